@@ -1,0 +1,4 @@
+//! File input and output: OpenEXR images, PNG previews, figures and configuration files.
+
+pub mod exr;
+pub mod png;

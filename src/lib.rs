@@ -1,0 +1,19 @@
+//! inimtrace: simulates how a near-eye integral-imaging (InIm) light-field display looks to a
+//! human eye, and scores the ways of rendering its display image (LensletCenter, PupilCenter,
+//! LensletAverage), after Dorado et al., "A framework for assessing rendering techniques for
+//! near-eye integral imaging displays".
+//!
+//! Conventions (see README): millimetres; the eye's pupil centre is the origin; +z points from
+//! the eye toward the display and the scene, +x right, +y up; images are stored with row 0 at
+//! the top. Optics is computed in `f64`.
+
+pub mod accel;
+pub mod error;
+pub mod io;
+pub mod metrics;
+pub mod optics;
+pub mod raster;
+pub mod render;
+pub mod scene;
+
+pub use error::{Error, Result};

@@ -1,0 +1,2 @@
+//! Scene description.
+pub mod mesh;
