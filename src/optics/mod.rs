@@ -1,1 +1,11 @@
 //! Optics: the display, the eye and the paraxial ray transfer between them (paper Sec. 2.3).
+
+pub mod display;
+pub mod eye;
+pub mod lattice;
+pub mod transfer;
+
+pub use display::{Display, Lcd};
+pub use eye::{Aperture, Eye, Focus, Retina};
+pub use lattice::Lattice;
+pub use transfer::{EyeTrace, PlaneRay};

@@ -1,0 +1,235 @@
+//! The near-eye integral-imaging display model (paper Sec. 2.2, 4.1; Fig. 2a planes P2, P3):
+//! a lenslet array at `z = v1` in front of an LCD at `z = v1 + v2`.
+//!
+//! Lenslet (i, j) is centred at `lenslet shift + M (i, j)`; elemental image (i, j) is centred at
+//! `EI shift + M_EI (i, j)` on the LCD and belongs to lenslet (i, j). A display pixel belongs to
+//! the elemental image whose centre is nearest. LCD pixels are boxes; pixel (row r, column c)
+//! has its centre at `x = -W/2 + (c + 0.5) W/Nx`, `y = H/2 - (r + 0.5) H/Ny` (row 0 at the top).
+
+use glam::{DVec2, IVec2};
+
+use super::lattice::Lattice;
+use crate::error::{Error, Result};
+
+/// The LCD panel: physical size and resolution, box pixels.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lcd {
+    /// Width and height, mm.
+    pub size: DVec2,
+    /// Columns (x) and rows (y).
+    pub resolution: [usize; 2],
+}
+
+impl Lcd {
+    pub fn columns(&self) -> usize {
+        self.resolution[0]
+    }
+    pub fn rows(&self) -> usize {
+        self.resolution[1]
+    }
+    pub fn pixel_count(&self) -> usize {
+        self.resolution[0] * self.resolution[1]
+    }
+    /// Pixel pitch (mm) along x and y.
+    pub fn pixel_pitch(&self) -> DVec2 {
+        self.size / DVec2::new(self.resolution[0] as f64, self.resolution[1] as f64)
+    }
+
+    /// Centre of pixel (row, column) on the LCD plane.
+    #[inline]
+    pub fn pixel_center(&self, row: usize, col: usize) -> DVec2 {
+        self.pixel_point(row, col, DVec2::splat(0.5))
+    }
+
+    /// A point inside pixel (row, column): `frac` in [0,1]^2 runs left-to-right, top-to-bottom.
+    #[inline]
+    pub fn pixel_point(&self, row: usize, col: usize, frac: DVec2) -> DVec2 {
+        let pitch = self.pixel_pitch();
+        DVec2::new(
+            -0.5 * self.size.x + (col as f64 + frac.x) * pitch.x,
+            0.5 * self.size.y - (row as f64 + frac.y) * pitch.y,
+        )
+    }
+
+    /// The pixel (row-major linear index) containing point `p`, or `None` off the panel.
+    ///
+    /// The panel is the closed rectangle `|x| <= W/2, |y| <= H/2`; inside it pixels are
+    /// half-open boxes `[left, right) x (bottom, top]`, and points on the panel's right or bottom
+    /// outer edge belong to the last column or row, so no index is ever out of range.
+    #[inline]
+    pub fn pixel_index(&self, p: DVec2) -> Option<usize> {
+        let fx = (p.x + 0.5 * self.size.x) / self.size.x;
+        let fy = (0.5 * self.size.y - p.y) / self.size.y;
+        // Written so that NaN fails the test.
+        if !((0.0..=1.0).contains(&fx) && (0.0..=1.0).contains(&fy)) {
+            return None;
+        }
+        let nx = self.resolution[0];
+        let ny = self.resolution[1];
+        let c = ((fx * nx as f64) as usize).min(nx - 1);
+        let r = ((fy * ny as f64) as usize).min(ny - 1);
+        Some(r * nx + c)
+    }
+}
+
+/// A near-eye InIm display.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Display {
+    pub name: String,
+    /// v1: distance from the eye's pupil plane (z = 0) to the lenslet plane, mm.
+    pub eye_to_lenslets: f64,
+    /// v2: distance from the lenslet plane to the LCD, mm.
+    pub lenslets_to_lcd: f64,
+    /// Lenslet focal length f, mm (optical power d2 = 1/f).
+    pub focal_length: f64,
+    /// Lenslet centres.
+    pub lenslets: Lattice,
+    /// Elemental-image centres on the LCD.
+    pub elemental_images: Lattice,
+    pub lcd: Lcd,
+}
+
+impl Display {
+    /// The framework's display from the paper (`lensletdisplay.yaml`): v1 20, v2 6.316,
+    /// f 6.427, lenslet pitch 1.2, EI pitch 1.58, LCD 21.6 mm square at 2160 x 2160.
+    pub fn paper() -> Self {
+        Self {
+            name: "paper (LFDisplay lensletdisplay.yaml)".into(),
+            eye_to_lenslets: 20.0,
+            lenslets_to_lcd: 6.316,
+            focal_length: 6.427,
+            lenslets: Lattice::square(1.2).expect("valid built-in lattice"),
+            elemental_images: Lattice::square(1.58).expect("valid built-in lattice"),
+            lcd: Lcd { size: DVec2::splat(21.6), resolution: [2160, 2160] },
+        }
+    }
+
+    /// z of the lenslet plane.
+    pub fn lenslet_z(&self) -> f64 {
+        self.eye_to_lenslets
+    }
+    /// z of the LCD plane.
+    pub fn lcd_z(&self) -> f64 {
+        self.eye_to_lenslets + self.lenslets_to_lcd
+    }
+    /// Lenslet optical power d2 = 1/f.
+    pub fn lenslet_power(&self) -> f64 {
+        1.0 / self.focal_length
+    }
+
+    /// z (from the pupil) of the central depth plane, the lenslets' image of the LCD:
+    /// `1/v2 - 1/f = 1/d` with the virtual image at `z = v1 + d`. `None` when the LCD is in the
+    /// lenslets' focal plane (image at infinity) or the image is real (LCD beyond the focus).
+    pub fn central_depth_plane(&self) -> Option<f64> {
+        let inv = 1.0 / self.lenslets_to_lcd - 1.0 / self.focal_length;
+        if inv <= 0.0 {
+            None
+        } else {
+            Some(self.eye_to_lenslets + 1.0 / inv)
+        }
+    }
+
+    /// Index of the elemental image (and so of the lenslet) that owns LCD point `p`.
+    #[inline]
+    pub fn elemental_image_of(&self, p: DVec2) -> IVec2 {
+        self.elemental_images.nearest(p)
+    }
+
+    /// Checks that the optics is possible; `source` names where it came from (a file path).
+    pub fn validate(&self, source: &str) -> Result<()> {
+        let positive = |field: &str, v: f64| -> Result<()> {
+            if !v.is_finite() {
+                Err(Error::invalid(source, field, format!("must be a finite number, got {v}")))
+            } else if v <= 0.0 {
+                Err(Error::invalid(source, field, format!("must be positive, got {v}")))
+            } else {
+                Ok(())
+            }
+        };
+        positive("eye_to_lenslets (v1)", self.eye_to_lenslets)?;
+        positive("lenslets_to_lcd (v2)", self.lenslets_to_lcd)?;
+        positive("focal_length (f)", self.focal_length)?;
+        positive("lcd.size[0] (width)", self.lcd.size.x)?;
+        positive("lcd.size[1] (height)", self.lcd.size.y)?;
+        for (i, n) in self.lcd.resolution.iter().enumerate() {
+            if *n == 0 {
+                return Err(Error::invalid(source, format!("lcd.resolution[{i}]"), "must be at least 1 pixel"));
+            }
+            if *n > 1 << 16 {
+                return Err(Error::invalid(source, format!("lcd.resolution[{i}]"), format!("{n} pixels is beyond the supported 65536")));
+            }
+        }
+        Ok(())
+    }
+
+    /// A short human-readable summary (printed by `inimtrace info` and at the start of `assess`).
+    pub fn summary(&self) -> String {
+        let cdp = match self.central_depth_plane() {
+            Some(z) => format!("{z:.1} mm from the pupil ({:.3} D)", 1000.0 / z),
+            None => "at infinity or real (LCD at or beyond the lenslet focal plane)".into(),
+        };
+        let [a, b, c, d] = self.lenslets.row_major();
+        let [ea, eb, ec, ed] = self.elemental_images.row_major();
+        format!(
+            "display {}: v1 {} mm, v2 {} mm, f {} mm; lenslets shift ({}, {}) M [{a} {b}; {c} {d}]; \
+             EIs shift ({}, {}) M [{ea} {eb}; {ec} {ed}]; LCD {} x {} mm, {} x {} px; central depth plane {cdp}",
+            self.name,
+            self.eye_to_lenslets,
+            self.lenslets_to_lcd,
+            self.focal_length,
+            self.lenslets.shift.x,
+            self.lenslets.shift.y,
+            self.elemental_images.shift.x,
+            self.elemental_images.shift.y,
+            self.lcd.size.x,
+            self.lcd.size.y,
+            self.lcd.resolution[0],
+            self.lcd.resolution[1],
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn paper_display_central_depth_plane_near_386_mm() {
+        let z = Display::paper().central_depth_plane().unwrap();
+        assert!((z - 385.8).abs() < 0.5, "{z}");
+        // With the paper text's v2 = 6.32 mm it is at 400 mm, as the paper says.
+        let mut d = Display::paper();
+        d.lenslets_to_lcd = 6.32;
+        let z = d.central_depth_plane().unwrap();
+        assert!((z - 400.0).abs() < 1.0, "{z}");
+    }
+
+    #[test]
+    fn pixel_centres_follow_the_convention_and_index_back() {
+        let lcd = Display::paper().lcd;
+        let p = lcd.pixel_center(0, 0);
+        assert!((p - DVec2::new(-10.795, 10.795)).length() < 1e-12);
+        for (r, c) in [(0, 0), (5, 2159), (2159, 0), (1080, 1079)] {
+            assert_eq!(lcd.pixel_index(lcd.pixel_center(r, c)), Some(r * 2160 + c));
+        }
+        // Outer edges stay in range; beyond them is off the panel.
+        assert_eq!(lcd.pixel_index(DVec2::new(10.8, -10.8)), Some(2159 * 2160 + 2159));
+        assert_eq!(lcd.pixel_index(DVec2::new(-10.8, 10.8)), Some(0));
+        assert_eq!(lcd.pixel_index(DVec2::new(10.800001, 0.0)), None);
+        assert_eq!(lcd.pixel_index(DVec2::new(f64::NAN, 0.0)), None);
+    }
+
+    #[test]
+    fn impossible_optics_names_the_field() {
+        let mut d = Display::paper();
+        d.focal_length = -1.0;
+        let e = d.validate("x.toml").unwrap_err().to_string();
+        assert!(e.contains("x.toml") && e.contains("focal_length"), "{e}");
+        let mut d = Display::paper();
+        d.lcd.resolution = [0, 10];
+        assert!(d.validate("x").unwrap_err().to_string().contains("lcd.resolution[0]"));
+        let mut d = Display::paper();
+        d.eye_to_lenslets = f64::NAN;
+        assert!(d.validate("x").unwrap_err().to_string().contains("eye_to_lenslets"));
+    }
+}

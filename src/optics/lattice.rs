@@ -1,0 +1,193 @@
+//! Two-dimensional lattices of cells: lenslet centres and elemental-image centres
+//! (paper Sec. 2.3, eq. (1): `x_c`, "the center of the lenslet that intercepts the ray").
+//!
+//! The centre of cell (i, j) is `shift + M (i, j)` with a 2x2 pitch matrix `M` (square,
+//! rectangular, hexagonal or tilted layouts). A point belongs to the cell whose centre is
+//! nearest (its Voronoi cell). Ties are broken deterministically: the candidate found by
+//! rounding the lattice coordinates (`floor(u + 0.5)`) wins, so a point exactly half-way
+//! between two centres of an axis-aligned lattice belongs to the cell with the larger index.
+
+use glam::{DMat2, DVec2, IVec2};
+
+/// A lattice of cell centres `shift + matrix * (i, j)`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lattice {
+    /// Centre of cell (0, 0), mm.
+    pub shift: DVec2,
+    /// Pitch matrix; its columns are the two lattice vectors (mm).
+    pub matrix: DMat2,
+    inverse: DMat2,
+    axis_aligned: bool,
+}
+
+impl Lattice {
+    /// A lattice from its shift and pitch matrix. Returns `None` when the matrix is singular
+    /// or not finite (callers turn that into an error naming the field).
+    pub fn new(shift: DVec2, matrix: DMat2) -> Option<Self> {
+        let det = matrix.determinant();
+        let scale = matrix.x_axis.length() * matrix.y_axis.length();
+        if !det.is_finite() || !shift.is_finite() || scale == 0.0 || det.abs() <= 1e-12 * scale {
+            return None;
+        }
+        let axis_aligned = matrix.x_axis.y == 0.0 && matrix.y_axis.x == 0.0;
+        Some(Self { shift, matrix, inverse: matrix.inverse(), axis_aligned })
+    }
+
+    /// A square lattice of the given pitch, centred on the optical axis.
+    pub fn square(pitch: f64) -> Option<Self> {
+        Self::new(DVec2::ZERO, DMat2::from_diagonal(DVec2::splat(pitch)))
+    }
+
+    /// A lattice from OpenCV's row-major 2x2 layout `[a, b, c, d]` meaning
+    /// `centre = shift + [[a, b], [c, d]] (i, j)`.
+    pub fn from_row_major(shift: DVec2, m: [f64; 4]) -> Option<Self> {
+        Self::new(shift, DMat2::from_cols(DVec2::new(m[0], m[2]), DVec2::new(m[1], m[3])))
+    }
+
+    /// The pitch matrix in row-major order `[a, b, c, d]`.
+    pub fn row_major(&self) -> [f64; 4] {
+        [self.matrix.x_axis.x, self.matrix.y_axis.x, self.matrix.x_axis.y, self.matrix.y_axis.y]
+    }
+
+    /// True when the lattice vectors are along x and y (rectangular or square layouts).
+    pub fn is_axis_aligned(&self) -> bool {
+        self.axis_aligned
+    }
+
+    /// Centre of cell `index`.
+    #[inline]
+    pub fn center(&self, index: IVec2) -> DVec2 {
+        self.shift + self.matrix * index.as_dvec2()
+    }
+
+    /// Continuous lattice coordinates of a point: `M^-1 (p - shift)`.
+    #[inline]
+    pub fn coordinates(&self, p: DVec2) -> DVec2 {
+        self.inverse * (p - self.shift)
+    }
+
+    /// Area of one cell (mm^2).
+    pub fn cell_area(&self) -> f64 {
+        self.matrix.determinant().abs()
+    }
+
+    /// Index of the cell whose centre is nearest to `p`.
+    ///
+    /// Axis-aligned lattices: rounding the lattice coordinates is exact. Other lattices: the
+    /// rounded candidate and its eight neighbours are compared (enough for a reduced basis,
+    /// e.g. hexagonal (p, 0), (p/2, p sqrt(3)/2) or any rotation of a rectangular lattice).
+    /// `nearest_brute_force` is the slow twin that tests check this against.
+    #[inline]
+    pub fn nearest(&self, p: DVec2) -> IVec2 {
+        let u = self.coordinates(p);
+        let rounded = IVec2::new(round_half_up(u.x), round_half_up(u.y));
+        if self.axis_aligned {
+            return rounded;
+        }
+        let mut best = rounded;
+        let mut best_d2 = (self.center(rounded) - p).length_squared();
+        for dj in -1..=1 {
+            for di in -1..=1 {
+                if di == 0 && dj == 0 {
+                    continue;
+                }
+                let cand = rounded + IVec2::new(di, dj);
+                let d2 = (self.center(cand) - p).length_squared();
+                if d2 < best_d2 {
+                    best = cand;
+                    best_d2 = d2;
+                }
+            }
+        }
+        best
+    }
+
+    /// Slow, obviously correct twin of [`Lattice::nearest`]: scans every cell within `radius`
+    /// indices of the rounded coordinates. Ties go to the rounded candidate, as in `nearest`.
+    pub fn nearest_brute_force(&self, p: DVec2, radius: i32) -> IVec2 {
+        let u = self.coordinates(p);
+        let rounded = IVec2::new(round_half_up(u.x), round_half_up(u.y));
+        let mut best = rounded;
+        let mut best_d2 = (self.center(rounded) - p).length_squared();
+        for dj in -radius..=radius {
+            for di in -radius..=radius {
+                let cand = rounded + IVec2::new(di, dj);
+                let d2 = (self.center(cand) - p).length_squared();
+                if d2 < best_d2 {
+                    best = cand;
+                    best_d2 = d2;
+                }
+            }
+        }
+        best
+    }
+}
+
+/// `floor(x + 0.5)` as an index, saturating for absurd inputs (never panics).
+#[inline]
+fn round_half_up(x: f64) -> i32 {
+    let r = (x + 0.5).floor();
+    if r.is_nan() {
+        0
+    } else {
+        r.clamp(i32::MIN as f64 / 2.0, i32::MAX as f64 / 2.0) as i32
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn hexagonal(p: f64) -> Lattice {
+        Lattice::new(DVec2::new(0.1, -0.2), DMat2::from_cols(DVec2::new(p, 0.0), DVec2::new(p / 2.0, p * 3f64.sqrt() / 2.0)))
+            .unwrap()
+    }
+
+    fn tilted(p: f64, angle: f64) -> Lattice {
+        let r = DMat2::from_angle(angle);
+        Lattice::new(DVec2::new(-0.3, 0.05), r * DMat2::from_diagonal(DVec2::new(p, 1.3 * p))).unwrap()
+    }
+
+    /// Deterministic pseudo-random points (no external RNG needed for a unit test).
+    fn points(n: usize, half: f64) -> Vec<DVec2> {
+        let mut s = 0x9E3779B97F4A7C15u64;
+        let mut next = || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 11) as f64 / (1u64 << 53) as f64
+        };
+        (0..n).map(|_| DVec2::new((next() * 2.0 - 1.0) * half, (next() * 2.0 - 1.0) * half)).collect()
+    }
+
+    #[test]
+    fn fast_nearest_agrees_with_brute_force_on_square_hex_and_tilted() {
+        for lat in [Lattice::square(1.2).unwrap(), hexagonal(1.2), tilted(1.0, 0.37), tilted(0.8, -1.1)] {
+            for p in points(20_000, 12.0) {
+                assert_eq!(lat.nearest(p), lat.nearest_brute_force(p, 4), "lattice {lat:?} point {p:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn square_lattice_boundary_goes_to_upper_cell() {
+        let lat = Lattice::square(1.2).unwrap();
+        assert_eq!(lat.nearest(DVec2::new(0.6, -0.6)), IVec2::new(1, 0));
+        assert_eq!(lat.nearest(DVec2::new(0.599_999, 0.0)), IVec2::new(0, 0));
+    }
+
+    #[test]
+    fn singular_or_nan_matrix_is_rejected() {
+        assert!(Lattice::new(DVec2::ZERO, DMat2::from_cols(DVec2::new(1.0, 2.0), DVec2::new(2.0, 4.0))).is_none());
+        assert!(Lattice::square(0.0).is_none());
+        assert!(Lattice::square(f64::NAN).is_none());
+        assert!(Lattice::new(DVec2::new(f64::NAN, 0.0), DMat2::IDENTITY).is_none());
+    }
+
+    #[test]
+    fn row_major_round_trip() {
+        let lat = Lattice::from_row_major(DVec2::ZERO, [1.0, 0.5, 0.0, 0.866]).unwrap();
+        assert_eq!(lat.row_major(), [1.0, 0.5, 0.0, 0.866]);
+        assert_eq!(lat.center(IVec2::new(1, 1)), DVec2::new(1.5, 0.866));
+    }
+}
