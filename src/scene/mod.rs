@@ -1,2 +1,150 @@
-//! Scene description.
+//! Scene description (paper Sec. 4.1, Fig. 3): objects with a shape and a material. Radiance
+//! equals albedo (the paper's scene needs nothing more: matte front-facing planes lit from
+//! behind the eye). Rays that hit nothing see `background`.
+//!
+//! Shapes are analytic rectangles (intersected exactly in `f64` by
+//! [`crate::accel::analytic::AnalyticRects`]) or triangle meshes. Every rectangle can be
+//! tessellated ([`Rect::to_mesh`]) so that every scene renders with every mesh backend.
+
 pub mod mesh;
+pub mod texture;
+pub mod usaf;
+
+use std::sync::Arc;
+
+use glam::{DVec2, DVec3};
+
+use crate::accel::{Hit, Surface};
+pub use mesh::Mesh;
+pub use texture::{Bar, BarChart};
+
+/// A planar rectangle `center + s half_u + t half_v`, `s, t` in `[-1, 1]`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Rect {
+    pub center: DVec3,
+    pub half_u: DVec3,
+    pub half_v: DVec3,
+}
+
+impl Rect {
+    /// A rectangle facing the eye (normal along z), `width` along x and `height` along y.
+    pub fn facing_eye(center: DVec3, width: f64, height: f64) -> Self {
+        Self { center, half_u: DVec3::new(0.5 * width, 0.0, 0.0), half_v: DVec3::new(0.0, 0.5 * height, 0.0) }
+    }
+
+    /// Two triangles with per-vertex `uv` = the rectangle's local coordinates, so that
+    /// interpolating them at a triangle hit recovers the analytic backend's `uv`.
+    pub fn to_mesh(&self) -> Mesh {
+        let corners = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
+        Mesh {
+            positions: corners.iter().map(|&(s, t)| self.center + s * self.half_u + t * self.half_v).collect(),
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+            normals: None,
+            uvs: Some(corners.iter().map(|&(s, t)| DVec2::new(s, t)).collect()),
+            colors: None,
+        }
+    }
+}
+
+/// The geometry of an object.
+#[derive(Clone, Debug)]
+pub enum Shape {
+    Rect(Rect),
+    Mesh(Arc<Mesh>),
+}
+
+/// What an object looks like. Albedos are linear RGB.
+#[derive(Clone, Debug)]
+pub enum Material {
+    /// A constant albedo.
+    Albedo(DVec3),
+    /// A bar chart: `bar` albedo on the bars, `backing` elsewhere, looked up by surface `uv`.
+    Chart { chart: Arc<BarChart>, bar: DVec3, backing: DVec3 },
+    /// Per-vertex colours of a mesh, interpolated.
+    VertexColor,
+}
+
+#[derive(Clone, Debug)]
+pub struct Object {
+    pub name: String,
+    pub shape: Shape,
+    pub material: Material,
+}
+
+#[derive(Clone, Debug)]
+pub struct Scene {
+    pub name: String,
+    pub objects: Vec<Object>,
+    /// Radiance seen by rays that hit nothing.
+    pub background: DVec3,
+}
+
+impl Scene {
+    /// The paper's scene, as its framework built it (see `data/README` notes in the README):
+    /// three USAF-1951 chart squares, near 90 mm wide centred at (-45, -45, 300), centre 120 mm
+    /// at (0, 0, 400), far 180 mm at (90, 90, 600); behind them a background square of albedo
+    /// (0.2, 0.7, 0.8) at z = 1302 spanning x -800..1200, y -1000..1000.
+    pub fn paper() -> Self {
+        let chart = Arc::new(usaf::framework_chart());
+        let square = |name: &str, c: DVec3, w: f64| Object {
+            name: name.into(),
+            shape: Shape::Rect(Rect::facing_eye(c, w, w)),
+            material: Material::Chart { chart: chart.clone(), bar: DVec3::ZERO, backing: DVec3::ONE },
+        };
+        Scene {
+            name: "paper".into(),
+            objects: vec![
+                square("near chart", DVec3::new(-45.0, -45.0, 300.0), 90.0),
+                square("centre chart", DVec3::new(0.0, 0.0, 400.0), 120.0),
+                square("far chart", DVec3::new(90.0, 90.0, 600.0), 180.0),
+                Object {
+                    name: "background".into(),
+                    shape: Shape::Rect(Rect::facing_eye(DVec3::new(200.0, 0.0, 1302.0), 2000.0, 2000.0)),
+                    material: Material::Albedo(DVec3::new(0.2, 0.7, 0.8)),
+                },
+            ],
+            background: DVec3::ZERO,
+        }
+    }
+
+    /// True when every object is an analytic primitive.
+    pub fn is_analytic(&self) -> bool {
+        self.objects.iter().all(|o| matches!(o.shape, Shape::Rect(_)))
+    }
+
+    /// Surface coordinates of a hit: the analytic `uv`, or the mesh's interpolated `uv`
+    /// (a tessellated rectangle's `uv` are its local coordinates).
+    pub fn surface_uv(&self, hit: &Hit) -> Option<DVec2> {
+        match hit.surface {
+            Surface::Analytic { uv } => Some(uv),
+            Surface::Triangle { index, bary } => match &self.objects.get(hit.object as usize)?.shape {
+                Shape::Rect(r) => {
+                    let m = r.to_mesh();
+                    Some(m.interpolate(m.uvs.as_deref()?, index, bary))
+                }
+                Shape::Mesh(m) => m.uvs.as_ref().map(|uvs| m.interpolate(uvs, index, bary)),
+            },
+        }
+    }
+
+    /// Radiance leaving the hit point toward the ray's origin (= albedo).
+    #[inline]
+    pub fn radiance(&self, hit: Option<&Hit>) -> DVec3 {
+        let Some(hit) = hit else { return self.background };
+        let Some(object) = self.objects.get(hit.object as usize) else { return self.background };
+        match &object.material {
+            Material::Albedo(a) => *a,
+            Material::Chart { chart, bar, backing } => match self.surface_uv(hit) {
+                Some(uv) if chart.is_bar(uv) => *bar,
+                _ => *backing,
+            },
+            Material::VertexColor => match (&object.shape, hit.surface) {
+                (Shape::Mesh(m), Surface::Triangle { index, bary }) => match &m.colors {
+                    Some(c) => m.interpolate(c, index, bary),
+                    None => DVec3::ONE,
+                },
+                _ => DVec3::ONE,
+            },
+        }
+    }
+}
