@@ -12,6 +12,7 @@ pub mod error;
 pub mod io;
 pub mod metrics;
 pub mod optics;
+pub mod progress;
 pub mod raster;
 pub mod render;
 pub mod scene;

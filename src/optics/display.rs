@@ -58,17 +58,36 @@ impl Lcd {
     /// outer edge belong to the last column or row, so no index is ever out of range.
     #[inline]
     pub fn pixel_index(&self, p: DVec2) -> Option<usize> {
-        let fx = (p.x + 0.5 * self.size.x) / self.size.x;
-        let fy = (0.5 * self.size.y - p.y) / self.size.y;
+        PixelIndexer::new(self).index(p)
+    }
+}
+
+/// [`Lcd::pixel_index`] with its reciprocals computed once, for hot loops.
+#[derive(Clone, Copy, Debug)]
+pub struct PixelIndexer {
+    scale: DVec2,
+    half: DVec2,
+    nx: usize,
+    ny: usize,
+}
+
+impl PixelIndexer {
+    pub fn new(lcd: &Lcd) -> Self {
+        let n = DVec2::new(lcd.resolution[0] as f64, lcd.resolution[1] as f64);
+        Self { scale: n / lcd.size, half: 0.5 * n, nx: lcd.resolution[0], ny: lcd.resolution[1] }
+    }
+
+    #[inline(always)]
+    pub fn index(&self, p: DVec2) -> Option<usize> {
+        let fx = p.x * self.scale.x + self.half.x;
+        let fy = self.half.y - p.y * self.scale.y;
         // Written so that NaN fails the test.
-        if !((0.0..=1.0).contains(&fx) && (0.0..=1.0).contains(&fy)) {
+        if !(fx >= 0.0 && fx <= 2.0 * self.half.x && fy >= 0.0 && fy <= 2.0 * self.half.y) {
             return None;
         }
-        let nx = self.resolution[0];
-        let ny = self.resolution[1];
-        let c = ((fx * nx as f64) as usize).min(nx - 1);
-        let r = ((fy * ny as f64) as usize).min(ny - 1);
-        Some(r * nx + c)
+        let c = (fx as u32 as usize).min(self.nx - 1);
+        let r = (fy as u32 as usize).min(self.ny - 1);
+        Some(r * self.nx + c)
     }
 }
 

@@ -123,15 +123,18 @@ impl Lattice {
     }
 }
 
-/// `floor(x + 0.5)` as an index, saturating for absurd inputs (never panics).
-#[inline]
+/// `floor(x + 0.5)` as an index. Saturates for absurd inputs and maps NaN to 0 (never panics).
+#[inline(always)]
 fn round_half_up(x: f64) -> i32 {
-    let r = (x + 0.5).floor();
-    if r.is_nan() {
-        0
-    } else {
-        r.clamp(i32::MIN as f64 / 2.0, i32::MAX as f64 / 2.0) as i32
-    }
+    floor_to_i32(x + 0.5)
+}
+
+/// `floor(x)` as an `i32` without a libm call (baseline x86-64 has no rounding instruction):
+/// truncate, then step down for negative non-integers. `as` saturates and maps NaN to 0.
+#[inline(always)]
+pub fn floor_to_i32(x: f64) -> i32 {
+    let i = x as i32;
+    i.saturating_sub((x < i as f64) as i32)
 }
 
 #[cfg(test)]
@@ -182,6 +185,15 @@ mod tests {
         assert!(Lattice::square(0.0).is_none());
         assert!(Lattice::square(f64::NAN).is_none());
         assert!(Lattice::new(DVec2::new(f64::NAN, 0.0), DMat2::IDENTITY).is_none());
+    }
+
+    #[test]
+    fn fast_floor_matches_floor() {
+        for x in [-2.5, -2.0, -1.0000001, -0.5, -0.0, 0.0, 0.3, 0.5, 1.0, 1.9999999, 1e9, -1e9, 3.0e9, -3.0e9] {
+            let expect = (x as f64).floor().clamp(i32::MIN as f64, i32::MAX as f64) as i32;
+            assert_eq!(floor_to_i32(x), expect, "{x}");
+        }
+        assert_eq!(floor_to_i32(f64::NAN), 0);
     }
 
     #[test]

@@ -97,8 +97,8 @@ impl BarChart {
         if !(fi >= 0.0 && fj >= 0.0) {
             return false;
         }
-        let i = (fi as usize).min(GRID - 1);
-        let j = (fj as usize).min(GRID - 1);
+        let i = (fi as i32 as usize).min(GRID - 1);
+        let j = (fj as i32 as usize).min(GRID - 1);
         if fi > GRID as f64 + 1.0 || fj > GRID as f64 + 1.0 {
             return false;
         }

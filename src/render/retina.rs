@@ -1,0 +1,205 @@
+//! Retinal images (paper Sec. 2.3 and 4.1).
+//!
+//! - Perceived image ([`simulate`]): for each retina sample and pupil sample, trace retina ->
+//!   pupil (thin lens) -> lenslet plane -> refraction at the nearest lenslet -> LCD (eq. (1)),
+//!   and read the display image there (box pixels). A ray that misses the LCD carries black and
+//!   still counts in the pixel's average, so no pixel is ever 0/0.
+//! - Ground truth ([`ground_truth`]): the same eye rays, leaving the eye lens, straight into the
+//!   scene.
+//!
+//! The paper's pinhole eye is the one-sample limit: the chief ray through the pupil centre.
+
+use glam::{DVec2, DVec3};
+use rayon::prelude::*;
+
+use super::display_image::RadianceField;
+use crate::accel::Ray;
+use crate::error::{Error, Result};
+use crate::optics::transfer::eye_ray;
+#[cfg(doc)]
+use crate::optics::transfer::eye_to_lcd;
+use crate::optics::display::PixelIndexer;
+use crate::optics::{Display, Eye, Retina};
+use crate::progress::Progress;
+use crate::raster::RgbImage;
+
+/// Display images interleaved pixel by pixel, so that one LCD lookup reads every method's
+/// value from one cache line.
+pub struct DisplayStack {
+    count: usize,
+    width: usize,
+    height: usize,
+    values: Vec<f32>,
+}
+
+impl DisplayStack {
+    /// Packs display images that must all have the LCD's resolution.
+    pub fn new(display: &Display, images: &[&RgbImage]) -> Result<Self> {
+        let lcd = display.lcd;
+        for (k, img) in images.iter().enumerate() {
+            if img.width != lcd.columns() || img.height != lcd.rows() {
+                return Err(Error::Unsupported(format!(
+                    "display image {k} is {} x {} pixels but the display's LCD is {} x {}",
+                    img.width,
+                    img.height,
+                    lcd.columns(),
+                    lcd.rows()
+                )));
+            }
+        }
+        let stride = 3 * images.len();
+        let mut values = vec![0f32; lcd.pixel_count() * stride];
+        if stride > 0 {
+            values.par_chunks_mut(stride).enumerate().for_each(|(i, dst)| {
+                for (k, img) in images.iter().enumerate() {
+                    dst[3 * k..3 * k + 3].copy_from_slice(&img.pixels[i]);
+                }
+            });
+        }
+        Ok(Self { count: images.len(), width: lcd.columns(), height: lcd.rows(), values })
+    }
+
+    /// Number of display images.
+    pub fn len(&self) -> usize {
+        self.count
+    }
+    pub fn is_empty(&self) -> bool {
+        self.count == 0
+    }
+}
+
+/// Simulates what the eye sees of each display image in `displays` (all with the LCD's
+/// resolution). Convenience wrapper over [`simulate_stack`].
+pub fn simulate(display: &Display, eye: &Eye, retina: &Retina, displays: &[&RgbImage], progress: &Progress) -> Result<Vec<RgbImage>> {
+    let stack = DisplayStack::new(display, displays)?;
+    simulate_stack(display, eye, retina, &stack, progress)
+}
+
+/// Simulates what the eye sees of every display image in `stack`. Each ray is traced once and
+/// read from every image.
+pub fn simulate_stack(display: &Display, eye: &Eye, retina: &Retina, stack: &DisplayStack, progress: &Progress) -> Result<Vec<RgbImage>> {
+    if stack.width != display.lcd.columns() || stack.height != display.lcd.rows() {
+        return Err(Error::Unsupported("display stack does not match the display's LCD resolution".into()));
+    }
+    let m = stack.count;
+    let stride = 3 * m;
+    let n = retina.resolution;
+    let pupil = eye.pupil_samples();
+    let subpixels = retina.subpixel_offsets();
+    let inv_count = 1.0 / (pupil.len() * subpixels.len()) as f64;
+    let fast = FastTransfer::new(display, eye, &pupil);
+    let packed = &stack.values;
+
+    let mut images: Vec<RgbImage> = (0..m).map(|_| RgbImage::new(n, n)).collect();
+    let mut rows = vec![0f32; n * n * stride];
+    if stride == 0 {
+        return Ok(images);
+    }
+    rows.par_chunks_mut(n * stride).enumerate().for_each(|(row, out)| {
+        // Pupil samples outside, columns inside: each sample sweeps the LCD in order, which
+        // the cache likes; every pixel still sums its samples in the same order.
+        let mut acc = vec![0f64; n * stride];
+        for frac in &subpixels {
+            for k in 0..pupil.len() {
+                for col in 0..n {
+                    let t = retina.tangent(row, col, *frac);
+                    if let Some(idx) = fast.pixel_index(t, k) {
+                        let src = &packed[idx * stride..(idx + 1) * stride];
+                        for (a, v) in acc[col * stride..(col + 1) * stride].iter_mut().zip(src) {
+                            *a += *v as f64;
+                        }
+                    }
+                }
+            }
+        }
+        for (o, a) in out.iter_mut().zip(&acc) {
+            *o = (*a * inv_count) as f32;
+        }
+        progress.inc(1);
+    });
+    for (i, px) in rows.chunks_exact(stride).enumerate() {
+        for (k, img) in images.iter_mut().enumerate() {
+            img.pixels[i] = [px[3 * k], px[3 * k + 1], px[3 * k + 2]];
+        }
+    }
+    Ok(images)
+}
+
+/// The eye -> LCD trace of [`eye_to_lcd`] with the per-eye constants folded in, for the hot
+/// loop of [`simulate`]. Tests check it against `eye_to_lcd` (the slow twin).
+pub struct FastTransfer<'a> {
+    display: &'a Display,
+    /// Per pupil sample: world position at the pupil plane, and the slope offset
+    /// `s/v0 - s d1` so that `w1 = tangent + offset`.
+    samples: Vec<(DVec2, DVec2)>,
+    /// Distance from the pupil plane to the lenslets.
+    to_lenslets: f64,
+    lenslet_power: f64,
+    v2: f64,
+    indexer: PixelIndexer,
+}
+
+impl<'a> FastTransfer<'a> {
+    pub fn new(display: &'a Display, eye: &Eye, pupil: &[DVec2]) -> Self {
+        let v0 = eye.retina_distance;
+        let d1 = eye.power();
+        let samples = pupil.iter().map(|&s| (s + eye.position.truncate(), s / v0 - s * d1)).collect();
+        Self {
+            display,
+            samples,
+            to_lenslets: display.lenslet_z() - eye.position.z,
+            lenslet_power: display.lenslet_power(),
+            v2: display.lenslets_to_lcd,
+            indexer: PixelIndexer::new(&display.lcd),
+        }
+    }
+
+    /// Where the ray for retina direction `tangent` through pupil sample `k` meets the LCD.
+    #[inline(always)]
+    pub fn lcd_point(&self, tangent: DVec2, k: usize) -> DVec2 {
+        let (x1, offset) = self.samples[k];
+        let w1 = tangent + offset;
+        let x2 = x1 + w1 * self.to_lenslets;
+        let c = self.display.lenslets.center(self.display.lenslets.nearest(x2));
+        let w2 = w1 - (x2 - c) * self.lenslet_power;
+        x2 + w2 * self.v2
+    }
+
+    /// The LCD pixel that ray hits, if any ([`crate::optics::Lcd::pixel_index`]).
+    #[inline(always)]
+    pub fn pixel_index(&self, tangent: DVec2, k: usize) -> Option<usize> {
+        self.indexer.index(self.lcd_point(tangent, k))
+    }
+}
+
+/// The ray into the scene that leaves the eye lens for retina direction `tangent` through pupil
+/// offset `pupil_offset`.
+#[inline]
+pub fn eye_scene_ray(eye: &Eye, tangent: DVec2, pupil_offset: DVec2) -> Ray {
+    let r = eye_ray(eye, tangent, pupil_offset);
+    Ray { origin: (r.position + eye.position.truncate()).extend(eye.position.z), dir: r.slope.extend(1.0) }
+}
+
+/// The ground-truth retinal image: the eye looking straight at the scene.
+pub fn ground_truth<R: RadianceField + ?Sized>(eye: &Eye, retina: &Retina, tracer: &R, progress: &Progress) -> RgbImage {
+    let n = retina.resolution;
+    let pupil = eye.pupil_samples();
+    let subpixels = retina.subpixel_offsets();
+    let inv_count = 1.0 / (pupil.len() * subpixels.len()) as f64;
+    let mut image = RgbImage::new(n, n);
+    image.pixels.par_chunks_mut(n).enumerate().for_each(|(row, out)| {
+        for (col, px) in out.iter_mut().enumerate() {
+            let mut sum = DVec3::ZERO;
+            for frac in &subpixels {
+                let t = retina.tangent(row, col, *frac);
+                for s in &pupil {
+                    sum += tracer.radiance(&eye_scene_ray(eye, t, *s));
+                }
+            }
+            let v = sum * inv_count;
+            *px = [v.x as f32, v.y as f32, v.z as f32];
+        }
+        progress.inc(1);
+    });
+    image
+}
