@@ -9,6 +9,7 @@
 
 pub mod accel;
 pub mod error;
+pub mod experiment;
 pub mod io;
 pub mod metrics;
 pub mod optics;
