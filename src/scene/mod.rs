@@ -1,2 +1,3 @@
 //! Scene description.
 pub mod mesh;
+pub mod mesh_io;
