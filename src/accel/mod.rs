@@ -3,6 +3,7 @@
 //! `f64`; mesh backends (Embree, pure-Rust BVH) intersect triangle meshes.
 
 pub mod analytic;
+pub mod brute;
 
 use glam::{DVec2, DVec3};
 

@@ -7,6 +7,7 @@
 //! tessellated ([`Rect::to_mesh`]) so that every scene renders with every mesh backend.
 
 pub mod mesh;
+pub mod mesh_io;
 pub mod texture;
 pub mod usaf;
 
