@@ -221,6 +221,8 @@ fn load_obj(path: &Path, bytes: &[u8]) -> Result<(Mesh, Option<PathBuf>)> {
     })?;
     validate_obj_text(path, text)?;
 
+    // tobj's optional features ("merging", "reordering") add fields that must stay false.
+    #[allow(clippy::needless_update)]
     let options = tobj::LoadOptions {
         single_index: true,
         triangulate: true,
@@ -413,11 +415,11 @@ fn validate_obj_text(path: &Path, text: &str) -> Result<()> {
                         ));
                     }
                     let kinds = [
-                        ("vertex", cv, nv),
-                        ("texture coordinate", cvt, nvt),
-                        ("normal", cvn, nvn),
+                        ("vertex", "vertices", cv, nv),
+                        ("texture coordinate", "texture coordinates", cvt, nvt),
+                        ("normal", "normals", cvn, nvn),
                     ];
-                    for (part, (kind, so_far, total)) in parts.iter().zip(kinds) {
+                    for (part, (kind, kinds, so_far, total)) in parts.iter().zip(kinds) {
                         if part.is_empty() {
                             continue;
                         }
@@ -439,7 +441,7 @@ fn validate_obj_text(path: &Path, text: &str) -> Result<()> {
                             return Err(err(
                                 line,
                                 format!(
-                                    "face corner {} '{word}': {kind} index {idx} out of range (file has {total} {kind}s)",
+                                    "face corner {} '{word}': {kind} index {idx} out of range (file has {total} {kinds})",
                                     corner + 1
                                 ),
                             ));
@@ -489,6 +491,19 @@ impl Scalar {
             "double" | "float64" => Scalar::F64,
             _ => return None,
         })
+    }
+
+    fn name(self) -> &'static str {
+        match self {
+            Scalar::I8 => "char",
+            Scalar::U8 => "uchar",
+            Scalar::I16 => "short",
+            Scalar::U16 => "ushort",
+            Scalar::I32 => "int",
+            Scalar::U32 => "uint",
+            Scalar::F32 => "float",
+            Scalar::F64 => "double",
+        }
     }
 
     fn size(self) -> usize {
@@ -743,8 +758,12 @@ impl PlyBody for AsciiBody<'_> {
             Error::parse(
                 path,
                 format!(
-                    "line {} ({} {}): bad number '{word}' for property '{}' ({ty:?})",
-                    self.line, loc.element, loc.index, loc.property
+                    "line {} ({} {}): bad number '{word}' for property '{}' ({})",
+                    self.line,
+                    loc.element,
+                    loc.index,
+                    loc.property,
+                    ty.name()
                 ),
             )
         };
