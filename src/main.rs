@@ -1,1 +1,291 @@
-fn main() {}
+//! The `inimtrace` command line: runs the paper's assessment (`assess`) or one stage of it.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{bail, Context, Result};
+use clap::{Args, Parser, Subcommand};
+use glam::DVec3;
+
+use inimtrace::accel::analytic::AnalyticRects;
+use inimtrace::experiment::{self, Experiment, ExperimentSpec, RunOptions};
+use inimtrace::io::config;
+use inimtrace::metrics::{self, SsimConstants};
+use inimtrace::optics::{Aperture, Display, Eye, Focus, Retina};
+use inimtrace::progress::Progress;
+use inimtrace::render::retina::simulate;
+use inimtrace::render::{ground_truth, render_display_image, DisplayRenderSettings, FacingPlanes, Method, RadianceField, SceneTracer};
+use inimtrace::scene::Scene;
+
+#[derive(Parser)]
+#[command(name = "inimtrace", version, about = "How a near-eye integral-imaging display looks to a human eye, and how good each way of rendering its display image is.")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+    /// No progress bars.
+    #[arg(long, short, global = true)]
+    quiet: bool,
+    /// Worker threads (default: all cores).
+    #[arg(long, global = true)]
+    threads: Option<usize>,
+    /// Print the wall time of every stage.
+    #[arg(long, global = true)]
+    timings: bool,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run an experiment (default: the paper's) and write every image, the table and the figure.
+    Assess {
+        /// Experiment TOML (default: the paper's experiment as its text states it).
+        experiment: Option<PathBuf>,
+        /// Output directory (default: out/<experiment name>).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// Render one display image.
+    RenderDisplay {
+        /// LC, PC, LA (5 x 5) or LA<k>.
+        #[arg(long, default_value = "LC")]
+        method: String,
+        #[command(flatten)]
+        setup: Setup,
+        /// k x k samples per display pixel.
+        #[arg(long, default_value_t = 1)]
+        samples_per_pixel: usize,
+        /// z of the reference plane camera rays start on (mm).
+        #[arg(long, default_value_t = 0.0)]
+        reference_plane: f64,
+        /// Output EXR (a PNG preview is written beside it).
+        #[arg(long, short)]
+        out: PathBuf,
+    },
+    /// Simulate the perceived retinal image of a display image (any EXR of the LCD's resolution).
+    Simulate {
+        /// Display image (EXR).
+        display_image: PathBuf,
+        #[command(flatten)]
+        setup: Setup,
+        #[command(flatten)]
+        eye: EyeArgs,
+        #[arg(long, short)]
+        out: PathBuf,
+    },
+    /// Render the ground-truth retinal image of the scene.
+    GroundTruth {
+        #[command(flatten)]
+        setup: Setup,
+        #[command(flatten)]
+        eye: EyeArgs,
+        #[arg(long, short)]
+        out: PathBuf,
+    },
+    /// PSNR and SSIM of two RGB EXR images of the same size.
+    Compare {
+        a: PathBuf,
+        b: PathBuf,
+        /// SSIM constants: wang2004 or framework-8bit.
+        #[arg(long, default_value = "wang2004")]
+        ssim: String,
+    },
+    /// Describe a display (central depth plane and more) and write the built-in files.
+    Info {
+        /// Display TOML or OpenCV YAML (default: the paper's).
+        #[arg(long)]
+        display: Option<PathBuf>,
+        /// Print the built-in experiment, scene or display as a file: paper-experiment,
+        /// framework-2020-experiment, paper-scene, paper-display.
+        #[arg(long)]
+        print: Option<String>,
+    },
+}
+
+/// Scene and display.
+#[derive(Args)]
+struct Setup {
+    /// Scene TOML (default: the paper's scene).
+    #[arg(long)]
+    scene: Option<PathBuf>,
+    /// Display TOML or OpenCV YAML (default: the paper's display).
+    #[arg(long)]
+    display: Option<PathBuf>,
+}
+
+/// The eye.
+#[derive(Args)]
+struct EyeArgs {
+    /// A pinhole eye (everything in focus).
+    #[arg(long, conflicts_with_all = ["focus_mm", "focus_diopters"])]
+    pinhole: bool,
+    /// Focus distance, mm.
+    #[arg(long)]
+    focus_mm: Option<f64>,
+    /// Focus in diopters (0 = infinity).
+    #[arg(long, conflicts_with = "focus_mm")]
+    focus_diopters: Option<f64>,
+    /// Pupil diameter, mm.
+    #[arg(long, default_value_t = 5.0)]
+    pupil: f64,
+    /// n x n pupil grid, kept inside the circle.
+    #[arg(long, default_value_t = 8)]
+    pupil_grid: usize,
+    /// Retina pixels per side.
+    #[arg(long, default_value_t = 512)]
+    retina: usize,
+    /// Retina half field, as a tangent.
+    #[arg(long, default_value_t = 0.3)]
+    half_tangent: f64,
+    /// k x k samples per retina pixel.
+    #[arg(long, default_value_t = 1)]
+    retina_samples: usize,
+}
+
+impl EyeArgs {
+    fn eye(&self) -> Result<(Eye, Retina)> {
+        let aperture = match (self.pinhole, self.focus_mm, self.focus_diopters) {
+            (true, _, _) => Aperture::Pinhole,
+            (false, Some(mm), None) => Aperture::ThinLens { pupil_diameter: self.pupil, focus: Focus::Millimetres(mm) },
+            (false, None, Some(d)) => Aperture::ThinLens { pupil_diameter: self.pupil, focus: Focus::Diopters(d) },
+            _ => bail!("give --pinhole, --focus-mm or --focus-diopters"),
+        };
+        let eye = Eye { retina_distance: 17.0, aperture, pupil_grid: self.pupil_grid, position: DVec3::ZERO };
+        eye.validate("command line")?;
+        let retina = Retina { resolution: self.retina, half_tangent: self.half_tangent, samples_per_pixel: self.retina_samples };
+        retina.validate("command line")?;
+        Ok((eye, retina))
+    }
+}
+
+fn load_setup(setup: &Setup) -> Result<(Scene, Display)> {
+    let scene = match &setup.scene {
+        Some(p) => config::load_scene(&p.to_string_lossy(), Path::new(""))?,
+        None => Scene::paper(),
+    };
+    let display = match &setup.display {
+        Some(p) => config::load_display(&p.to_string_lossy(), Path::new(""))?,
+        None => Display::paper(),
+    };
+    Ok((scene, display))
+}
+
+/// Runs `f` with the fastest radiance field for the scene.
+fn with_field<T>(scene: &Scene, f: impl FnOnce(&dyn RadianceField) -> Result<T>) -> Result<T> {
+    let backend = AnalyticRects::new(scene)?;
+    match FacingPlanes::new(scene, &backend) {
+        Some(fast) => f(&fast),
+        None => f(&SceneTracer { scene, backend: &backend }),
+    }
+}
+
+fn write_image(path: &Path, img: &inimtrace::raster::RgbImage, attrs: &[(&str, String)]) -> Result<()> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    }
+    inimtrace::io::exr::write_rgb(path, img, None, attrs)?;
+    inimtrace::io::png::write_preview(&path.with_extension("png"), img)?;
+    Ok(())
+}
+
+fn main() {
+    if let Err(e) = run() {
+        eprintln!("error: {e:#}");
+        std::process::exit(1);
+    }
+}
+
+fn run() -> Result<()> {
+    let cli = Cli::parse();
+    if let Some(n) = cli.threads {
+        if n == 0 {
+            bail!("--threads must be at least 1");
+        }
+        rayon::ThreadPoolBuilder::new().num_threads(n).build_global().context("cannot start the thread pool")?;
+    }
+    let quiet = cli.quiet;
+    let start = Instant::now();
+    match cli.command {
+        Command::Assess { experiment, out } => {
+            let exp = match &experiment {
+                Some(p) => Experiment::load(p)?,
+                None => Experiment::paper(),
+            };
+            let out = out.unwrap_or_else(|| PathBuf::from("out").join(&exp.name));
+            if !quiet {
+                eprintln!("{}", exp.display.summary());
+            }
+            let report = experiment::assess(&exp, &out, RunOptions { quiet })?;
+            print!("{}", experiment::table_markdown(&report, &exp));
+            if cli.timings {
+                for s in &report.stages {
+                    let what = [s.method.as_deref(), s.eye_case.as_deref()].into_iter().flatten().collect::<Vec<_>>().join(" ");
+                    eprintln!("{:>8.3} s  {} {}", s.seconds, s.stage, what);
+                }
+                eprintln!("{:>8.3} s  total ({} threads, backend {})", report.total_seconds, report.threads, report.backend);
+            }
+            eprintln!("wrote {}", out.display());
+        }
+        Command::RenderDisplay { method, setup, samples_per_pixel, reference_plane, out } => {
+            let (scene, display) = load_setup(&setup)?;
+            let method: Method = method.parse().map_err(anyhow::Error::msg)?;
+            let settings = DisplayRenderSettings { samples_per_pixel, reference_plane_z: reference_plane, eye_position: DVec3::ZERO };
+            let img = with_field(&scene, |field| {
+                let p = Progress::new(display.lcd.rows() as u64, &format!("display image {}", method.short_name()), quiet);
+                let img = render_display_image(&display, method, &settings, field, &p)?;
+                p.finish();
+                Ok(img)
+            })?;
+            write_image(&out, &img, &[("inimtrace:kind", "display image".into()), ("inimtrace:method", method.to_string()), ("inimtrace:display", display.summary())])?;
+        }
+        Command::Simulate { display_image, setup, eye, out } => {
+            let (_, display) = load_setup(&setup)?;
+            let (eye, retina) = eye.eye()?;
+            let img = inimtrace::io::exr::read_rgb(&display_image)?;
+            let p = Progress::new(retina.resolution as u64, "simulate", quiet);
+            let sim = simulate(&display, &eye, &retina, &[&img], &p).with_context(|| format!("simulating {}", display_image.display()))?;
+            p.finish();
+            write_image(&out, &sim[0], &[("inimtrace:kind", "simulated retinal image".into()), ("inimtrace:source", display_image.display().to_string())])?;
+        }
+        Command::GroundTruth { setup, eye, out } => {
+            let (scene, _) = load_setup(&setup)?;
+            let (eye, retina) = eye.eye()?;
+            let img = with_field(&scene, |field| {
+                let p = Progress::new(retina.resolution as u64, "ground truth", quiet);
+                let img = ground_truth(&eye, &retina, field, &p);
+                p.finish();
+                Ok(img)
+            })?;
+            write_image(&out, &img, &[("inimtrace:kind", "ground truth retinal image".into())])?;
+        }
+        Command::Compare { a, b, ssim } => {
+            let constants: SsimConstants = ssim.parse()?;
+            let ia = inimtrace::io::exr::read_rgb(&a)?;
+            let ib = inimtrace::io::exr::read_rgb(&b)?;
+            let p = metrics::psnr(&ia, &ib).with_context(|| format!("comparing {} and {}", a.display(), b.display()))?;
+            let s = metrics::ssim(&ia, &ib, constants).with_context(|| format!("comparing {} and {}", a.display(), b.display()))?;
+            println!("PSNR  {} dB  (R {}, G {}, B {})", metrics::format_db(p.mean, 3), metrics::format_db(p.channels[0], 3), metrics::format_db(p.channels[1], 3), metrics::format_db(p.channels[2], 3));
+            println!("SSIM  {:.5}  (R {:.5}, G {:.5}, B {:.5}; constants {})", s.mean, s.channels[0], s.channels[1], s.channels[2], constants);
+        }
+        Command::Info { display, print } => {
+            if let Some(what) = print {
+                let text = match what.as_str() {
+                    "paper-experiment" => ExperimentSpec::paper().to_toml(),
+                    "framework-2020-experiment" => ExperimentSpec::framework_2020().to_toml(),
+                    "paper-scene" => toml::to_string_pretty(&config::SceneSpec::paper())?,
+                    "paper-display" => toml::to_string_pretty(&config::DisplaySpec::from_display(&Display::paper()))?,
+                    other => bail!("unknown --print `{other}`: paper-experiment, framework-2020-experiment, paper-scene or paper-display"),
+                };
+                print!("{text}");
+                return Ok(());
+            }
+            let d = match display {
+                Some(p) => config::load_display(&p.to_string_lossy(), Path::new(""))?,
+                None => Display::paper(),
+            };
+            println!("{}", d.summary());
+        }
+    }
+    if cli.timings {
+        eprintln!("total {:.3} s", start.elapsed().as_secs_f64());
+    }
+    Ok(())
+}

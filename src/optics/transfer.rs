@@ -80,12 +80,7 @@ pub fn eye_to_lcd(display: &Display, eye: &Eye, tangent: DVec2, pupil_offset: DV
     let center = display.lenslets.center(lenslet_index);
     let lenslet = at_lenslets.refract(center, display.lenslet_power());
     let lcd = lenslet.propagate(display.lenslets_to_lcd).position;
-    EyeTrace { retina: -v0_times(eye, tangent), pupil, lenslet, lenslet_index, lcd }
-}
-
-#[inline]
-fn v0_times(eye: &Eye, tangent: DVec2) -> DVec2 {
-    eye.retina_distance * tangent
+    EyeTrace { retina: -eye.retina_distance * tangent, pupil, lenslet, lenslet_index, lcd }
 }
 
 /// The reverse trace: light leaving LCD point `lcd` through lenslet-plane point `lenslet_point`,

@@ -1,0 +1,266 @@
+//! The physics of the assessment pipeline (issue: "What must be true").
+
+use glam::{DVec2, DVec3};
+use inimtrace::accel::analytic::AnalyticRects;
+use inimtrace::io::config;
+use inimtrace::metrics;
+use inimtrace::optics::transfer::{eye_ray, eye_to_lcd, lcd_to_eye};
+use inimtrace::optics::{Display, Eye, Focus, Retina};
+use inimtrace::progress::Progress;
+use inimtrace::raster::RgbImage;
+use inimtrace::render::retina::{simulate, FastTransfer};
+use inimtrace::render::{ground_truth, render_display_image, DisplayRenderSettings, FacingPlanes, Method, SceneTracer};
+use inimtrace::scene::{Material, Object, Rect, Scene, Shape};
+use std::path::Path;
+
+/// Deterministic pseudo-random numbers in [0, 1).
+struct Lcg(u64);
+impl Lcg {
+    fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.next()
+    }
+}
+
+fn small_display(res: usize) -> Display {
+    let mut d = Display::paper();
+    d.lcd.resolution = [res, res];
+    d
+}
+
+#[test]
+fn ray_transfer_is_reversible() {
+    let mut rng = Lcg(1);
+    let display = Display::paper();
+    for focus in [Focus::Millimetres(300.0), Focus::Diopters(0.0), Focus::Millimetres(385.0)] {
+        let mut eye = Eye::thin_lens(5.0, focus, 8);
+        eye.position = DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), 0.0);
+        for _ in 0..20_000 {
+            let t = DVec2::new(rng.range(-0.3, 0.3), rng.range(-0.3, 0.3));
+            let s = DVec2::new(rng.range(-2.5, 2.5), rng.range(-2.5, 2.5));
+            let fwd = eye_to_lcd(&display, &eye, t, s);
+            let (pupil, retina) = lcd_to_eye(&display, &eye, fwd.lcd, fwd.lenslet.position);
+            assert!((pupil.position - fwd.pupil.position).length() < 1e-9, "pupil {:?} vs {:?}", pupil, fwd.pupil);
+            assert!((pupil.slope - fwd.pupil.slope).length() < 1e-12);
+            assert!((retina - fwd.retina).length() < 1e-9, "retina {retina:?} vs {:?}", fwd.retina);
+            assert!((fwd.retina - (-eye.retina_distance * t)).length() < 1e-12);
+        }
+    }
+}
+
+#[test]
+fn fast_transfer_agrees_with_eye_to_lcd() {
+    let display = Display::paper();
+    let mut rng = Lcg(2);
+    for eye in [Eye::thin_lens(5.0, Focus::Millimetres(300.0), 8), Eye::pinhole(), Eye::thin_lens(2.0, Focus::Diopters(0.0), 5)] {
+        let pupil = eye.pupil_samples();
+        let fast = FastTransfer::new(&display, &eye, &pupil);
+        for _ in 0..5_000 {
+            let t = DVec2::new(rng.range(-0.3, 0.3), rng.range(-0.3, 0.3));
+            for (k, s) in pupil.iter().enumerate() {
+                let slow = eye_to_lcd(&display, &eye, t, *s).lcd;
+                assert!((fast.lcd_point(t, k) - slow).length() < 1e-12);
+            }
+        }
+    }
+}
+
+#[test]
+fn focal_plane_points_image_to_one_retina_point() {
+    let mut rng = Lcg(3);
+    for (a, b) in [(Focus::Millimetres(400.0), Focus::Diopters(2.5)), (Focus::Millimetres(250.0), Focus::Diopters(4.0))] {
+        let ea = Eye::thin_lens(5.0, a, 8);
+        let eb = Eye::thin_lens(5.0, b, 8);
+        let z = a.distance_mm();
+        for _ in 0..1000 {
+            let t = DVec2::new(rng.range(-0.3, 0.3), rng.range(-0.3, 0.3));
+            for s in ea.pupil_samples() {
+                let ra = eye_ray(&ea, t, s);
+                let rb = eye_ray(&eb, t, s);
+                // Every pupil sample reaches the same focal-plane point, t * z.
+                assert!((ra.propagate(z).position - t * z).length() < 1e-9);
+                assert!((ra.slope - rb.slope).length() < 1e-15, "diopters and mm disagree");
+            }
+        }
+    }
+    // 0 D: all rays from one retina point leave parallel (they meet at infinity).
+    let inf = Eye::thin_lens(5.0, Focus::Diopters(0.0), 8);
+    let t = DVec2::new(0.1, -0.05);
+    for s in inf.pupil_samples() {
+        assert!((eye_ray(&inf, t, s).slope - t).length() < 1e-15);
+    }
+}
+
+#[test]
+fn lensletaverage_1x1_is_exactly_lensletcenter() {
+    let display = small_display(540);
+    let scene = Scene::paper();
+    let backend = AnalyticRects::new(&scene).unwrap();
+    let field = FacingPlanes::new(&scene, &backend).unwrap();
+    let s = DisplayRenderSettings::default();
+    let lc = render_display_image(&display, Method::LensletCenter, &s, &field, &Progress::hidden()).unwrap();
+    let la = render_display_image(&display, Method::LensletAverage { grid: 1 }, &s, &field, &Progress::hidden()).unwrap();
+    assert!(lc == la);
+    let la3 = render_display_image(&display, Method::LensletAverage { grid: 3 }, &s, &field, &Progress::hidden()).unwrap();
+    assert!(lc != la3);
+}
+
+#[test]
+fn fused_kernel_and_generic_backend_render_the_same_images() {
+    let display = small_display(216);
+    let scene = Scene::paper();
+    let backend = AnalyticRects::new(&scene).unwrap();
+    let fast = FacingPlanes::new(&scene, &backend).unwrap();
+    let slow = SceneTracer { scene: &scene, backend: &backend };
+    let s = DisplayRenderSettings::default();
+    for m in [Method::LensletCenter, Method::PupilCenter, Method::LensletAverage { grid: 3 }] {
+        let a = render_display_image(&display, m, &s, &fast, &Progress::hidden()).unwrap();
+        let b = render_display_image(&display, m, &s, &slow, &Progress::hidden()).unwrap();
+        assert!(a == b, "{m}");
+    }
+    let eye = Eye::thin_lens(5.0, Focus::Millimetres(300.0), 4);
+    let retina = Retina { resolution: 64, ..Retina::default() };
+    assert!(ground_truth(&eye, &retina, &fast, &Progress::hidden()) == ground_truth(&eye, &retina, &slow, &Progress::hidden()));
+}
+
+fn white_scene() -> Scene {
+    Scene {
+        name: "white".into(),
+        objects: vec![Object {
+            name: "wall".into(),
+            shape: Shape::Rect(Rect::facing_eye(DVec3::new(0.0, 0.0, 500.0), 1e5, 1e5)),
+            material: Material::Albedo(DVec3::ONE),
+        }],
+        background: DVec3::ZERO,
+    }
+}
+
+#[test]
+fn uniform_white_scene_looks_white_wherever_rays_land_on_the_lcd() {
+    let display = small_display(432);
+    let scene = white_scene();
+    let backend = AnalyticRects::new(&scene).unwrap();
+    let field = SceneTracer { scene: &scene, backend: &backend };
+    let s = DisplayRenderSettings::default();
+    let images: Vec<RgbImage> = [Method::LensletCenter, Method::PupilCenter, Method::LensletAverage { grid: 3 }]
+        .iter()
+        .map(|m| render_display_image(&display, *m, &s, &field, &Progress::hidden()).unwrap())
+        .collect();
+    for img in &images {
+        assert!(img.pixels.iter().all(|p| *p == [1.0; 3]), "display image of a white scene is white");
+    }
+    // Wide field so that some rays miss the LCD.
+    let retina = Retina { resolution: 96, half_tangent: 0.6, samples_per_pixel: 1 };
+    let eye = Eye::thin_lens(5.0, Focus::Millimetres(400.0), 6);
+    let sims = simulate(&display, &eye, &retina, &images.iter().collect::<Vec<_>>(), &Progress::hidden()).unwrap();
+    let pupil = eye.pupil_samples();
+    let fast = FastTransfer::new(&display, &eye, &pupil);
+    let (mut all_on, mut partly) = (0, 0);
+    for row in 0..96 {
+        for col in 0..96 {
+            let t = retina.tangent(row, col, DVec2::splat(0.5));
+            let landed = (0..pupil.len()).filter(|&k| fast.pixel_index(t, k).is_some()).count();
+            for sim in &sims {
+                let v = sim.get(row, col);
+                let expect = landed as f32 / pupil.len() as f32;
+                assert!((v[0] - expect).abs() < 1e-6 && v[0] == v[1] && v[1] == v[2], "({row},{col}): {v:?} vs {expect}");
+            }
+            if landed == pupil.len() {
+                all_on += 1;
+            } else if landed > 0 {
+                partly += 1;
+            }
+        }
+    }
+    assert!(all_on > 1000 && partly > 100, "both cases exercised: {all_on} {partly}");
+}
+
+fn region_psnr(a: &RgbImage, b: &RgbImage, rows: std::ops::Range<usize>, cols: std::ops::Range<usize>) -> f64 {
+    let mut se = 0.0;
+    let mut n = 0.0;
+    for r in rows {
+        for c in cols.clone() {
+            for ch in 0..3 {
+                let d = a.get(r, c)[ch] as f64 - b.get(r, c)[ch] as f64;
+                se += d * d;
+                n += 1.0;
+            }
+        }
+    }
+    -10.0 * (se / n).log10()
+}
+
+/// The paper's display at full resolution with a smaller retina (the physics at stake, focus
+/// cues and LC against PC, lives in the display's pixel pitch).
+#[test]
+fn focus_cues_and_lc_beats_pc_when_the_eye_focuses() {
+    let display = Display::paper();
+    let scene = Scene::paper();
+    let backend = AnalyticRects::new(&scene).unwrap();
+    let field = FacingPlanes::new(&scene, &backend).unwrap();
+    let s = DisplayRenderSettings::default();
+    let methods = [Method::LensletCenter, Method::PupilCenter, Method::LensletAverage { grid: 3 }];
+    let images: Vec<RgbImage> = methods.iter().map(|m| render_display_image(&display, *m, &s, &field, &Progress::hidden()).unwrap()).collect();
+    let refs: Vec<&RgbImage> = images.iter().collect();
+    let n = 256;
+    let retina = Retina { resolution: n, ..Retina::default() };
+    let mut by_focus = Vec::new();
+    for z in [300.0, 400.0, 600.0] {
+        let eye = Eye::thin_lens(5.0, Focus::Millimetres(z), 8);
+        let gt = ground_truth(&eye, &retina, &field, &Progress::hidden());
+        let sims = simulate(&display, &eye, &retina, &refs, &Progress::hidden()).unwrap();
+        let lc = metrics::psnr(&sims[0], &gt).unwrap().mean;
+        let pc = metrics::psnr(&sims[1], &gt).unwrap().mean;
+        assert!(lc > pc + 1.0, "focus {z}: LC {lc:.2} dB should beat PC {pc:.2} dB clearly");
+        // Near chart: tangents x, y in [-0.3, 0] (bottom-left quadrant). Far chart, unoccluded:
+        // tangents x, y in [0.16, 0.3] (top-right corner).
+        let near = region_psnr(&sims[2], &gt, n / 2 + 4..n - 4, 4..n / 2 - 4);
+        let far = region_psnr(&sims[2], &gt, 4..(n as f64 * (0.3 - 0.16) / 0.6) as usize, (n as f64 * (0.3 + 0.16) / 0.6) as usize..n - 4);
+        by_focus.push((near, far));
+    }
+    let (near_300, far_300) = by_focus[0];
+    let (near_600, far_600) = by_focus[2];
+    assert!(near_300 > near_600 + 0.5, "near chart: {near_300:.2} dB focused near vs {near_600:.2} dB focused far");
+    assert!(far_600 > far_300 + 0.5, "far chart: {far_600:.2} dB focused far vs {far_300:.2} dB focused near");
+}
+
+#[test]
+fn framework_yaml_equals_our_toml_and_the_builtin_display() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let yaml = config::load_display("data/lensletdisplay.yaml", root).unwrap();
+    let toml = config::load_display("displays/paper.toml", root).unwrap();
+    let builtin = Display::paper();
+    for d in [&yaml, &toml] {
+        assert_eq!(d.eye_to_lenslets, builtin.eye_to_lenslets);
+        assert_eq!(d.lenslets_to_lcd, builtin.lenslets_to_lcd);
+        assert_eq!(d.focal_length, builtin.focal_length);
+        assert_eq!(d.lenslets, builtin.lenslets);
+        assert_eq!(d.elemental_images, builtin.elemental_images);
+        assert_eq!(d.lcd, builtin.lcd);
+    }
+    let z = yaml.central_depth_plane().unwrap();
+    assert!((z - 385.8).abs() < 0.5, "{z}");
+}
+
+#[test]
+fn shipped_scene_and_experiment_files_match_the_builtins() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let scene = config::load_scene("scenes/paper.toml", root).unwrap();
+    let builtin = Scene::paper();
+    assert_eq!(scene.objects.len(), builtin.objects.len());
+    for (a, b) in scene.objects.iter().zip(&builtin.objects) {
+        match (&a.shape, &b.shape) {
+            (Shape::Rect(x), Shape::Rect(y)) => assert_eq!(x, y),
+            _ => panic!("shapes differ"),
+        }
+    }
+    let paper = inimtrace::experiment::Experiment::load(&root.join("experiments/paper.toml")).unwrap();
+    assert_eq!(paper.spec, inimtrace::experiment::ExperimentSpec::paper());
+    let fw = inimtrace::experiment::Experiment::load(&root.join("experiments/framework-2020.toml")).unwrap();
+    assert_eq!(fw.spec, inimtrace::experiment::ExperimentSpec::framework_2020());
+    assert_eq!(fw.cases[1].eye.pupil_samples().len(), 21);
+    assert_eq!(paper.cases[1].eye.pupil_samples().len(), 52);
+}
