@@ -57,7 +57,10 @@ pub fn psnr_channel(a: &[f64], b: &[f64]) -> f64 {
     assert_eq!(a.len(), b.len(), "psnr_channel: planes differ in length");
     assert!(!a.is_empty(), "psnr_channel: empty planes");
     let sse: f64 = a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum();
-    let mse = sse / a.len() as f64;
+    psnr_from_mse(sse / a.len() as f64)
+}
+
+fn psnr_from_mse(mse: f64) -> f64 {
     if mse == 0.0 {
         f64::INFINITY
     } else {
@@ -86,9 +89,26 @@ impl Psnr {
 /// Errors if the images differ in size, are empty, or contain a non-finite sample.
 pub fn psnr(a: &RgbImage, b: &RgbImage) -> Result<Psnr> {
     check_pair(a, b, "PSNR")?;
+    // Per-chunk sums of squared errors in f64, added in a fixed order (schedule-independent).
+    let chunk_sse: Vec<[f64; 3]> = a
+        .pixels
+        .par_chunks(16_384)
+        .zip(b.pixels.par_chunks(16_384))
+        .map(|(pa, pb)| {
+            let mut sse = [0.0f64; 3];
+            for (p, q) in pa.iter().zip(pb) {
+                for c in 0..3 {
+                    let d = p[c] as f64 - q[c] as f64;
+                    sse[c] += d * d;
+                }
+            }
+            sse
+        })
+        .collect();
+    let n = a.pixels.len() as f64;
     let mut channels = [0.0; 3];
     for (c, out) in channels.iter_mut().enumerate() {
-        *out = psnr_channel(&a.channel(c), &b.channel(c));
+        *out = psnr_from_mse(chunk_sse.iter().map(|s| s[c]).sum::<f64>() / n);
     }
     let mean = channels.iter().sum::<f64>() / 3.0;
     Ok(Psnr { channels, mean })
@@ -216,6 +236,17 @@ fn gaussian_2d() -> [[f64; SSIM_WINDOW]; SSIM_WINDOW] {
     w
 }
 
+/// The same SSIM map value from `E[x² + y²]` instead of `E[x²]` and `E[y²]` (the formula only
+/// needs `σx² + σy²`), which saves one of five filtered quantities in the fast path.
+#[inline]
+fn ssim_value_combined(mx: f64, my: f64, esq: f64, exy: f64, c1: f64, c2: f64) -> f64 {
+    let mxy = mx * my;
+    let msq = mx * mx + my * my;
+    let s_sum = esq - msq;
+    let sxy = exy - mxy;
+    ((2.0 * mxy + c1) * (2.0 * sxy + c2)) / ((msq + c1) * (s_sum + c2))
+}
+
 /// One SSIM map value from the local statistics (ssim_index.m, case C1 > 0 and C2 > 0).
 #[inline]
 #[allow(clippy::too_many_arguments)]
@@ -229,83 +260,109 @@ fn ssim_value(mx: f64, my: f64, exx: f64, eyy: f64, exy: f64, c1: f64, c2: f64) 
     ((2.0 * mxy + c1) * (2.0 * sxy + c2)) / ((mxx + myy + c1) * (sxx + syy + c2))
 }
 
-/// `out[j] += gk * (a[j] + b[j])`, written so that it vectorises.
+/// 'valid' 1-D filtering of `src` with the symmetric 11-tap window `g`:
+/// `out.len() == src.len() - 10`. Written per output sample with the taps folded in symmetric
+/// pairs (6 multiplications), which the compiler vectorises across outputs.
 #[inline]
-fn accumulate_pair(out: &mut [f64], gk: f64, a: &[f64], b: &[f64]) {
-    let n = out.len();
-    for ((o, &p), &q) in out.iter_mut().zip(&a[..n]).zip(&b[..n]) {
-        *o += gk * (p + q);
-    }
-}
-
-/// 'valid' 1-D filtering of `src` with the symmetric window `g`: `out.len() == src.len() - 10`.
 fn filter_row_valid(src: &[f64], g: &[f64; SSIM_WINDOW], out: &mut [f64]) {
-    let n = out.len();
-    debug_assert_eq!(n + SSIM_WINDOW - 1, src.len());
-    for (o, &s) in out.iter_mut().zip(&src[HALF..HALF + n]) {
-        *o = g[HALF] * s;
-    }
-    for k in 0..HALF {
-        accumulate_pair(
-            out,
-            g[k],
-            &src[k..k + n],
-            &src[SSIM_WINDOW - 1 - k..SSIM_WINDOW - 1 - k + n],
-        );
+    debug_assert_eq!(out.len() + SSIM_WINDOW - 1, src.len());
+    let [g0, g1, g2, g3, g4, g5, ..] = *g;
+    for (o, w) in out.iter_mut().zip(src.windows(SSIM_WINDOW)) {
+        *o = g5 * w[5]
+            + g0 * (w[0] + w[10])
+            + g1 * (w[1] + w[9])
+            + g2 * (w[2] + w[8])
+            + g3 * (w[3] + w[7])
+            + g4 * (w[4] + w[6]);
     }
 }
 
-/// Mean SSIM of one channel, separable filtering, rows in parallel.
-fn ssim_channel_fast(x: &[f64], y: &[f64], width: usize, height: usize, c1: f64, c2: f64) -> f64 {
+/// 'valid' vertical filtering: `out[j] = Σk g[k] rows[k][j]`, taps folded as in
+/// [`filter_row_valid`].
+#[inline]
+fn filter_column_valid(rows: [&[f64]; SSIM_WINDOW], g: &[f64; SSIM_WINDOW], out: &mut [f64]) {
+    let n = out.len();
+    let [g0, g1, g2, g3, g4, g5, ..] = *g;
+    let r: [&[f64]; SSIM_WINDOW] = rows.map(|row| &row[..n]);
+    for (j, o) in out.iter_mut().enumerate() {
+        *o = g5 * r[5][j]
+            + g0 * (r[0][j] + r[10][j])
+            + g1 * (r[1][j] + r[9][j])
+            + g2 * (r[2][j] + r[8][j])
+            + g3 * (r[3][j] + r[7][j])
+            + g4 * (r[4][j] + r[6][j]);
+    }
+}
+
+/// Output rows per parallel task of [`ssim_channel_fast`]: large enough that recomputing the
+/// 10 rows of overlap between bands costs little, small enough for several tasks per core.
+const BAND_ROWS: usize = 64;
+
+/// Mean SSIM of channel `c`, separable filtering. The 'valid' output rows are split into bands
+/// processed in parallel; inside a band the four horizontally filtered quantities (x, y,
+/// x² + y², xy) of the last 11 input rows are kept in a ring buffer (cache-sized), from which the
+/// vertical pass makes one row of the SSIM map at a time. Band sums are added in a fixed order,
+/// so the result does not depend on the thread schedule.
+fn ssim_channel_fast(a: &RgbImage, b: &RgbImage, c: usize, c1: f64, c2: f64) -> f64 {
+    let (width, height) = (a.width, a.height);
     let g = gaussian_1d();
     let wv = width - (SSIM_WINDOW - 1);
     let hv = height - (SSIM_WINDOW - 1);
-    // Horizontal pass: for every image row, the five filtered quantities x, y, x², y², xy,
-    // stored as [row][quantity][column].
-    let stride = 5 * wv;
-    let mut horiz = vec![0.0f64; height * stride];
-    horiz
-        .par_chunks_mut(stride)
-        .enumerate()
-        .for_each(|(r, out)| {
-            let xr = &x[r * width..(r + 1) * width];
-            let yr = &y[r * width..(r + 1) * width];
-            let xx: Vec<f64> = xr.iter().map(|v| v * v).collect();
-            let yy: Vec<f64> = yr.iter().map(|v| v * v).collect();
-            let xy: Vec<f64> = xr.iter().zip(yr).map(|(a, b)| a * b).collect();
-            for (q, src) in [xr, yr, &xx, &yy, &xy].into_iter().enumerate() {
-                filter_row_valid(src, &g, &mut out[q * wv..(q + 1) * wv]);
-            }
-        });
-    // Vertical pass and SSIM map, one output row at a time; per-row sums are added in a fixed
-    // order so the result does not depend on the thread schedule.
-    let row_sums: Vec<f64> = (0..hv)
-        .into_par_iter()
-        .map(|i| {
+    let stride = 4 * wv;
+    let band_starts: Vec<usize> = (0..hv).step_by(BAND_ROWS).collect();
+    let band_sums: Vec<f64> = band_starts
+        .par_iter()
+        .map(|&i0| {
+            let i1 = (i0 + BAND_ROWS).min(hv);
+            let mut ring = vec![0.0f64; SSIM_WINDOW * stride];
+            let mut quantities = vec![0.0f64; 4 * width];
             let mut acc = vec![0.0f64; stride];
-            let centre = &horiz[(i + HALF) * stride..(i + HALF + 1) * stride];
-            for (o, &s) in acc.iter_mut().zip(centre) {
-                *o = g[HALF] * s;
+            let mut sum = 0.0;
+            let mut filter_input_row = |r: usize, ring: &mut [f64]| {
+                let (qx, rest) = quantities.split_at_mut(width);
+                let (qy, rest) = rest.split_at_mut(width);
+                let (qsq, qxy) = rest.split_at_mut(width);
+                let row_a = &a.pixels[r * width..(r + 1) * width];
+                let row_b = &b.pixels[r * width..(r + 1) * width];
+                for j in 0..width {
+                    let (u, v) = (row_a[j][c] as f64, row_b[j][c] as f64);
+                    qx[j] = u;
+                    qy[j] = v;
+                    qsq[j] = u * u + v * v;
+                    qxy[j] = u * v;
+                }
+                let slot = &mut ring[(r % SSIM_WINDOW) * stride..(r % SSIM_WINDOW + 1) * stride];
+                for (q, out) in slot.chunks_exact_mut(wv).enumerate() {
+                    filter_row_valid(&quantities[q * width..(q + 1) * width], &g, out);
+                }
+            };
+            for r in i0..i0 + SSIM_WINDOW - 1 {
+                filter_input_row(r, &mut ring);
             }
-            for k in 0..HALF {
-                let a = &horiz[(i + k) * stride..(i + k + 1) * stride];
-                let b = &horiz[(i + SSIM_WINDOW - 1 - k) * stride..(i + SSIM_WINDOW - k) * stride];
-                accumulate_pair(&mut acc, g[k], a, b);
+            for i in i0..i1 {
+                filter_input_row(i + SSIM_WINDOW - 1, &mut ring);
+                let row = |k: usize| {
+                    let s = (i + k) % SSIM_WINDOW;
+                    &ring[s * stride..(s + 1) * stride]
+                };
+                filter_column_valid(std::array::from_fn(row), &g, &mut acc);
+                let (mx, rest) = acc.split_at(wv);
+                let (my, rest) = rest.split_at(wv);
+                let (esq, exy) = rest.split_at(wv);
+                sum += (0..wv)
+                    .map(|j| ssim_value_combined(mx[j], my[j], esq[j], exy[j], c1, c2))
+                    .sum::<f64>();
             }
-            let (mx, rest) = acc.split_at(wv);
-            let (my, rest) = rest.split_at(wv);
-            let (exx, rest) = rest.split_at(wv);
-            let (eyy, exy) = rest.split_at(wv);
-            (0..wv)
-                .map(|j| ssim_value(mx[j], my[j], exx[j], eyy[j], exy[j], c1, c2))
-                .sum::<f64>()
+            sum
         })
         .collect();
-    row_sums.iter().sum::<f64>() / (wv * hv) as f64
+    band_sums.iter().sum::<f64>() / (wv * hv) as f64
 }
 
 /// Mean SSIM of one channel by direct 11×11 weighted sums at every valid window position.
-fn ssim_channel_direct(x: &[f64], y: &[f64], width: usize, height: usize, c1: f64, c2: f64) -> f64 {
+fn ssim_channel_direct(a: &RgbImage, b: &RgbImage, c: usize, c1: f64, c2: f64) -> f64 {
+    let (x, y) = (a.channel(c), b.channel(c));
+    let (width, height) = (a.width, a.height);
     let w = gaussian_2d();
     let mut total = 0.0;
     let mut count = 0usize;
@@ -343,7 +400,7 @@ pub fn ssim_direct(a: &RgbImage, b: &RgbImage, constants: SsimConstants) -> Resu
     ssim_with(a, b, constants, ssim_channel_direct)
 }
 
-type ChannelSsim = fn(&[f64], &[f64], usize, usize, f64, f64) -> f64;
+type ChannelSsim = fn(&RgbImage, &RgbImage, usize, f64, f64) -> f64;
 
 fn ssim_with(a: &RgbImage, b: &RgbImage, constants: SsimConstants, f: ChannelSsim) -> Result<Ssim> {
     check_pair(a, b, "SSIM")?;
@@ -358,10 +415,7 @@ fn ssim_with(a: &RgbImage, b: &RgbImage, constants: SsimConstants, f: ChannelSsi
         ));
     }
     let (c1, c2) = constants.c1_c2();
-    let per: Vec<f64> = (0..3)
-        .into_par_iter()
-        .map(|c| f(&a.channel(c), &b.channel(c), a.width, a.height, c1, c2))
-        .collect();
+    let per: Vec<f64> = (0..3).into_par_iter().map(|c| f(a, b, c, c1, c2)).collect();
     let channels = [per[0], per[1], per[2]];
     Ok(Ssim {
         channels,

@@ -1,4 +1,5 @@
 //! File input and output: OpenEXR images, PNG previews, figures and configuration files.
 
 pub mod exr;
+pub mod figure;
 pub mod png;
