@@ -2,4 +2,5 @@
 
 pub mod config;
 pub mod exr;
+pub mod figure;
 pub mod png;

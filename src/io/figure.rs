@@ -1,0 +1,305 @@
+//! Paper-style image grids: a PNG montage like the paper's Figure 3, with one row per eye case
+//! and one column per image (ground truth, LC, PC, LA), row labels on the left and column labels
+//! on top.
+//!
+//! Layout (all sizes in pixels, see [`montage_size`] and [`cell_origin`]): a white canvas; a
+//! label strip of [`ROW_LABEL_WIDTH`] on the left and [`COLUMN_LABEL_HEIGHT`] on top; cells of
+//! [`CELL_SIZE`]² separated by white gaps of [`SEPARATOR`], and a [`SEPARATOR`] margin right and
+//! below. Every source image is scaled, in linear light, to fit its cell with its aspect ratio
+//! kept (centred, black bars if not square) by area averaging (an exact box filter: downscaling
+//! averages the covered source pixels, integer upscaling replicates them), then sRGB-encoded
+//! like [`super::png::write_preview`].
+//!
+//! Text is drawn with plotters' bitmap backend and its `ttf` feature, which finds the
+//! `sans-serif` font through fontconfig: building needs `pkg-config`, `libfontconfig1-dev` and
+//! `libfreetype-dev`; running needs a font (Debian `fonts-dejavu-core`). Without a usable font,
+//! [`write_montage`] returns an error saying so rather than a figure without labels.
+
+use std::path::Path;
+
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+
+use crate::error::{Error, Result};
+use crate::io::png::{to_srgb8, write_rgb8};
+use crate::raster::RgbImage;
+
+/// Side of one square cell.
+pub const CELL_SIZE: usize = 256;
+/// Gap between cells, and margin right and below the grid.
+pub const SEPARATOR: usize = 4;
+/// Width of the row-label strip on the left.
+pub const ROW_LABEL_WIDTH: usize = 180;
+/// Height of the column-label strip on top.
+pub const COLUMN_LABEL_HEIGHT: usize = 40;
+
+const FONT: &str = "sans-serif";
+const COLUMN_FONT_SIZE: f64 = 24.0;
+const ROW_FONT_SIZE: f64 = 20.0;
+
+/// `(width, height)` of a montage with `n_rows` rows and `n_cols` columns:
+/// `width = ROW_LABEL_WIDTH + n_cols * (CELL_SIZE + SEPARATOR)`,
+/// `height = COLUMN_LABEL_HEIGHT + n_rows * (CELL_SIZE + SEPARATOR)`.
+pub fn montage_size(n_rows: usize, n_cols: usize) -> (usize, usize) {
+    (
+        ROW_LABEL_WIDTH + n_cols * (CELL_SIZE + SEPARATOR),
+        COLUMN_LABEL_HEIGHT + n_rows * (CELL_SIZE + SEPARATOR),
+    )
+}
+
+/// `(x, y)` of the top-left pixel of cell (`row`, `col`).
+pub fn cell_origin(row: usize, col: usize) -> (usize, usize) {
+    (
+        ROW_LABEL_WIDTH + col * (CELL_SIZE + SEPARATOR),
+        COLUMN_LABEL_HEIGHT + row * (CELL_SIZE + SEPARATOR),
+    )
+}
+
+/// Box-filter weights mapping `src` samples onto `dst` samples along one axis: for each output
+/// sample, the `(source index, weight)` pairs, weights summing to 1.
+fn box_weights(src: usize, dst: usize) -> Vec<Vec<(usize, f64)>> {
+    let scale = src as f64 / dst as f64;
+    (0..dst)
+        .map(|i| {
+            let (a, b) = (i as f64 * scale, (i + 1) as f64 * scale);
+            let first = a.floor() as usize;
+            let last = (b.ceil() as usize).min(src);
+            (first..last)
+                .filter_map(|j| {
+                    let overlap = (b.min(j as f64 + 1.0) - a.max(j as f64)) / scale;
+                    (overlap > 0.0).then_some((j, overlap))
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// `src` resampled to `width` × `height` by area averaging (separable box filter).
+fn resample(src: &RgbImage, width: usize, height: usize) -> RgbImage {
+    let wx = box_weights(src.width, width);
+    let wy = box_weights(src.height, height);
+    // Horizontal pass: src.height rows of `width` pixels.
+    let mut tmp = vec![[0.0f64; 3]; src.height * width];
+    for r in 0..src.height {
+        for (c, weights) in wx.iter().enumerate() {
+            let mut acc = [0.0f64; 3];
+            for &(j, w) in weights {
+                let p = src.get(r, j);
+                for k in 0..3 {
+                    acc[k] += w * p[k] as f64;
+                }
+            }
+            tmp[r * width + c] = acc;
+        }
+    }
+    let mut out = RgbImage::new(width, height);
+    for (r, weights) in wy.iter().enumerate() {
+        for c in 0..width {
+            let mut acc = [0.0f64; 3];
+            for &(i, w) in weights {
+                for k in 0..3 {
+                    acc[k] += w * tmp[i * width + c][k];
+                }
+            }
+            out.set(r, c, [acc[0] as f32, acc[1] as f32, acc[2] as f32]);
+        }
+    }
+    out
+}
+
+/// Splits `text` at spaces into lines no wider than `max_width` according to `measure`.
+fn wrap(text: &str, max_width: u32, measure: &dyn Fn(&str) -> Result<u32>) -> Result<Vec<String>> {
+    let mut lines: Vec<String> = Vec::new();
+    let mut current = String::new();
+    for word in text.split_whitespace() {
+        let candidate = if current.is_empty() {
+            word.to_string()
+        } else {
+            format!("{current} {word}")
+        };
+        if current.is_empty() || measure(&candidate)? <= max_width {
+            current = candidate;
+        } else {
+            lines.push(std::mem::replace(&mut current, word.to_string()));
+        }
+    }
+    if !current.is_empty() {
+        lines.push(current);
+    }
+    Ok(lines)
+}
+
+/// Writes a labelled grid of images as an sRGB PNG (see the module comment for the layout).
+///
+/// `rows` are `(row label, images)`; every row must hold `column_labels.len()` images (sizes may
+/// differ). Errors: no rows or columns, a row of the wrong length, an empty or non-finite image,
+/// no usable font, or a file-system failure, each naming `path`.
+pub fn write_montage(
+    path: &Path,
+    rows: &[(&str, Vec<&RgbImage>)],
+    column_labels: &[&str],
+) -> Result<()> {
+    let source = path.display().to_string();
+    let n_cols = column_labels.len();
+    if rows.is_empty() || n_cols == 0 {
+        return Err(Error::invalid(
+            source,
+            "montage",
+            "needs at least one row and one column",
+        ));
+    }
+    for (label, images) in rows {
+        if images.len() != n_cols {
+            return Err(Error::invalid(
+                source,
+                format!("row `{label}`"),
+                format!(
+                    "has {} images but there are {n_cols} column labels",
+                    images.len()
+                ),
+            ));
+        }
+        for (c, img) in images.iter().enumerate() {
+            if img.width == 0
+                || img.height == 0
+                || img.pixels.len() != img.width * img.height
+                || !img.all_finite()
+            {
+                return Err(Error::invalid(
+                    source,
+                    format!("row `{label}`, column `{}`", column_labels[c]),
+                    format!(
+                        "image ({}x{}) is empty, inconsistent or has non-finite samples",
+                        img.width, img.height
+                    ),
+                ));
+            }
+        }
+    }
+
+    let (width, height) = montage_size(rows.len(), n_cols);
+    let mut canvas = vec![255u8; width * height * 3];
+    for (r, (_, images)) in rows.iter().enumerate() {
+        for (c, img) in images.iter().enumerate() {
+            let scale =
+                (CELL_SIZE as f64 / img.width as f64).min(CELL_SIZE as f64 / img.height as f64);
+            let w = ((img.width as f64 * scale).round() as usize).clamp(1, CELL_SIZE);
+            let h = ((img.height as f64 * scale).round() as usize).clamp(1, CELL_SIZE);
+            let cell = if w == img.width && h == img.height {
+                (*img).clone()
+            } else {
+                resample(img, w, h)
+            };
+            let mut padded = RgbImage::new(CELL_SIZE, CELL_SIZE);
+            let (ox, oy) = ((CELL_SIZE - w) / 2, (CELL_SIZE - h) / 2);
+            for y in 0..h {
+                for x in 0..w {
+                    padded.set(oy + y, ox + x, cell.get(y, x));
+                }
+            }
+            let bytes = to_srgb8(&padded);
+            let (x0, y0) = cell_origin(r, c);
+            for y in 0..CELL_SIZE {
+                let dst = ((y0 + y) * width + x0) * 3;
+                canvas[dst..dst + CELL_SIZE * 3]
+                    .copy_from_slice(&bytes[y * CELL_SIZE * 3..(y + 1) * CELL_SIZE * 3]);
+            }
+        }
+    }
+
+    draw_labels(&mut canvas, (width, height), rows, column_labels).map_err(|message| {
+        Error::Unsupported(format!(
+            "{source}: cannot draw montage labels: {message} (needs fontconfig and a sans-serif font, e.g. Debian package fonts-dejavu-core)"
+        ))
+    })?;
+    write_rgb8(path, width, height, &canvas)
+}
+
+fn draw_labels(
+    canvas: &mut [u8],
+    (width, height): (usize, usize),
+    rows: &[(&str, Vec<&RgbImage>)],
+    column_labels: &[&str],
+) -> std::result::Result<(), String> {
+    let root =
+        BitMapBackend::with_buffer(canvas, (width as u32, height as u32)).into_drawing_area();
+    let column_style = TextStyle::from((FONT, COLUMN_FONT_SIZE).into_font())
+        .color(&BLACK)
+        .pos(Pos::new(HPos::Center, VPos::Center));
+    let row_style = TextStyle::from((FONT, ROW_FONT_SIZE).into_font())
+        .color(&BLACK)
+        .pos(Pos::new(HPos::Right, VPos::Center));
+    let err = |e: DrawingAreaErrorKind<_>| e.to_string();
+
+    for (c, label) in column_labels.iter().enumerate() {
+        let (x0, _) = cell_origin(0, c);
+        let centre = (
+            (x0 + CELL_SIZE / 2) as i32,
+            (COLUMN_LABEL_HEIGHT / 2) as i32,
+        );
+        root.draw_text(label, &column_style, centre).map_err(err)?;
+    }
+    let max_width = (ROW_LABEL_WIDTH - 3 * SEPARATOR) as u32;
+    let measure = |s: &str| -> Result<u32> {
+        root.estimate_text_size(s, &row_style)
+            .map(|(w, _)| w)
+            .map_err(|e| Error::Unsupported(e.to_string()))
+    };
+    for (r, (label, _)) in rows.iter().enumerate() {
+        let lines = wrap(label, max_width, &measure).map_err(|e| e.to_string())?;
+        let line_height = (ROW_FONT_SIZE * 1.25) as i32;
+        let (_, y0) = cell_origin(r, 0);
+        let centre_y = (y0 + CELL_SIZE / 2) as i32;
+        let top = centre_y - line_height * (lines.len() as i32 - 1) / 2;
+        let x = (ROW_LABEL_WIDTH - 2 * SEPARATOR) as i32;
+        for (i, line) in lines.iter().enumerate() {
+            root.draw_text(line, &row_style, (x, top + i as i32 * line_height))
+                .map_err(err)?;
+        }
+    }
+    root.present().map_err(err)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn box_weights_sum_to_one_and_cover_source() {
+        for (src, dst) in [(2160, 256), (512, 256), (64, 256), (7, 3), (3, 7)] {
+            let w = box_weights(src, dst);
+            let mut per_source = vec![0.0; src];
+            for ws in &w {
+                let s: f64 = ws.iter().map(|&(_, x)| x).sum();
+                assert!((s - 1.0).abs() < 1e-12, "{src}->{dst}: {s}");
+                for &(j, x) in ws {
+                    per_source[j] += x;
+                }
+            }
+            // Every source pixel contributes in total dst/src of one output pixel.
+            for v in per_source {
+                assert!(
+                    (v - dst as f64 / src as f64).abs() < 1e-9,
+                    "{src}->{dst}: {v}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn resample_averages_blocks() {
+        // 4x4 -> 2x2: each output is the mean of a 2x2 block.
+        let mut img = RgbImage::new(4, 4);
+        for r in 0..4 {
+            for c in 0..4 {
+                img.set(r, c, [(r * 4 + c) as f32, 0.0, 1.0]);
+            }
+        }
+        let out = resample(&img, 2, 2);
+        assert_eq!(out.get(0, 0), [(0.0 + 1.0 + 4.0 + 5.0) / 4.0, 0.0, 1.0]);
+        assert_eq!(out.get(1, 1), [(10.0 + 11.0 + 14.0 + 15.0) / 4.0, 0.0, 1.0]);
+        // 2x2 -> 4x4: pixel replication.
+        let up = resample(&out, 4, 4);
+        assert_eq!(up.get(3, 2), out.get(1, 1));
+    }
+}
