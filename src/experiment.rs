@@ -256,7 +256,7 @@ impl Experiment {
     /// Loads an experiment file.
     pub fn load(path: &Path) -> Result<Self> {
         let text = read_text(path)?;
-        let spec: ExperimentSpec = toml::from_str(&text).map_err(|e| Error::parse(path, e.to_string().trim_end().to_string()))?;
+        let spec: ExperimentSpec = toml::from_str(&text).map_err(|e| config::toml_error(path, &text, &e))?;
         Self::from_spec(spec, &path.display().to_string(), &config::base_dir(path))
     }
 
@@ -455,11 +455,15 @@ fn assess_with<R: RadianceField>(exp: &Experiment, out: &Path, opts: RunOptions,
         || {
             jobs.par_iter().try_for_each(|j| -> Result<()> {
                 let attrs: Vec<(&str, String)> = j.attributes.iter().map(|(k, v)| (*k, v.clone())).collect();
+                let t0 = Instant::now();
                 crate::io::exr::write_rgb(&out.join(format!("{}.exr", j.stem)), j.image, None, &attrs)?;
-                crate::io::png::write_preview(&out.join(format!("{}.png", j.stem)), j.image)
+                let t1 = Instant::now();
+                let r = crate::io::png::write_preview(&out.join(format!("{}.png", j.stem)), j.image);
+                if std::env::var_os("INIMTRACE_DEBUG").is_some() { eprintln!("{} exr {:?} png {:?}", j.stem, t1 - t0, t1.elapsed()); }
+                r
             })
         },
-        || crate::io::figure::write_montage(&out.join("figure.png"), &figure_rows, &labels),
+        || { let t0 = Instant::now(); let r = crate::io::figure::write_montage(&out.join("figure.png"), &figure_rows, &labels); if std::env::var_os("INIMTRACE_DEBUG").is_some() { eprintln!("figure {:?}", t0.elapsed()); } r },
     );
     image_result?;
     figure_result?;
@@ -505,8 +509,10 @@ pub fn table_markdown(report: &AssessReport, exp: &Experiment) -> String {
             let v = find(m).map(|x| metrics::format_db(x.psnr.mean, 2)).unwrap_or_default();
             s.push_str(&format!(" {v} |"));
         }
+        // The framework's 8-bit constants pin SSIM near 1: show enough digits to tell methods apart.
+        let digits = if exp.ssim == SsimConstants::Framework8Bit { 5 } else { 3 };
         for m in &methods {
-            let v = find(m).map(|x| format!("{:.3}", x.ssim.mean)).unwrap_or_default();
+            let v = find(m).map(|x| format!("{:.digits$}", x.ssim.mean)).unwrap_or_default();
             s.push_str(&format!(" {v} |"));
         }
         s.push('\n');

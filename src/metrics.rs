@@ -71,7 +71,7 @@ fn psnr_from_mse(mse: f64) -> f64 {
 /// PSNR of an RGB image pair: the three channel PSNRs (R, G, B) and their mean.
 ///
 /// `mean` is infinite when any channel is identical in both images.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Psnr {
     pub channels: [f64; 3],
     pub mean: f64,

@@ -24,9 +24,25 @@ pub fn read_text(path: &Path) -> Result<String> {
     String::from_utf8(bytes).map_err(|e| Error::parse(path, format!("not UTF-8 text (byte {})", e.utf8_error().valid_up_to())))
 }
 
-fn toml_error(path: &Path, e: toml::de::Error) -> Error {
-    // toml's message already names the line, column and key.
-    Error::parse(path, e.to_string().trim_end().to_string())
+/// A TOML error on one line: `line L, column C: message (in `the line`)`, plus the table the
+/// error is in when toml names it.
+pub fn toml_error(path: &Path, text: &str, e: &toml::de::Error) -> Error {
+    let message = e.message().trim().replace('\n', " ");
+    match e.span() {
+        Some(span) => {
+            let start = span.start.min(text.len());
+            let line = text[..start].matches('\n').count() + 1;
+            let line_start = text[..start].rfind('\n').map(|i| i + 1).unwrap_or(0);
+            let column = text[line_start..start].chars().count() + 1;
+            let snippet = text[line_start..].lines().next().unwrap_or("").trim();
+            if snippet.is_empty() {
+                Error::parse(path, format!("line {line}, column {column}: {message}"))
+            } else {
+                Error::parse(path, format!("line {line}, column {column}: {message} (in `{snippet}`)"))
+            }
+        }
+        None => Error::parse(path, message),
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -163,7 +179,7 @@ pub fn load_display(spec: &str, base: &Path) -> Result<Display> {
     if is_yaml {
         parse_opencv_display(&text, &path)
     } else {
-        let spec: DisplaySpec = toml::from_str(&text).map_err(|e| toml_error(&path, e))?;
+        let spec: DisplaySpec = toml::from_str(&text).map_err(|e| toml_error(&path, &text, &e))?;
         spec.to_display(&path.display().to_string())
     }
 }
@@ -477,7 +493,7 @@ pub fn load_scene(spec: &str, base: &Path) -> Result<Scene> {
     }
     let path = base.join(spec);
     let text = read_text(&path)?;
-    let s: SceneSpec = toml::from_str(&text).map_err(|e| toml_error(&path, e))?;
+    let s: SceneSpec = toml::from_str(&text).map_err(|e| toml_error(&path, &text, &e))?;
     s.to_scene(&path.display().to_string(), path.parent().unwrap_or(Path::new(".")))
 }
 

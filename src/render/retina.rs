@@ -95,27 +95,44 @@ pub fn simulate_stack(display: &Display, eye: &Eye, retina: &Retina, stack: &Dis
     if stride == 0 {
         return Ok(images);
     }
-    rows.par_chunks_mut(n * stride).enumerate().for_each(|(row, out)| {
-        // Pupil samples outside, columns inside: each sample sweeps the LCD in order, which
-        // the cache likes; every pixel still sums its samples in the same order.
-        let mut acc = vec![0f64; n * stride];
-        for frac in &subpixels {
-            for k in 0..pupil.len() {
-                for col in 0..n {
-                    let t = retina.tangent(row, col, *frac);
-                    if let Some(idx) = fast.pixel_index(t, k) {
-                        let src = &packed[idx * stride..(idx + 1) * stride];
-                        for (a, v) in acc[col * stride..(col + 1) * stride].iter_mut().zip(src) {
-                            *a += *v as f64;
+    // Work in tiles of TILE x TILE retina pixels, pupil samples outside the tile's pixels: the
+    // rays of one pupil sample from one tile land in one small patch of the LCD, which then
+    // stays in cache. Every pixel still sums its samples in the same order (sub-pixel sample,
+    // then pupil sample), so the result does not depend on the tiling.
+    const TILE: usize = 16;
+    rows.par_chunks_mut(TILE * n * stride).enumerate().for_each(|(band, out)| {
+        let row0 = band * TILE;
+        let band_rows = out.len() / (n * stride);
+        let mut acc = vec![0f64; TILE * TILE * stride];
+        for col0 in (0..n).step_by(TILE) {
+            let tile_cols = TILE.min(n - col0);
+            acc.iter_mut().for_each(|a| *a = 0.0);
+            for frac in &subpixels {
+                for k in 0..pupil.len() {
+                    for r in 0..band_rows {
+                        for c in 0..tile_cols {
+                            let t = retina.tangent(row0 + r, col0 + c, *frac);
+                            if let Some(idx) = fast.pixel_index(t, k) {
+                                let src = &packed[idx * stride..(idx + 1) * stride];
+                                let dst = &mut acc[(r * TILE + c) * stride..(r * TILE + c + 1) * stride];
+                                for (a, v) in dst.iter_mut().zip(src) {
+                                    *a += *v as f64;
+                                }
+                            }
                         }
                     }
                 }
             }
+            for r in 0..band_rows {
+                for c in 0..tile_cols {
+                    let o = &mut out[(r * n + col0 + c) * stride..(r * n + col0 + c + 1) * stride];
+                    for (o, a) in o.iter_mut().zip(&acc[(r * TILE + c) * stride..]) {
+                        *o = (*a * inv_count) as f32;
+                    }
+                }
+            }
         }
-        for (o, a) in out.iter_mut().zip(&acc) {
-            *o = (*a * inv_count) as f32;
-        }
-        progress.inc(1);
+        progress.inc(band_rows as u64);
     });
     for (i, px) in rows.chunks_exact(stride).enumerate() {
         for (k, img) in images.iter_mut().enumerate() {

@@ -1,0 +1,181 @@
+//! The command line as a user meets it: a small experiment end to end, and bad input that must
+//! fail with a clear message naming the file and the field, never a panic.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn inimtrace(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_inimtrace")).args(args).arg("--quiet").output().expect("binary runs");
+    (out.status.success(), String::from_utf8_lossy(&out.stdout).into_owned(), String::from_utf8_lossy(&out.stderr).into_owned())
+}
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// A small version of the paper's experiment (quarter-resolution LCD, 64 x 64 retina).
+fn small_experiment(dir: &Path) -> PathBuf {
+    let display = std::fs::read_to_string(root().join("displays/paper.toml")).unwrap().replace("[2160, 2160]", "[540, 540]");
+    std::fs::write(dir.join("display.toml"), display).unwrap();
+    let exp = std::fs::read_to_string(root().join("experiments/paper.toml"))
+        .unwrap()
+        .replace("../scenes/paper.toml", &root().join("scenes/paper.toml").display().to_string())
+        .replace("../displays/paper.toml", "display.toml")
+        .replace("retina_resolution = 512", "retina_resolution = 64")
+        .replace("pupil_grid = 8", "pupil_grid = 4")
+        .replace("name = \"paper\"", "name = \"small\"");
+    let path = dir.join("small.toml");
+    std::fs::write(&path, exp).unwrap();
+    path
+}
+
+#[test]
+fn assess_writes_every_output_with_the_documented_names() {
+    let dir = tempfile::tempdir().unwrap();
+    let exp = small_experiment(dir.path());
+    let out = dir.path().join("out");
+    let (ok, stdout, stderr) = inimtrace(&["assess", exp.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    assert!(ok, "{stderr}");
+    assert!(stdout.contains("| Near |"), "{stdout}");
+    let mut names = vec!["table.md".to_string(), "results.csv".into(), "results.json".into(), "figure.png".into()];
+    for c in ["Pin", "Near", "Cen", "Far"] {
+        names.push(format!("gt_{c}.exr"));
+        names.push(format!("gt_{c}.png"));
+        for m in ["LC", "PC", "LA"] {
+            names.push(format!("sim_{m}_{c}.exr"));
+            names.push(format!("sim_{m}_{c}.png"));
+        }
+    }
+    for m in ["LC", "PC", "LA"] {
+        names.push(format!("display_{m}.exr"));
+        names.push(format!("display_{m}.png"));
+    }
+    for n in &names {
+        assert!(out.join(n).is_file(), "missing {n}");
+    }
+    let gt = inimtrace::io::exr::read_rgb(&out.join("gt_Near.exr")).unwrap();
+    assert_eq!((gt.width, gt.height), (64, 64));
+    assert!(gt.all_finite());
+    let d = inimtrace::io::exr::read_rgb(&out.join("display_LA.exr")).unwrap();
+    assert_eq!((d.width, d.height), (540, 540));
+    let attrs = inimtrace::io::exr::read_attributes(&out.join("sim_PC_Near.exr")).unwrap();
+    let get = |k: &str| attrs.iter().find(|(a, _)| a == k).map(|(_, v)| v.clone()).unwrap_or_default();
+    assert_eq!(get("inimtrace:method"), "PC");
+    assert_eq!(get("inimtrace:eye_case"), "Near");
+    assert_eq!(get("inimtrace:focus_mm"), "300");
+    assert_eq!(get("inimtrace:pupil_diameter_mm"), "5");
+    assert!(get("inimtrace:units").contains("mm"));
+    // The table's numbers are the JSON's, and none is NaN.
+    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
+    let scores = json["scores"].as_array().unwrap();
+    assert_eq!(scores.len(), 12);
+    for s in scores {
+        let p = s["psnr"]["mean"].as_f64().unwrap();
+        let q = s["ssim"]["mean"].as_f64().unwrap();
+        assert!(p.is_finite() && p > 5.0 && p < 60.0 && q > 0.0 && q <= 1.0, "{s}");
+    }
+    let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    assert_eq!(csv.lines().filter(|l| l.starts_with("score,")).count(), 12 * 4);
+    assert!(csv.contains("stage,small,LA,,,,,render_display,"));
+    assert!(!csv.contains("NaN") && !csv.to_lowercase().contains(",nan"));
+
+    // compare: an image against itself, and the stages on their own agree with assess.
+    let gt_path = out.join("gt_Near.exr");
+    let (ok, stdout, stderr) = inimtrace(&["compare", gt_path.to_str().unwrap(), gt_path.to_str().unwrap()]);
+    assert!(ok, "{stderr}");
+    assert!(stdout.contains("SSIM  1.00000"), "{stdout}");
+    let sim = dir.path().join("sim.exr");
+    let display = dir.path().join("display.toml");
+    let (ok, _, stderr) = inimtrace(&[
+        "simulate",
+        out.join("display_LC.exr").to_str().unwrap(),
+        "--display",
+        display.to_str().unwrap(),
+        "--focus-mm",
+        "300",
+        "--pupil-grid",
+        "4",
+        "--retina",
+        "64",
+        "--out",
+        sim.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    let a = inimtrace::io::exr::read_rgb(&sim).unwrap();
+    let b = inimtrace::io::exr::read_rgb(&out.join("sim_LC_Near.exr")).unwrap();
+    assert!(a == b, "simulate from the written display image equals assess's simulation");
+}
+
+fn expect_error(args: &[&str], needles: &[&str]) {
+    let (ok, _, stderr) = inimtrace(args);
+    assert!(!ok, "{args:?} should fail");
+    assert!(!stderr.contains("panicked"), "{args:?} panicked: {stderr}");
+    for n in needles {
+        assert!(stderr.contains(n), "{args:?}: message should name `{n}`: {stderr}");
+    }
+    assert_eq!(stderr.trim().lines().count(), 1, "one clear line: {stderr}");
+}
+
+#[test]
+fn bad_input_gives_one_clear_error_and_never_panics() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let w = |name: &str, text: &str| -> String {
+        let p = d.join(name);
+        std::fs::write(&p, text).unwrap();
+        p.display().to_string()
+    };
+    let good_display = std::fs::read_to_string(root().join("displays/paper.toml")).unwrap();
+    let out = d.join("o").display().to_string();
+
+    expect_error(&["assess", "does-not-exist.toml"], &["does-not-exist.toml"]);
+    expect_error(&["assess", d.to_str().unwrap()], &["directory"]);
+    let p = w("empty.toml", "");
+    expect_error(&["assess", &p, "--out", &out], &["empty.toml", "name"]);
+    let p = w("syntax.toml", "name = \"x\"\n[eye\n");
+    expect_error(&["assess", &p, "--out", &out], &["syntax.toml", "line 2"]);
+    let p = w("types.toml", "name = \"x\"\n[eye]\npupil_diameter = \"five\"\n[[eye_cases]]\nname = \"A\"\npinhole = true\n");
+    expect_error(&["assess", &p, "--out", &out], &["types.toml", "pupil_diameter"]);
+    let p = w("unknown.toml", "name = \"x\"\nfocus = 3\n[[eye_cases]]\nname = \"A\"\npinhole = true\n");
+    expect_error(&["assess", &p, "--out", &out], &["unknown.toml", "focus"]);
+    let p = w("negpupil.toml", "name = \"x\"\n[eye]\npupil_diameter = -5.0\n[[eye_cases]]\nname = \"A\"\nfocus_mm = 300.0\n");
+    expect_error(&["assess", &p, "--out", &out], &["negpupil.toml", "pupil_diameter"]);
+    let p = w("nanfocus.toml", "name = \"x\"\n[[eye_cases]]\nname = \"A\"\nfocus_mm = nan\n");
+    expect_error(&["assess", &p, "--out", &out], &["nanfocus.toml", "focus_mm"]);
+
+    let p = w("f.toml", &good_display.replace("focal_length = 6.427", "focal_length = -6.427"));
+    expect_error(&["info", "--display", &p], &["f.toml", "focal_length"]);
+    let p = w("res.toml", &good_display.replace("[2160, 2160]", "[0, 2160]"));
+    expect_error(&["info", "--display", &p], &["res.toml", "lcd.resolution[0]"]);
+    let p = w("sing.toml", &good_display.replace("pitch = 1.2", "pitch = [[1.2, 2.4], [0.6, 1.2]]"));
+    expect_error(&["info", "--display", &p], &["sing.toml", "lenslets.pitch", "singular"]);
+    let p = w("size.toml", &good_display.replace("size = [21.6, 21.6]", "size = [-21.6, 21.6]"));
+    expect_error(&["info", "--display", &p], &["size.toml", "lcd.size[0]"]);
+    let yaml = std::fs::read_to_string(root().join("data/lensletdisplay.yaml")).unwrap();
+    let p = w("nan.yaml", &yaml.replace("lenslettoorigin: 20.", "lenslettoorigin: .nan"));
+    expect_error(&["info", "--display", &p], &["nan.yaml", "lenslettoorigin"]);
+    let p = w("missing.yaml", &yaml.replace("lensletfocallength: 6.427\n", ""));
+    expect_error(&["info", "--display", &p], &["missing.yaml", "lensletfocallength", "missing"]);
+    let p = w("broken.yaml", "%YAML:1.0\n---\nlenslettolcd: [1, 2\n");
+    expect_error(&["info", "--display", &p], &["broken.yaml"]);
+
+    // PupilCenter at the singular configuration: the lenslet images the pupil centre onto the LCD.
+    let singular = good_display.replace("lenslets_to_lcd = 6.316", &format!("lenslets_to_lcd = {}", 1.0 / (1.0 / 6.427 - 1.0 / 20.0)));
+    let sp = w("singular.toml", &singular);
+    let e = std::fs::read_to_string(root().join("experiments/paper.toml"))
+        .unwrap()
+        .replace("../scenes/paper.toml", "builtin:paper")
+        .replace("../displays/paper.toml", &sp);
+    let p = w("pc.toml", &e);
+    expect_error(&["assess", &p, "--out", &out], &["PupilCenter", "image the pupil centre onto the LCD"]);
+
+    // Broken EXR input.
+    let p = w("bad.exr", "this is not an EXR file");
+    expect_error(&["compare", &p, &p], &["bad.exr"]);
+    let p = w("empty.exr", "");
+    expect_error(&["simulate", &p, "--pinhole", "--out", &out], &["empty.exr"]);
+
+    // An output directory that cannot be created.
+    let blocker = w("blocker", "a file where a directory should be");
+    expect_error(&["assess", "--out", &format!("{blocker}/sub")], &["blocker"]);
+}
