@@ -33,10 +33,10 @@ use exr::prelude::{
 use crate::error::{Error, Result};
 use crate::raster::RgbImage;
 
-/// Compression of written files: uncompressed scan lines. Image data here is noisy `f32`
-/// radiance which lossless EXR codecs shrink little (RLE ~0 %, ZIP/PIZ 10–40 %) at several times
-/// the cost, while an uncompressed 2160×2160 RGB write is bound only by the disk (see the
-/// measurements in the `io` branch report: ~0.1–0.2 s in release mode).
+/// Compression of written files: uncompressed scan lines. Measured on a 2160×2160 RGB `f32`
+/// image with fine noise (release build, 2 busy cores): uncompressed 56 MB in 0.11–0.2 s;
+/// RLE saved nothing at 0.4–1.2 s; ZIP1/ZIP16 saved 2–6 % at 2–3.5 s; PIZ saved 22 % at
+/// ~2.3 s. Lossless codecs gain little on noisy `f32` radiance, so speed wins.
 pub const COMPRESSION: Compression = Compression::Uncompressed;
 
 fn encoding() -> Encoding {
