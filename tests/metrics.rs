@@ -158,13 +158,8 @@ fn ssim_matches_scikit_image() {
             ssim(&a, y, SsimConstants::Wang2004).unwrap(),
             ssim_direct(&a, y, SsimConstants::Wang2004).unwrap(),
         ] {
-            for c in 0..3 {
-                assert_close(
-                    s.channels[c],
-                    want[c],
-                    1e-12,
-                    "channel SSIM vs scikit-image",
-                );
+            for (got, want) in s.channels.iter().zip(want) {
+                assert_close(*got, want, 1e-12, "channel SSIM vs scikit-image");
             }
             assert_close(s.mean, want.iter().sum::<f64>() / 3.0, 1e-12, "mean SSIM");
         }
@@ -173,8 +168,8 @@ fn ssim_matches_scikit_image() {
     // C1 = 6.5025, C2 = 58.5225.
     let want_fw = [0.9997761980060974, 0.999824381717742, 0.9997701477319089];
     let s = ssim(&a, &b, SsimConstants::Framework8Bit).unwrap();
-    for c in 0..3 {
-        assert_close(s.channels[c], want_fw[c], 1e-12, "framework-8bit SSIM");
+    for (got, want) in s.channels.iter().zip(want_fw) {
+        assert_close(*got, want, 1e-12, "framework-8bit SSIM");
     }
 }
 

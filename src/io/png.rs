@@ -128,7 +128,7 @@ pub fn write_rgb8(path: &Path, width: usize, height: usize, rgb: &[u8]) -> Resul
     };
     let file = File::create(path).map_err(|e| Error::io(path, e))?;
     let mut writer = BufWriter::new(file);
-    PngEncoder::new_with_quality(&mut writer, CompressionType::Fast, FilterType::Sub)
+    PngEncoder::new_with_quality(&mut writer, CompressionType::Fast, FilterType::Adaptive)
         .write_image(rgb, w, h, ExtendedColorType::Rgb8)
         .map_err(|e| match e {
             image::ImageError::IoError(e) => Error::io(path, e),
