@@ -3,6 +3,8 @@
 //! `f64`; mesh backends (Embree, pure-Rust BVH) intersect triangle meshes.
 
 pub mod analytic;
+#[cfg(feature = "embree")]
+pub mod embree;
 
 use glam::{DVec2, DVec3};
 
