@@ -47,12 +47,13 @@ mod embree {
 
     fn locate() -> Found {
         println!("cargo::rerun-if-env-changed=EMBREE_DIR");
-        if let Some(dir) = env::var_os("EMBREE_DIR") {
+        if let Some(dir) = env::var_os("EMBREE_DIR").filter(|d| !d.is_empty()) {
             let dir = PathBuf::from(dir);
             let include_root = dir.join("include");
             let Some(major) = header_version(&include_root) else {
                 fail(&format!(
-                    "EMBREE_DIR={} has no include/embree4/rtcore.h or include/embree3/rtcore.h",
+                    "EMBREE_DIR={} has no include/embree4/rtcore.h or include/embree3/rtcore.h \
+                     (unset it to use the system's, from `{INSTALL_HINT}`)",
                     dir.display()
                 ));
             };
@@ -67,15 +68,21 @@ mod embree {
                 lib_dir: Some(lib_dir),
             };
         }
-        let mut roots: Vec<PathBuf> = ["/usr/include", "/usr/local/include", "/opt/homebrew/include"]
-            .iter()
-            .map(PathBuf::from)
-            .collect();
+        let mut roots: Vec<PathBuf> = [
+            "/usr/include",
+            "/usr/local/include",
+            "/opt/homebrew/include",
+        ]
+        .iter()
+        .map(PathBuf::from)
+        .collect();
         // Honour extra include paths from the usual compiler variables, searched first.
         for var in ["CPATH", "C_INCLUDE_PATH"] {
             println!("cargo::rerun-if-env-changed={var}");
             if let Some(paths) = env::var_os(var) {
-                let extra: Vec<PathBuf> = env::split_paths(&paths).filter(|p| !p.as_os_str().is_empty()).collect();
+                let extra: Vec<PathBuf> = env::split_paths(&paths)
+                    .filter(|p| !p.as_os_str().is_empty())
+                    .collect();
                 roots.splice(0..0, extra);
             }
         }
@@ -95,7 +102,9 @@ mod embree {
     }
 
     fn has_header(root: &Path, major: u32) -> bool {
-        root.join(format!("embree{major}")).join("rtcore.h").is_file()
+        root.join(format!("embree{major}"))
+            .join("rtcore.h")
+            .is_file()
     }
 
     fn header_version(root: &Path) -> Option<u32> {
@@ -107,6 +116,7 @@ mod embree {
         let header_dir = found.include_root.join(format!("embree{}", found.major));
         println!("cargo::rerun-if-changed=wrapper.h");
         println!("cargo::rerun-if-changed={}", header_dir.display());
+        println!("cargo::rerun-if-env-changed=LIBCLANG_PATH");
 
         let mut builder = bindgen::Builder::default()
             .header("wrapper.h")
@@ -122,7 +132,10 @@ mod embree {
             .derive_debug(true)
             .generate_comments(false)
             .layout_tests(true)
-            .rust_target(bindgen::RustTarget::stable(80, 0).unwrap_or_else(|e| fail(&format!("bindgen: {e}"))))
+            .rust_target(
+                bindgen::RustTarget::stable(80, 0)
+                    .unwrap_or_else(|e| fail(&format!("bindgen: {e}"))),
+            )
             .parse_callbacks(Box::new(bindgen::CargoCallbacks::new()));
         if found.major >= 4 {
             builder = builder.clang_arg("-DINIMTRACE_EMBREE4");
@@ -131,7 +144,8 @@ mod embree {
         // bindgen panics when libclang cannot be loaded; turn that into the same one-line error.
         let default_hook = std::panic::take_hook();
         std::panic::set_hook(Box::new(|_| {}));
-        let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(move || builder.generate()));
+        let result =
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(move || builder.generate()));
         std::panic::set_hook(default_hook);
         let bindings = match result {
             Ok(Ok(b)) => b,
@@ -150,8 +164,9 @@ mod embree {
                 ))
             }
         };
-        let out = PathBuf::from(env::var_os("OUT_DIR").unwrap_or_else(|| fail("OUT_DIR is not set")))
-            .join("embree_bindings.rs");
+        let out =
+            PathBuf::from(env::var_os("OUT_DIR").unwrap_or_else(|| fail("OUT_DIR is not set")))
+                .join("embree_bindings.rs");
         if let Err(e) = bindings.write_to_file(&out) {
             fail(&format!("cannot write {}: {e}", out.display()));
         }

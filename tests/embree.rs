@@ -10,7 +10,8 @@ use std::sync::{RwLock, RwLockReadGuard, RwLockWriteGuard};
 
 use glam::{DVec2, DVec3};
 use inimtrace::accel::embree::{
-    embree_error, live_objects, BuildQuality, Device, EmbreeIntersector, RawRay, SceneBuilder, TriangleGeometry,
+    embree_error, live_objects, BuildQuality, Device, EmbreeIntersector, RawRay, SceneBuilder,
+    TriangleGeometry,
 };
 use inimtrace::accel::{Hit, Intersector, Ray, Surface};
 use inimtrace::scene::mesh::Mesh;
@@ -299,9 +300,14 @@ fn single_triangle_hit_t_barycentrics_object_and_misses() {
     let (index, bary) = tri_bary(&hit);
     assert_eq!(index, 0);
     // point (1, 2) = u * (4, 0) + v * (0, 4)  =>  u = 0.25, v = 0.5
-    assert!((bary - DVec2::new(0.25, 0.5)).length() < 1e-6, "bary = {bary}");
+    assert!(
+        (bary - DVec2::new(0.25, 0.5)).length() < 1e-6,
+        "bary = {bary}"
+    );
     let b = brute(&[(7, &tri)], &ray, f64::INFINITY).unwrap();
-    assert!((b.t - hit.t).abs() < 1e-6 && (b.u - bary.x).abs() < 1e-6 && (b.v - bary.y).abs() < 1e-6);
+    assert!(
+        (b.t - hit.t).abs() < 1e-6 && (b.u - bary.x).abs() < 1e-6 && (b.v - bary.y).abs() < 1e-6
+    );
 
     // t_max bounds the search on both sides of the hit, and `occluded` agrees.
     assert!(acc.intersect(&ray, 4.999).is_none());
@@ -324,8 +330,14 @@ fn single_triangle_hit_t_barycentrics_object_and_misses() {
         dir: DVec3::new(0.0, 0.0, 1.0),
     };
     for r in [parallel, away, beside] {
-        assert!(acc.intersect(&r, f64::INFINITY).is_none(), "{r:?} should miss");
-        assert!(!acc.occluded(&r, f64::INFINITY), "{r:?} should not be occluded");
+        assert!(
+            acc.intersect(&r, f64::INFINITY).is_none(),
+            "{r:?} should miss"
+        );
+        assert!(
+            !acc.occluded(&r, f64::INFINITY),
+            "{r:?} should not be occluded"
+        );
         assert!(brute(&[(7, &tri)], &r, f64::INFINITY).is_none());
     }
     // From behind the triangle it is hit too (no back-face culling), at t = 10.
@@ -528,7 +540,10 @@ fn agrees_with_brute_force_on_random_rays() {
             }
         }
     }
-    assert!(hits > n / 3, "test rays should mostly hit the scene, got {hits} of {n}");
+    assert!(
+        hits > n / 3,
+        "test rays should mostly hit the scene, got {hits} of {n}"
+    );
     assert!(
         edge_cases * 100 < n,
         "{edge_cases} edge cases among {n} rays is too many"
@@ -594,9 +609,21 @@ fn intersect_many_equals_intersect_per_ray() {
             (None, None) => {}
             (Some(s), Some(p)) => {
                 n_hits += 1;
-                assert_eq!((s.object, tri_bary(&s).0), (p.object, tri_bary(p).0), "{ray:?}");
-                assert!((s.t - p.t).abs() <= 1e-5 * s.t, "t {} vs {} for {ray:?}", s.t, p.t);
-                assert!((tri_bary(&s).1 - tri_bary(p).1).abs().max_element() < 1e-4, "{ray:?}");
+                assert_eq!(
+                    (s.object, tri_bary(&s).0),
+                    (p.object, tri_bary(p).0),
+                    "{ray:?}"
+                );
+                assert!(
+                    (s.t - p.t).abs() <= 1e-5 * s.t,
+                    "t {} vs {} for {ray:?}",
+                    s.t,
+                    p.t
+                );
+                assert!(
+                    (tri_bary(&s).1 - tri_bary(p).1).abs().max_element() < 1e-4,
+                    "{ray:?}"
+                );
             }
             _ => panic!("single {single:?} vs packet {packet:?} for {ray:?}"),
         }
@@ -617,7 +644,9 @@ fn intersect_many_equals_intersect_per_ray() {
         );
         if let (Some(s), Some(p)) = (s, p) {
             assert!(
-                (s.t - p.t).abs() <= 1e-5 * s.t && (s.u - p.u).abs() < 1e-4 && (s.v - p.v).abs() < 1e-4,
+                (s.t - p.t).abs() <= 1e-5 * s.t
+                    && (s.u - p.u).abs() < 1e-4
+                    && (s.v - p.v).abs() < 1e-4,
                 "{r:?}"
             );
         }
@@ -637,8 +666,14 @@ fn committed_scene_is_shared_across_rayon_threads() {
             dir: rng.vec(-1.0, 1.0),
         })
         .collect();
-    let sequential: Vec<Option<Hit>> = rays.iter().map(|r| acc.intersect(r, f64::INFINITY)).collect();
-    let parallel: Vec<Option<Hit>> = rays.par_iter().map(|r| acc.intersect(r, f64::INFINITY)).collect();
+    let sequential: Vec<Option<Hit>> = rays
+        .iter()
+        .map(|r| acc.intersect(r, f64::INFINITY))
+        .collect();
+    let parallel: Vec<Option<Hit>> = rays
+        .par_iter()
+        .map(|r| acc.intersect(r, f64::INFINITY))
+        .collect();
     assert_eq!(sequential, parallel);
     let mut chunked = vec![None; rays.len()];
     chunked
@@ -665,7 +700,9 @@ fn creating_and_dropping_many_scenes_leaks_nothing() {
         for i in 0..1000 {
             let mut builder = SceneBuilder::new(&device, BuildQuality::Low).unwrap();
             if i % 2 == 0 {
-                let geometry = TriangleGeometry::new(&device, &tri, &[[0, 1, 2]], BuildQuality::Low, "tri").unwrap();
+                let geometry =
+                    TriangleGeometry::new(&device, &tri, &[[0, 1, 2]], BuildQuality::Low, "tri")
+                        .unwrap();
                 assert_eq!(builder.attach(geometry).unwrap(), 0);
             }
             if i % 3 == 0 {
@@ -701,7 +738,12 @@ fn creating_and_dropping_many_scenes_leaks_nothing() {
         }
         // A failed build releases what it created too.
         let bad = mesh(vec![DVec3::ZERO; 3], vec![[0, 1, 3]]);
-        assert!(EmbreeIntersector::with_device(&device, &[(0, &bumpy), (1, &bad)], BuildQuality::Low).is_err());
+        assert!(EmbreeIntersector::with_device(
+            &device,
+            &[(0, &bumpy), (1, &bad)],
+            BuildQuality::Low
+        )
+        .is_err());
         assert_eq!(live_objects(), 1);
     }
     assert_eq!(live_objects(), 0);
@@ -713,7 +755,8 @@ fn embree_errors_become_error_embree() {
     // A real failure inside Embree, reported through its error callback with its message.
     let a = Device::new().unwrap();
     let b = Device::new().unwrap();
-    let geometry = TriangleGeometry::new(&a, &[[0.0; 3]; 3], &[[0, 1, 2]], BuildQuality::Low, "tri").unwrap();
+    let geometry =
+        TriangleGeometry::new(&a, &[[0.0; 3]; 3], &[[0, 1, 2]], BuildQuality::Low, "tri").unwrap();
     let mut builder = SceneBuilder::new(&b, BuildQuality::Low).unwrap();
     match builder.attach(geometry) {
         Err(Error::Embree { code, message }) => {
@@ -732,12 +775,18 @@ fn embree_errors_become_error_embree() {
     // A failed device construction (malformed config value).
     match Device::with_config("verbose=x") {
         Err(Error::Embree { code, message }) => {
-            assert!(code.starts_with("RTC_ERROR_") && code != "RTC_ERROR_NONE", "{code}");
+            assert!(
+                code.starts_with("RTC_ERROR_") && code != "RTC_ERROR_NONE",
+                "{code}"
+            );
             assert!(message.contains("rtcNewDevice"), "{message}");
         }
         other => panic!("expected Error::Embree, got {other:?}"),
     }
-    assert!(matches!(Device::with_config("verbose=0\0"), Err(Error::Invalid { .. })));
+    assert!(matches!(
+        Device::with_config("verbose=0\0"),
+        Err(Error::Invalid { .. })
+    ));
 
     // The conversion itself.
     match embree_error(2, Some("bad thing"), "rtcFoo") {

@@ -4,15 +4,16 @@
 //! `rtcInitIntersectContext`, which bindgen cannot emit) to every ray query; Embree 4 drops the
 //! context argument in favour of an optional `RTCIntersectArguments` (initialised by the
 //! header-only `rtcInitIntersectArguments`). The Rust equivalents of both initialisers live here.
+//! Embree 4 also gives occlusion queries their own `RTCOccludedArguments`.
 //! `build.rs` sets `cfg(embree4)` when it bound against Embree 4.
 
 use super::sys;
 
 /// Per-query state: Embree 3's intersection context or Embree 4's intersect arguments.
 #[cfg(not(embree4))]
-pub(super) type QueryArgs = sys::RTCIntersectContext;
+type QueryArgs = sys::RTCIntersectContext;
 #[cfg(embree4)]
-pub(super) type QueryArgs = sys::RTCIntersectArguments;
+type QueryArgs = sys::RTCIntersectArguments;
 
 /// Which Embree major version the crate was bound against.
 pub const EMBREE_MAJOR: u32 = if cfg!(embree4) { 4 } else { 3 };
@@ -21,7 +22,8 @@ pub const EMBREE_MAJOR: u32 = if cfg!(embree4) { 4 } else { 3 };
 /// stack, and the coherence hint. (Debian's build has `RTC_MAX_INSTANCE_LEVEL_COUNT == 1` and
 /// `RTC_MIN_WIDTH == 0`; other builds may have more `instID` slots, all of which are set.)
 #[cfg(not(embree4))]
-pub(super) fn query_args(coherent: bool) -> QueryArgs {
+#[allow(clippy::field_reassign_with_default)] // the struct's fields depend on Embree's build options
+fn query_args(coherent: bool) -> QueryArgs {
     let mut ctx = sys::RTCIntersectContext::default();
     ctx.flags = if coherent {
         sys::RTC_INTERSECT_CONTEXT_FLAG_COHERENT
@@ -39,7 +41,8 @@ pub(super) fn query_args(coherent: bool) -> QueryArgs {
 /// ray-query context, no filter or user-geometry callbacks (the zeroed default), plus the
 /// coherence hint.
 #[cfg(embree4)]
-pub(super) fn query_args(coherent: bool) -> QueryArgs {
+#[allow(clippy::field_reassign_with_default)] // the struct's fields depend on Embree's build options
+fn query_args(coherent: bool) -> QueryArgs {
     let mut args = sys::RTCIntersectArguments::default();
     args.flags = if coherent {
         sys::RTC_RAY_QUERY_FLAG_COHERENT
@@ -52,39 +55,46 @@ pub(super) fn query_args(coherent: bool) -> QueryArgs {
     args
 }
 
-/// `rtcIntersect1` for either version.
+/// `rtcIntersect1` for either version (incoherent-ray hint).
 ///
 /// # Safety
 /// `scene` must be a live, committed scene, and `rayhit` must point to a valid, 16-byte aligned
 /// `RTCRayHit` that nothing else accesses during the call.
 #[inline]
-pub(super) unsafe fn intersect1(scene: sys::RTCScene, args: &mut QueryArgs, rayhit: *mut sys::RTCRayHit) {
-    // SAFETY: forwarded from this function's contract; `args` is an exclusive reference to a
-    // fully initialised context/arguments struct that outlives the call.
+pub(super) unsafe fn intersect1(scene: sys::RTCScene, rayhit: *mut sys::RTCRayHit) {
+    let mut args = query_args(false);
+    // SAFETY: forwarded from this function's contract; `args` is a fully initialised local
+    // that outlives the call.
     unsafe {
         #[cfg(not(embree4))]
-        sys::rtcIntersect1(scene, args, rayhit);
+        sys::rtcIntersect1(scene, &mut args, rayhit);
         #[cfg(embree4)]
-        sys::rtcIntersect1(scene, rayhit, args);
+        sys::rtcIntersect1(scene, rayhit, &mut args);
     }
 }
 
-/// `rtcOccluded1` for either version.
+/// `rtcOccluded1` for either version (incoherent-ray hint).
 ///
 /// # Safety
 /// As for [`intersect1`], with a 16-byte aligned `RTCRay`.
 #[inline]
-pub(super) unsafe fn occluded1(scene: sys::RTCScene, args: &mut QueryArgs, ray: *mut sys::RTCRay) {
-    // SAFETY: forwarded from this function's contract; `args` is valid for the whole call.
-    unsafe {
-        #[cfg(not(embree4))]
-        sys::rtcOccluded1(scene, args, ray);
-        #[cfg(embree4)]
-        sys::rtcOccluded1(scene, ray, args);
+pub(super) unsafe fn occluded1(scene: sys::RTCScene, ray: *mut sys::RTCRay) {
+    #[cfg(not(embree4))]
+    {
+        let mut ctx = query_args(false);
+        // SAFETY: forwarded from this function's contract; `ctx` is valid for the whole call.
+        unsafe { sys::rtcOccluded1(scene, &mut ctx, ray) };
+    }
+    // Embree 4 takes a separate, optional `RTCOccludedArguments`; NULL means the defaults
+    // (incoherent hint, all features, no filter), which is what we want.
+    #[cfg(embree4)]
+    {
+        // SAFETY: forwarded from this function's contract; the arguments pointer may be NULL.
+        unsafe { sys::rtcOccluded1(scene, ray, std::ptr::null_mut()) };
     }
 }
 
-/// `rtcIntersect16` for either version.
+/// `rtcIntersect16` for either version, with the coherent-ray hint when `coherent`.
 ///
 /// # Safety
 /// `scene` must be a live, committed scene; `valid` must point to 16 `int`s aligned to 64 bytes
@@ -94,14 +104,15 @@ pub(super) unsafe fn occluded1(scene: sys::RTCScene, args: &mut QueryArgs, ray: 
 pub(super) unsafe fn intersect16(
     valid: *const i32,
     scene: sys::RTCScene,
-    args: &mut QueryArgs,
     rayhit: *mut sys::RTCRayHit16,
+    coherent: bool,
 ) {
+    let mut args = query_args(coherent);
     // SAFETY: forwarded from this function's contract; `args` is valid for the whole call.
     unsafe {
         #[cfg(not(embree4))]
-        sys::rtcIntersect16(valid, scene, args, rayhit);
+        sys::rtcIntersect16(valid, scene, &mut args, rayhit);
         #[cfg(embree4)]
-        sys::rtcIntersect16(valid, scene, rayhit, args);
+        sys::rtcIntersect16(valid, scene, rayhit, &mut args);
     }
 }

@@ -54,7 +54,11 @@ impl EmbreeIntersector {
     }
 
     /// As [`EmbreeIntersector::new`], on an existing device.
-    pub fn with_device(device: &Device, meshes: &[(u32, &Mesh)], quality: BuildQuality) -> Result<EmbreeIntersector> {
+    pub fn with_device(
+        device: &Device,
+        meshes: &[(u32, &Mesh)],
+        quality: BuildQuality,
+    ) -> Result<EmbreeIntersector> {
         let start = Instant::now();
         let mut builder = SceneBuilder::new(device, quality)?;
         let mut objects = Vec::with_capacity(meshes.len());
@@ -62,9 +66,14 @@ impl EmbreeIntersector {
         for &(object, mesh) in meshes {
             // f64 -> f32 at the Embree boundary: Embree stores and intersects single-precision
             // vertices. World coordinates are millimetres, so rounding costs ~1e-7 relative.
-            let positions: Vec<[f32; 3]> = mesh.positions.iter().map(|p| p.as_vec3().to_array()).collect();
+            let positions: Vec<[f32; 3]> = mesh
+                .positions
+                .iter()
+                .map(|p| p.as_vec3().to_array())
+                .collect();
             let name = format!("mesh of scene object {object}");
-            let geometry = TriangleGeometry::new(device, &positions, &mesh.triangles, quality, &name)?;
+            let geometry =
+                TriangleGeometry::new(device, &positions, &mesh.triangles, quality, &name)?;
             let id = builder.attach(geometry)? as usize;
             if objects.len() <= id {
                 objects.resize(id + 1, u32::MAX);
@@ -76,7 +85,11 @@ impl EmbreeIntersector {
             }
         }
         let scene = builder.commit()?;
-        let extent = if lo.cmple(hi).all() { (hi - lo).length() } else { 0.0 };
+        let extent = if lo.cmple(hi).all() {
+            (hi - lo).length()
+        } else {
+            0.0
+        };
         Ok(EmbreeIntersector {
             scene,
             objects,
@@ -103,7 +116,9 @@ impl EmbreeIntersector {
 
     /// Whether a chunk of rays is coherent enough for a packet to beat single rays.
     fn coherent(&self, rays: &[Ray]) -> bool {
-        let Some(first) = rays.first() else { return false };
+        let Some(first) = rays.first() else {
+            return false;
+        };
         let u0 = first.dir.normalize_or_zero();
         let mut dir_spread = 0.0f64;
         let mut origin_spread = 0.0f64;
@@ -158,10 +173,12 @@ impl Intersector for EmbreeIntersector {
     }
 
     fn intersect(&self, ray: &Ray, t_max: f64) -> Option<Hit> {
-        if !(t_max > 0.0) {
+        if t_max.is_nan() || t_max <= 0.0 {
             return None;
         }
-        self.scene.intersect1(&raw_ray(ray, t_max)).and_then(|h| self.to_hit(h))
+        self.scene
+            .intersect1(&raw_ray(ray, t_max))
+            .and_then(|h| self.to_hit(h))
     }
 
     /// Traces each run of 16 consecutive rays as one packet (`rtcIntersect16` with the
@@ -169,7 +186,11 @@ impl Intersector for EmbreeIntersector {
     /// is ~2x faster than `rtcIntersect1` per ray; incoherent runs, where packets are slower,
     /// go one ray at a time. Same hits either way.
     fn intersect_many(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
-        debug_assert_eq!(rays.len(), hits.len(), "intersect_many: rays and hits differ in length");
+        debug_assert_eq!(
+            rays.len(),
+            hits.len(),
+            "intersect_many: rays and hits differ in length"
+        );
         let n = rays.len().min(hits.len());
         let blank = RawRay {
             org: [0.0; 3],
@@ -198,7 +219,7 @@ impl Intersector for EmbreeIntersector {
     }
 
     fn occluded(&self, ray: &Ray, t_max: f64) -> bool {
-        if !(t_max > 0.0) {
+        if t_max.is_nan() || t_max <= 0.0 {
             return false;
         }
         self.scene.occluded1(&raw_ray(ray, t_max))

@@ -54,7 +54,9 @@ fn live_dec() {
 
 /// BVH build quality (Embree's `RTC_BUILD_QUALITY_*`): `Low` builds fastest, `High` (spatial
 /// splits) traces fastest.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum BuildQuality {
     Low,
@@ -111,7 +113,11 @@ type ErrorSink = Mutex<Vec<(u32, String)>>;
 
 /// Embree's error callback. `user_ptr` is the device's [`ErrorSink`]. It must not unwind into
 /// C, so it only records and never panics (a poisoned lock is still usable).
-unsafe extern "C" fn error_callback(user_ptr: *mut c_void, code: sys::RTCError, message: *const c_char) {
+unsafe extern "C" fn error_callback(
+    user_ptr: *mut c_void,
+    code: sys::RTCError,
+    message: *const c_char,
+) {
     if user_ptr.is_null() {
         return;
     }
@@ -120,7 +126,9 @@ unsafe extern "C" fn error_callback(user_ptr: *mut c_void, code: sys::RTCError, 
     } else {
         // SAFETY: Embree passes a NUL-terminated C string that is valid for the duration of the
         // callback; we copy it out before returning.
-        unsafe { CStr::from_ptr(message) }.to_string_lossy().into_owned()
+        unsafe { CStr::from_ptr(message) }
+            .to_string_lossy()
+            .into_owned()
     };
     // SAFETY: `user_ptr` is the address of the `ErrorSink` boxed inside `DeviceInner`, registered
     // by `Device::with_config` and unregistered in `DeviceInner::drop` before that box is
@@ -187,15 +195,24 @@ impl Device {
 
     /// A device with an Embree configuration string (e.g. `"threads=1,verbose=0"`).
     pub fn with_config(config: &str) -> Result<Device> {
-        let c_config = CString::new(config)
-            .map_err(|_| Error::invalid("Embree device", "config", "configuration string contains a NUL byte"))?;
+        let c_config = CString::new(config).map_err(|_| {
+            Error::invalid(
+                "Embree device",
+                "config",
+                "configuration string contains a NUL byte",
+            )
+        })?;
         // SAFETY: `c_config` is a valid NUL-terminated string that lives across the call.
         let raw = unsafe { sys::rtcNewDevice(c_config.as_ptr()) };
         if raw.is_null() {
             // SAFETY: passing NULL asks for the error of the failed device construction, which
             // the Embree API documents as the way to query it.
             let code = unsafe { sys::rtcGetDeviceError(std::ptr::null_mut()) };
-            return Err(embree_error(code, None, &format!("rtcNewDevice(\"{config}\")")));
+            return Err(embree_error(
+                code,
+                None,
+                &format!("rtcNewDevice(\"{config}\")"),
+            ));
         }
         live_inc();
         let inner = DeviceInner {
@@ -206,7 +223,9 @@ impl Device {
         // SAFETY: `raw` is the live device just created; the sink pointer stays valid until
         // `DeviceInner::drop` unregisters the callback (the box is never moved out or replaced).
         unsafe { sys::rtcSetDeviceErrorFunction(raw, Some(error_callback), sink_ptr) };
-        Ok(Device { inner: Arc::new(inner) })
+        Ok(Device {
+            inner: Arc::new(inner),
+        })
     }
 
     fn raw(&self) -> sys::RTCDevice {
@@ -226,7 +245,10 @@ impl Device {
             Ok(g) => g,
             Err(poisoned) => poisoned.into_inner(),
         };
-        let message = sink.iter().rposition(|(c, _)| *c == code).map(|i| sink.remove(i).1);
+        let message = sink
+            .iter()
+            .rposition(|(c, _)| *c == code)
+            .map(|i| sink.remove(i).1);
         sink.clear();
         Err(embree_error(code, message.as_deref(), during))
     }
@@ -324,8 +346,13 @@ impl TriangleGeometry {
         };
         device.check("rtcNewGeometry")?;
 
-        let vertex_ptr = geometry.new_buffer(sys::RTC_BUFFER_TYPE_VERTEX, sys::RTC_FORMAT_FLOAT3, n)?;
-        let index_ptr = geometry.new_buffer(sys::RTC_BUFFER_TYPE_INDEX, sys::RTC_FORMAT_UINT3, triangles.len())?;
+        let vertex_ptr =
+            geometry.new_buffer(sys::RTC_BUFFER_TYPE_VERTEX, sys::RTC_FORMAT_FLOAT3, n)?;
+        let index_ptr = geometry.new_buffer(
+            sys::RTC_BUFFER_TYPE_INDEX,
+            sys::RTC_FORMAT_UINT3,
+            triangles.len(),
+        )?;
         // SAFETY: Embree returned buffers of exactly `n` (resp. `triangles.len()`) items of 12
         // bytes (`FLOAT3` / `UINT3`, byte stride 12), 4-byte aligned (Embree aligns buffers to at
         // least 16 bytes), owned by the geometry and not accessed by Embree until commit. The
@@ -336,7 +363,11 @@ impl TriangleGeometry {
                 std::ptr::copy_nonoverlapping(positions.as_ptr(), vertex_ptr.cast::<[f32; 3]>(), n);
             }
             if !triangles.is_empty() {
-                std::ptr::copy_nonoverlapping(triangles.as_ptr(), index_ptr.cast::<[u32; 3]>(), triangles.len());
+                std::ptr::copy_nonoverlapping(
+                    triangles.as_ptr(),
+                    index_ptr.cast::<[u32; 3]>(),
+                    triangles.len(),
+                );
             }
         }
         // SAFETY: `raw` is a live geometry; quality is one of Embree's valid enum values.
@@ -350,7 +381,12 @@ impl TriangleGeometry {
     }
 
     /// Allocates an Embree-owned buffer of `count` 12-byte items; returns its address.
-    fn new_buffer(&self, kind: sys::RTCBufferType, format: sys::RTCFormat, count: usize) -> Result<*mut c_void> {
+    fn new_buffer(
+        &self,
+        kind: sys::RTCBufferType,
+        format: sys::RTCFormat,
+        count: usize,
+    ) -> Result<*mut c_void> {
         // SAFETY: `raw` is a live geometry; stride 12 matches FLOAT3/UINT3; Embree allocates the
         // buffer (with its own padding for vector loads) and keeps it alive with the geometry.
         let ptr = unsafe { sys::rtcSetNewGeometryBuffer(self.raw, kind, 0, format, 12, count) };
@@ -407,7 +443,11 @@ impl SceneBuilder {
         let raw = unsafe { sys::rtcNewScene(device.raw()) };
         if raw.is_null() {
             device.check("rtcNewScene")?;
-            return Err(embree_error(sys::RTC_ERROR_UNKNOWN, None, "rtcNewScene returned NULL"));
+            return Err(embree_error(
+                sys::RTC_ERROR_UNKNOWN,
+                None,
+                "rtcNewScene returned NULL",
+            ));
         }
         live_inc();
         let builder = SceneBuilder {
@@ -471,7 +511,10 @@ impl RawRay {
     /// Whether Embree may be asked about this ray: finite origin and direction, finite
     /// `tnear >= 0`, and `tfar >= tnear` (`tfar` may be `+inf`).
     pub fn is_valid(&self) -> bool {
-        self.org.iter().chain(self.dir.iter()).all(|c| c.is_finite())
+        self.org
+            .iter()
+            .chain(self.dir.iter())
+            .all(|c| c.is_finite())
             && self.tnear.is_finite()
             && self.tnear >= 0.0
             && self.tfar >= self.tnear
@@ -559,11 +602,10 @@ impl Scene {
         };
         rayhit.hit.geomID = sys::RTC_INVALID_GEOMETRY_ID;
         rayhit.hit.instID.fill(sys::RTC_INVALID_GEOMETRY_ID);
-        let mut args = compat::query_args(false);
         // SAFETY: the scene is live and committed; `rayhit` is a properly aligned (checked at
         // compile time), fully initialised local that only this call accesses.
-        unsafe { compat::intersect1(self.handle.raw, &mut args, &mut rayhit) };
-        (rayhit.hit.geomID != sys::RTC_INVALID_GEOMETRY_ID).then(|| RawHit {
+        unsafe { compat::intersect1(self.handle.raw, &mut rayhit) };
+        (rayhit.hit.geomID != sys::RTC_INVALID_GEOMETRY_ID).then_some(RawHit {
             t: rayhit.ray.tfar,
             u: rayhit.hit.u,
             v: rayhit.hit.v,
@@ -580,9 +622,8 @@ impl Scene {
             return false;
         }
         let mut raw = ray.to_sys();
-        let mut args = compat::query_args(false);
         // SAFETY: the scene is live and committed; `raw` is an aligned, initialised local.
-        unsafe { compat::occluded1(self.handle.raw, &mut args, &mut raw) };
+        unsafe { compat::occluded1(self.handle.raw, &mut raw) };
         // Embree marks an occluded ray by setting tfar to -inf.
         raw.tfar < 0.0
     }
@@ -598,7 +639,11 @@ impl Scene {
             "intersect16: {} rays given, at most 16 fit a packet",
             rays.len()
         );
-        assert_eq!(rays.len(), hits.len(), "intersect16: rays and hits differ in length");
+        assert_eq!(
+            rays.len(),
+            hits.len(),
+            "intersect16: rays and hits differ in length"
+        );
         let mut valid = Valid16([0; 16]);
         let mut packet = sys::RTCRayHit16::default();
         for (lane, ray) in rays.iter().enumerate() {
@@ -623,22 +668,26 @@ impl Scene {
             r.mask[lane] = u32::MAX;
         }
         if valid.0.iter().any(|&v| v != 0) {
-            let mut args = compat::query_args(coherent);
             // SAFETY: the scene is live and committed; `valid` and `packet` are 64-byte aligned
             // locals (checked at compile time), initialised for every lane (inactive lanes are
             // ignored by Embree), and only this call accesses them.
-            unsafe { compat::intersect16(valid.0.as_ptr(), self.handle.raw, &mut args, &mut packet) };
+            unsafe {
+                compat::intersect16(valid.0.as_ptr(), self.handle.raw, &mut packet, coherent)
+            };
         }
         for (lane, hit) in hits.iter_mut().enumerate() {
             let h = &packet.hit;
-            *hit = (valid.0[lane] != 0 && h.geomID[lane] != sys::RTC_INVALID_GEOMETRY_ID).then(|| RawHit {
-                t: packet.ray.tfar[lane],
-                u: h.u[lane],
-                v: h.v[lane],
-                ng: [h.Ng_x[lane], h.Ng_y[lane], h.Ng_z[lane]],
-                geom_id: h.geomID[lane],
-                prim_id: h.primID[lane],
-            });
+            *hit =
+                (valid.0[lane] != 0 && h.geomID[lane] != sys::RTC_INVALID_GEOMETRY_ID).then(|| {
+                    RawHit {
+                        t: packet.ray.tfar[lane],
+                        u: h.u[lane],
+                        v: h.v[lane],
+                        ng: [h.Ng_x[lane], h.Ng_y[lane], h.Ng_z[lane]],
+                        geom_id: h.geomID[lane],
+                        prim_id: h.primID[lane],
+                    }
+                });
         }
     }
 
