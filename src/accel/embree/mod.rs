@@ -2,21 +2,21 @@
 //! hits an object; Embree does this for triangle meshes).
 //!
 //! This module owns the crate's only `unsafe` code. Layers:
-//! - [`sys`]: raw bindings that `build.rs` generates with bindgen from `wrapper.h`;
-//! - [`compat`]: the few differences between Embree 3 and Embree 4;
+//! - `sys`: raw bindings that `build.rs` generates with bindgen from `wrapper.h`;
+//! - `compat`: the few differences between Embree 3 and Embree 4;
 //! - this file: a small safe API ([`Device`], [`TriangleGeometry`], [`SceneBuilder`], committed
 //!   [`Scene`]) with RAII release, Embree errors turned into [`Error::Embree`], and a process-wide
 //!   count of live Embree objects ([`live_objects`]);
-//! - [`intersector`]: [`EmbreeIntersector`], the [`crate::accel::Intersector`] over inimtrace
+//! - `intersector`: [`EmbreeIntersector`], the [`crate::accel::Intersector`] over inimtrace
 //!   meshes, where `f64` optics meets Embree's `f32`.
 //!
 //! The safe API keeps Embree from ever reading out of bounds: vertex positions must be finite,
 //! triangle indices must be in range, and rays with non-finite fields are answered "no hit"
 //! without calling Embree.
 
-pub mod compat;
+mod compat;
 mod intersector;
-pub mod sys;
+mod sys;
 
 use std::ffi::{c_char, c_void, CStr, CString};
 use std::sync::atomic::{AtomicUsize, Ordering};
