@@ -4,6 +4,8 @@
 
 pub mod analytic;
 pub mod brute;
+#[cfg(feature = "embree")]
+pub mod embree;
 
 use glam::{DVec2, DVec3};
 
