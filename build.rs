@@ -57,42 +57,23 @@ mod embree {
                     dir.display()
                 ));
             };
-            let lib_dir = ["lib", "lib64"]
-                .iter()
-                .map(|l| dir.join(l))
-                .find(|p| p.is_dir())
-                .unwrap_or_else(|| dir.join("lib"));
-            return Found {
-                major,
-                include_root,
-                lib_dir: Some(lib_dir),
-            };
+            let lib_dir =
+                ["lib", "lib64"].iter().map(|l| dir.join(l)).find(|p| p.is_dir()).unwrap_or_else(|| dir.join("lib"));
+            return Found { major, include_root, lib_dir: Some(lib_dir) };
         }
-        let mut roots: Vec<PathBuf> = [
-            "/usr/include",
-            "/usr/local/include",
-            "/opt/homebrew/include",
-        ]
-        .iter()
-        .map(PathBuf::from)
-        .collect();
+        let mut roots: Vec<PathBuf> =
+            ["/usr/include", "/usr/local/include", "/opt/homebrew/include"].iter().map(PathBuf::from).collect();
         // Honour extra include paths from the usual compiler variables, searched first.
         for var in ["CPATH", "C_INCLUDE_PATH"] {
             println!("cargo::rerun-if-env-changed={var}");
             if let Some(paths) = env::var_os(var) {
-                let extra: Vec<PathBuf> = env::split_paths(&paths)
-                    .filter(|p| !p.as_os_str().is_empty())
-                    .collect();
+                let extra: Vec<PathBuf> = env::split_paths(&paths).filter(|p| !p.as_os_str().is_empty()).collect();
                 roots.splice(0..0, extra);
             }
         }
         for major in [4, 3] {
             if let Some(root) = roots.iter().find(|r| has_header(r, major)) {
-                return Found {
-                    major,
-                    include_root: root.clone(),
-                    lib_dir: None,
-                };
+                return Found { major, include_root: root.clone(), lib_dir: None };
             }
         }
         fail(&format!(
@@ -102,9 +83,7 @@ mod embree {
     }
 
     fn has_header(root: &Path, major: u32) -> bool {
-        root.join(format!("embree{major}"))
-            .join("rtcore.h")
-            .is_file()
+        root.join(format!("embree{major}")).join("rtcore.h").is_file()
     }
 
     fn header_version(root: &Path) -> Option<u32> {
@@ -132,10 +111,7 @@ mod embree {
             .derive_debug(true)
             .generate_comments(false)
             .layout_tests(true)
-            .rust_target(
-                bindgen::RustTarget::stable(80, 0)
-                    .unwrap_or_else(|e| fail(&format!("bindgen: {e}"))),
-            )
+            .rust_target(bindgen::RustTarget::stable(80, 0).unwrap_or_else(|e| fail(&format!("bindgen: {e}"))))
             .parse_callbacks(Box::new(bindgen::CargoCallbacks::new()));
         if found.major >= 4 {
             builder = builder.clang_arg("-DINIMTRACE_EMBREE4");
@@ -144,8 +120,7 @@ mod embree {
         // bindgen panics when libclang cannot be loaded; turn that into the same one-line error.
         let default_hook = std::panic::take_hook();
         std::panic::set_hook(Box::new(|_| {}));
-        let result =
-            std::panic::catch_unwind(std::panic::AssertUnwindSafe(move || builder.generate()));
+        let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(move || builder.generate()));
         std::panic::set_hook(default_hook);
         let bindings = match result {
             Ok(Ok(b)) => b,
@@ -159,14 +134,11 @@ mod embree {
                     .cloned()
                     .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
                     .unwrap_or_default();
-                fail(&format!(
-                    "bindgen could not run ({what}); install libclang with `{INSTALL_HINT}`"
-                ))
+                fail(&format!("bindgen could not run ({what}); install libclang with `{INSTALL_HINT}`"))
             }
         };
-        let out =
-            PathBuf::from(env::var_os("OUT_DIR").unwrap_or_else(|| fail("OUT_DIR is not set")))
-                .join("embree_bindings.rs");
+        let out = PathBuf::from(env::var_os("OUT_DIR").unwrap_or_else(|| fail("OUT_DIR is not set")))
+            .join("embree_bindings.rs");
         if let Err(e) = bindings.write_to_file(&out) {
             fail(&format!("cannot write {}: {e}", out.display()));
         }

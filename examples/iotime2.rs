@@ -1,5 +1,5 @@
-use std::time::Instant;
 use std::path::Path;
+use std::time::Instant;
 fn main() {
     let img = inimtrace::io::exr::read_rgb(Path::new("out/paper/display_LA.exr")).unwrap();
     for dir in ["/tmp", "out"] {

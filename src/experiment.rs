@@ -17,7 +17,9 @@ use crate::optics::{Aperture, Display, Eye, Focus, Retina};
 use crate::progress::Progress;
 use crate::raster::RgbImage;
 use crate::render::retina::{simulate_stack, DisplayStack};
-use crate::render::{ground_truth, render_display_image, DisplayRenderSettings, FacingPlanes, Method, RadianceField, SceneTracer};
+use crate::render::{
+    ground_truth, render_display_image, DisplayRenderSettings, FacingPlanes, Method, RadianceField, SceneTracer,
+};
 use crate::scene::Scene;
 
 fn builtin() -> String {
@@ -124,7 +126,12 @@ pub struct ExperimentSpec {
 
 impl ExperimentSpec {
     fn paper_cases() -> Vec<EyeCaseSpec> {
-        let case = |name: &str, focus: Option<f64>| EyeCaseSpec { name: name.into(), pinhole: focus.is_none(), focus_mm: focus, focus_diopters: None };
+        let case = |name: &str, focus: Option<f64>| EyeCaseSpec {
+            name: name.into(),
+            pinhole: focus.is_none(),
+            focus_mm: focus,
+            focus_diopters: None,
+        };
         vec![case("Pin", None), case("Near", Some(300.0)), case("Cen", Some(400.0)), case("Far", Some(600.0))]
     }
 
@@ -197,7 +204,11 @@ impl Experiment {
                 (other, _) => other,
             };
             if methods.iter().any(|x: &Method| x.short_name() == method.short_name()) {
-                return Err(Error::invalid(source, format!("methods[{i}]"), format!("{} appears twice (output file names would collide)", method.short_name())));
+                return Err(Error::invalid(
+                    source,
+                    format!("methods[{i}]"),
+                    format!("{} appears twice (output file names would collide)", method.short_name()),
+                ));
             }
             methods.push(method);
         }
@@ -205,10 +216,18 @@ impl Experiment {
             return Err(Error::invalid(source, "methods", "list at least one of LC, PC, LA"));
         }
         if dr.la_grid == 0 || dr.la_grid > 64 {
-            return Err(Error::invalid(source, "display_render.la_grid", format!("must be between 1 and 64, got {}", dr.la_grid)));
+            return Err(Error::invalid(
+                source,
+                "display_render.la_grid",
+                format!("must be between 1 and 64, got {}", dr.la_grid),
+            ));
         }
         if dr.samples_per_pixel == 0 || dr.samples_per_pixel > 64 {
-            return Err(Error::invalid(source, "display_render.samples_per_pixel", format!("must be between 1 and 64, got {}", dr.samples_per_pixel)));
+            return Err(Error::invalid(
+                source,
+                "display_render.samples_per_pixel",
+                format!("must be between 1 and 64, got {}", dr.samples_per_pixel),
+            ));
         }
         if !dr.reference_plane_z.is_finite() {
             return Err(Error::invalid(source, "display_render.reference_plane_z", "must be finite"));
@@ -223,7 +242,11 @@ impl Experiment {
         if !render.eye_position.is_finite() {
             return Err(Error::invalid(source, "display_render.eye_position", "must be finite"));
         }
-        let retina = Retina { resolution: e.retina_resolution, half_tangent: e.retina_half_tangent, samples_per_pixel: e.retina_samples };
+        let retina = Retina {
+            resolution: e.retina_resolution,
+            half_tangent: e.retina_half_tangent,
+            samples_per_pixel: e.retina_samples,
+        };
         retina.validate(source).map_err(|err| prefix_field(err, "eye."))?;
         if spec.eye_cases.is_empty() {
             return Err(Error::invalid(source, "eye_cases", "list at least one eye case"));
@@ -232,16 +255,30 @@ impl Experiment {
         for (i, c) in spec.eye_cases.iter().enumerate() {
             let field = format!("eye_cases[{i}]");
             if c.name.is_empty() || !c.name.chars().all(|ch| ch.is_ascii_alphanumeric() || ch == '-' || ch == '_') {
-                return Err(Error::invalid(source, format!("{field}.name"), format!("`{}` must be non-empty and use only letters, digits, - and _ (it names files)", c.name)));
+                return Err(Error::invalid(
+                    source,
+                    format!("{field}.name"),
+                    format!("`{}` must be non-empty and use only letters, digits, - and _ (it names files)", c.name),
+                ));
             }
             if cases.iter().any(|x: &EyeCase| x.name == c.name) {
                 return Err(Error::invalid(source, format!("{field}.name"), format!("`{}` appears twice", c.name)));
             }
             let aperture = match (c.pinhole, c.focus_mm, c.focus_diopters) {
                 (true, None, None) => Aperture::Pinhole,
-                (false, Some(mm), None) => Aperture::ThinLens { pupil_diameter: e.pupil_diameter, focus: Focus::Millimetres(mm) },
-                (false, None, Some(d)) => Aperture::ThinLens { pupil_diameter: e.pupil_diameter, focus: Focus::Diopters(d) },
-                _ => return Err(Error::invalid(source, field, "give exactly one of `pinhole = true`, `focus_mm` or `focus_diopters`")),
+                (false, Some(mm), None) => {
+                    Aperture::ThinLens { pupil_diameter: e.pupil_diameter, focus: Focus::Millimetres(mm) }
+                }
+                (false, None, Some(d)) => {
+                    Aperture::ThinLens { pupil_diameter: e.pupil_diameter, focus: Focus::Diopters(d) }
+                }
+                _ => {
+                    return Err(Error::invalid(
+                        source,
+                        field,
+                        "give exactly one of `pinhole = true`, `focus_mm` or `focus_diopters`",
+                    ))
+                }
             };
             let eye = Eye { retina_distance: e.retina_distance, aperture, pupil_grid: e.pupil_grid, position };
             eye.validate(source).map_err(|err| prefix_field(err, &format!("{field} / eye.")))?;
@@ -250,7 +287,18 @@ impl Experiment {
         if methods.contains(&Method::PupilCenter) {
             crate::render::display_image::check_pupil_center(&display, render.eye_position)?;
         }
-        Ok(Self { name: spec.name.clone(), source: source.into(), scene, display, methods, render, retina, cases, ssim: spec.ssim, spec })
+        Ok(Self {
+            name: spec.name.clone(),
+            source: source.into(),
+            scene,
+            display,
+            methods,
+            render,
+            retina,
+            cases,
+            ssim: spec.ssim,
+            spec,
+        })
     }
 
     /// Loads an experiment file.
@@ -262,13 +310,16 @@ impl Experiment {
 
     /// The paper's experiment, built in.
     pub fn paper() -> Self {
-        Self::from_spec(ExperimentSpec::paper(), "built-in paper experiment", Path::new(".")).expect("built-in experiment is valid")
+        Self::from_spec(ExperimentSpec::paper(), "built-in paper experiment", Path::new("."))
+            .expect("built-in experiment is valid")
     }
 }
 
 fn prefix_field(err: Error, prefix: &str) -> Error {
     match err {
-        Error::Invalid { source_name, field, message } => Error::Invalid { source_name, field: format!("{prefix}{field}"), message },
+        Error::Invalid { source_name, field, message } => {
+            Error::Invalid { source_name, field: format!("{prefix}{field}"), message }
+        }
         other => other,
     }
 }
@@ -342,10 +393,22 @@ struct Job<'a> {
     attributes: Vec<(&'static str, String)>,
 }
 
-fn assess_with<R: RadianceField>(exp: &Experiment, out: &Path, opts: RunOptions, field: &R, backend_name: &str, start: Instant) -> Result<AssessReport> {
+fn assess_with<R: RadianceField>(
+    exp: &Experiment,
+    out: &Path,
+    opts: RunOptions,
+    field: &R,
+    backend_name: &str,
+    start: Instant,
+) -> Result<AssessReport> {
     let mut stages = Vec::new();
     let mut timed = |stage: &str, method: Option<&str>, case: Option<&str>, t: Instant| {
-        stages.push(StageTime { stage: stage.into(), method: method.map(String::from), eye_case: case.map(String::from), seconds: t.elapsed().as_secs_f64() });
+        stages.push(StageTime {
+            stage: stage.into(),
+            method: method.map(String::from),
+            eye_case: case.map(String::from),
+            seconds: t.elapsed().as_secs_f64(),
+        });
     };
     let display = &exp.display;
 
@@ -382,7 +445,8 @@ fn assess_with<R: RadianceField>(exp: &Experiment, out: &Path, opts: RunOptions,
 
     // 3. Scores.
     let t = Instant::now();
-    let pairs: Vec<(usize, usize)> = (0..exp.cases.len()).flat_map(|c| (0..exp.methods.len()).map(move |m| (c, m))).collect();
+    let pairs: Vec<(usize, usize)> =
+        (0..exp.cases.len()).flat_map(|c| (0..exp.methods.len()).map(move |m| (c, m))).collect();
     let scores: Vec<Score> = pairs
         .par_iter()
         .map(|&(c, m)| -> Result<Score> {
@@ -459,11 +523,20 @@ fn assess_with<R: RadianceField>(exp: &Experiment, out: &Path, opts: RunOptions,
                 crate::io::exr::write_rgb(&out.join(format!("{}.exr", j.stem)), j.image, None, &attrs)?;
                 let t1 = Instant::now();
                 let r = crate::io::png::write_preview(&out.join(format!("{}.png", j.stem)), j.image);
-                if std::env::var_os("INIMTRACE_DEBUG").is_some() { eprintln!("{} exr {:?} png {:?}", j.stem, t1 - t0, t1.elapsed()); }
+                if std::env::var_os("INIMTRACE_DEBUG").is_some() {
+                    eprintln!("{} exr {:?} png {:?}", j.stem, t1 - t0, t1.elapsed());
+                }
                 r
             })
         },
-        || { let t0 = Instant::now(); let r = crate::io::figure::write_montage(&out.join("figure.png"), &figure_rows, &labels); if std::env::var_os("INIMTRACE_DEBUG").is_some() { eprintln!("figure {:?}", t0.elapsed()); } r },
+        || {
+            let t0 = Instant::now();
+            let r = crate::io::figure::write_montage(&out.join("figure.png"), &figure_rows, &labels);
+            if std::env::var_os("INIMTRACE_DEBUG").is_some() {
+                eprintln!("figure {:?}", t0.elapsed());
+            }
+            r
+        },
     );
     image_result?;
     figure_result?;
@@ -543,7 +616,14 @@ fn write_reports(report: &AssessReport, exp: &Experiment, out: &Path) -> Result<
                 s.ssim.channels[c]
             ));
         }
-        csv.push_str(&format!("score,{},{},{},mean,{},{},,\n", report.experiment, s.method, s.eye_case, csv_db(s.psnr.mean), s.ssim.mean));
+        csv.push_str(&format!(
+            "score,{},{},{},mean,{},{},,\n",
+            report.experiment,
+            s.method,
+            s.eye_case,
+            csv_db(s.psnr.mean),
+            s.ssim.mean
+        ));
     }
     for st in &report.stages {
         csv.push_str(&format!(
@@ -557,7 +637,8 @@ fn write_reports(report: &AssessReport, exp: &Experiment, out: &Path) -> Result<
     }
     csv.push_str(&format!("stage,{},,,,,,total,{}\n", report.experiment, report.total_seconds));
     write("results.csv", csv)?;
-    let json = serde_json::to_string_pretty(report).map_err(|e| Error::Unsupported(format!("cannot serialise the report: {e}")))?;
+    let json = serde_json::to_string_pretty(report)
+        .map_err(|e| Error::Unsupported(format!("cannot serialise the report: {e}")))?;
     // Last: its presence marks a complete run.
     write("results.json", json)
 }

@@ -14,11 +14,17 @@ use inimtrace::metrics::{self, SsimConstants};
 use inimtrace::optics::{Aperture, Display, Eye, Focus, Retina};
 use inimtrace::progress::Progress;
 use inimtrace::render::retina::simulate;
-use inimtrace::render::{ground_truth, render_display_image, DisplayRenderSettings, FacingPlanes, Method, RadianceField, SceneTracer};
+use inimtrace::render::{
+    ground_truth, render_display_image, DisplayRenderSettings, FacingPlanes, Method, RadianceField, SceneTracer,
+};
 use inimtrace::scene::Scene;
 
 #[derive(Parser)]
-#[command(name = "inimtrace", version, about = "How a near-eye integral-imaging display looks to a human eye, and how good each way of rendering its display image is.")]
+#[command(
+    name = "inimtrace",
+    version,
+    about = "How a near-eye integral-imaging display looks to a human eye, and how good each way of rendering its display image is."
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -150,7 +156,8 @@ impl EyeArgs {
         };
         let eye = Eye { retina_distance: 17.0, aperture, pupil_grid: self.pupil_grid, position: DVec3::ZERO };
         eye.validate("command line")?;
-        let retina = Retina { resolution: self.retina, half_tangent: self.half_tangent, samples_per_pixel: self.retina_samples };
+        let retina =
+            Retina { resolution: self.retina, half_tangent: self.half_tangent, samples_per_pixel: self.retina_samples };
         retina.validate("command line")?;
         Ok((eye, retina))
     }
@@ -217,33 +224,61 @@ fn run() -> Result<()> {
             print!("{}", experiment::table_markdown(&report, &exp));
             if cli.timings {
                 for s in &report.stages {
-                    let what = [s.method.as_deref(), s.eye_case.as_deref()].into_iter().flatten().collect::<Vec<_>>().join(" ");
+                    let what = [s.method.as_deref(), s.eye_case.as_deref()]
+                        .into_iter()
+                        .flatten()
+                        .collect::<Vec<_>>()
+                        .join(" ");
                     eprintln!("{:>8.3} s  {} {}", s.seconds, s.stage, what);
                 }
-                eprintln!("{:>8.3} s  total ({} threads, backend {})", report.total_seconds, report.threads, report.backend);
+                eprintln!(
+                    "{:>8.3} s  total ({} threads, backend {})",
+                    report.total_seconds, report.threads, report.backend
+                );
             }
             eprintln!("wrote {}", out.display());
         }
         Command::RenderDisplay { method, setup, samples_per_pixel, reference_plane, out } => {
             let (scene, display) = load_setup(&setup)?;
             let method: Method = method.parse().map_err(anyhow::Error::msg)?;
-            let settings = DisplayRenderSettings { samples_per_pixel, reference_plane_z: reference_plane, eye_position: DVec3::ZERO };
+            let settings = DisplayRenderSettings {
+                samples_per_pixel,
+                reference_plane_z: reference_plane,
+                eye_position: DVec3::ZERO,
+            };
             let img = with_field(&scene, |field| {
-                let p = Progress::new(display.lcd.rows() as u64, &format!("display image {}", method.short_name()), quiet);
+                let p =
+                    Progress::new(display.lcd.rows() as u64, &format!("display image {}", method.short_name()), quiet);
                 let img = render_display_image(&display, method, &settings, field, &p)?;
                 p.finish();
                 Ok(img)
             })?;
-            write_image(&out, &img, &[("inimtrace:kind", "display image".into()), ("inimtrace:method", method.to_string()), ("inimtrace:display", display.summary())])?;
+            write_image(
+                &out,
+                &img,
+                &[
+                    ("inimtrace:kind", "display image".into()),
+                    ("inimtrace:method", method.to_string()),
+                    ("inimtrace:display", display.summary()),
+                ],
+            )?;
         }
         Command::Simulate { display_image, setup, eye, out } => {
             let (_, display) = load_setup(&setup)?;
             let (eye, retina) = eye.eye()?;
             let img = inimtrace::io::exr::read_rgb(&display_image)?;
             let p = Progress::new(retina.resolution as u64, "simulate", quiet);
-            let sim = simulate(&display, &eye, &retina, &[&img], &p).with_context(|| format!("simulating {}", display_image.display()))?;
+            let sim = simulate(&display, &eye, &retina, &[&img], &p)
+                .with_context(|| format!("simulating {}", display_image.display()))?;
             p.finish();
-            write_image(&out, &sim[0], &[("inimtrace:kind", "simulated retinal image".into()), ("inimtrace:source", display_image.display().to_string())])?;
+            write_image(
+                &out,
+                &sim[0],
+                &[
+                    ("inimtrace:kind", "simulated retinal image".into()),
+                    ("inimtrace:source", display_image.display().to_string()),
+                ],
+            )?;
         }
         Command::GroundTruth { setup, eye, out } => {
             let (scene, _) = load_setup(&setup)?;
@@ -260,10 +295,21 @@ fn run() -> Result<()> {
             let constants: SsimConstants = ssim.parse()?;
             let ia = inimtrace::io::exr::read_rgb(&a)?;
             let ib = inimtrace::io::exr::read_rgb(&b)?;
-            let p = metrics::psnr(&ia, &ib).with_context(|| format!("comparing {} and {}", a.display(), b.display()))?;
-            let s = metrics::ssim(&ia, &ib, constants).with_context(|| format!("comparing {} and {}", a.display(), b.display()))?;
-            println!("PSNR  {} dB  (R {}, G {}, B {})", metrics::format_db(p.mean, 3), metrics::format_db(p.channels[0], 3), metrics::format_db(p.channels[1], 3), metrics::format_db(p.channels[2], 3));
-            println!("SSIM  {:.5}  (R {:.5}, G {:.5}, B {:.5}; constants {})", s.mean, s.channels[0], s.channels[1], s.channels[2], constants);
+            let p =
+                metrics::psnr(&ia, &ib).with_context(|| format!("comparing {} and {}", a.display(), b.display()))?;
+            let s = metrics::ssim(&ia, &ib, constants)
+                .with_context(|| format!("comparing {} and {}", a.display(), b.display()))?;
+            println!(
+                "PSNR  {} dB  (R {}, G {}, B {})",
+                metrics::format_db(p.mean, 3),
+                metrics::format_db(p.channels[0], 3),
+                metrics::format_db(p.channels[1], 3),
+                metrics::format_db(p.channels[2], 3)
+            );
+            println!(
+                "SSIM  {:.5}  (R {:.5}, G {:.5}, B {:.5}; constants {})",
+                s.mean, s.channels[0], s.channels[1], s.channels[2], constants
+            );
         }
         Command::Info { display, print } => {
             if let Some(what) = print {

@@ -185,18 +185,13 @@ impl fmt::Display for SsimConstants {
 impl FromStr for SsimConstants {
     type Err = Error;
     fn from_str(s: &str) -> Result<Self> {
-        SsimConstants::ALL
-            .into_iter()
-            .find(|c| c.name() == s)
-            .ok_or_else(|| {
-                Error::invalid(
-                    "SSIM constants",
-                    "name",
-                    format!(
-                        "unknown SSIM constants `{s}` (expected `wang2004` or `framework-8bit`)"
-                    ),
-                )
-            })
+        SsimConstants::ALL.into_iter().find(|c| c.name() == s).ok_or_else(|| {
+            Error::invalid(
+                "SSIM constants",
+                "name",
+                format!("unknown SSIM constants `{s}` (expected `wang2004` or `framework-8bit`)"),
+            )
+        })
     }
 }
 
@@ -349,9 +344,7 @@ fn ssim_channel_fast(a: &RgbImage, b: &RgbImage, c: usize, c1: f64, c2: f64) -> 
                 let (mx, rest) = acc.split_at(wv);
                 let (my, rest) = rest.split_at(wv);
                 let (esq, exy) = rest.split_at(wv);
-                sum += (0..wv)
-                    .map(|j| ssim_value_combined(mx[j], my[j], esq[j], exy[j], c1, c2))
-                    .sum::<f64>();
+                sum += (0..wv).map(|j| ssim_value_combined(mx[j], my[j], esq[j], exy[j], c1, c2)).sum::<f64>();
             }
             sum
         })
@@ -408,19 +401,13 @@ fn ssim_with(a: &RgbImage, b: &RgbImage, constants: SsimConstants, f: ChannelSsi
         return Err(Error::invalid(
             "SSIM",
             "image size",
-            format!(
-                "{}x{} image is smaller than the {SSIM_WINDOW}x{SSIM_WINDOW} SSIM window",
-                a.width, a.height
-            ),
+            format!("{}x{} image is smaller than the {SSIM_WINDOW}x{SSIM_WINDOW} SSIM window", a.width, a.height),
         ));
     }
     let (c1, c2) = constants.c1_c2();
     let per: Vec<f64> = (0..3).into_par_iter().map(|c| f(a, b, c, c1, c2)).collect();
     let channels = [per[0], per[1], per[2]];
-    Ok(Ssim {
-        channels,
-        mean: channels.iter().sum::<f64>() / 3.0,
-    })
+    Ok(Ssim { channels, mean: channels.iter().sum::<f64>() / 3.0 })
 }
 
 /// Both images the same, non-zero size, every sample finite.
@@ -429,10 +416,7 @@ fn check_pair(a: &RgbImage, b: &RgbImage, metric: &str) -> Result<()> {
         return Err(Error::invalid(
             metric,
             "image size",
-            format!(
-                "cannot compare a {}x{} image with a {}x{} image",
-                a.width, a.height, b.width, b.height
-            ),
+            format!("cannot compare a {}x{} image with a {}x{} image", a.width, a.height, b.width, b.height),
         ));
     }
     if a.width == 0 || a.height == 0 {
@@ -443,27 +427,14 @@ fn check_pair(a: &RgbImage, b: &RgbImage, metric: &str) -> Result<()> {
             return Err(Error::invalid(
                 metric,
                 "pixels",
-                format!(
-                    "{name} image has {} pixels, expected {}x{}",
-                    img.pixels.len(),
-                    img.width,
-                    img.height
-                ),
+                format!("{name} image has {} pixels, expected {}x{}", img.pixels.len(), img.width, img.height),
             ));
         }
-        if let Some(i) = img
-            .pixels
-            .iter()
-            .position(|p| p.iter().any(|v| !v.is_finite()))
-        {
+        if let Some(i) = img.pixels.iter().position(|p| p.iter().any(|v| !v.is_finite())) {
             return Err(Error::invalid(
                 metric,
                 "pixels",
-                format!(
-                    "{name} image has a non-finite sample at (row {}, col {})",
-                    i / img.width,
-                    i % img.width
-                ),
+                format!("{name} image has a non-finite sample at (row {}, col {})", i / img.width, i % img.width),
             ));
         }
     }

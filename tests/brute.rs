@@ -12,11 +12,7 @@ fn ray(origin: DVec3, dir: DVec3) -> Ray {
 }
 
 fn tri_mesh(p: [DVec3; 3]) -> Mesh {
-    Mesh {
-        positions: p.to_vec(),
-        triangles: vec![[0, 1, 2]],
-        ..Default::default()
-    }
+    Mesh { positions: p.to_vec(), triangles: vec![[0, 1, 2]], ..Default::default() }
 }
 
 fn bary(hit: &Hit) -> (u32, DVec2) {
@@ -28,11 +24,7 @@ fn bary(hit: &Hit) -> (u32, DVec2) {
 
 /// Unit right triangle in the plane z = 5.
 fn unit_triangle() -> [DVec3; 3] {
-    [
-        DVec3::new(0.0, 0.0, 5.0),
-        DVec3::new(1.0, 0.0, 5.0),
-        DVec3::new(0.0, 1.0, 5.0),
-    ]
+    [DVec3::new(0.0, 0.0, 5.0), DVec3::new(1.0, 0.0, 5.0), DVec3::new(0.0, 1.0, 5.0)]
 }
 
 #[test]
@@ -40,33 +32,22 @@ fn analytic_hit_is_exact() {
     let m = tri_mesh(unit_triangle());
     let b = BruteForce::new(&[(4, &m)]).unwrap();
     // Straight down the z axis at (0.25, 0.125): t = 5, u (weight of p1) = x, v (of p2) = y.
-    let hit = b
-        .intersect(&ray(DVec3::new(0.25, 0.125, 0.0), DVec3::Z), f64::INFINITY)
-        .unwrap();
+    let hit = b.intersect(&ray(DVec3::new(0.25, 0.125, 0.0), DVec3::Z), f64::INFINITY).unwrap();
     assert_eq!(hit.t, 5.0);
     assert_eq!(hit.object, 4);
     assert_eq!(bary(&hit), (0, DVec2::new(0.25, 0.125)));
     // t is in units of dir.
-    let hit = b
-        .intersect(
-            &ray(DVec3::new(0.25, 0.125, 0.0), DVec3::new(0.0, 0.0, 2.0)),
-            1e9,
-        )
-        .unwrap();
+    let hit = b.intersect(&ray(DVec3::new(0.25, 0.125, 0.0), DVec3::new(0.0, 0.0, 2.0)), 1e9).unwrap();
     assert_eq!(hit.t, 2.5);
     // Two-sided: from behind.
-    let hit = b
-        .intersect(&ray(DVec3::new(0.5, 0.25, 9.0), -DVec3::Z), f64::INFINITY)
-        .unwrap();
+    let hit = b.intersect(&ray(DVec3::new(0.5, 0.25, 9.0), -DVec3::Z), f64::INFINITY).unwrap();
     assert_eq!(hit.t, 4.0);
     assert_eq!(bary(&hit).1, DVec2::new(0.5, 0.25));
     // Oblique ray from the origin to the point with barycentrics (u, v) = (0.3, 0.6).
     let (u, v) = (0.3, 0.6);
     let [p0, p1, p2] = unit_triangle();
     let target = (1.0 - u - v) * p0 + u * p1 + v * p2;
-    let hit = b
-        .intersect(&ray(DVec3::ZERO, target * 0.5), f64::INFINITY)
-        .unwrap();
+    let hit = b.intersect(&ray(DVec3::ZERO, target * 0.5), f64::INFINITY).unwrap();
     assert!((hit.t - 2.0).abs() < 1e-15, "t = {}", hit.t);
     assert!((bary(&hit).1 - DVec2::new(u, v)).abs().max_element() < 1e-15);
 }
@@ -81,32 +62,14 @@ fn t_range_is_open_interval() {
     assert!(!b.occluded(&r, 5.0));
     assert!(b.occluded(&r, 6.0));
     // Triangle behind the origin, and origin exactly on the triangle (t = 0).
-    assert!(b
-        .intersect(&ray(DVec3::new(0.25, 0.25, 6.0), DVec3::Z), f64::INFINITY)
-        .is_none());
-    assert!(b
-        .intersect(&ray(DVec3::new(0.25, 0.25, 5.0), DVec3::Z), f64::INFINITY)
-        .is_none());
+    assert!(b.intersect(&ray(DVec3::new(0.25, 0.25, 6.0), DVec3::Z), f64::INFINITY).is_none());
+    assert!(b.intersect(&ray(DVec3::new(0.25, 0.25, 5.0), DVec3::Z), f64::INFINITY).is_none());
     // Outside the triangle (u + v > 1) and outside an edge (u < 0).
-    assert!(b
-        .intersect(&ray(DVec3::new(0.6, 0.6, 0.0), DVec3::Z), f64::INFINITY)
-        .is_none());
-    assert!(b
-        .intersect(&ray(DVec3::new(-0.01, 0.5, 0.0), DVec3::Z), f64::INFINITY)
-        .is_none());
+    assert!(b.intersect(&ray(DVec3::new(0.6, 0.6, 0.0), DVec3::Z), f64::INFINITY).is_none());
+    assert!(b.intersect(&ray(DVec3::new(-0.01, 0.5, 0.0), DVec3::Z), f64::INFINITY).is_none());
     // Degenerate rays hit nothing.
-    assert!(b
-        .intersect(
-            &ray(DVec3::new(0.25, 0.25, 0.0), DVec3::ZERO),
-            f64::INFINITY
-        )
-        .is_none());
-    assert!(b
-        .intersect(
-            &ray(DVec3::new(0.25, 0.25, 0.0), DVec3::new(f64::NAN, 0.0, 1.0)),
-            9.0
-        )
-        .is_none());
+    assert!(b.intersect(&ray(DVec3::new(0.25, 0.25, 0.0), DVec3::ZERO), f64::INFINITY).is_none());
+    assert!(b.intersect(&ray(DVec3::new(0.25, 0.25, 0.0), DVec3::new(f64::NAN, 0.0, 1.0)), 9.0).is_none());
 }
 
 #[test]
@@ -114,19 +77,10 @@ fn parallel_rays_miss() {
     let m = tri_mesh(unit_triangle());
     let b = BruteForce::new(&[(0, &m)]).unwrap();
     // In the triangle's plane, crossing its interior.
-    assert!(b
-        .intersect(&ray(DVec3::new(-1.0, 0.25, 5.0), DVec3::X), f64::INFINITY)
-        .is_none());
-    assert!(b
-        .intersect(
-            &ray(DVec3::new(0.25, -3.0, 5.0), DVec3::new(0.0, 1.0, 0.0)),
-            1e9
-        )
-        .is_none());
+    assert!(b.intersect(&ray(DVec3::new(-1.0, 0.25, 5.0), DVec3::X), f64::INFINITY).is_none());
+    assert!(b.intersect(&ray(DVec3::new(0.25, -3.0, 5.0), DVec3::new(0.0, 1.0, 0.0)), 1e9).is_none());
     // Parallel, just above the plane.
-    assert!(b
-        .intersect(&ray(DVec3::new(-1.0, 0.25, 5.001), DVec3::X), f64::INFINITY)
-        .is_none());
+    assert!(b.intersect(&ray(DVec3::new(-1.0, 0.25, 5.001), DVec3::X), f64::INFINITY).is_none());
 }
 
 /// Axis-aligned cube [-1, 1]^3, 12 triangles, outward winding; each face split along the
@@ -141,24 +95,13 @@ fn cube() -> Mesh {
             )
         })
         .collect();
-    let quads = [
-        [0, 2, 3, 1],
-        [4, 5, 7, 6],
-        [0, 1, 5, 4],
-        [2, 6, 7, 3],
-        [0, 4, 6, 2],
-        [1, 3, 7, 5],
-    ];
+    let quads = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
     let mut triangles = Vec::new();
     for [a, b, c, d] in quads {
         triangles.push([a, b, c]);
         triangles.push([a, c, d]);
     }
-    let m = Mesh {
-        positions,
-        triangles,
-        ..Default::default()
-    };
+    let m = Mesh { positions, triangles, ..Default::default() };
     // Outward winding check: the geometric normal of every triangle points away from the centre.
     for t in 0..m.triangles.len() {
         let [p0, p1, p2] = m.triangle_positions(t);
@@ -226,11 +169,7 @@ fn icosphere(levels: usize) -> Mesh {
         }
         triangles = next;
     }
-    Mesh {
-        positions,
-        triangles,
-        ..Default::default()
-    }
+    Mesh { positions, triangles, ..Default::default() }
 }
 
 /// Small deterministic generator (xorshift64*), uniform in [0, 1).
@@ -280,37 +219,21 @@ fn rays_through_cube_edges_and_vertices_never_fall_through() {
     let b = BruteForce::new(&[(0, &m)]).unwrap();
     let targets = cube_edge_targets();
     assert_eq!(targets.len(), 17 * 24);
-    let origins = [
-        DVec3::ZERO,
-        DVec3::new(0.1, -0.3, 0.2),
-        DVec3::new(-0.75, 0.5, 0.625),
-        DVec3::new(0.999, 0.999, -0.999),
-    ];
+    let origins =
+        [DVec3::ZERO, DVec3::new(0.1, -0.3, 0.2), DVec3::new(-0.75, 0.5, 0.625), DVec3::new(0.999, 0.999, -0.999)];
     for origin in origins {
         for &target in &targets {
             // From inside: the exit point is the target, at t = 1.
             let r = ray(origin, target - origin);
-            let hit = b
-                .intersect(&r, f64::INFINITY)
-                .unwrap_or_else(|| panic!("{origin} -> {target} fell through"));
-            assert!(
-                (hit.t - 1.0).abs() < 1e-12,
-                "{origin} -> {target}: t = {}",
-                hit.t
-            );
+            let hit = b.intersect(&r, f64::INFINITY).unwrap_or_else(|| panic!("{origin} -> {target} fell through"));
+            assert!((hit.t - 1.0).abs() < 1e-12, "{origin} -> {target}: t = {}", hit.t);
             // Deterministic: the same ray gives the same hit.
             assert_eq!(b.intersect(&r, f64::INFINITY), Some(hit));
             // From outside through the target towards the inside point: enters at the target.
             let outside = target + 3.0 * (target - origin);
             let r = ray(outside, origin - outside);
-            let hit = b
-                .intersect(&r, f64::INFINITY)
-                .unwrap_or_else(|| panic!("{outside} -> {target} missed"));
-            assert!(
-                (hit.t - 0.75).abs() < 1e-12,
-                "{outside} -> {target}: t = {}",
-                hit.t
-            );
+            let hit = b.intersect(&r, f64::INFINITY).unwrap_or_else(|| panic!("{outside} -> {target} missed"));
+            assert!((hit.t - 0.75).abs() < 1e-12, "{outside} -> {target}: t = {}", hit.t);
         }
     }
 }
@@ -329,20 +252,14 @@ fn rays_from_inside_icosphere_always_hit() {
     let mut targets: Vec<DVec3> = m.positions.clone();
     for tri in &m.triangles {
         for k in 0..3 {
-            let (a, c) = (
-                m.positions[tri[k] as usize],
-                m.positions[tri[(k + 1) % 3] as usize],
-            );
+            let (a, c) = (m.positions[tri[k] as usize], m.positions[tri[(k + 1) % 3] as usize]);
             targets.push((a + c) * 0.5);
         }
     }
     for origin in &origins {
         for target in &targets {
             let r = ray(*origin, *target - *origin);
-            assert!(
-                b.intersect(&r, f64::INFINITY).is_some(),
-                "{origin} -> {target} fell through"
-            );
+            assert!(b.intersect(&r, f64::INFINITY).is_some(), "{origin} -> {target} fell through");
         }
     }
     for _ in 0..2000 {
@@ -352,11 +269,7 @@ fn rays_from_inside_icosphere_always_hit() {
         }
         let hit = b.intersect(&r, f64::INFINITY).expect("random ray escaped");
         let p = r.origin + hit.t * r.dir;
-        assert!(
-            p.length() <= 1.0 + 1e-12 && p.length() > 0.98,
-            "hit at radius {}",
-            p.length()
-        );
+        assert!(p.length() <= 1.0 + 1e-12 && p.length() > 0.98, "hit at radius {}", p.length());
     }
 }
 
@@ -394,11 +307,7 @@ fn agrees_with_moller_trumbore_away_from_edges() {
         // Half the rays aim into the triangle, half anywhere.
         let dir = if i % 2 == 0 {
             let (u, v) = (rng.next(), rng.next());
-            let (u, v) = if u + v > 1.0 {
-                (1.0 - u, 1.0 - v)
-            } else {
-                (u, v)
-            };
+            let (u, v) = if u + v > 1.0 { (1.0 - u, 1.0 - v) } else { (u, v) };
             (1.0 - u - v) * p[0] + u * p[1] + v * p[2] - origin
         } else {
             rng.vec(-1.0, 1.0)
@@ -417,21 +326,13 @@ fn agrees_with_moller_trumbore_away_from_edges() {
         if [u, v, 1.0 - u - v].iter().any(|x| x.abs() < 1e-7) {
             continue;
         }
-        let wt = WatertightRay::new(&r)
-            .unwrap()
-            .intersect(p[0], p[1], p[2], f64::INFINITY);
+        let wt = WatertightRay::new(&r).unwrap().intersect(p[0], p[1], p[2], f64::INFINITY);
         match (wt, mt) {
             (None, None) => misses += 1,
             (Some((t1, b1)), Some((t2, b2))) => {
                 hits += 1;
-                assert!(
-                    (t1 - t2).abs() <= 1e-9 * t2.abs(),
-                    "ray {i}: t {t1} vs {t2}"
-                );
-                assert!(
-                    (b1 - b2).abs().max_element() < 1e-9,
-                    "ray {i}: bary {b1} vs {b2}"
-                );
+                assert!((t1 - t2).abs() <= 1e-9 * t2.abs(), "ray {i}: t {t1} vs {t2}");
+                assert!((b1 - b2).abs().max_element() < 1e-9, "ray {i}: bary {b1} vs {b2}");
                 // The barycentrics reconstruct the hit point.
                 let q = (1.0 - b1.x - b1.y) * p[0] + b1.x * p[1] + b1.y * p[2];
                 assert!((q - (r.origin + t1 * r.dir)).length() < 1e-9, "ray {i}");
@@ -439,10 +340,7 @@ fn agrees_with_moller_trumbore_away_from_edges() {
             (a, b) => panic!("ray {i}: watertight {a:?} vs Möller–Trumbore {b:?}"),
         }
     }
-    assert!(
-        hits > 9_000 && misses > 5_000,
-        "hits {hits}, misses {misses}"
-    );
+    assert!(hits > 9_000 && misses > 5_000, "hits {hits}, misses {misses}");
 }
 
 #[test]
@@ -479,21 +377,11 @@ fn nearest_hit_and_deterministic_ties() {
 
 #[test]
 fn invalid_meshes_are_rejected_not_panicking() {
-    let bad = Mesh {
-        positions: vec![DVec3::ZERO; 3],
-        triangles: vec![[0, 1, 3]],
-        ..Default::default()
-    };
+    let bad = Mesh { positions: vec![DVec3::ZERO; 3], triangles: vec![[0, 1, 3]], ..Default::default() };
     let err = BruteForce::new(&[(5, &bad)]).unwrap_err().to_string();
-    assert!(
-        err.contains("scene object 5") && err.contains("triangle 0"),
-        "{err}"
-    );
+    assert!(err.contains("scene object 5") && err.contains("triangle 0"), "{err}");
     let empty = BruteForce::new(&[]).unwrap();
-    assert_eq!(
-        empty.intersect(&ray(DVec3::ZERO, DVec3::Z), f64::INFINITY),
-        None
-    );
+    assert_eq!(empty.intersect(&ray(DVec3::ZERO, DVec3::Z), f64::INFINITY), None);
 }
 
 #[test]

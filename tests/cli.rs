@@ -6,7 +6,11 @@ use std::process::Command;
 
 fn inimtrace(args: &[&str]) -> (bool, String, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_inimtrace")).args(args).arg("--quiet").output().expect("binary runs");
-    (out.status.success(), String::from_utf8_lossy(&out.stdout).into_owned(), String::from_utf8_lossy(&out.stderr).into_owned())
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
 }
 
 fn root() -> PathBuf {
@@ -15,7 +19,8 @@ fn root() -> PathBuf {
 
 /// A small version of the paper's experiment (quarter-resolution LCD, 64 x 64 retina).
 fn small_experiment(dir: &Path) -> PathBuf {
-    let display = std::fs::read_to_string(root().join("displays/paper.toml")).unwrap().replace("[2160, 2160]", "[540, 540]");
+    let display =
+        std::fs::read_to_string(root().join("displays/paper.toml")).unwrap().replace("[2160, 2160]", "[540, 540]");
     std::fs::write(dir.join("display.toml"), display).unwrap();
     let exp = std::fs::read_to_string(root().join("experiments/paper.toml"))
         .unwrap()
@@ -66,7 +71,8 @@ fn assess_writes_every_output_with_the_documented_names() {
     assert_eq!(get("inimtrace:pupil_diameter_mm"), "5");
     assert!(get("inimtrace:units").contains("mm"));
     // The table's numbers are the JSON's, and none is NaN.
-    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
     let scores = json["scores"].as_array().unwrap();
     assert_eq!(scores.len(), 12);
     for s in scores {
@@ -134,11 +140,17 @@ fn bad_input_gives_one_clear_error_and_never_panics() {
     expect_error(&["assess", &p, "--out", &out], &["empty.toml", "name"]);
     let p = w("syntax.toml", "name = \"x\"\n[eye\n");
     expect_error(&["assess", &p, "--out", &out], &["syntax.toml", "line 2"]);
-    let p = w("types.toml", "name = \"x\"\n[eye]\npupil_diameter = \"five\"\n[[eye_cases]]\nname = \"A\"\npinhole = true\n");
+    let p = w(
+        "types.toml",
+        "name = \"x\"\n[eye]\npupil_diameter = \"five\"\n[[eye_cases]]\nname = \"A\"\npinhole = true\n",
+    );
     expect_error(&["assess", &p, "--out", &out], &["types.toml", "pupil_diameter"]);
     let p = w("unknown.toml", "name = \"x\"\nfocus = 3\n[[eye_cases]]\nname = \"A\"\npinhole = true\n");
     expect_error(&["assess", &p, "--out", &out], &["unknown.toml", "focus"]);
-    let p = w("negpupil.toml", "name = \"x\"\n[eye]\npupil_diameter = -5.0\n[[eye_cases]]\nname = \"A\"\nfocus_mm = 300.0\n");
+    let p = w(
+        "negpupil.toml",
+        "name = \"x\"\n[eye]\npupil_diameter = -5.0\n[[eye_cases]]\nname = \"A\"\nfocus_mm = 300.0\n",
+    );
     expect_error(&["assess", &p, "--out", &out], &["negpupil.toml", "pupil_diameter"]);
     let p = w("nanfocus.toml", "name = \"x\"\n[[eye_cases]]\nname = \"A\"\nfocus_mm = nan\n");
     expect_error(&["assess", &p, "--out", &out], &["nanfocus.toml", "focus_mm"]);
@@ -160,7 +172,8 @@ fn bad_input_gives_one_clear_error_and_never_panics() {
     expect_error(&["info", "--display", &p], &["broken.yaml"]);
 
     // PupilCenter at the singular configuration: the lenslet images the pupil centre onto the LCD.
-    let singular = good_display.replace("lenslets_to_lcd = 6.316", &format!("lenslets_to_lcd = {}", 1.0 / (1.0 / 6.427 - 1.0 / 20.0)));
+    let singular = good_display
+        .replace("lenslets_to_lcd = 6.316", &format!("lenslets_to_lcd = {}", 1.0 / (1.0 / 6.427 - 1.0 / 20.0)));
     let sp = w("singular.toml", &singular);
     let e = std::fs::read_to_string(root().join("experiments/paper.toml"))
         .unwrap()

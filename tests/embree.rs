@@ -10,8 +10,7 @@ use std::sync::{RwLock, RwLockReadGuard, RwLockWriteGuard};
 
 use glam::{DVec2, DVec3};
 use inimtrace::accel::embree::{
-    embree_error, live_objects, BuildQuality, Device, EmbreeIntersector, RawRay, SceneBuilder,
-    TriangleGeometry,
+    embree_error, live_objects, BuildQuality, Device, EmbreeIntersector, RawRay, SceneBuilder, TriangleGeometry,
 };
 use inimtrace::accel::{Hit, Intersector, Ray, Surface};
 use inimtrace::scene::mesh::Mesh;
@@ -62,11 +61,7 @@ struct BruteHit {
 
 fn tri_points(mesh: &Mesh, tri: usize) -> [DVec3; 3] {
     let [a, b, c] = mesh.triangles[tri];
-    [
-        mesh.positions[a as usize],
-        mesh.positions[b as usize],
-        mesh.positions[c as usize],
-    ]
+    [mesh.positions[a as usize], mesh.positions[b as usize], mesh.positions[c as usize]]
 }
 
 fn brute(meshes: &[(u32, &Mesh)], ray: &Ray, t_max: f64) -> Option<BruteHit> {
@@ -76,13 +71,7 @@ fn brute(meshes: &[(u32, &Mesh)], ray: &Ray, t_max: f64) -> Option<BruteHit> {
             if let Some((t, u, v)) = ray_plane(ray.origin, ray.dir, tri_points(mesh, tri)) {
                 let inside = u >= 0.0 && v >= 0.0 && u + v <= 1.0;
                 if inside && t > 0.0 && t < t_max && best.map_or(true, |b| t < b.t) {
-                    best = Some(BruteHit {
-                        t,
-                        object,
-                        tri: tri as u32,
-                        u,
-                        v,
-                    });
+                    best = Some(BruteHit { t, object, tri: tri as u32, u, v });
                 }
             }
         }
@@ -92,12 +81,7 @@ fn brute(meshes: &[(u32, &Mesh)], ray: &Ray, t_max: f64) -> Option<BruteHit> {
 
 /// The same f64 -> f32 rounding the backend does, for `Scene`-level queries.
 fn raw_ray(ray: &Ray) -> RawRay {
-    RawRay {
-        org: ray.origin.as_vec3().to_array(),
-        dir: ray.dir.as_vec3().to_array(),
-        tnear: 0.0,
-        tfar: f32::INFINITY,
-    }
+    RawRay { org: ray.origin.as_vec3().to_array(), dir: ray.dir.as_vec3().to_array(), tnear: 0.0, tfar: f32::INFINITY }
 }
 
 fn tri_bary(hit: &Hit) -> (u32, DVec2) {
@@ -111,11 +95,7 @@ fn tri_bary(hit: &Hit) -> (u32, DVec2) {
 // Test geometry.
 
 fn mesh(positions: Vec<DVec3>, triangles: Vec<[u32; 3]>) -> Mesh {
-    Mesh {
-        positions,
-        triangles,
-        ..Mesh::default()
-    }
+    Mesh { positions, triangles, ..Mesh::default() }
 }
 
 /// Unit icosphere: a closed, convex, watertight mesh whose vertices have irrational coordinates.
@@ -187,11 +167,7 @@ fn grid_cube(n: u32) -> Mesh {
     let mut pos = Vec::new();
     let mut tris = Vec::new();
     let mut vertex = |p: DVec3, pos: &mut Vec<DVec3>| -> u32 {
-        let key = [
-            (p.x * 1e6).round() as i64,
-            (p.y * 1e6).round() as i64,
-            (p.z * 1e6).round() as i64,
-        ];
+        let key = [(p.x * 1e6).round() as i64, (p.y * 1e6).round() as i64, (p.z * 1e6).round() as i64];
         *index.entry(key).or_insert_with(|| {
             pos.push(p);
             (pos.len() - 1) as u32
@@ -274,40 +250,24 @@ fn random_scene(seed: u64) -> (Mesh, Mesh) {
 #[test]
 fn single_triangle_hit_t_barycentrics_object_and_misses() {
     let _g = shared();
-    let tri = mesh(
-        vec![
-            DVec3::new(0.0, 0.0, 10.0),
-            DVec3::new(4.0, 0.0, 10.0),
-            DVec3::new(0.0, 4.0, 10.0),
-        ],
-        vec![[0, 1, 2]],
-    );
+    let tri =
+        mesh(vec![DVec3::new(0.0, 0.0, 10.0), DVec3::new(4.0, 0.0, 10.0), DVec3::new(0.0, 4.0, 10.0)], vec![[0, 1, 2]]);
     let acc = EmbreeIntersector::new(&[(7, &tri)], BuildQuality::Medium).unwrap();
     assert_eq!(acc.name(), "embree");
     assert_eq!(acc.triangle_count(), 1);
     assert!(acc.build_seconds() >= 0.0);
 
     // Unnormalised direction (length 2): the plane z = 10 is reached at t = 5 in units of dir.
-    let ray = Ray {
-        origin: DVec3::new(1.0, 2.0, 0.0),
-        dir: DVec3::new(0.0, 0.0, 2.0),
-    };
-    let hit = acc
-        .intersect(&ray, f64::INFINITY)
-        .expect("ray through the triangle must hit");
+    let ray = Ray { origin: DVec3::new(1.0, 2.0, 0.0), dir: DVec3::new(0.0, 0.0, 2.0) };
+    let hit = acc.intersect(&ray, f64::INFINITY).expect("ray through the triangle must hit");
     assert!((hit.t - 5.0).abs() < 1e-6, "t = {}", hit.t);
     assert_eq!(hit.object, 7);
     let (index, bary) = tri_bary(&hit);
     assert_eq!(index, 0);
     // point (1, 2) = u * (4, 0) + v * (0, 4)  =>  u = 0.25, v = 0.5
-    assert!(
-        (bary - DVec2::new(0.25, 0.5)).length() < 1e-6,
-        "bary = {bary}"
-    );
+    assert!((bary - DVec2::new(0.25, 0.5)).length() < 1e-6, "bary = {bary}");
     let b = brute(&[(7, &tri)], &ray, f64::INFINITY).unwrap();
-    assert!(
-        (b.t - hit.t).abs() < 1e-6 && (b.u - bary.x).abs() < 1e-6 && (b.v - bary.y).abs() < 1e-6
-    );
+    assert!((b.t - hit.t).abs() < 1e-6 && (b.u - bary.x).abs() < 1e-6 && (b.v - bary.y).abs() < 1e-6);
 
     // t_max bounds the search on both sides of the hit, and `occluded` agrees.
     assert!(acc.intersect(&ray, 4.999).is_none());
@@ -317,45 +277,21 @@ fn single_triangle_hit_t_barycentrics_object_and_misses() {
     assert!(acc.occluded(&ray, f64::INFINITY));
 
     // Parallel to the triangle's plane (just below it), pointing away, beside it: all miss.
-    let parallel = Ray {
-        origin: DVec3::new(-1.0, 1.0, 9.999),
-        dir: DVec3::new(1.0, 0.0, 0.0),
-    };
-    let away = Ray {
-        origin: DVec3::new(1.0, 1.0, 0.0),
-        dir: DVec3::new(0.0, 0.0, -1.0),
-    };
-    let beside = Ray {
-        origin: DVec3::new(3.0, 3.0, 0.0),
-        dir: DVec3::new(0.0, 0.0, 1.0),
-    };
+    let parallel = Ray { origin: DVec3::new(-1.0, 1.0, 9.999), dir: DVec3::new(1.0, 0.0, 0.0) };
+    let away = Ray { origin: DVec3::new(1.0, 1.0, 0.0), dir: DVec3::new(0.0, 0.0, -1.0) };
+    let beside = Ray { origin: DVec3::new(3.0, 3.0, 0.0), dir: DVec3::new(0.0, 0.0, 1.0) };
     for r in [parallel, away, beside] {
-        assert!(
-            acc.intersect(&r, f64::INFINITY).is_none(),
-            "{r:?} should miss"
-        );
-        assert!(
-            !acc.occluded(&r, f64::INFINITY),
-            "{r:?} should not be occluded"
-        );
+        assert!(acc.intersect(&r, f64::INFINITY).is_none(), "{r:?} should miss");
+        assert!(!acc.occluded(&r, f64::INFINITY), "{r:?} should not be occluded");
         assert!(brute(&[(7, &tri)], &r, f64::INFINITY).is_none());
     }
     // From behind the triangle it is hit too (no back-face culling), at t = 10.
-    let behind = Ray {
-        origin: DVec3::new(1.0, 1.0, 20.0),
-        dir: DVec3::new(0.0, 0.0, -1.0),
-    };
+    let behind = Ray { origin: DVec3::new(1.0, 1.0, 20.0), dir: DVec3::new(0.0, 0.0, -1.0) };
     assert!((acc.intersect(&behind, f64::INFINITY).unwrap().t - 10.0).abs() < 1e-5);
 
     // Invalid rays and limits are "no hit", never a crash.
-    let nan = Ray {
-        origin: DVec3::new(f64::NAN, 0.0, 0.0),
-        dir: DVec3::Z,
-    };
-    let inf_dir = Ray {
-        origin: DVec3::new(1.0, 1.0, 0.0),
-        dir: DVec3::new(0.0, 0.0, f64::INFINITY),
-    };
+    let nan = Ray { origin: DVec3::new(f64::NAN, 0.0, 0.0), dir: DVec3::Z };
+    let inf_dir = Ray { origin: DVec3::new(1.0, 1.0, 0.0), dir: DVec3::new(0.0, 0.0, f64::INFINITY) };
     assert!(acc.intersect(&nan, f64::INFINITY).is_none());
     assert!(acc.intersect(&inf_dir, f64::INFINITY).is_none());
     assert!(acc.intersect(&ray, f64::NAN).is_none());
@@ -387,15 +323,9 @@ fn assert_watertight(surface: &Mesh, what: &str) {
     let mut rays = Vec::new();
     let mut expected = Vec::new();
     for &p in &targets {
-        rays.push(Ray {
-            origin: DVec3::ZERO,
-            dir: p,
-        });
+        rays.push(Ray { origin: DVec3::ZERO, dir: p });
         expected.push(1.0);
-        rays.push(Ray {
-            origin: 3.0 * p,
-            dir: -p,
-        });
+        rays.push(Ray { origin: 3.0 * p, dir: -p });
         expected.push(2.0);
     }
     let mut many = vec![None; rays.len()];
@@ -409,16 +339,8 @@ fn assert_watertight(surface: &Mesh, what: &str) {
         match (acc.intersect(ray, f64::INFINITY), many_hit, packet_hit) {
             (Some(h), Some(hm), Some(hp)) => {
                 assert_eq!(h.object, 3);
-                assert!(
-                    (h.t - t).abs() < 1e-5,
-                    "{what}: {ray:?} hit at t = {} instead of {t}",
-                    h.t
-                );
-                assert!(
-                    (hm.t - t).abs() < 1e-5,
-                    "{what}: intersect_many {ray:?} hit at t = {} instead of {t}",
-                    hm.t
-                );
+                assert!((h.t - t).abs() < 1e-5, "{what}: {ray:?} hit at t = {} instead of {t}", h.t);
+                assert!((hm.t - t).abs() < 1e-5, "{what}: intersect_many {ray:?} hit at t = {} instead of {t}", hm.t);
                 assert!(
                     (f64::from(hp.t) - t).abs() < 1e-5,
                     "{what}: packet {ray:?} hit at t = {} instead of {t}",
@@ -428,12 +350,7 @@ fn assert_watertight(surface: &Mesh, what: &str) {
             _ => holes += 1,
         }
     }
-    assert_eq!(
-        holes,
-        0,
-        "{what}: {holes} of {} edge/vertex rays slipped through",
-        rays.len()
-    );
+    assert_eq!(holes, 0, "{what}: {holes} of {} edge/vertex rays slipped through", rays.len());
 }
 
 #[test]
@@ -455,25 +372,13 @@ fn agrees_with_brute_force_on_random_rays() {
     for i in 0..n {
         let origin = rng.vec(-6.0, 6.0);
         // Aim at the scene most of the time; unnormalised directions test t's units.
-        let target = if i % 4 == 0 {
-            origin + rng.unit()
-        } else {
-            rng.vec(-3.0, 3.0)
-        };
+        let target = if i % 4 == 0 { origin + rng.unit() } else { rng.vec(-3.0, 3.0) };
         let dir = (target - origin) * rng.range(0.05, 20.0);
         let ray = Ray { origin, dir };
-        let t_max = if i % 5 == 0 {
-            rng.range(0.0, 1.0) * 12.0 / dir.length()
-        } else {
-            f64::INFINITY
-        };
+        let t_max = if i % 5 == 0 { rng.range(0.0, 1.0) * 12.0 / dir.length() } else { f64::INFINITY };
         let e = acc.intersect(&ray, t_max);
         let b = brute(&meshes, &ray, t_max);
-        assert_eq!(
-            acc.occluded(&ray, t_max),
-            e.is_some(),
-            "occluded disagrees with intersect for {ray:?}"
-        );
+        assert_eq!(acc.occluded(&ray, t_max), e.is_some(), "occluded disagrees with intersect for {ray:?}");
         match (e, b) {
             (None, None) => {}
             (Some(e), Some(b)) => {
@@ -488,19 +393,9 @@ fn agrees_with_brute_force_on_random_rays() {
                 let cos = normal.dot(dir.normalize()).abs().max(1e-3);
                 let t_tol = 1e-6 * (1.0 + origin.length()) / (dir.length() * cos);
                 if (e.object, index) == (b.object, b.tri) {
-                    assert!(
-                        (e.t - b.t).abs() <= t_tol,
-                        "t {} vs brute {} (tol {t_tol}) for {ray:?}",
-                        e.t,
-                        b.t
-                    );
+                    assert!((e.t - b.t).abs() <= t_tol, "t {} vs brute {} (tol {t_tol}) for {ray:?}", e.t, b.t);
                     let bary_err = (bary - DVec2::new(b.u, b.v)).abs().max_element();
-                    assert!(
-                        bary_err < 1e-3 / cos,
-                        "bary {bary} vs brute ({}, {}) for {ray:?}",
-                        b.u,
-                        b.v
-                    );
+                    assert!(bary_err < 1e-3 / cos, "bary {bary} vs brute ({}, {}) for {ray:?}", b.u, b.v);
                 } else {
                     // A different triangle is acceptable only when it is at the same distance
                     // (a shared edge or a crossing of two soup triangles).
@@ -523,10 +418,7 @@ fn agrees_with_brute_force_on_random_rays() {
                 let mesh = if e.object == 0 { &bumpy } else { &soup };
                 let (t, u, v) = ray_plane(origin, dir, tri_points(mesh, index as usize)).unwrap();
                 let margin = u.min(v).min(1.0 - u - v);
-                assert!(
-                    margin > -1e-4 && t > 0.0,
-                    "Embree-only hit {e:?} (margin {margin}) for {ray:?}"
-                );
+                assert!(margin > -1e-4 && t > 0.0, "Embree-only hit {e:?} (margin {margin}) for {ray:?}");
             }
             (None, Some(b)) => {
                 // Embree missed what the f64 test hits: only allowed on a triangle's rim or at
@@ -540,14 +432,8 @@ fn agrees_with_brute_force_on_random_rays() {
             }
         }
     }
-    assert!(
-        hits > n / 3,
-        "test rays should mostly hit the scene, got {hits} of {n}"
-    );
-    assert!(
-        edge_cases * 100 < n,
-        "{edge_cases} edge cases among {n} rays is too many"
-    );
+    assert!(hits > n / 3, "test rays should mostly hit the scene, got {hits} of {n}");
+    assert!(edge_cases * 100 < n, "{edge_cases} edge cases among {n} rays is too many");
 }
 
 #[test]
@@ -564,41 +450,17 @@ fn intersect_many_equals_intersect_per_ray() {
         for col in 0..97 {
             let x = -0.08 + 0.16 * f64::from(col) / 96.0;
             let y = 0.1 - 0.2 * f64::from(row) / 28.0;
-            rays.push(Ray {
-                origin: eye,
-                dir: DVec3::new(x, y, 1.0) * 3.0,
-            });
+            rays.push(Ray { origin: eye, dir: DVec3::new(x, y, 1.0) * 3.0 });
         }
     }
     // ... incoherent random rays, and invalid ones mixed into the same packets.
     let mut rng = Rng(9);
     for _ in 0..500 {
-        rays.push(Ray {
-            origin: rng.vec(-6.0, 6.0),
-            dir: rng.unit() * rng.range(0.1, 5.0),
-        });
+        rays.push(Ray { origin: rng.vec(-6.0, 6.0), dir: rng.unit() * rng.range(0.1, 5.0) });
     }
-    rays.insert(
-        100,
-        Ray {
-            origin: DVec3::new(f64::NAN, 0.0, 0.0),
-            dir: DVec3::Z,
-        },
-    );
-    rays.insert(
-        200,
-        Ray {
-            origin: eye,
-            dir: DVec3::new(0.0, 0.0, f64::INFINITY),
-        },
-    );
-    rays.insert(
-        300,
-        Ray {
-            origin: eye,
-            dir: DVec3::new(0.0, 0.0, 1e300),
-        },
-    );
+    rays.insert(100, Ray { origin: DVec3::new(f64::NAN, 0.0, 0.0), dir: DVec3::Z });
+    rays.insert(200, Ray { origin: eye, dir: DVec3::new(0.0, 0.0, f64::INFINITY) });
+    rays.insert(300, Ray { origin: eye, dir: DVec3::new(0.0, 0.0, 1e300) });
 
     let mut many = vec![None; rays.len()];
     acc.intersect_many(&rays, &mut many);
@@ -609,21 +471,9 @@ fn intersect_many_equals_intersect_per_ray() {
             (None, None) => {}
             (Some(s), Some(p)) => {
                 n_hits += 1;
-                assert_eq!(
-                    (s.object, tri_bary(&s).0),
-                    (p.object, tri_bary(p).0),
-                    "{ray:?}"
-                );
-                assert!(
-                    (s.t - p.t).abs() <= 1e-5 * s.t,
-                    "t {} vs {} for {ray:?}",
-                    s.t,
-                    p.t
-                );
-                assert!(
-                    (tri_bary(&s).1 - tri_bary(p).1).abs().max_element() < 1e-4,
-                    "{ray:?}"
-                );
+                assert_eq!((s.object, tri_bary(&s).0), (p.object, tri_bary(p).0), "{ray:?}");
+                assert!((s.t - p.t).abs() <= 1e-5 * s.t, "t {} vs {} for {ray:?}", s.t, p.t);
+                assert!((tri_bary(&s).1 - tri_bary(p).1).abs().max_element() < 1e-4, "{ray:?}");
             }
             _ => panic!("single {single:?} vs packet {packet:?} for {ray:?}"),
         }
@@ -637,18 +487,9 @@ fn intersect_many_equals_intersect_per_ray() {
     acc.scene().intersect_packets(&raw, &mut packets);
     for (r, p) in raw.iter().zip(&packets) {
         let s = acc.scene().intersect1(r);
-        assert_eq!(
-            s.map(|h| (h.geom_id, h.prim_id)),
-            p.map(|h| (h.geom_id, h.prim_id)),
-            "{r:?}"
-        );
+        assert_eq!(s.map(|h| (h.geom_id, h.prim_id)), p.map(|h| (h.geom_id, h.prim_id)), "{r:?}");
         if let (Some(s), Some(p)) = (s, p) {
-            assert!(
-                (s.t - p.t).abs() <= 1e-5 * s.t
-                    && (s.u - p.u).abs() < 1e-4
-                    && (s.v - p.v).abs() < 1e-4,
-                "{r:?}"
-            );
+            assert!((s.t - p.t).abs() <= 1e-5 * s.t && (s.u - p.u).abs() < 1e-4 && (s.v - p.v).abs() < 1e-4, "{r:?}");
         }
     }
 }
@@ -660,31 +501,13 @@ fn committed_scene_is_shared_across_rayon_threads() {
     let meshes = [(0u32, &bumpy), (1u32, &soup)];
     let acc = EmbreeIntersector::new(&meshes, BuildQuality::Low).unwrap();
     let mut rng = Rng(5);
-    let rays: Vec<Ray> = (0..3000)
-        .map(|_| Ray {
-            origin: rng.vec(-6.0, 6.0),
-            dir: rng.vec(-1.0, 1.0),
-        })
-        .collect();
-    let sequential: Vec<Option<Hit>> = rays
-        .iter()
-        .map(|r| acc.intersect(r, f64::INFINITY))
-        .collect();
-    let parallel: Vec<Option<Hit>> = rays
-        .par_iter()
-        .map(|r| acc.intersect(r, f64::INFINITY))
-        .collect();
+    let rays: Vec<Ray> = (0..3000).map(|_| Ray { origin: rng.vec(-6.0, 6.0), dir: rng.vec(-1.0, 1.0) }).collect();
+    let sequential: Vec<Option<Hit>> = rays.iter().map(|r| acc.intersect(r, f64::INFINITY)).collect();
+    let parallel: Vec<Option<Hit>> = rays.par_iter().map(|r| acc.intersect(r, f64::INFINITY)).collect();
     assert_eq!(sequential, parallel);
     let mut chunked = vec![None; rays.len()];
-    chunked
-        .par_chunks_mut(64)
-        .zip(rays.par_chunks(64))
-        .for_each(|(h, r)| acc.intersect_many(r, h));
-    let agree = chunked
-        .iter()
-        .zip(&sequential)
-        .filter(|(a, b)| a.map(|h| h.object) == b.map(|h| h.object))
-        .count();
+    chunked.par_chunks_mut(64).zip(rays.par_chunks(64)).for_each(|(h, r)| acc.intersect_many(r, h));
+    let agree = chunked.iter().zip(&sequential).filter(|(a, b)| a.map(|h| h.object) == b.map(|h| h.object)).count();
     assert_eq!(agree, rays.len());
 }
 
@@ -700,19 +523,12 @@ fn creating_and_dropping_many_scenes_leaks_nothing() {
         for i in 0..1000 {
             let mut builder = SceneBuilder::new(&device, BuildQuality::Low).unwrap();
             if i % 2 == 0 {
-                let geometry =
-                    TriangleGeometry::new(&device, &tri, &[[0, 1, 2]], BuildQuality::Low, "tri")
-                        .unwrap();
+                let geometry = TriangleGeometry::new(&device, &tri, &[[0, 1, 2]], BuildQuality::Low, "tri").unwrap();
                 assert_eq!(builder.attach(geometry).unwrap(), 0);
             }
             if i % 3 == 0 {
                 let scene = builder.commit().unwrap();
-                let ray = RawRay {
-                    org: [0.2, 0.2, 0.0],
-                    dir: [0.0, 0.0, 1.0],
-                    tnear: 0.0,
-                    tfar: f32::INFINITY,
-                };
+                let ray = RawRay { org: [0.2, 0.2, 0.0], dir: [0.0, 0.0, 1.0], tnear: 0.0, tfar: f32::INFINITY };
                 assert_eq!(scene.intersect1(&ray).is_some(), i % 2 == 0);
                 if i % 100 == 0 {
                     kept.push(scene);
@@ -726,24 +542,11 @@ fn creating_and_dropping_many_scenes_leaks_nothing() {
         let (bumpy, _) = random_scene(1);
         for _ in 0..20 {
             let acc = EmbreeIntersector::new(&[(0, &bumpy)], BuildQuality::Medium).unwrap();
-            assert!(acc
-                .intersect(
-                    &Ray {
-                        origin: DVec3::ZERO,
-                        dir: DVec3::X
-                    },
-                    f64::INFINITY
-                )
-                .is_some());
+            assert!(acc.intersect(&Ray { origin: DVec3::ZERO, dir: DVec3::X }, f64::INFINITY).is_some());
         }
         // A failed build releases what it created too.
         let bad = mesh(vec![DVec3::ZERO; 3], vec![[0, 1, 3]]);
-        assert!(EmbreeIntersector::with_device(
-            &device,
-            &[(0, &bumpy), (1, &bad)],
-            BuildQuality::Low
-        )
-        .is_err());
+        assert!(EmbreeIntersector::with_device(&device, &[(0, &bumpy), (1, &bad)], BuildQuality::Low).is_err());
         assert_eq!(live_objects(), 1);
     }
     assert_eq!(live_objects(), 0);
@@ -755,17 +558,13 @@ fn embree_errors_become_error_embree() {
     // A real failure inside Embree, reported through its error callback with its message.
     let a = Device::new().unwrap();
     let b = Device::new().unwrap();
-    let geometry =
-        TriangleGeometry::new(&a, &[[0.0; 3]; 3], &[[0, 1, 2]], BuildQuality::Low, "tri").unwrap();
+    let geometry = TriangleGeometry::new(&a, &[[0.0; 3]; 3], &[[0, 1, 2]], BuildQuality::Low, "tri").unwrap();
     let mut builder = SceneBuilder::new(&b, BuildQuality::Low).unwrap();
     match builder.attach(geometry) {
         Err(Error::Embree { code, message }) => {
             assert_eq!(code, "RTC_ERROR_INVALID_ARGUMENT");
             assert!(message.contains("rtcAttachGeometry"), "{message}");
-            assert!(
-                message.contains("different devices"),
-                "Embree's own message is kept: {message}"
-            );
+            assert!(message.contains("different devices"), "Embree's own message is kept: {message}");
         }
         other => panic!("expected Error::Embree, got {other:?}"),
     }
@@ -775,18 +574,12 @@ fn embree_errors_become_error_embree() {
     // A failed device construction (malformed config value).
     match Device::with_config("verbose=x") {
         Err(Error::Embree { code, message }) => {
-            assert!(
-                code.starts_with("RTC_ERROR_") && code != "RTC_ERROR_NONE",
-                "{code}"
-            );
+            assert!(code.starts_with("RTC_ERROR_") && code != "RTC_ERROR_NONE", "{code}");
             assert!(message.contains("rtcNewDevice"), "{message}");
         }
         other => panic!("expected Error::Embree, got {other:?}"),
     }
-    assert!(matches!(
-        Device::with_config("verbose=0\0"),
-        Err(Error::Invalid { .. })
-    ));
+    assert!(matches!(Device::with_config("verbose=0\0"), Err(Error::Invalid { .. })));
 
     // The conversion itself.
     match embree_error(2, Some("bad thing"), "rtcFoo") {
@@ -817,11 +610,7 @@ fn invalid_meshes_are_rejected_naming_the_element() {
         &[(0, &ok), (5, m)],
         BuildQuality::Low,
     ) {
-        Err(Error::Invalid {
-            source_name,
-            field,
-            message,
-        }) => {
+        Err(Error::Invalid { source_name, field, message }) => {
             assert!(source_name.contains("object 5"), "{source_name}");
             assert_eq!(field, want_field);
             assert!(message.contains(want_msg), "{message}");
@@ -843,15 +632,7 @@ fn invalid_meshes_are_rejected_naming_the_element() {
     // Empty meshes are fine and simply never hit.
     let empty = Mesh::default();
     let acc = EmbreeIntersector::new(&[(0, &empty)], BuildQuality::Low).unwrap();
-    assert!(acc
-        .intersect(
-            &Ray {
-                origin: DVec3::ZERO,
-                dir: DVec3::Z
-            },
-            f64::INFINITY
-        )
-        .is_none());
+    assert!(acc.intersect(&Ray { origin: DVec3::ZERO, dir: DVec3::Z }, f64::INFINITY).is_none());
     let acc = EmbreeIntersector::new(&[], BuildQuality::Low).unwrap();
     assert_eq!(acc.triangle_count(), 0);
 }

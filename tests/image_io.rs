@@ -14,16 +14,7 @@ use inimtrace::raster::RgbImage;
 fn awkward_image() -> RgbImage {
     let (w, h) = (7, 5);
     let mut img = RgbImage::new(w, h);
-    let special = [
-        0.0f32,
-        1.0e-40,
-        1.0e-30,
-        0.1,
-        1.0 / 3.0,
-        65_504.0,
-        3.0e38,
-        0.999_999_9,
-    ];
+    let special = [0.0f32, 1.0e-40, 1.0e-30, 0.1, 1.0 / 3.0, 65_504.0, 3.0e38, 0.999_999_9];
     let mut k = 0usize;
     for r in 0..h {
         for c in 0..w {
@@ -32,9 +23,7 @@ fn awkward_image() -> RgbImage {
                 *v = if k % 3 == 0 {
                     special[k / 3 % special.len()]
                 } else {
-                    f32::from_bits(
-                        0x3e00_0000 + (k as u32).wrapping_mul(2_654_435_761) % 0x0180_0000,
-                    )
+                    f32::from_bits(0x3e00_0000 + (k as u32).wrapping_mul(2_654_435_761) % 0x0180_0000)
                 };
                 k += 1;
             }
@@ -49,15 +38,10 @@ fn exr_round_trip_is_bit_exact_with_attributes_and_depth() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("display.exr");
     let img = awkward_image();
-    let depth: Vec<f32> = (0..img.width * img.height)
-        .map(|i| 250.0 + i as f32 * 0.123_456_7)
-        .collect();
+    let depth: Vec<f32> = (0..img.width * img.height).map(|i| 250.0 + i as f32 * 0.123_456_7).collect();
     let mut depth = depth;
     depth[3] = f32::INFINITY; // a ray that hit nothing
-    let attrs = [
-        ("inimtrace:method", "LC".to_string()),
-        ("inimtrace:units", "mm; café".to_string()),
-    ];
+    let attrs = [("inimtrace:method", "LC".to_string()), ("inimtrace:units", "mm; café".to_string())];
     write_rgb(&path, &img, Some(&depth), &attrs).unwrap();
 
     let (back, z) = read_rgb_depth(&path).unwrap();
@@ -68,18 +52,12 @@ fn exr_round_trip_is_bit_exact_with_attributes_and_depth() {
         }
     }
     let z = z.expect("Z channel");
-    assert!(z
-        .iter()
-        .zip(&depth)
-        .all(|(a, b)| a.to_bits() == b.to_bits()));
+    assert!(z.iter().zip(&depth).all(|(a, b)| a.to_bits() == b.to_bits()));
     assert_eq!(read_rgb(&path).unwrap(), img);
 
     let read = read_attributes(&path).unwrap();
     for (k, v) in &attrs {
-        assert!(
-            read.contains(&(k.to_string(), v.clone())),
-            "{k} missing from {read:?}"
-        );
+        assert!(read.contains(&(k.to_string(), v.clone())), "{k} missing from {read:?}");
     }
 
     // Without depth there is no Z.
@@ -107,12 +85,7 @@ fn exr_row_zero_is_the_top_row_of_the_file() {
     let file = read_all_flat_layers_from_file(&path).unwrap();
     let layer = &file.layer_data[0];
     assert_eq!(layer.size, Vec2(3, 4));
-    let red = layer
-        .channel_data
-        .list
-        .iter()
-        .find(|c| c.name == *"R")
-        .unwrap();
+    let red = layer.channel_data.list.iter().find(|c| c.name == *"R").unwrap();
     let values: Vec<f32> = red.sample_data.values_as_f32().collect();
     // Flat index = y * width + x, y = 0 at the top.
     assert_eq!(values, vec![0., 0., 0., 1., 1., 1., 2., 2., 2., 3., 3., 3.]);
@@ -129,25 +102,15 @@ fn exr_accepts_f16_channels() {
         AnyChannel::new("G", vals(0.25)),
         AnyChannel::new("B", vals(2.0)),
     ]));
-    Image::from_channels((3, 2), channels)
-        .write()
-        .to_file(&path)
-        .unwrap();
+    Image::from_channels((3, 2), channels).write().to_file(&path).unwrap();
     let img = read_rgb(&path).unwrap();
     assert_eq!((img.width, img.height), (3, 2));
     assert_eq!(img.get(1, 2), [2.5, 1.25, 10.0]); // flat index 5
 }
 
-fn assert_err_names(
-    result: Result<impl std::fmt::Debug, inimtrace::Error>,
-    path: &Path,
-    what: &str,
-) {
+fn assert_err_names(result: Result<impl std::fmt::Debug, inimtrace::Error>, path: &Path, what: &str) {
     let e = result.expect_err(what).to_string();
-    assert!(
-        e.contains(&path.display().to_string()),
-        "{what}: error `{e}` does not name the path"
-    );
+    assert!(e.contains(&path.display().to_string()), "{what}: error `{e}` does not name the path");
 }
 
 #[test]
@@ -187,10 +150,7 @@ fn exr_without_rgb_is_an_error() {
         AnyChannel::new("R", FlatSamples::F32(vec![0.5; 4])),
         AnyChannel::new("G", FlatSamples::F32(vec![0.5; 4])),
     ]));
-    Image::from_channels((2, 2), channels)
-        .write()
-        .to_file(&path)
-        .unwrap();
+    Image::from_channels((2, 2), channels).write().to_file(&path).unwrap();
     let e = read_rgb(&path).unwrap_err().to_string();
     assert!(e.contains("rg.exr") && e.contains("R, G and B"), "{e}");
 }
@@ -198,23 +158,13 @@ fn exr_without_rgb_is_an_error() {
 #[test]
 fn bad_samples_in_exr_name_pixel_and_channel() {
     let dir = tempfile::tempdir().unwrap();
-    for (value, kind) in [
-        (f32::NAN, "NaN"),
-        (f32::INFINITY, "infinite"),
-        (-0.25, "negative"),
-    ] {
+    for (value, kind) in [(f32::NAN, "NaN"), (f32::INFINITY, "infinite"), (-0.25, "negative")] {
         let path = dir.path().join(format!("bad_{kind}.exr"));
         let mut img = RgbImage::filled(6, 4, [0.5; 3]);
         img.set(2, 5, [0.5, value, 0.5]);
         write_rgb(&path, &img, None, &[]).unwrap();
         let e = read_rgb(&path).unwrap_err().to_string();
-        for needle in [
-            path.display().to_string(),
-            "row 2".into(),
-            "col 5".into(),
-            "channel G".into(),
-            kind.into(),
-        ] {
+        for needle in [path.display().to_string(), "row 2".into(), "col 5".into(), "channel G".into(), kind.into()] {
             assert!(e.contains(&needle), "`{e}` lacks `{needle}`");
         }
     }
@@ -225,10 +175,7 @@ fn bad_samples_in_exr_name_pixel_and_channel() {
     z[4] = f32::NAN;
     write_rgb(&path, &img, Some(&z), &[]).unwrap();
     let e = read_rgb_depth(&path).unwrap_err().to_string();
-    assert!(
-        e.contains("row 1") && e.contains("col 1") && e.contains("channel Z"),
-        "{e}"
-    );
+    assert!(e.contains("row 1") && e.contains("col 1") && e.contains("channel Z"), "{e}");
 }
 
 #[test]
@@ -241,11 +188,7 @@ fn exr_write_rejects_bad_requests() {
     assert!(write_rgb(&path, &img, None, &[("inimtrace:note", "π".into())]).is_err());
     assert!(write_rgb(&path, &RgbImage::new(0, 0), None, &[]).is_err());
     let no_dir = dir.path().join("no/such/dir/x.exr");
-    assert_err_names(
-        write_rgb(&no_dir, &img, None, &[]),
-        &no_dir,
-        "write into missing dir",
-    );
+    assert_err_names(write_rgb(&no_dir, &img, None, &[]), &no_dir, "write into missing dir");
 }
 
 #[test]
@@ -286,23 +229,14 @@ fn png_preview_pixels_and_orientation() {
     assert_eq!(png.get_pixel(4, 2).0, [255, 0, 118]);
     assert_eq!(png.get_pixel(1, 0).0, [0, 0, 0]);
     let missing_dir = dir.path().join("nope/p.png");
-    assert_err_names(
-        write_preview(&missing_dir, &img),
-        &missing_dir,
-        "png into missing dir",
-    );
+    assert_err_names(write_preview(&missing_dir, &img), &missing_dir, "png into missing dir");
 }
 
 #[test]
 fn montage_layout_and_cell_colours() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("montage.png");
-    let colours = [
-        [0.5f32, 0.2, 0.8],
-        [0.05, 0.9, 0.3],
-        [1.0, 0.0, 0.0],
-        [0.0, 0.0, 1.0],
-    ];
+    let colours = [[0.5f32, 0.2, 0.8], [0.05, 0.9, 0.3], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]];
     // Different sizes: downscaled (300x300), upscaled (16x16), same size, and non-square.
     let imgs = [
         RgbImage::filled(300, 300, colours[0]),
@@ -311,10 +245,7 @@ fn montage_layout_and_cell_colours() {
         RgbImage::filled(512, 256, colours[3]),
     ];
     let rows = vec![
-        (
-            "Emmetropic eye, focus 0.5 m",
-            imgs.iter().collect::<Vec<_>>(),
-        ),
+        ("Emmetropic eye, focus 0.5 m", imgs.iter().collect::<Vec<_>>()),
         ("Myopic eye", imgs.iter().rev().collect::<Vec<_>>()),
     ];
     write_montage(&path, &rows, &["GT", "LC", "PC", "LA"]).unwrap();
@@ -325,17 +256,11 @@ fn montage_layout_and_cell_colours() {
     for (r, (_, row)) in rows.iter().enumerate() {
         for (c, img) in row.iter().enumerate() {
             let (x0, y0) = cell_origin(r, c);
-            let centre = png
-                .get_pixel((x0 + CELL_SIZE / 2) as u32, (y0 + CELL_SIZE / 2) as u32)
-                .0;
+            let centre = png.get_pixel((x0 + CELL_SIZE / 2) as u32, (y0 + CELL_SIZE / 2) as u32).0;
             assert_eq!(centre, code(img.pixels[0]), "cell ({r}, {c})");
             // Corner pixels: the colour, or black letterbox bars for the 2:1 image.
             let corner = png.get_pixel(x0 as u32, y0 as u32).0;
-            let want = if img.width == img.height {
-                code(img.pixels[0])
-            } else {
-                [0, 0, 0]
-            };
+            let want = if img.width == img.height { code(img.pixels[0]) } else { [0, 0, 0] };
             assert_eq!(corner, want, "corner of cell ({r}, {c})");
             // Just outside the cell (separator) is white background.
             let gap = png.get_pixel((x0 + CELL_SIZE) as u32, (y0 + 10) as u32).0;
@@ -349,14 +274,8 @@ fn montage_layout_and_cell_colours() {
             .filter(|&(x, y)| png.get_pixel(x as u32, y as u32).0.iter().all(|&v| v < 100))
             .count()
     };
-    assert!(
-        dark(x0..x0 + CELL_SIZE, 0..cell_origin(0, 0).1) > 20,
-        "no column label drawn"
-    );
-    assert!(
-        dark(0..x0, cell_origin(1, 0).1..cell_origin(1, 0).1 + CELL_SIZE) > 20,
-        "no row label drawn"
-    );
+    assert!(dark(x0..x0 + CELL_SIZE, 0..cell_origin(0, 0).1) > 20, "no column label drawn");
+    assert!(dark(0..x0, cell_origin(1, 0).1..cell_origin(1, 0).1 + CELL_SIZE) > 20, "no row label drawn");
 }
 
 #[test]
@@ -365,9 +284,7 @@ fn montage_rejects_ragged_rows() {
     let path = dir.path().join("m.png");
     let a = RgbImage::filled(20, 20, [0.5; 3]);
     let rows = vec![("only one", vec![&a])];
-    let e = write_montage(&path, &rows, &["GT", "LC"])
-        .unwrap_err()
-        .to_string();
+    let e = write_montage(&path, &rows, &["GT", "LC"]).unwrap_err().to_string();
     assert!(e.contains("m.png") && e.contains("only one"), "{e}");
     assert!(write_montage(&path, &[], &["GT"]).is_err());
 }

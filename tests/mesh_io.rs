@@ -9,9 +9,7 @@ use inimtrace::scene::mesh::{tessellate_rect, Mesh};
 use inimtrace::scene::mesh_io::{load_mesh, MeshLoad, Transform};
 
 fn data(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data")
-        .join(rel)
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(rel)
 }
 
 fn load(rel: &str) -> MeshLoad {
@@ -30,26 +28,12 @@ struct Corners {
 }
 
 fn corners(mesh: &Mesh) -> Corners {
-    let idx: Vec<usize> = mesh
-        .triangles
-        .iter()
-        .flatten()
-        .map(|&i| i as usize)
-        .collect();
+    let idx: Vec<usize> = mesh.triangles.iter().flatten().map(|&i| i as usize).collect();
     Corners {
         positions: idx.iter().map(|&i| mesh.positions[i]).collect(),
-        normals: idx
-            .iter()
-            .map(|&i| mesh.normals.as_ref().expect("normals")[i])
-            .collect(),
-        uvs: idx
-            .iter()
-            .map(|&i| mesh.uvs.as_ref().expect("uvs")[i])
-            .collect(),
-        colors: idx
-            .iter()
-            .map(|&i| mesh.colors.as_ref().expect("colors")[i])
-            .collect(),
+        normals: idx.iter().map(|&i| mesh.normals.as_ref().expect("normals")[i]).collect(),
+        uvs: idx.iter().map(|&i| mesh.uvs.as_ref().expect("uvs")[i]).collect(),
+        colors: idx.iter().map(|&i| mesh.colors.as_ref().expect("colors")[i]).collect(),
     }
 }
 
@@ -73,12 +57,9 @@ fn obj_and_ply_variants_load_identically() {
     assert_eq!(reference.mesh.triangles[0], [0, 3, 2]);
     assert_eq!(reference.mesh.triangles[1], [0, 2, 1]);
     let want = corners(&reference.mesh);
-    for rel in [
-        "meshes/pyramid.obj",
-        "meshes/pyramid_two_objects.obj",
-        "meshes/pyramid_le.ply",
-        "meshes/pyramid_be.ply",
-    ] {
+    for rel in
+        ["meshes/pyramid.obj", "meshes/pyramid_two_objects.obj", "meshes/pyramid_le.ply", "meshes/pyramid_be.ply"]
+    {
         let got = load(rel);
         assert_eq!(got.mesh.triangles.len(), 6, "{rel}");
         assert_eq!(got.dropped_degenerate, 0, "{rel}");
@@ -87,10 +68,7 @@ fn obj_and_ply_variants_load_identically() {
         assert_eq!(c.normals, want.normals, "{rel}");
         assert_eq!(c.uvs, want.uvs, "{rel}");
         for (a, b) in c.colors.iter().zip(&want.colors) {
-            assert!(
-                (*a - *b).abs().max_element() < 1e-12,
-                "{rel}: colour {a} vs {b}"
-            );
+            assert!((*a - *b).abs().max_element() < 1e-12, "{rel}: colour {a} vs {b}");
         }
     }
     // Multi-object OBJ: objects merged, each keeping its own vertices (4 + 5).
@@ -106,11 +84,7 @@ fn per_vertex_attributes_are_read_and_colours_linearised() {
     assert_eq!(m.normals.as_ref().unwrap()[3], DVec3::new(-0.5, 0.5, 0.25));
     assert_eq!(m.uvs.as_ref().unwrap()[3], DVec2::new(0.0, 1.0));
     let c = m.colors.as_ref().unwrap()[3];
-    let want = DVec3::new(
-        srgb_to_linear(128.0 / 255.0),
-        srgb_to_linear(64.0 / 255.0),
-        srgb_to_linear(10.0 / 255.0),
-    );
+    let want = DVec3::new(srgb_to_linear(128.0 / 255.0), srgb_to_linear(64.0 / 255.0), srgb_to_linear(10.0 / 255.0));
     assert!((c - want).abs().max_element() < 1e-15, "{c} vs {want}");
     // Known values of the sRGB curve: 128/255 -> 0.21586, 10/255 (linear segment) -> 0.003035.
     assert!((c.x - 0.215_860_5).abs() < 1e-6);
@@ -144,10 +118,7 @@ fn stanford_bunny_loads() {
             "INIMTRACE_REQUIRE_BUNNY is set but {} is missing (Debian package glmark2-data)",
             path.display()
         );
-        eprintln!(
-            "SKIPPED stanford_bunny_loads: {} not present",
-            path.display()
-        );
+        eprintln!("SKIPPED stanford_bunny_loads: {} not present", path.display());
         return;
     }
     let l = load_mesh(path).unwrap();
@@ -167,31 +138,13 @@ fn bad_files_give_located_errors() {
         ("bad/a_directory.obj", &["a_directory.obj", "directory"]),
         ("bad/empty.obj", &["empty.obj", "no triangles"]),
         ("bad/bad_number.obj", &["bad_number.obj", "line 3", "1.x"]),
-        (
-            "bad/index_out_of_range.obj",
-            &["index_out_of_range.obj", "line 5", "index 7"],
-        ),
-        (
-            "bad/nan_vertex.obj",
-            &["nan_vertex.obj", "line 3", "vertex 3", "non-finite"],
-        ),
+        ("bad/index_out_of_range.obj", &["index_out_of_range.obj", "line 5", "index 7"]),
+        ("bad/nan_vertex.obj", &["nan_vertex.obj", "line 3", "vertex 3", "non-finite"]),
         ("bad/bad_header.ply", &["bad_header.ply", "line 4", "flaot"]),
-        (
-            "bad/bad_number.ply",
-            &["bad_number.ply", "line 11", "vertex 1", "zero"],
-        ),
-        (
-            "bad/index_out_of_range.ply",
-            &["index_out_of_range.ply", "face 1", "index 5"],
-        ),
-        (
-            "bad/inf_vertex.ply",
-            &["inf_vertex.ply", "vertex 2", "non-finite"],
-        ),
-        (
-            "bad/truncated.ply",
-            &["truncated.ply", "truncated", "face 3 of 5"],
-        ),
+        ("bad/bad_number.ply", &["bad_number.ply", "line 11", "vertex 1", "zero"]),
+        ("bad/index_out_of_range.ply", &["index_out_of_range.ply", "face 1", "index 5"]),
+        ("bad/inf_vertex.ply", &["inf_vertex.ply", "vertex 2", "non-finite"]),
+        ("bad/truncated.ply", &["truncated.ply", "truncated", "face 3 of 5"]),
     ];
     for (rel, needles) in cases {
         let err = match load_mesh(&data(rel)) {
@@ -199,23 +152,15 @@ fn bad_files_give_located_errors() {
             Err(e) => e.to_string(),
         };
         for needle in *needles {
-            assert!(
-                err.contains(needle),
-                "{rel}: error '{err}' lacks '{needle}'"
-            );
+            assert!(err.contains(needle), "{rel}: error '{err}' lacks '{needle}'");
         }
     }
 }
 
 #[test]
 fn unknown_extension_is_an_error() {
-    let err = load_mesh(&data("meshes/make_fixtures.py"))
-        .unwrap_err()
-        .to_string();
-    assert!(
-        err.contains("make_fixtures.py") && err.contains(".obj"),
-        "{err}"
-    );
+    let err = load_mesh(&data("meshes/make_fixtures.py")).unwrap_err().to_string();
+    assert!(err.contains("make_fixtures.py") && err.contains(".obj"), "{err}");
 }
 
 fn close(a: DVec3, b: DVec3) -> bool {
@@ -223,19 +168,12 @@ fn close(a: DVec3, b: DVec3) -> bool {
 }
 
 fn single_vertex_mesh(p: DVec3, n: DVec3) -> Mesh {
-    Mesh {
-        positions: vec![p],
-        normals: Some(vec![n]),
-        ..Default::default()
-    }
+    Mesh { positions: vec![p], normals: Some(vec![n]), ..Default::default() }
 }
 
 #[test]
 fn transform_rotation_about_z() {
-    let t = Transform {
-        rotation_deg: DVec3::new(0.0, 0.0, 90.0),
-        ..Default::default()
-    };
+    let t = Transform { rotation_deg: DVec3::new(0.0, 0.0, 90.0), ..Default::default() };
     let mut m = single_vertex_mesh(DVec3::X, DVec3::X);
     t.apply(&mut m);
     assert!(close(m.positions[0], DVec3::Y), "{}", m.positions[0]);
@@ -245,15 +183,8 @@ fn transform_rotation_about_z() {
 #[test]
 fn transform_euler_order_is_x_then_y_then_z() {
     // X by 90: +y -> +z; then Y by 90: +z -> +x. (Y first would give +y -> +y -> +z.)
-    let t = Transform {
-        rotation_deg: DVec3::new(90.0, 90.0, 0.0),
-        ..Default::default()
-    };
-    assert!(
-        close(t.apply_point(DVec3::Y), DVec3::X),
-        "{}",
-        t.apply_point(DVec3::Y)
-    );
+    let t = Transform { rotation_deg: DVec3::new(90.0, 90.0, 0.0), ..Default::default() };
+    assert!(close(t.apply_point(DVec3::Y), DVec3::X), "{}", t.apply_point(DVec3::Y));
     // Full chain with scale and translation: p' = T + R (S p).
     let t = Transform {
         scale: DVec3::new(2.0, 3.0, 4.0),
@@ -261,27 +192,17 @@ fn transform_euler_order_is_x_then_y_then_z() {
         translation: DVec3::new(10.0, 20.0, 30.0),
     };
     // S (1,1,1) = (2,3,4); Rz90 (x,y,z) = (-y,x,z) -> (-3,2,4); + T.
-    assert!(close(
-        t.apply_point(DVec3::ONE),
-        DVec3::new(7.0, 22.0, 34.0)
-    ));
+    assert!(close(t.apply_point(DVec3::ONE), DVec3::new(7.0, 22.0, 34.0)));
 }
 
 #[test]
 fn transform_normals_follow_surfaces() {
     // A tilted triangle with shading normals set to its geometric normal; after any transform
     // (non-uniform and mirroring scales included) they must still equal the geometric normal.
-    let p = [
-        DVec3::new(0.3, -0.2, 1.0),
-        DVec3::new(1.7, 0.4, 0.2),
-        DVec3::new(-0.5, 1.1, 0.6),
-    ];
+    let p = [DVec3::new(0.3, -0.2, 1.0), DVec3::new(1.7, 0.4, 0.2), DVec3::new(-0.5, 1.1, 0.6)];
     let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize();
     let transforms = [
-        Transform {
-            scale: DVec3::new(3.0, 0.5, 1.5),
-            ..Default::default()
-        },
+        Transform { scale: DVec3::new(3.0, 0.5, 1.5), ..Default::default() },
         Transform {
             scale: DVec3::new(2.0, 1.0, 0.25),
             rotation_deg: DVec3::new(30.0, -45.0, 100.0),
@@ -294,34 +215,21 @@ fn transform_normals_follow_surfaces() {
         },
     ];
     for t in transforms {
-        let mut m = Mesh {
-            positions: p.to_vec(),
-            triangles: vec![[0, 1, 2]],
-            normals: Some(vec![n; 3]),
-            ..Default::default()
-        };
+        let mut m =
+            Mesh { positions: p.to_vec(), triangles: vec![[0, 1, 2]], normals: Some(vec![n; 3]), ..Default::default() };
         t.apply(&mut m);
         let [a, b, c] = m.triangle_positions(0);
         let geometric = (b - a).cross(c - a).normalize();
         for shading in m.normals.as_ref().unwrap() {
-            assert!(
-                close(*shading, geometric),
-                "{t:?}: {shading} vs {geometric}"
-            );
+            assert!(close(*shading, geometric), "{t:?}: {shading} vs {geometric}");
         }
     }
     // Non-uniform scale: the plane x + y = 0 (normal (1,1,0)) scaled by 2 in x becomes
     // x/2 + y = 0, normal (1/2, 1, 0) normalised.
-    let t = Transform {
-        scale: DVec3::new(2.0, 1.0, 1.0),
-        ..Default::default()
-    };
+    let t = Transform { scale: DVec3::new(2.0, 1.0, 1.0), ..Default::default() };
     let mut m = single_vertex_mesh(DVec3::ZERO, DVec3::new(1.0, 1.0, 0.0).normalize());
     t.apply(&mut m);
-    assert!(close(
-        m.normals.unwrap()[0],
-        DVec3::new(0.5, 1.0, 0.0).normalize()
-    ));
+    assert!(close(m.normals.unwrap()[0], DVec3::new(0.5, 1.0, 0.0).normalize()));
 }
 
 #[test]
@@ -335,36 +243,20 @@ fn transform_deserialises_with_defaults_and_rejects_unknown_fields() {
     assert_eq!(t.scale, DVec3::ONE);
     let err = serde_json::from_str::<Transform>(r#"{"rotation": [0, 0, 90]}"#).unwrap_err();
     assert!(err.to_string().contains("rotation"), "{err}");
-    let bad = Transform {
-        scale: DVec3::new(1.0, 0.0, 1.0),
-        ..Default::default()
-    };
+    let bad = Transform { scale: DVec3::new(1.0, 0.0, 1.0), ..Default::default() };
     let err = bad.validate("scene.yaml").unwrap_err().to_string();
     assert!(err.contains("scene.yaml") && err.contains("scale"), "{err}");
-    let bad = Transform {
-        translation: DVec3::new(f64::NAN, 0.0, 0.0),
-        ..Default::default()
-    };
-    assert!(bad
-        .validate("scene.yaml")
-        .unwrap_err()
-        .to_string()
-        .contains("translation"));
+    let bad = Transform { translation: DVec3::new(f64::NAN, 0.0, 0.0), ..Default::default() };
+    assert!(bad.validate("scene.yaml").unwrap_err().to_string().contains("translation"));
 }
 
 #[test]
 fn mesh_validate_and_bounds() {
     let mut m = load("meshes/pyramid_ascii.ply").mesh;
-    assert_eq!(
-        m.bounds(),
-        (DVec3::new(-1.0, -1.0, 0.0), DVec3::new(1.0, 1.0, 2.0))
-    );
+    assert_eq!(m.bounds(), (DVec3::new(-1.0, -1.0, 0.0), DVec3::new(1.0, 1.0, 2.0)));
     m.triangles.push([0, 1, 9]);
     let err = m.validate("pyr").unwrap_err().to_string();
-    assert!(
-        err.contains("pyr") && err.contains("triangle 6") && err.contains("9"),
-        "{err}"
-    );
+    assert!(err.contains("pyr") && err.contains("triangle 6") && err.contains("9"), "{err}");
     m.triangles.pop();
     m.positions[2].y = f64::INFINITY;
     let err = m.validate("pyr").unwrap_err().to_string();
@@ -397,37 +289,15 @@ fn tessellated_rectangle_recovers_local_coordinates() {
     // uv is (s, t).
     let brute = BruteForce::new(&[(0, &m)]).unwrap();
     let uvs = m.uvs.as_ref().unwrap();
-    for (s, t) in [
-        (0.1, 0.2),
-        (-0.77, 0.5),
-        (0.95, -0.95),
-        (-0.3, -0.6),
-        (0.5, 0.123),
-    ] {
+    for (s, t) in [(0.1, 0.2), (-0.77, 0.5), (0.95, -0.95), (-0.3, -0.6), (0.5, 0.123)] {
         let target = center + s * half_u + t * half_v;
         let origin = DVec3::new(0.5, 0.25, 0.0);
-        let hit = brute
-            .intersect(
-                &Ray {
-                    origin,
-                    dir: target - origin,
-                },
-                f64::INFINITY,
-            )
-            .expect("hit");
+        let hit = brute.intersect(&Ray { origin, dir: target - origin }, f64::INFINITY).expect("hit");
         assert!((hit.t - 1.0).abs() < 1e-12, "t = {}", hit.t);
-        let Surface::Triangle { index, bary } = hit.surface else {
-            panic!("not a triangle")
-        };
+        let Surface::Triangle { index, bary } = hit.surface else { panic!("not a triangle") };
         let uv = m.interpolate(uvs, index, bary);
-        assert!(
-            (uv - DVec2::new(s, t)).abs().max_element() < 1e-12,
-            "({s}, {t}) -> {uv}"
-        );
+        assert!((uv - DVec2::new(s, t)).abs().max_element() < 1e-12, "({s}, {t}) -> {uv}");
     }
     // n = 0 is taken as 1.
-    assert_eq!(
-        tessellate_rect(center, half_u, half_v, 0).triangles.len(),
-        2
-    );
+    assert_eq!(tessellate_rect(center, half_u, half_v, 0).triangles.len(), 2);
 }

@@ -2,9 +2,7 @@
 //! analytic constant-image values, against scikit-image reference numbers, and fast (separable)
 //! against the slow direct twin.
 
-use inimtrace::metrics::{
-    finite_db, format_db, psnr, psnr_channel, ssim, ssim_direct, SsimConstants, SSIM_WINDOW,
-};
+use inimtrace::metrics::{finite_db, format_db, psnr, psnr_channel, ssim, ssim_direct, SsimConstants, SSIM_WINDOW};
 use inimtrace::raster::RgbImage;
 
 /// Deterministic test image: an LCG (glibc constants) gives each sample a value k/255, computed
@@ -38,10 +36,7 @@ fn mix(a: &RgbImage, n: &RgbImage) -> RgbImage {
 }
 
 fn assert_close(got: f64, want: f64, tol: f64, what: &str) {
-    assert!(
-        (got - want).abs() <= tol,
-        "{what}: got {got:.17}, want {want:.17} (tol {tol:e})"
-    );
+    assert!((got - want).abs() <= tol, "{what}: got {got:.17}, want {want:.17} (tol {tol:e})");
 }
 
 #[test]
@@ -93,12 +88,7 @@ fn psnr_of_known_mse() {
 fn psnr_channel_direct() {
     assert_eq!(psnr_channel(&[0.5, 0.5], &[0.5, 0.5]), f64::INFINITY);
     // MSE = (0.5^2 + 0)/2 = 0.125 -> 10 log10 8
-    assert_close(
-        psnr_channel(&[0.5, 0.0], &[0.0, 0.0]),
-        10.0 * 8f64.log10(),
-        1e-12,
-        "mse 1/8",
-    );
+    assert_close(psnr_channel(&[0.5, 0.0], &[0.0, 0.0]), 10.0 * 8f64.log10(), 1e-12, "mse 1/8");
 }
 
 #[test]
@@ -148,16 +138,9 @@ fn ssim_matches_scikit_image() {
     let n = lcg_image(2, 13, 17);
     let b = mix(&a, &n);
     let want_ab = [0.9160862763632832, 0.9281172262733702, 0.9240597480241406];
-    let want_an = [
-        -0.0802944551248405,
-        0.07510907092850032,
-        -0.08828134024912122,
-    ];
+    let want_an = [-0.0802944551248405, 0.07510907092850032, -0.08828134024912122];
     for (y, want) in [(&b, want_ab), (&n, want_an)] {
-        for s in [
-            ssim(&a, y, SsimConstants::Wang2004).unwrap(),
-            ssim_direct(&a, y, SsimConstants::Wang2004).unwrap(),
-        ] {
+        for s in [ssim(&a, y, SsimConstants::Wang2004).unwrap(), ssim_direct(&a, y, SsimConstants::Wang2004).unwrap()] {
             for (got, want) in s.channels.iter().zip(want) {
                 assert_close(*got, want, 1e-12, "channel SSIM vs scikit-image");
             }
@@ -199,12 +182,7 @@ fn fast_ssim_equals_direct_twin() {
                 let fast = ssim(&a, y, k).unwrap();
                 let slow = ssim_direct(&a, y, k).unwrap();
                 for ch in 0..3 {
-                    assert_close(
-                        fast.channels[ch],
-                        slow.channels[ch],
-                        1e-12,
-                        "fast vs direct",
-                    );
+                    assert_close(fast.channels[ch], slow.channels[ch], 1e-12, "fast vs direct");
                 }
                 assert_close(fast.mean, slow.mean, 1e-12, "fast vs direct mean");
             }
@@ -230,9 +208,7 @@ fn bad_inputs_are_errors() {
     assert!(e.contains("12x12") && e.contains("12x13"), "{e}");
     assert!(ssim(&a, &b, SsimConstants::Wang2004).is_err());
     let small = RgbImage::new(SSIM_WINDOW - 1, 20);
-    let e = ssim(&small, &small, SsimConstants::Wang2004)
-        .unwrap_err()
-        .to_string();
+    let e = ssim(&small, &small, SsimConstants::Wang2004).unwrap_err().to_string();
     assert!(e.contains("smaller than the 11x11"), "{e}");
     assert!(ssim_direct(&small, &small, SsimConstants::Wang2004).is_err());
     let mut nan = RgbImage::new(12, 12);
@@ -255,8 +231,5 @@ fn ssim_constants_names() {
     assert_eq!(SsimConstants::Framework8Bit.name(), "framework-8bit");
     assert_eq!(SsimConstants::Wang2004.to_string(), "wang2004");
     let e = "wang".parse::<SsimConstants>().unwrap_err().to_string();
-    assert!(
-        e.contains("wang2004") && e.contains("framework-8bit"),
-        "{e}"
-    );
+    assert!(e.contains("wang2004") && e.contains("framework-8bit"), "{e}");
 }

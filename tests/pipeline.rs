@@ -55,7 +55,11 @@ fn ray_transfer_is_reversible() {
 fn fast_transfer_agrees_with_eye_to_lcd() {
     let display = Display::paper();
     let mut rng = Lcg(2);
-    for eye in [Eye::thin_lens(5.0, Focus::Millimetres(300.0), 8), Eye::pinhole(), Eye::thin_lens(2.0, Focus::Diopters(0.0), 5)] {
+    for eye in [
+        Eye::thin_lens(5.0, Focus::Millimetres(300.0), 8),
+        Eye::pinhole(),
+        Eye::thin_lens(2.0, Focus::Diopters(0.0), 5),
+    ] {
         let pupil = eye.pupil_samples();
         let fast = FastTransfer::new(&display, &eye, &pupil);
         for _ in 0..5_000 {
@@ -71,7 +75,8 @@ fn fast_transfer_agrees_with_eye_to_lcd() {
 #[test]
 fn focal_plane_points_image_to_one_retina_point() {
     let mut rng = Lcg(3);
-    for (a, b) in [(Focus::Millimetres(400.0), Focus::Diopters(2.5)), (Focus::Millimetres(250.0), Focus::Diopters(4.0))] {
+    for (a, b) in [(Focus::Millimetres(400.0), Focus::Diopters(2.5)), (Focus::Millimetres(250.0), Focus::Diopters(4.0))]
+    {
         let ea = Eye::thin_lens(5.0, a, 8);
         let eb = Eye::thin_lens(5.0, b, 8);
         let z = a.distance_mm();
@@ -102,9 +107,11 @@ fn lensletaverage_1x1_is_exactly_lensletcenter() {
     let field = FacingPlanes::new(&scene, &backend).unwrap();
     let s = DisplayRenderSettings::default();
     let lc = render_display_image(&display, Method::LensletCenter, &s, &field, &Progress::hidden()).unwrap();
-    let la = render_display_image(&display, Method::LensletAverage { grid: 1 }, &s, &field, &Progress::hidden()).unwrap();
+    let la =
+        render_display_image(&display, Method::LensletAverage { grid: 1 }, &s, &field, &Progress::hidden()).unwrap();
     assert!(lc == la);
-    let la3 = render_display_image(&display, Method::LensletAverage { grid: 3 }, &s, &field, &Progress::hidden()).unwrap();
+    let la3 =
+        render_display_image(&display, Method::LensletAverage { grid: 3 }, &s, &field, &Progress::hidden()).unwrap();
     assert!(lc != la3);
 }
 
@@ -123,7 +130,10 @@ fn fused_kernel_and_generic_backend_render_the_same_images() {
     }
     let eye = Eye::thin_lens(5.0, Focus::Millimetres(300.0), 4);
     let retina = Retina { resolution: 64, ..Retina::default() };
-    assert!(ground_truth(&eye, &retina, &fast, &Progress::hidden()) == ground_truth(&eye, &retina, &slow, &Progress::hidden()));
+    assert!(
+        ground_truth(&eye, &retina, &fast, &Progress::hidden())
+            == ground_truth(&eye, &retina, &slow, &Progress::hidden())
+    );
 }
 
 fn white_scene() -> Scene {
@@ -166,7 +176,10 @@ fn uniform_white_scene_looks_white_wherever_rays_land_on_the_lcd() {
             for sim in &sims {
                 let v = sim.get(row, col);
                 let expect = landed as f32 / pupil.len() as f32;
-                assert!((v[0] - expect).abs() < 1e-6 && v[0] == v[1] && v[1] == v[2], "({row},{col}): {v:?} vs {expect}");
+                assert!(
+                    (v[0] - expect).abs() < 1e-6 && v[0] == v[1] && v[1] == v[2],
+                    "({row},{col}): {v:?} vs {expect}"
+                );
             }
             if landed == pupil.len() {
                 all_on += 1;
@@ -203,7 +216,8 @@ fn focus_cues_and_lc_beats_pc_when_the_eye_focuses() {
     let field = FacingPlanes::new(&scene, &backend).unwrap();
     let s = DisplayRenderSettings::default();
     let methods = [Method::LensletCenter, Method::PupilCenter, Method::LensletAverage { grid: 3 }];
-    let images: Vec<RgbImage> = methods.iter().map(|m| render_display_image(&display, *m, &s, &field, &Progress::hidden()).unwrap()).collect();
+    let images: Vec<RgbImage> =
+        methods.iter().map(|m| render_display_image(&display, *m, &s, &field, &Progress::hidden()).unwrap()).collect();
     let refs: Vec<&RgbImage> = images.iter().collect();
     let n = 256;
     let retina = Retina { resolution: n, ..Retina::default() };
@@ -220,13 +234,24 @@ fn focus_cues_and_lc_beats_pc_when_the_eye_focuses() {
         // Near chart: tangents x, y in [-0.3, 0] (bottom-left quadrant). Far chart, unoccluded:
         // tangents x, y in [0.16, 0.3] (top-right corner).
         let near = region_psnr(&sims[2], &sharp, n / 2 + 4..n - 4, 4..n / 2 - 4);
-        let far = region_psnr(&sims[2], &sharp, 4..(n as f64 * (0.3 - 0.16) / 0.6) as usize, (n as f64 * (0.3 + 0.16) / 0.6) as usize..n - 4);
+        let far = region_psnr(
+            &sims[2],
+            &sharp,
+            4..(n as f64 * (0.3 - 0.16) / 0.6) as usize,
+            (n as f64 * (0.3 + 0.16) / 0.6) as usize..n - 4,
+        );
         by_focus.push((near, far));
     }
     let (near_300, far_300) = by_focus[0];
     let (near_600, far_600) = by_focus[2];
-    assert!(near_300 > near_600 + 0.5, "near chart against its in-focus image: {near_300:.2} dB focused near vs {near_600:.2} dB focused far");
-    assert!(far_600 > far_300 + 0.5, "far chart against its in-focus image: {far_600:.2} dB focused far vs {far_300:.2} dB focused near");
+    assert!(
+        near_300 > near_600 + 0.5,
+        "near chart against its in-focus image: {near_300:.2} dB focused near vs {near_600:.2} dB focused far"
+    );
+    assert!(
+        far_600 > far_300 + 0.5,
+        "far chart against its in-focus image: {far_600:.2} dB focused far vs {far_300:.2} dB focused near"
+    );
 }
 
 #[test]
@@ -261,13 +286,23 @@ fn shipped_scene_and_experiment_files_match_the_builtins() {
     }
     use inimtrace::experiment::{Experiment, ExperimentSpec};
     // The files name the scene and display files instead of the built-ins; all else is equal.
-    for (file, builtin) in [("experiments/paper.toml", ExperimentSpec::paper()), ("experiments/framework-2020.toml", ExperimentSpec::framework_2020())] {
+    for (file, builtin) in [
+        ("experiments/paper.toml", ExperimentSpec::paper()),
+        ("experiments/framework-2020.toml", ExperimentSpec::framework_2020()),
+    ] {
         let loaded = Experiment::load(&root.join(file)).unwrap();
-        let spec = ExperimentSpec { scene: builtin.scene.clone(), display: builtin.display.clone(), ..loaded.spec.clone() };
+        let spec =
+            ExperimentSpec { scene: builtin.scene.clone(), display: builtin.display.clone(), ..loaded.spec.clone() };
         assert_eq!(spec, builtin, "{file}");
         let d = Display::paper();
-        assert_eq!((loaded.display.lenslets, loaded.display.elemental_images, loaded.display.lcd), (d.lenslets, d.elemental_images, d.lcd));
-        assert_eq!((loaded.display.eye_to_lenslets, loaded.display.lenslets_to_lcd, loaded.display.focal_length), (20.0, 6.316, 6.427));
+        assert_eq!(
+            (loaded.display.lenslets, loaded.display.elemental_images, loaded.display.lcd),
+            (d.lenslets, d.elemental_images, d.lcd)
+        );
+        assert_eq!(
+            (loaded.display.eye_to_lenslets, loaded.display.lenslets_to_lcd, loaded.display.focal_length),
+            (20.0, 6.316, 6.427)
+        );
     }
     let paper = Experiment::load(&root.join("experiments/paper.toml")).unwrap();
     let fw = Experiment::load(&root.join("experiments/framework-2020.toml")).unwrap();

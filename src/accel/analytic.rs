@@ -195,7 +195,9 @@ mod tests {
             match (fast, slow) {
                 (Some(f), Some(s)) if f.object == s.object => {
                     assert!((f.t - s.t).abs() <= 1e-12 * s.t, "{ray:?}");
-                    let (Surface::Analytic { uv: fu }, Surface::Analytic { uv: su }) = (f.surface, s.surface) else { panic!() };
+                    let (Surface::Analytic { uv: fu }, Surface::Analytic { uv: su }) = (f.surface, s.surface) else {
+                        panic!()
+                    };
                     assert!((fu - su).abs().max_element() <= 1e-12, "{ray:?}");
                 }
                 (None, None) => {}
@@ -227,7 +229,9 @@ mod tests {
         assert_eq!((h.t, h.object), (400.0, 1));
         // t_max excludes farther hits.
         assert!(a.intersect(&Ray { origin: DVec3::new(1e-9, 0.0, 0.0), dir: DVec3::Z }, 399.0).is_none());
-        let h = a.intersect(&Ray { origin: DVec3::new(0.0, 0.0, 0.0), dir: DVec3::new(-0.15, -0.15, 1.0) }, f64::INFINITY).unwrap();
+        let h = a
+            .intersect(&Ray { origin: DVec3::new(0.0, 0.0, 0.0), dir: DVec3::new(-0.15, -0.15, 1.0) }, f64::INFINITY)
+            .unwrap();
         assert_eq!(h.object, 0);
         assert!((h.t - 300.0).abs() < 1e-12);
         // Away from the scene, and parallel to every plane.
@@ -240,7 +244,11 @@ mod tests {
         let mut scene = Scene::paper();
         scene.objects.push(Object {
             name: "tilted".into(),
-            shape: Shape::Rect(Rect { center: DVec3::new(0.0, 0.0, 200.0), half_u: DVec3::new(10.0, 0.0, 5.0), half_v: DVec3::new(0.0, 10.0, 0.0) }),
+            shape: Shape::Rect(Rect {
+                center: DVec3::new(0.0, 0.0, 200.0),
+                half_u: DVec3::new(10.0, 0.0, 5.0),
+                half_v: DVec3::new(0.0, 10.0, 0.0),
+            }),
             material: Material::Albedo(DVec3::ONE),
         });
         let a = AnalyticRects::new(&scene).unwrap();

@@ -66,15 +66,7 @@ impl WatertightRay {
         if d[kz] < 0.0 {
             std::mem::swap(&mut kx, &mut ky);
         }
-        Some(WatertightRay {
-            origin: ray.origin,
-            kx,
-            ky,
-            kz,
-            sx: d[kx] / d[kz],
-            sy: d[ky] / d[kz],
-            sz: 1.0 / d[kz],
-        })
+        Some(WatertightRay { origin: ray.origin, kx, ky, kz, sx: d[kx] / d[kz], sy: d[ky] / d[kz], sz: 1.0 / d[kz] })
     }
 
     /// Intersects triangle `(p0, p1, p2)` (either side). Returns `(t, bary)` when
@@ -213,20 +205,13 @@ impl Intersector for BruteForce {
                 best = Some((t, tri.object, tri.index, bary));
             }
         }
-        best.map(|(t, object, index, bary)| Hit {
-            t,
-            object,
-            surface: Surface::Triangle { index, bary },
-        })
+        best.map(|(t, object, index, bary)| Hit { t, object, surface: Surface::Triangle { index, bary } })
     }
 
     fn occluded(&self, ray: &Ray, t_max: f64) -> bool {
         let Some(wray) = WatertightRay::new(ray) else {
             return false;
         };
-        self.tris.iter().any(|tri| {
-            wray.intersect(tri.p[0], tri.p[1], tri.p[2], t_max)
-                .is_some()
-        })
+        self.tris.iter().any(|tri| wray.intersect(tri.p[0], tri.p[1], tri.p[2], t_max).is_some())
     }
 }

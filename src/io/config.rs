@@ -21,7 +21,8 @@ pub fn read_text(path: &Path) -> Result<String> {
         return Err(Error::io(path, std::io::Error::other("is a directory, expected a file")));
     }
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    String::from_utf8(bytes).map_err(|e| Error::parse(path, format!("not UTF-8 text (byte {})", e.utf8_error().valid_up_to())))
+    String::from_utf8(bytes)
+        .map_err(|e| Error::parse(path, format!("not UTF-8 text (byte {})", e.utf8_error().valid_up_to())))
 }
 
 /// A TOML error on one line: `line L, column C: message (in `the line`)`, plus the table the
@@ -75,16 +76,28 @@ impl LatticeSpec {
         let det = m.determinant();
         if let PitchSpec::Square(p) | PitchSpec::Rectangular([p, _]) = &self.pitch {
             if !(p.is_finite() && *p > 0.0) {
-                return Err(Error::invalid(source, format!("{field}.pitch"), format!("must be positive and finite, got {p}")));
+                return Err(Error::invalid(
+                    source,
+                    format!("{field}.pitch"),
+                    format!("must be positive and finite, got {p}"),
+                ));
             }
         }
         if let PitchSpec::Rectangular([_, p]) = &self.pitch {
             if !(p.is_finite() && *p > 0.0) {
-                return Err(Error::invalid(source, format!("{field}.pitch[1]"), format!("must be positive and finite, got {p}")));
+                return Err(Error::invalid(
+                    source,
+                    format!("{field}.pitch[1]"),
+                    format!("must be positive and finite, got {p}"),
+                ));
             }
         }
         Lattice::new(DVec2::from_array(self.shift), m).ok_or_else(|| {
-            Error::invalid(source, format!("{field}.pitch"), format!("pitch matrix is singular or not finite (determinant {det}) or shift is not finite"))
+            Error::invalid(
+                source,
+                format!("{field}.pitch"),
+                format!("pitch matrix is singular or not finite (determinant {det}) or shift is not finite"),
+            )
         })
     }
 
@@ -138,7 +151,8 @@ pub struct DisplaySpec {
 
 impl DisplaySpec {
     pub fn to_display(&self, source: &str) -> Result<Display> {
-        let lenslets = LatticeSpec { shift: self.lenslets.shift, pitch: self.lenslets.pitch.clone() }.to_lattice(source, "lenslets")?;
+        let lenslets = LatticeSpec { shift: self.lenslets.shift, pitch: self.lenslets.pitch.clone() }
+            .to_lattice(source, "lenslets")?;
         let elemental_images = self.elemental_images.to_lattice(source, "elemental_images")?;
         let d = Display {
             name: self.name.clone().unwrap_or_else(|| source.to_string()),
@@ -248,13 +262,21 @@ pub fn parse_opencv_display(text: &str, path: &Path) -> Result<Display> {
     let vertical = map.get("islensletvertical").map(|_| numbers("islensletvertical", 1)).transpose()?;
     if let Some(v) = vertical {
         if v[0] != 0.0 {
-            return Err(Error::invalid(&src, "islensletvertical", "cylindrical (vertical lenticular) lenslets are not supported; only spherical lenslet arrays (0)"));
+            return Err(Error::invalid(
+                &src,
+                "islensletvertical",
+                "cylindrical (vertical lenticular) lenslets are not supported; only spherical lenslet arrays (0)",
+            ));
         }
     }
     let res = numbers("resolutionlcd", 2)?;
     for (i, r) in res.iter().enumerate() {
         if !(r.fract() == 0.0 && *r >= 0.0 && *r <= 65536.0) {
-            return Err(Error::invalid(&src, format!("resolutionlcd[{i}]"), format!("must be a whole number of pixels, got {r}")));
+            return Err(Error::invalid(
+                &src,
+                format!("resolutionlcd[{i}]"),
+                format!("must be a whole number of pixels, got {r}"),
+            ));
         }
     }
     let shift = |k: &str| -> Result<DVec2> { numbers(k, 2).map(|v| DVec2::new(v[0], v[1])) };
@@ -399,29 +421,49 @@ impl SceneSpec {
             let rect = match (o.size, o.half_u, o.half_v) {
                 (Some([w, h]), None, None) => {
                     if !(w.is_finite() && h.is_finite() && w > 0.0 && h > 0.0) {
-                        return Err(Error::invalid(src, f("size"), format!("width and height must be positive and finite, got [{w}, {h}]")));
+                        return Err(Error::invalid(
+                            src,
+                            f("size"),
+                            format!("width and height must be positive and finite, got [{w}, {h}]"),
+                        ));
                     }
                     Rect::facing_eye(center, w, h)
                 }
                 (None, Some(u), Some(v)) => {
                     let (hu, hv) = (finite3(src, &f("half_u"), u)?, finite3(src, &f("half_v"), v)?);
                     if hu.cross(hv).length() == 0.0 {
-                        return Err(Error::invalid(src, f("half_u"), "half_u and half_v must be non-zero and not parallel"));
+                        return Err(Error::invalid(
+                            src,
+                            f("half_u"),
+                            "half_u and half_v must be non-zero and not parallel",
+                        ));
                     }
                     Rect { center, half_u: hu, half_v: hv }
                 }
-                _ => return Err(Error::invalid(src, f("size"), "give either `size = [width, height]` (facing the eye) or both `half_u` and `half_v`")),
+                _ => {
+                    return Err(Error::invalid(
+                        src,
+                        f("size"),
+                        "give either `size = [width, height]` (facing the eye) or both `half_u` and `half_v`",
+                    ))
+                }
             };
             let m = &o.material;
             let material = match (&m.albedo, &m.chart) {
                 (Some(a), None) => Material::Albedo(albedo3(src, &f("material.albedo"), *a)?),
                 (None, Some(kind)) => {
                     let chart = match kind {
-                        ChartKind::Framework => framework_chart.get_or_insert_with(|| Arc::new(usaf::framework_chart())).clone(),
+                        ChartKind::Framework => {
+                            framework_chart.get_or_insert_with(|| Arc::new(usaf::framework_chart())).clone()
+                        }
                         ChartKind::Usaf => {
                             let [g0, g1] = m.groups.unwrap_or([-2, 1]);
                             if g0 > g1 || g0 < -10 || g1 > 10 {
-                                return Err(Error::invalid(src, f("material.groups"), format!("expected [first, last] with -10 <= first <= last <= 10, got [{g0}, {g1}]")));
+                                return Err(Error::invalid(
+                                    src,
+                                    f("material.groups"),
+                                    format!("expected [first, last] with -10 <= first <= last <= 10, got [{g0}, {g1}]"),
+                                ));
                             }
                             let scale = match m.scale.clone().unwrap_or(ChartScaleSpec::Fit) {
                                 ChartScaleSpec::Fit => ChartScale::Fit,
@@ -432,10 +474,15 @@ impl SceneSpec {
                             Arc::new(usaf::procedural_chart(g0..=g1, scale))
                         }
                         ChartKind::File => {
-                            let file = m.file.as_ref().ok_or_else(|| Error::invalid(src, f("material.file"), "chart = \"file\" needs `file`"))?;
+                            let file = m.file.as_ref().ok_or_else(|| {
+                                Error::invalid(src, f("material.file"), "chart = \"file\" needs `file`")
+                            })?;
                             let path = base.join(file);
                             let text = read_text(&path)?;
-                            Arc::new(crate::scene::BarChart::new(usaf::parse_bar_list(&text, &path.display().to_string())?))
+                            Arc::new(crate::scene::BarChart::new(usaf::parse_bar_list(
+                                &text,
+                                &path.display().to_string(),
+                            )?))
                         }
                     };
                     Material::Chart {
@@ -444,9 +491,19 @@ impl SceneSpec {
                         backing: albedo3(src, &f("material.backing_albedo"), m.backing_albedo.unwrap_or([1.0; 3]))?,
                     }
                 }
-                _ => return Err(Error::invalid(src, f("material"), "give exactly one of `albedo = [r, g, b]` or `chart = \"framework\" | \"usaf\" | \"file\"`")),
+                _ => {
+                    return Err(Error::invalid(
+                        src,
+                        f("material"),
+                        "give exactly one of `albedo = [r, g, b]` or `chart = \"framework\" | \"usaf\" | \"file\"`",
+                    ))
+                }
             };
-            objects.push(Object { name: o.name.clone().unwrap_or_else(|| format!("object {i}")), shape: Shape::Rect(rect), material });
+            objects.push(Object {
+                name: o.name.clone().unwrap_or_else(|| format!("object {i}")),
+                shape: Shape::Rect(rect),
+                material,
+            });
         }
         if objects.is_empty() {
             return Err(Error::invalid(src, "objects", "a scene needs at least one object"));

@@ -26,9 +26,7 @@ use exr::image::{AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer};
 use exr::math::Vec2;
 use exr::meta::attribute::{AttributeValue, Text};
 use exr::meta::header::{standard_names, LayerAttributes};
-use exr::prelude::{
-    read, Blocks, Compression, LineOrder, ReadChannels, ReadLayers, SmallVec, WritableImage,
-};
+use exr::prelude::{read, Blocks, Compression, LineOrder, ReadChannels, ReadLayers, SmallVec, WritableImage};
 
 use crate::error::{Error, Result};
 use crate::raster::RgbImage;
@@ -40,24 +38,14 @@ use crate::raster::RgbImage;
 pub const COMPRESSION: Compression = Compression::Uncompressed;
 
 fn encoding() -> Encoding {
-    Encoding {
-        compression: COMPRESSION,
-        blocks: Blocks::ScanLines,
-        line_order: LineOrder::Increasing,
-    }
+    Encoding { compression: COMPRESSION, blocks: Blocks::ScanLines, line_order: LineOrder::Increasing }
 }
 
 fn exr_error(path: &Path, err: exr::error::Error) -> Error {
     match err {
-        exr::error::Error::Io(e) if e.kind() != std::io::ErrorKind::UnexpectedEof => {
-            Error::io(path, e)
-        }
+        exr::error::Error::Io(e) if e.kind() != std::io::ErrorKind::UnexpectedEof => Error::io(path, e),
         other => {
-            let hint = if other.to_string().contains("missing bytes") {
-                " (truncated file?)"
-            } else {
-                ""
-            };
+            let hint = if other.to_string().contains("missing bytes") { " (truncated file?)" } else { "" };
             Error::parse(path, format!("not a readable OpenEXR file: {other}{hint}"))
         }
     }
@@ -79,12 +67,7 @@ fn latin1_text(path: &Path, what: &str, s: &str) -> Result<Text> {
 ///
 /// Errors: image or depth size mismatch, empty image, non-Latin-1 or reserved attribute names,
 /// and file-system failures (naming `path`).
-pub fn write_rgb(
-    path: &Path,
-    img: &RgbImage,
-    depth: Option<&[f32]>,
-    attributes: &[(&str, String)],
-) -> Result<()> {
+pub fn write_rgb(path: &Path, img: &RgbImage, depth: Option<&[f32]>, attributes: &[(&str, String)]) -> Result<()> {
     let source = path.display().to_string();
     let n = img.width * img.height;
     if n == 0 {
@@ -98,12 +81,7 @@ pub fn write_rgb(
         return Err(Error::invalid(
             source,
             "pixels",
-            format!(
-                "image has {} pixels, expected {}x{}",
-                img.pixels.len(),
-                img.width,
-                img.height
-            ),
+            format!("image has {} pixels, expected {}x{}", img.pixels.len(), img.width, img.height),
         ));
     }
     if let Some(z) = depth {
@@ -111,12 +89,7 @@ pub fn write_rgb(
             return Err(Error::invalid(
                 source,
                 "Z",
-                format!(
-                    "depth plane has {} values, expected {}x{}",
-                    z.len(),
-                    img.width,
-                    img.height
-                ),
+                format!("depth plane has {} values, expected {}x{}", z.len(), img.width, img.height),
             ));
         }
     }
@@ -138,11 +111,8 @@ pub fn write_rgb(
     layer_attributes.other = other;
 
     let plane = |c: usize| FlatSamples::F32(img.pixels.iter().map(|p| p[c]).collect());
-    let mut channels = vec![
-        AnyChannel::new("R", plane(0)),
-        AnyChannel::new("G", plane(1)),
-        AnyChannel::new("B", plane(2)),
-    ];
+    let mut channels =
+        vec![AnyChannel::new("R", plane(0)), AnyChannel::new("G", plane(1)), AnyChannel::new("B", plane(2))];
     if let Some(z) = depth {
         channels.push(AnyChannel::new("Z", FlatSamples::F32(z.to_vec())));
     }
@@ -152,10 +122,7 @@ pub fn write_rgb(
         encoding(),
         AnyChannels::sort(SmallVec::from_vec(channels)),
     );
-    Image::from_layer(layer)
-        .write()
-        .to_file(path)
-        .map_err(|e| exr_error(path, e))
+    Image::from_layer(layer).write().to_file(path).map_err(|e| exr_error(path, e))
 }
 
 fn check_readable_file(path: &Path) -> Result<()> {
@@ -163,10 +130,7 @@ fn check_readable_file(path: &Path) -> Result<()> {
     if meta.is_dir() {
         return Err(Error::io(
             path,
-            std::io::Error::new(
-                std::io::ErrorKind::InvalidInput,
-                "is a directory, not an OpenEXR file",
-            ),
+            std::io::Error::new(std::io::ErrorKind::InvalidInput, "is a directory, not an OpenEXR file"),
         ));
     }
     if meta.len() == 0 {
@@ -196,30 +160,13 @@ pub fn read_rgb_depth(path: &Path) -> Result<(RgbImage, Option<Vec<f32>>)> {
         .map_err(|e| exr_error(path, e))?;
 
     let find = |layer: &Layer<AnyChannels<FlatSamples>>, name: &str| {
-        layer
-            .channel_data
-            .list
-            .iter()
-            .find(|c| c.name == *name)
-            .map(|c| c.sample_data.clone())
+        layer.channel_data.list.iter().find(|c| c.name == *name).map(|c| c.sample_data.clone())
     };
-    let layer = image
-        .layer_data
-        .iter()
-        .find(|l| ["R", "G", "B"].iter().all(|n| find(l, n).is_some()))
-        .ok_or_else(|| {
-            let names: Vec<String> = image
-                .layer_data
-                .iter()
-                .flat_map(|l| l.channel_data.list.iter().map(|c| c.name.to_string()))
-                .collect();
-            Error::parse(
-                path,
-                format!(
-                    "no layer with R, G and B channels (channels found: {})",
-                    names.join(", ")
-                ),
-            )
+    let layer =
+        image.layer_data.iter().find(|l| ["R", "G", "B"].iter().all(|n| find(l, n).is_some())).ok_or_else(|| {
+            let names: Vec<String> =
+                image.layer_data.iter().flat_map(|l| l.channel_data.list.iter().map(|c| c.name.to_string())).collect();
+            Error::parse(path, format!("no layer with R, G and B channels (channels found: {})", names.join(", ")))
         })?;
     let (width, height) = (layer.size.0, layer.size.1);
     let n = width * height;
@@ -232,7 +179,10 @@ pub fn read_rgb_depth(path: &Path) -> Result<(RgbImage, Option<Vec<f32>>)> {
         if samples.len() != n {
             return Err(Error::parse(
                 path,
-                format!("channel {name} has {} samples for {width}x{height} pixels (subsampled channels are not supported)", samples.len()),
+                format!(
+                    "channel {name} has {} samples for {width}x{height} pixels (subsampled channels are not supported)",
+                    samples.len()
+                ),
             ));
         }
         let values: Vec<f32> = match samples {
@@ -267,10 +217,7 @@ pub fn read_rgb_depth(path: &Path) -> Result<(RgbImage, Option<Vec<f32>>)> {
             if samples.len() != n {
                 return Err(Error::parse(
                     path,
-                    format!(
-                        "channel Z has {} samples for {width}x{height} pixels",
-                        samples.len()
-                    ),
+                    format!("channel Z has {} samples for {width}x{height} pixels", samples.len()),
                 ));
             }
             let z: Vec<f32> = samples.values_as_f32().collect();

@@ -41,18 +41,12 @@ const ROW_FONT_SIZE: f64 = 20.0;
 /// `width = ROW_LABEL_WIDTH + n_cols * (CELL_SIZE + SEPARATOR)`,
 /// `height = COLUMN_LABEL_HEIGHT + n_rows * (CELL_SIZE + SEPARATOR)`.
 pub fn montage_size(n_rows: usize, n_cols: usize) -> (usize, usize) {
-    (
-        ROW_LABEL_WIDTH + n_cols * (CELL_SIZE + SEPARATOR),
-        COLUMN_LABEL_HEIGHT + n_rows * (CELL_SIZE + SEPARATOR),
-    )
+    (ROW_LABEL_WIDTH + n_cols * (CELL_SIZE + SEPARATOR), COLUMN_LABEL_HEIGHT + n_rows * (CELL_SIZE + SEPARATOR))
 }
 
 /// `(x, y)` of the top-left pixel of cell (`row`, `col`).
 pub fn cell_origin(row: usize, col: usize) -> (usize, usize) {
-    (
-        ROW_LABEL_WIDTH + col * (CELL_SIZE + SEPARATOR),
-        COLUMN_LABEL_HEIGHT + row * (CELL_SIZE + SEPARATOR),
-    )
+    (ROW_LABEL_WIDTH + col * (CELL_SIZE + SEPARATOR), COLUMN_LABEL_HEIGHT + row * (CELL_SIZE + SEPARATOR))
 }
 
 /// Box-filter weights mapping `src` samples onto `dst` samples along one axis: for each output
@@ -112,11 +106,7 @@ fn wrap(text: &str, max_width: u32, measure: &dyn Fn(&str) -> Result<u32>) -> Re
     let mut lines: Vec<String> = Vec::new();
     let mut current = String::new();
     for word in text.split_whitespace() {
-        let candidate = if current.is_empty() {
-            word.to_string()
-        } else {
-            format!("{current} {word}")
-        };
+        let candidate = if current.is_empty() { word.to_string() } else { format!("{current} {word}") };
         if current.is_empty() || measure(&candidate)? <= max_width {
             current = candidate;
         } else {
@@ -134,44 +124,26 @@ fn wrap(text: &str, max_width: u32, measure: &dyn Fn(&str) -> Result<u32>) -> Re
 /// `rows` are `(row label, images)`; every row must hold `column_labels.len()` images (sizes may
 /// differ). Errors: no rows or columns, a row of the wrong length, an empty or non-finite image,
 /// no usable font, or a file-system failure, each naming `path`.
-pub fn write_montage(
-    path: &Path,
-    rows: &[(&str, Vec<&RgbImage>)],
-    column_labels: &[&str],
-) -> Result<()> {
+pub fn write_montage(path: &Path, rows: &[(&str, Vec<&RgbImage>)], column_labels: &[&str]) -> Result<()> {
     let source = path.display().to_string();
     let n_cols = column_labels.len();
     if rows.is_empty() || n_cols == 0 {
-        return Err(Error::invalid(
-            source,
-            "montage",
-            "needs at least one row and one column",
-        ));
+        return Err(Error::invalid(source, "montage", "needs at least one row and one column"));
     }
     for (label, images) in rows {
         if images.len() != n_cols {
             return Err(Error::invalid(
                 source,
                 format!("row `{label}`"),
-                format!(
-                    "has {} images but there are {n_cols} column labels",
-                    images.len()
-                ),
+                format!("has {} images but there are {n_cols} column labels", images.len()),
             ));
         }
         for (c, img) in images.iter().enumerate() {
-            if img.width == 0
-                || img.height == 0
-                || img.pixels.len() != img.width * img.height
-                || !img.all_finite()
-            {
+            if img.width == 0 || img.height == 0 || img.pixels.len() != img.width * img.height || !img.all_finite() {
                 return Err(Error::invalid(
                     source,
                     format!("row `{label}`, column `{}`", column_labels[c]),
-                    format!(
-                        "image ({}x{}) is empty, inconsistent or has non-finite samples",
-                        img.width, img.height
-                    ),
+                    format!("image ({}x{}) is empty, inconsistent or has non-finite samples", img.width, img.height),
                 ));
             }
         }
@@ -181,15 +153,10 @@ pub fn write_montage(
     let mut canvas = vec![255u8; width * height * 3];
     for (r, (_, images)) in rows.iter().enumerate() {
         for (c, img) in images.iter().enumerate() {
-            let scale =
-                (CELL_SIZE as f64 / img.width as f64).min(CELL_SIZE as f64 / img.height as f64);
+            let scale = (CELL_SIZE as f64 / img.width as f64).min(CELL_SIZE as f64 / img.height as f64);
             let w = ((img.width as f64 * scale).round() as usize).clamp(1, CELL_SIZE);
             let h = ((img.height as f64 * scale).round() as usize).clamp(1, CELL_SIZE);
-            let cell = if w == img.width && h == img.height {
-                (*img).clone()
-            } else {
-                resample(img, w, h)
-            };
+            let cell = if w == img.width && h == img.height { (*img).clone() } else { resample(img, w, h) };
             let mut padded = RgbImage::new(CELL_SIZE, CELL_SIZE);
             let (ox, oy) = ((CELL_SIZE - w) / 2, (CELL_SIZE - h) / 2);
             for y in 0..h {
@@ -201,8 +168,7 @@ pub fn write_montage(
             let (x0, y0) = cell_origin(r, c);
             for y in 0..CELL_SIZE {
                 let dst = ((y0 + y) * width + x0) * 3;
-                canvas[dst..dst + CELL_SIZE * 3]
-                    .copy_from_slice(&bytes[y * CELL_SIZE * 3..(y + 1) * CELL_SIZE * 3]);
+                canvas[dst..dst + CELL_SIZE * 3].copy_from_slice(&bytes[y * CELL_SIZE * 3..(y + 1) * CELL_SIZE * 3]);
             }
         }
     }
@@ -221,29 +187,21 @@ fn draw_labels(
     rows: &[(&str, Vec<&RgbImage>)],
     column_labels: &[&str],
 ) -> std::result::Result<(), String> {
-    let root =
-        BitMapBackend::with_buffer(canvas, (width as u32, height as u32)).into_drawing_area();
-    let column_style = TextStyle::from((FONT, COLUMN_FONT_SIZE).into_font())
-        .color(&BLACK)
-        .pos(Pos::new(HPos::Center, VPos::Center));
-    let row_style = TextStyle::from((FONT, ROW_FONT_SIZE).into_font())
-        .color(&BLACK)
-        .pos(Pos::new(HPos::Right, VPos::Center));
+    let root = BitMapBackend::with_buffer(canvas, (width as u32, height as u32)).into_drawing_area();
+    let column_style =
+        TextStyle::from((FONT, COLUMN_FONT_SIZE).into_font()).color(&BLACK).pos(Pos::new(HPos::Center, VPos::Center));
+    let row_style =
+        TextStyle::from((FONT, ROW_FONT_SIZE).into_font()).color(&BLACK).pos(Pos::new(HPos::Right, VPos::Center));
     let err = |e: DrawingAreaErrorKind<_>| e.to_string();
 
     for (c, label) in column_labels.iter().enumerate() {
         let (x0, _) = cell_origin(0, c);
-        let centre = (
-            (x0 + CELL_SIZE / 2) as i32,
-            (COLUMN_LABEL_HEIGHT / 2) as i32,
-        );
+        let centre = ((x0 + CELL_SIZE / 2) as i32, (COLUMN_LABEL_HEIGHT / 2) as i32);
         root.draw_text(label, &column_style, centre).map_err(err)?;
     }
     let max_width = (ROW_LABEL_WIDTH - 3 * SEPARATOR) as u32;
     let measure = |s: &str| -> Result<u32> {
-        root.estimate_text_size(s, &row_style)
-            .map(|(w, _)| w)
-            .map_err(|e| Error::Unsupported(e.to_string()))
+        root.estimate_text_size(s, &row_style).map(|(w, _)| w).map_err(|e| Error::Unsupported(e.to_string()))
     };
     for (r, (label, _)) in rows.iter().enumerate() {
         let lines = wrap(label, max_width, &measure).map_err(|e| e.to_string())?;
@@ -253,8 +211,7 @@ fn draw_labels(
         let top = centre_y - line_height * (lines.len() as i32 - 1) / 2;
         let x = (ROW_LABEL_WIDTH - 2 * SEPARATOR) as i32;
         for (i, line) in lines.iter().enumerate() {
-            root.draw_text(line, &row_style, (x, top + i as i32 * line_height))
-                .map_err(err)?;
+            root.draw_text(line, &row_style, (x, top + i as i32 * line_height)).map_err(err)?;
         }
     }
     root.present().map_err(err)
@@ -278,10 +235,7 @@ mod tests {
             }
             // Every source pixel contributes in total dst/src of one output pixel.
             for v in per_source {
-                assert!(
-                    (v - dst as f64 / src as f64).abs() < 1e-9,
-                    "{src}->{dst}: {v}"
-                );
+                assert!((v - dst as f64 / src as f64).abs() < 1e-9, "{src}->{dst}: {v}");
             }
         }
     }

@@ -23,16 +23,8 @@ use crate::raster::RgbImage;
 /// The 8-bit sRGB code of a linear value: clamp to `[0, 1]` (`NaN` → 0), apply the sRGB
 /// transfer function, round to nearest. `srgb_encode(0.5) == 188`.
 pub fn srgb_encode(linear: f32) -> u8 {
-    let v = if linear.is_nan() {
-        0.0
-    } else {
-        (linear as f64).clamp(0.0, 1.0)
-    };
-    let e = if v <= 0.0031308 {
-        12.92 * v
-    } else {
-        1.055 * v.powf(1.0 / 2.4) - 0.055
-    };
+    let v = if linear.is_nan() { 0.0 } else { (linear as f64).clamp(0.0, 1.0) };
+    let e = if v <= 0.0031308 { 12.92 * v } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 };
     (e * 255.0).round().clamp(0.0, 255.0) as u8
 }
 
@@ -67,9 +59,7 @@ fn table() -> &'static SrgbTable {
             *t = f32::from_bits(hi);
         }
         let buckets = (1.0f32.to_bits() >> BUCKET_SHIFT) as usize + 1;
-        let bucket = (0..buckets)
-            .map(|b| srgb_encode(f32::from_bits((b as u32) << BUCKET_SHIFT)))
-            .collect();
+        let bucket = (0..buckets).map(|b| srgb_encode(f32::from_bits((b as u32) << BUCKET_SHIFT))).collect();
         SrgbTable { threshold, bucket }
     })
 }
@@ -91,15 +81,13 @@ fn srgb_encode_fast(t: &SrgbTable, v: f32) -> u8 {
 pub fn to_srgb8(img: &RgbImage) -> Vec<u8> {
     let t = table();
     let mut out = vec![0u8; img.pixels.len() * 3];
-    out.par_chunks_mut(3 * 4096)
-        .zip(img.pixels.par_chunks(4096))
-        .for_each(|(o, px)| {
-            for (o, p) in o.chunks_exact_mut(3).zip(px) {
-                for c in 0..3 {
-                    o[c] = srgb_encode_fast(t, p[c]);
-                }
+    out.par_chunks_mut(3 * 4096).zip(img.pixels.par_chunks(4096)).for_each(|(o, px)| {
+        for (o, p) in o.chunks_exact_mut(3).zip(px) {
+            for c in 0..3 {
+                o[c] = srgb_encode_fast(t, p[c]);
             }
-        });
+        }
+    });
     out
 }
 
@@ -110,21 +98,12 @@ pub fn write_rgb8(path: &Path, width: usize, height: usize, rgb: &[u8]) -> Resul
         return Err(Error::invalid(
             path.display().to_string(),
             "image size",
-            format!(
-                "{} bytes do not form a non-empty {width}x{height} RGB image",
-                rgb.len()
-            ),
+            format!("{} bytes do not form a non-empty {width}x{height} RGB image", rgb.len()),
         ));
     }
     let (w, h) = match (u32::try_from(width), u32::try_from(height)) {
         (Ok(w), Ok(h)) => (w, h),
-        _ => {
-            return Err(Error::invalid(
-                path.display().to_string(),
-                "image size",
-                "too large for PNG",
-            ))
-        }
+        _ => return Err(Error::invalid(path.display().to_string(), "image size", "too large for PNG")),
     };
     let file = File::create(path).map_err(|e| Error::io(path, e))?;
     let mut writer = BufWriter::new(file);
@@ -144,12 +123,7 @@ pub fn write_preview(path: &Path, img: &RgbImage) -> Result<()> {
         return Err(Error::invalid(
             path.display().to_string(),
             "pixels",
-            format!(
-                "image has {} pixels, expected {}x{}",
-                img.pixels.len(),
-                img.width,
-                img.height
-            ),
+            format!("image has {} pixels, expected {}x{}", img.pixels.len(), img.width, img.height),
         ));
     }
     write_rgb8(path, img.width, img.height, &to_srgb8(img))
@@ -176,17 +150,7 @@ mod tests {
             assert_eq!(srgb_encode_fast(t, v), srgb_encode(v), "v = {v:e}");
             bits += 1009;
         }
-        for v in [
-            f32::NAN,
-            -1.0,
-            -0.0,
-            0.0,
-            1.0,
-            1.5,
-            f32::INFINITY,
-            f32::NEG_INFINITY,
-            f32::MIN_POSITIVE,
-        ] {
+        for v in [f32::NAN, -1.0, -0.0, 0.0, 1.0, 1.5, f32::INFINITY, f32::NEG_INFINITY, f32::MIN_POSITIVE] {
             assert_eq!(srgb_encode_fast(t, v), srgb_encode(v), "v = {v:e}");
         }
     }

@@ -175,7 +175,11 @@ impl Display {
                 return Err(Error::invalid(source, format!("lcd.resolution[{i}]"), "must be at least 1 pixel"));
             }
             if *n > 1 << 16 {
-                return Err(Error::invalid(source, format!("lcd.resolution[{i}]"), format!("{n} pixels is beyond the supported 65536")));
+                return Err(Error::invalid(
+                    source,
+                    format!("lcd.resolution[{i}]"),
+                    format!("{n} pixels is beyond the supported 65536"),
+                ));
             }
         }
         Ok(())

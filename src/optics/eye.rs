@@ -98,26 +98,46 @@ impl Eye {
     /// Checks the eye's parameters; `source` names where they came from.
     pub fn validate(&self, source: &str) -> Result<()> {
         if !(self.retina_distance.is_finite() && self.retina_distance > 0.0) {
-            return Err(Error::invalid(source, "retina_distance", format!("must be a positive finite number, got {}", self.retina_distance)));
+            return Err(Error::invalid(
+                source,
+                "retina_distance",
+                format!("must be a positive finite number, got {}", self.retina_distance),
+            ));
         }
         if !self.position.is_finite() {
             return Err(Error::invalid(source, "eye_position", "must be finite"));
         }
         if let Aperture::ThinLens { pupil_diameter, focus } = self.aperture {
             if !(pupil_diameter.is_finite() && pupil_diameter > 0.0) {
-                return Err(Error::invalid(source, "pupil_diameter", format!("must be a positive finite number (use a pinhole eye for zero), got {pupil_diameter}")));
+                return Err(Error::invalid(
+                    source,
+                    "pupil_diameter",
+                    format!("must be a positive finite number (use a pinhole eye for zero), got {pupil_diameter}"),
+                ));
             }
             match focus {
                 Focus::Millimetres(z) if z.is_nan() || z <= 0.0 => {
-                    return Err(Error::invalid(source, "focus_mm", format!("must be positive (inf for infinity), got {z}")))
+                    return Err(Error::invalid(
+                        source,
+                        "focus_mm",
+                        format!("must be positive (inf for infinity), got {z}"),
+                    ))
                 }
                 Focus::Diopters(d) if !d.is_finite() || d < 0.0 => {
-                    return Err(Error::invalid(source, "focus_diopters", format!("must be finite and >= 0 (0 D is infinity), got {d}")))
+                    return Err(Error::invalid(
+                        source,
+                        "focus_diopters",
+                        format!("must be finite and >= 0 (0 D is infinity), got {d}"),
+                    ))
                 }
                 _ => {}
             }
             if self.pupil_grid == 0 || self.pupil_grid > 1024 {
-                return Err(Error::invalid(source, "pupil_grid", format!("must be between 1 and 1024, got {}", self.pupil_grid)));
+                return Err(Error::invalid(
+                    source,
+                    "pupil_grid",
+                    format!("must be between 1 and 1024, got {}", self.pupil_grid),
+                ));
             }
         }
         Ok(())
@@ -170,13 +190,25 @@ impl Retina {
 
     pub fn validate(&self, source: &str) -> Result<()> {
         if self.resolution == 0 || self.resolution > 1 << 15 {
-            return Err(Error::invalid(source, "retina_resolution", format!("must be between 1 and 32768, got {}", self.resolution)));
+            return Err(Error::invalid(
+                source,
+                "retina_resolution",
+                format!("must be between 1 and 32768, got {}", self.resolution),
+            ));
         }
         if !(self.half_tangent.is_finite() && self.half_tangent > 0.0) {
-            return Err(Error::invalid(source, "retina_half_tangent", format!("must be a positive finite number, got {}", self.half_tangent)));
+            return Err(Error::invalid(
+                source,
+                "retina_half_tangent",
+                format!("must be a positive finite number, got {}", self.half_tangent),
+            ));
         }
         if self.samples_per_pixel == 0 || self.samples_per_pixel > 64 {
-            return Err(Error::invalid(source, "retina_samples", format!("must be between 1 and 64, got {}", self.samples_per_pixel)));
+            return Err(Error::invalid(
+                source,
+                "retina_samples",
+                format!("must be between 1 and 64, got {}", self.samples_per_pixel),
+            ));
         }
         Ok(())
     }

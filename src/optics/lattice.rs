@@ -142,8 +142,11 @@ mod tests {
     use super::*;
 
     fn hexagonal(p: f64) -> Lattice {
-        Lattice::new(DVec2::new(0.1, -0.2), DMat2::from_cols(DVec2::new(p, 0.0), DVec2::new(p / 2.0, p * 3f64.sqrt() / 2.0)))
-            .unwrap()
+        Lattice::new(
+            DVec2::new(0.1, -0.2),
+            DMat2::from_cols(DVec2::new(p, 0.0), DVec2::new(p / 2.0, p * 3f64.sqrt() / 2.0)),
+        )
+        .unwrap()
     }
 
     fn tilted(p: f64, angle: f64) -> Lattice {

@@ -34,7 +34,9 @@ pub enum Method {
     LensletCenter,
     PupilCenter,
     /// `grid` x `grid` samples over the lenslet's pitch cell.
-    LensletAverage { grid: usize },
+    LensletAverage {
+        grid: usize,
+    },
 }
 
 impl Method {
@@ -133,7 +135,13 @@ impl<I: Intersector + ?Sized> RadianceField for SceneTracer<'_, I> {
 /// `lenslet_point`, refracted by the lenslet centred at `lenslet_center`; it starts on the plane
 /// `z = reference_z` and has unit z component.
 #[inline]
-pub fn camera_ray(display: &Display, lcd_point: DVec2, lenslet_center: DVec2, lenslet_point: DVec2, reference_z: f64) -> Ray {
+pub fn camera_ray(
+    display: &Display,
+    lcd_point: DVec2,
+    lenslet_center: DVec2,
+    lenslet_point: DVec2,
+    reference_z: f64,
+) -> Ray {
     let w2 = (lcd_point - lenslet_point) / display.lenslets_to_lcd;
     let w1 = w2 + (lenslet_point - lenslet_center) * display.lenslet_power();
     let start = lenslet_point - w1 * (display.lenslet_z() - reference_z);
@@ -201,7 +209,11 @@ pub fn render_display_image<R: RadianceField + ?Sized>(
     }
     if let Method::LensletAverage { grid } = method {
         if grid == 0 || grid > 64 {
-            return Err(Error::invalid("display render settings", "la_grid", format!("must be between 1 and 64, got {grid}")));
+            return Err(Error::invalid(
+                "display render settings",
+                "la_grid",
+                format!("must be between 1 and 64, got {grid}"),
+            ));
         }
     }
     let lcd = display.lcd;

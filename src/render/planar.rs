@@ -50,10 +50,22 @@ impl<'a> FacingPlanes<'a> {
             }
             let material = match &o.material {
                 Material::Albedo(a) => FlatMaterial::Albedo(*a),
-                Material::Chart { chart, bar, backing } => FlatMaterial::Chart { chart: chart.clone(), bar: *bar, backing: *backing },
+                Material::Chart { chart, bar, backing } => {
+                    FlatMaterial::Chart { chart: chart.clone(), bar: *bar, backing: *backing }
+                }
                 Material::VertexColor => return None,
             };
-            rects.push((k, FlatRect { z: r.center.z, cx: r.center.x, cy: r.center.y, inv_hx: 1.0 / r.half_u.x, inv_hy: 1.0 / r.half_v.y, material }));
+            rects.push((
+                k,
+                FlatRect {
+                    z: r.center.z,
+                    cx: r.center.x,
+                    cy: r.center.y,
+                    inv_hx: 1.0 / r.half_u.x,
+                    inv_hy: 1.0 / r.half_v.y,
+                    material,
+                },
+            ));
         }
         // Same order as AnalyticRects: by z, then object index.
         rects.sort_by(|a, b| a.1.z.total_cmp(&b.1.z).then(a.0.cmp(&b.0)));

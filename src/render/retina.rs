@@ -15,10 +15,10 @@ use rayon::prelude::*;
 use super::display_image::RadianceField;
 use crate::accel::Ray;
 use crate::error::{Error, Result};
+use crate::optics::display::PixelIndexer;
 use crate::optics::transfer::eye_ray;
 #[cfg(doc)]
 use crate::optics::transfer::eye_to_lcd;
-use crate::optics::display::PixelIndexer;
 use crate::optics::{Display, Eye, Retina};
 use crate::progress::Progress;
 use crate::raster::RgbImage;
@@ -70,14 +70,26 @@ impl DisplayStack {
 
 /// Simulates what the eye sees of each display image in `displays` (all with the LCD's
 /// resolution). Convenience wrapper over [`simulate_stack`].
-pub fn simulate(display: &Display, eye: &Eye, retina: &Retina, displays: &[&RgbImage], progress: &Progress) -> Result<Vec<RgbImage>> {
+pub fn simulate(
+    display: &Display,
+    eye: &Eye,
+    retina: &Retina,
+    displays: &[&RgbImage],
+    progress: &Progress,
+) -> Result<Vec<RgbImage>> {
     let stack = DisplayStack::new(display, displays)?;
     simulate_stack(display, eye, retina, &stack, progress)
 }
 
 /// Simulates what the eye sees of every display image in `stack`. Each ray is traced once and
 /// read from every image.
-pub fn simulate_stack(display: &Display, eye: &Eye, retina: &Retina, stack: &DisplayStack, progress: &Progress) -> Result<Vec<RgbImage>> {
+pub fn simulate_stack(
+    display: &Display,
+    eye: &Eye,
+    retina: &Retina,
+    stack: &DisplayStack,
+    progress: &Progress,
+) -> Result<Vec<RgbImage>> {
     if stack.width != display.lcd.columns() || stack.height != display.lcd.rows() {
         return Err(Error::Unsupported("display stack does not match the display's LCD resolution".into()));
     }
@@ -198,7 +210,12 @@ pub fn eye_scene_ray(eye: &Eye, tangent: DVec2, pupil_offset: DVec2) -> Ray {
 }
 
 /// The ground-truth retinal image: the eye looking straight at the scene.
-pub fn ground_truth<R: RadianceField + ?Sized>(eye: &Eye, retina: &Retina, tracer: &R, progress: &Progress) -> RgbImage {
+pub fn ground_truth<R: RadianceField + ?Sized>(
+    eye: &Eye,
+    retina: &Retina,
+    tracer: &R,
+    progress: &Progress,
+) -> RgbImage {
     let n = retina.resolution;
     let pupil = eye.pupil_samples();
     let subpixels = retina.subpixel_offsets();

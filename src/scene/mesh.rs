@@ -33,9 +33,7 @@ impl Mesh {
         T: Copy + std::ops::Mul<f64, Output = T> + std::ops::Add<Output = T>,
     {
         let [i0, i1, i2] = self.triangles[tri as usize];
-        attr[i0 as usize] * (1.0 - bary.x - bary.y)
-            + attr[i1 as usize] * bary.x
-            + attr[i2 as usize] * bary.y
+        attr[i0 as usize] * (1.0 - bary.x - bary.y) + attr[i1 as usize] * bary.x + attr[i2 as usize] * bary.y
     }
 }
 
@@ -49,21 +47,13 @@ impl Mesh {
     /// range (call [`Mesh::validate`] on untrusted meshes first).
     pub fn triangle_positions(&self, tri: usize) -> [DVec3; 3] {
         let [a, b, c] = self.triangles[tri];
-        [
-            self.positions[a as usize],
-            self.positions[b as usize],
-            self.positions[c as usize],
-        ]
+        [self.positions[a as usize], self.positions[b as usize], self.positions[c as usize]]
     }
 
     /// Axis-aligned bounds `(min, max)` of all vertex positions. An empty mesh gives the empty
     /// box `(+inf, -inf)`.
     pub fn bounds(&self) -> (DVec3, DVec3) {
-        self.positions
-            .iter()
-            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| {
-                (lo.min(*p), hi.max(*p))
-            })
+        self.positions.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| (lo.min(*p), hi.max(*p)))
     }
 
     /// Checks that the mesh can be intersected and shaded: at least one triangle, every index in
@@ -71,11 +61,7 @@ impl Mesh {
     /// per position. Errors name `source_name` and the offending triangle or vertex.
     pub fn validate(&self, source_name: &str) -> Result<()> {
         if self.triangles.is_empty() {
-            return Err(Error::invalid(
-                source_name,
-                "triangles",
-                "mesh has no triangles",
-            ));
+            return Err(Error::invalid(source_name, "triangles", "mesh has no triangles"));
         }
         let n = self.positions.len();
         for (i, p) in self.positions.iter().enumerate() {
@@ -114,11 +100,7 @@ impl Mesh {
                     ));
                 }
                 if let Some(i) = values.iter().position(|v| !finite(v)) {
-                    return Err(Error::invalid(
-                        source_name,
-                        format!("{name} of vertex {i}"),
-                        "non-finite value",
-                    ));
+                    return Err(Error::invalid(source_name, format!("{name} of vertex {i}"), "non-finite value"));
                 }
             }
             Ok(())
@@ -184,11 +166,5 @@ pub fn tessellate_rect(center: DVec3, half_u: DVec3, half_v: DVec3, n: usize) ->
         }
     }
     let normals = vec![normal; positions.len()];
-    Mesh {
-        positions,
-        triangles,
-        normals: Some(normals),
-        uvs: Some(uvs),
-        colors: None,
-    }
+    Mesh { positions, triangles, normals: Some(normals), uvs: Some(uvs), colors: None }
 }

@@ -61,15 +61,9 @@ pub struct MeshLoad {
 pub fn load_mesh(path: &Path) -> Result<MeshLoad> {
     let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
     if meta.is_dir() {
-        return Err(Error::io(
-            path,
-            std::io::Error::other("is a directory, expected a mesh file (.obj or .ply)"),
-        ));
+        return Err(Error::io(path, std::io::Error::other("is a directory, expected a mesh file (.obj or .ply)")));
     }
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
+    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     let (mut mesh, texture) = match ext.as_deref() {
         Some("obj") => load_obj(path, &bytes)?,
@@ -92,11 +86,7 @@ pub fn load_mesh(path: &Path) -> Result<MeshLoad> {
     }
     // The readers already checked everything; this is a cheap guard that they did.
     mesh.validate(&path.display().to_string())?;
-    Ok(MeshLoad {
-        mesh,
-        dropped_degenerate,
-        texture,
-    })
+    Ok(MeshLoad { mesh, dropped_degenerate, texture })
 }
 
 /// Decodes an sRGB-encoded component in `[0, 1]` to linear.
@@ -128,11 +118,7 @@ pub struct Transform {
 
 impl Default for Transform {
     fn default() -> Self {
-        Transform {
-            scale: DVec3::ONE,
-            rotation_deg: DVec3::ZERO,
-            translation: DVec3::ZERO,
-        }
+        Transform { scale: DVec3::ONE, rotation_deg: DVec3::ZERO, translation: DVec3::ZERO }
     }
 }
 
@@ -140,11 +126,9 @@ impl Transform {
     /// Checks that every component is finite and no scale component is zero (which would
     /// flatten the mesh and make normals undefined). `source_name` names the config file.
     pub fn validate(&self, source_name: &str) -> Result<()> {
-        for (field, v) in [
-            ("scale", self.scale),
-            ("rotation_deg", self.rotation_deg),
-            ("translation", self.translation),
-        ] {
+        for (field, v) in
+            [("scale", self.scale), ("rotation_deg", self.rotation_deg), ("translation", self.translation)]
+        {
             if !v.is_finite() {
                 return Err(Error::invalid(
                     source_name,
@@ -157,10 +141,7 @@ impl Transform {
             return Err(Error::invalid(
                 source_name,
                 "scale",
-                format!(
-                    "components must be non-zero, got [{}, {}, {}]",
-                    self.scale.x, self.scale.y, self.scale.z
-                ),
+                format!("components must be non-zero, got [{}, {}, {}]", self.scale.x, self.scale.y, self.scale.z),
             ));
         }
         Ok(())
@@ -213,10 +194,7 @@ fn tf<F: Into<f64>>(x: F) -> f64 {
 
 fn load_obj(path: &Path, bytes: &[u8]) -> Result<(Mesh, Option<PathBuf>)> {
     let text = std::str::from_utf8(bytes).map_err(|e| {
-        let line = 1 + bytes[..e.valid_up_to()]
-            .iter()
-            .filter(|&&b| b == b'\n')
-            .count();
+        let line = 1 + bytes[..e.valid_up_to()].iter().filter(|&&b| b == b'\n').count();
         Error::parse(path, format!("line {line}: not valid UTF-8 text"))
     })?;
     validate_obj_text(path, text)?;
@@ -231,10 +209,9 @@ fn load_obj(path: &Path, bytes: &[u8]) -> Result<(Mesh, Option<PathBuf>)> {
         ..Default::default()
     };
     let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    let (models, materials) = tobj::load_obj_buf(&mut Cursor::new(text), &options, |mtl| {
-        tobj::load_mtl(base_dir.join(mtl))
-    })
-    .map_err(|e| Error::parse(path, format!("OBJ: {e}")))?;
+    let (models, materials) =
+        tobj::load_obj_buf(&mut Cursor::new(text), &options, |mtl| tobj::load_mtl(base_dir.join(mtl)))
+            .map_err(|e| Error::parse(path, format!("OBJ: {e}")))?;
     // A missing or broken .mtl only loses the texture.
     let materials = materials.unwrap_or_default();
 
@@ -245,49 +222,32 @@ fn load_obj(path: &Path, bytes: &[u8]) -> Result<(Mesh, Option<PathBuf>)> {
         let m = &model.mesh;
         let nv = m.positions.len() / 3;
         let offset = mesh.positions.len();
-        let offset_u32 = u32::try_from(offset)
-            .map_err(|_| Error::parse(path, "more than 2^32 vertices are not supported"))?;
-        mesh.positions.extend(
-            m.positions
-                .chunks_exact(3)
-                .map(|c| DVec3::new(tf(c[0]), tf(c[1]), tf(c[2]))),
-        );
-        mesh.triangles.extend(
-            m.indices
-                .chunks_exact(3)
-                .map(|c| [c[0] + offset_u32, c[1] + offset_u32, c[2] + offset_u32]),
-        );
+        let offset_u32 =
+            u32::try_from(offset).map_err(|_| Error::parse(path, "more than 2^32 vertices are not supported"))?;
+        mesh.positions.extend(m.positions.chunks_exact(3).map(|c| DVec3::new(tf(c[0]), tf(c[1]), tf(c[2]))));
+        mesh.triangles
+            .extend(m.indices.chunks_exact(3).map(|c| [c[0] + offset_u32, c[1] + offset_u32, c[2] + offset_u32]));
         if m.normals.len() == 3 * nv {
             if let Some(n) = &mut normals {
-                n.extend(
-                    m.normals
-                        .chunks_exact(3)
-                        .map(|c| DVec3::new(tf(c[0]), tf(c[1]), tf(c[2]))),
-                );
+                n.extend(m.normals.chunks_exact(3).map(|c| DVec3::new(tf(c[0]), tf(c[1]), tf(c[2]))));
             }
         } else {
             normals = None;
         }
         if m.texcoords.len() == 2 * nv {
             if let Some(t) = &mut uvs {
-                t.extend(
-                    m.texcoords
-                        .chunks_exact(2)
-                        .map(|c| DVec2::new(tf(c[0]), tf(c[1]))),
-                );
+                t.extend(m.texcoords.chunks_exact(2).map(|c| DVec2::new(tf(c[0]), tf(c[1]))));
             }
         } else {
             uvs = None;
         }
         if m.vertex_color.len() == 3 * nv {
             if let Some(col) = &mut colors {
-                col.extend(m.vertex_color.chunks_exact(3).map(|c| {
-                    DVec3::new(
-                        srgb_to_linear(tf(c[0])),
-                        srgb_to_linear(tf(c[1])),
-                        srgb_to_linear(tf(c[2])),
-                    )
-                }));
+                col.extend(
+                    m.vertex_color.chunks_exact(3).map(|c| {
+                        DVec3::new(srgb_to_linear(tf(c[0])), srgb_to_linear(tf(c[1])), srgb_to_linear(tf(c[2])))
+                    }),
+                );
             }
         } else {
             colors = None;
@@ -316,15 +276,9 @@ fn nonempty<T>(v: Option<Vec<T>>) -> Option<Vec<T>> {
 /// `v//vn`, `v/vt/vn`; negative = relative to the count so far) within the counts in the file.
 fn validate_obj_text(path: &Path, text: &str) -> Result<()> {
     let err = |line: usize, msg: String| Error::parse(path, format!("line {line}: {msg}"));
-    let parse_numbers =
-        |line: usize, what: &str, words: std::str::SplitWhitespace| -> Result<Vec<f64>> {
-            words
-                .map(|w| {
-                    w.parse::<f64>()
-                        .map_err(|_| err(line, format!("bad number '{w}' in {what}")))
-                })
-                .collect()
-        };
+    let parse_numbers = |line: usize, what: &str, words: std::str::SplitWhitespace| -> Result<Vec<f64>> {
+        words.map(|w| w.parse::<f64>().map_err(|_| err(line, format!("bad number '{w}' in {what}")))).collect()
+    };
     // Pass 1: attribute lines; counts of positions, texcoords, normals.
     let (mut nv, mut nvt, mut nvn) = (0usize, 0usize, 0usize);
     let mut colored: Option<bool> = None;
@@ -366,30 +320,21 @@ fn validate_obj_text(path: &Path, text: &str) -> Result<()> {
                 if p.iter().any(|v| !v.is_finite()) {
                     return Err(err(
                         line,
-                        format!(
-                            "vertex {nv} has a non-finite coordinate ({}, {}, {})",
-                            p[0], p[1], p[2]
-                        ),
+                        format!("vertex {nv} has a non-finite coordinate ({}, {}, {})", p[0], p[1], p[2]),
                     ));
                 }
             }
             Some("vt") => {
                 let vals = parse_numbers(line, "texture coordinate", words)?;
                 if vals.len() < 2 {
-                    return Err(err(
-                        line,
-                        format!("texture coordinate needs 2 values, found {}", vals.len()),
-                    ));
+                    return Err(err(line, format!("texture coordinate needs 2 values, found {}", vals.len())));
                 }
                 nvt += 1;
             }
             Some("vn") => {
                 let vals = parse_numbers(line, "normal", words)?;
                 if vals.len() < 3 {
-                    return Err(err(
-                        line,
-                        format!("normal needs 3 values, found {}", vals.len()),
-                    ));
+                    return Err(err(line, format!("normal needs 3 values, found {}", vals.len())));
                 }
                 nvn += 1;
             }
@@ -409,10 +354,7 @@ fn validate_obj_text(path: &Path, text: &str) -> Result<()> {
                 for (corner, word) in words.enumerate() {
                     let parts: Vec<&str> = word.split('/').collect();
                     if parts.len() > 3 || parts[0].is_empty() {
-                        return Err(err(
-                            line,
-                            format!("bad face vertex '{word}' (corner {})", corner + 1),
-                        ));
+                        return Err(err(line, format!("bad face vertex '{word}' (corner {})", corner + 1)));
                     }
                     let kinds = [
                         ("vertex", "vertices", cv, nv),
@@ -424,19 +366,9 @@ fn validate_obj_text(path: &Path, text: &str) -> Result<()> {
                             continue;
                         }
                         let idx: i64 = part.parse().map_err(|_| {
-                            err(
-                                line,
-                                format!(
-                                    "bad face index '{part}' in '{word}' (corner {})",
-                                    corner + 1
-                                ),
-                            )
+                            err(line, format!("bad face index '{part}' in '{word}' (corner {})", corner + 1))
                         })?;
-                        let resolved = if idx < 0 {
-                            so_far as i64 + idx
-                        } else {
-                            idx - 1
-                        };
+                        let resolved = if idx < 0 { so_far as i64 + idx } else { idx - 1 };
                         if idx == 0 || resolved < 0 || resolved >= total as i64 {
                             return Err(err(
                                 line,
@@ -562,24 +494,16 @@ struct PlyHeader {
 }
 
 fn parse_ply_header(path: &Path, bytes: &[u8]) -> Result<PlyHeader> {
-    let bad = |line: usize, msg: String| {
-        Error::parse(path, format!("bad PLY header: line {line}: {msg}"))
-    };
+    let bad = |line: usize, msg: String| Error::parse(path, format!("bad PLY header: line {line}: {msg}"));
     let mut pos = 0;
     let mut line_no = 0;
     let mut format = None;
     let mut elements: Vec<Element> = Vec::new();
     loop {
         if pos >= bytes.len() {
-            return Err(Error::parse(
-                path,
-                "bad PLY header: no 'end_header' line before the end of the file",
-            ));
+            return Err(Error::parse(path, "bad PLY header: no 'end_header' line before the end of the file"));
         }
-        let end = bytes[pos..]
-            .iter()
-            .position(|&b| b == b'\n')
-            .map_or(bytes.len(), |i| pos + i);
+        let end = bytes[pos..].iter().position(|&b| b == b'\n').map_or(bytes.len(), |i| pos + i);
         let raw = &bytes[pos..end];
         pos = (end + 1).min(bytes.len());
         line_no += 1;
@@ -590,10 +514,7 @@ fn parse_ply_header(path: &Path, bytes: &[u8]) -> Result<PlyHeader> {
         let words: Vec<&str> = text.split_whitespace().collect();
         if line_no == 1 {
             if text.trim() != "ply" {
-                return Err(bad(
-                    1,
-                    format!("expected the magic word 'ply', found '{}'", text.trim()),
-                ));
+                return Err(bad(1, format!("expected the magic word 'ply', found '{}'", text.trim())));
             }
             continue;
         }
@@ -601,10 +522,7 @@ fn parse_ply_header(path: &Path, bytes: &[u8]) -> Result<PlyHeader> {
             None | Some("comment") | Some("obj_info") => {}
             Some("format") => {
                 if words.len() != 3 {
-                    return Err(bad(
-                        line_no,
-                        format!("expected 'format <type> 1.0', found '{text}'"),
-                    ));
+                    return Err(bad(line_no, format!("expected 'format <type> 1.0', found '{text}'")));
                 }
                 format = Some(match words[1] {
                     "ascii" => PlyFormat::Ascii,
@@ -613,57 +531,33 @@ fn parse_ply_header(path: &Path, bytes: &[u8]) -> Result<PlyHeader> {
                     other => return Err(bad(line_no, format!("unknown format '{other}'"))),
                 });
                 if words[2] != "1.0" {
-                    return Err(bad(
-                        line_no,
-                        format!("unsupported version '{}' (expected 1.0)", words[2]),
-                    ));
+                    return Err(bad(line_no, format!("unsupported version '{}' (expected 1.0)", words[2])));
                 }
             }
             Some("element") => {
                 if words.len() != 3 {
-                    return Err(bad(
-                        line_no,
-                        format!("expected 'element <name> <count>', found '{text}'"),
-                    ));
+                    return Err(bad(line_no, format!("expected 'element <name> <count>', found '{text}'")));
                 }
-                let count = words[2]
-                    .parse::<usize>()
-                    .map_err(|_| bad(line_no, format!("bad element count '{}'", words[2])))?;
-                elements.push(Element {
-                    name: words[1].to_string(),
-                    count,
-                    props: Vec::new(),
-                });
+                let count =
+                    words[2].parse::<usize>().map_err(|_| bad(line_no, format!("bad element count '{}'", words[2])))?;
+                elements.push(Element { name: words[1].to_string(), count, props: Vec::new() });
             }
             Some("property") => {
                 let Some(element) = elements.last_mut() else {
                     return Err(bad(line_no, "property before any element".into()));
                 };
                 let scalar = |name: &str| {
-                    Scalar::from_name(name)
-                        .ok_or_else(|| bad(line_no, format!("unknown property type '{name}'")))
+                    Scalar::from_name(name).ok_or_else(|| bad(line_no, format!("unknown property type '{name}'")))
                 };
                 let prop = match words.as_slice() {
                     ["property", "list", count, item, name] => {
                         let count = scalar(count)?;
                         if count.is_float() {
-                            return Err(bad(
-                                line_no,
-                                format!("list count type of '{name}' must be an integer type"),
-                            ));
+                            return Err(bad(line_no, format!("list count type of '{name}' must be an integer type")));
                         }
-                        Property {
-                            name: name.to_string(),
-                            kind: PropKind::List {
-                                count,
-                                item: scalar(item)?,
-                            },
-                        }
+                        Property { name: name.to_string(), kind: PropKind::List { count, item: scalar(item)? } }
                     }
-                    ["property", ty, name] => Property {
-                        name: name.to_string(),
-                        kind: PropKind::Scalar(scalar(ty)?),
-                    },
+                    ["property", ty, name] => Property { name: name.to_string(), kind: PropKind::Scalar(scalar(ty)?) },
                     _ => return Err(bad(line_no, format!("malformed property line '{text}'"))),
                 };
                 element.props.push(prop);
@@ -675,12 +569,7 @@ fn parse_ply_header(path: &Path, bytes: &[u8]) -> Result<PlyHeader> {
     let Some(format) = format else {
         return Err(Error::parse(path, "bad PLY header: no 'format' line"));
     };
-    Ok(PlyHeader {
-        format,
-        elements,
-        body_start: pos,
-        header_lines: line_no,
-    })
+    Ok(PlyHeader { format, elements, body_start: pos, header_lines: line_no })
 }
 
 /// Where in the body a value is being read, for error messages.
@@ -838,9 +727,7 @@ fn vertex_layout(path: &Path, element: &Element) -> Result<VertexLayout> {
                 PropKind::Scalar(_) => Ok(Some(i)),
                 PropKind::List { .. } => Err(Error::parse(
                     path,
-                    format!(
-                        "bad PLY header: vertex property '{name}' must be a scalar, not a list"
-                    ),
+                    format!("bad PLY header: vertex property '{name}' must be a scalar, not a list"),
                 )),
             },
         }
@@ -852,19 +739,11 @@ fn vertex_layout(path: &Path, element: &Element) -> Result<VertexLayout> {
         })
     };
     let Some(xyz) = triple("x", "y", "z")? else {
-        return Err(Error::parse(
-            path,
-            "bad PLY header: element 'vertex' lacks properties x, y, z",
-        ));
+        return Err(Error::parse(path, "bad PLY header: element 'vertex' lacks properties x, y, z"));
     };
     let normal = triple("nx", "ny", "nz")?;
     let mut uv = None;
-    for (a, b) in [
-        ("u", "v"),
-        ("s", "t"),
-        ("texture_u", "texture_v"),
-        ("texture_s", "texture_t"),
-    ] {
+    for (a, b) in [("u", "v"), ("s", "t"), ("texture_u", "texture_v"), ("texture_s", "texture_t")] {
         if let (Some(i), Some(j)) = (find(a)?, find(b)?) {
             uv = Some([i, j]);
             break;
@@ -877,12 +756,7 @@ fn vertex_layout(path: &Path, element: &Element) -> Result<VertexLayout> {
         };
         (idx, ty)
     });
-    Ok(VertexLayout {
-        xyz,
-        normal,
-        uv,
-        color,
-    })
+    Ok(VertexLayout { xyz, normal, uv, color })
 }
 
 fn load_ply(path: &Path, bytes: &[u8]) -> Result<Mesh> {
@@ -894,32 +768,22 @@ fn load_ply(path: &Path, bytes: &[u8]) -> Result<Mesh> {
     let layout = vertex_layout(path, vertex_el)?;
     let face_el = header.elements.iter().find(|e| e.name == "face");
     let face_prop = match face_el {
-        None => {
-            return Err(Error::parse(
-                path,
-                "contains no triangles (no 'face' element)",
-            ))
-        }
+        None => return Err(Error::parse(path, "contains no triangles (no 'face' element)")),
         Some(el) => el
             .props
             .iter()
             .position(|p| {
-                matches!(p.kind, PropKind::List { .. })
-                    && (p.name == "vertex_indices" || p.name == "vertex_index")
+                matches!(p.kind, PropKind::List { .. }) && (p.name == "vertex_indices" || p.name == "vertex_index")
             })
             .ok_or_else(|| {
-                Error::parse(
-                    path,
-                    "bad PLY header: element 'face' has no list property 'vertex_indices'",
-                )
+                Error::parse(path, "bad PLY header: element 'face' has no list property 'vertex_indices'")
             })?,
     };
 
     let body = &bytes[header.body_start..];
     match header.format {
         PlyFormat::Ascii => {
-            let text = std::str::from_utf8(body)
-                .map_err(|_| Error::parse(path, "ASCII PLY body is not valid text"))?;
+            let text = std::str::from_utf8(body).map_err(|_| Error::parse(path, "ASCII PLY body is not valid text"))?;
             let mut reader = AsciiBody {
                 lines: text.lines().enumerate(),
                 first_line: header.header_lines + 1,
@@ -929,11 +793,7 @@ fn load_ply(path: &Path, bytes: &[u8]) -> Result<Mesh> {
             read_ply_body(path, &header.elements, &layout, face_prop, &mut reader)
         }
         PlyFormat::BinaryLe | PlyFormat::BinaryBe => {
-            let mut reader = BinaryBody {
-                bytes: body,
-                pos: 0,
-                big_endian: header.format == PlyFormat::BinaryBe,
-            };
+            let mut reader = BinaryBody { bytes: body, pos: 0, big_endian: header.format == PlyFormat::BinaryBe };
             read_ply_body(path, &header.elements, &layout, face_prop, &mut reader)
         }
     }
@@ -958,12 +818,7 @@ fn read_ply_body(
         let is_vertex = element.name == "vertex";
         let is_face = element.name == "face";
         for index in 0..element.count {
-            let mut loc = Loc {
-                element: &element.name,
-                index,
-                count: element.count,
-                property: "",
-            };
+            let mut loc = Loc { element: &element.name, index, count: element.count, property: "" };
             body.begin_element(path, &loc)?;
             scalars.clear();
             for (pi, prop) in element.props.iter().enumerate() {
@@ -976,10 +831,7 @@ fn read_ply_body(
                         if n < 0.0 {
                             return Err(Error::parse(
                                 path,
-                                format!(
-                                    "{} {index}: negative list length {n} for '{}'",
-                                    element.name, prop.name
-                                ),
+                                format!("{} {index}: negative list length {n} for '{}'", element.name, prop.name),
                             ));
                         }
                         polygon.clear();
@@ -990,10 +842,7 @@ fn read_ply_body(
                             if polygon.len() < 3 {
                                 return Err(Error::parse(
                                     path,
-                                    format!(
-                                        "face {index}: has {} vertices, a face needs at least 3",
-                                        polygon.len()
-                                    ),
+                                    format!("face {index}: has {} vertices, a face needs at least 3", polygon.len()),
                                 ));
                             }
                             let mut idx = Vec::with_capacity(polygon.len());
@@ -1014,18 +863,11 @@ fn read_ply_body(
             loc.property = "";
             body.end_element(path, &loc)?;
             if is_vertex {
-                let p = DVec3::new(
-                    scalars[layout.xyz[0]],
-                    scalars[layout.xyz[1]],
-                    scalars[layout.xyz[2]],
-                );
+                let p = DVec3::new(scalars[layout.xyz[0]], scalars[layout.xyz[1]], scalars[layout.xyz[2]]);
                 if !p.is_finite() {
                     return Err(Error::parse(
                         path,
-                        format!(
-                            "vertex {index}: non-finite coordinate ({}, {}, {})",
-                            p.x, p.y, p.z
-                        ),
+                        format!("vertex {index}: non-finite coordinate ({}, {}, {})", p.x, p.y, p.z),
                     ));
                 }
                 mesh.positions.push(p);
@@ -1048,10 +890,7 @@ fn read_ply_body(
     }
     let nv = mesh.positions.len();
     if u32::try_from(nv).is_err() {
-        return Err(Error::parse(
-            path,
-            format!("{nv} vertices: more than 2^32 are not supported"),
-        ));
+        return Err(Error::parse(path, format!("{nv} vertices: more than 2^32 are not supported")));
     }
     for (face, idx) in &faces {
         for (corner, &v) in idx.iter().enumerate() {
@@ -1064,8 +903,7 @@ fn read_ply_body(
         }
         // Fan triangulation (0, i, i + 1).
         for i in 1..idx.len() - 1 {
-            mesh.triangles
-                .push([idx[0] as u32, idx[i] as u32, idx[i + 1] as u32]);
+            mesh.triangles.push([idx[0] as u32, idx[i] as u32, idx[i + 1] as u32]);
         }
     }
     if layout.normal.is_some() {
@@ -1081,10 +919,7 @@ fn read_ply_body(
         return Err(Error::parse(path, format!("vertex {i}: non-finite normal")));
     }
     if let Some(i) = mesh.uvs.iter().flatten().position(|t| !t.is_finite()) {
-        return Err(Error::parse(
-            path,
-            format!("vertex {i}: non-finite texture coordinate"),
-        ));
+        return Err(Error::parse(path, format!("vertex {i}: non-finite texture coordinate")));
     }
     if let Some(i) = mesh.colors.iter().flatten().position(|c| !c.is_finite()) {
         return Err(Error::parse(path, format!("vertex {i}: non-finite colour")));

@@ -28,7 +28,10 @@ enum Cell {
     Empty,
     Full,
     /// Candidates are `candidates[start..start + len]`.
-    Mixed { start: u32, len: u32 },
+    Mixed {
+        start: u32,
+        len: u32,
+    },
 }
 
 /// A set of bars over `[-1, 1]^2` with a grid for constant-time lookups.
@@ -140,7 +143,9 @@ mod tests {
             for p in [b.min, b.max, DVec2::new(b.min.x, b.max.y), DVec2::new(b.max.x, b.min.y), (b.min + b.max) / 2.0] {
                 assert!(chart.is_bar(p));
                 assert!(chart.is_bar_brute_force(p));
-                for d in [DVec2::new(1e-12, 0.0), DVec2::new(-1e-12, 0.0), DVec2::new(0.0, 1e-12), DVec2::new(0.0, -1e-12)] {
+                for d in
+                    [DVec2::new(1e-12, 0.0), DVec2::new(-1e-12, 0.0), DVec2::new(0.0, 1e-12), DVec2::new(0.0, -1e-12)]
+                {
                     assert_eq!(chart.is_bar(p + d), chart.is_bar_brute_force(p + d));
                 }
             }

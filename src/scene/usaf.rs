@@ -32,7 +32,10 @@ pub fn parse_bar_list(text: &str, source: &str) -> Result<Vec<Bar>> {
             .collect::<std::result::Result<_, _>>()
             .map_err(|e| Error::parse(source, format!("line {}: {e}: `{line}`", n + 1)))?;
         if vals.len() != 4 || vals.iter().any(|v| !v.is_finite()) {
-            return Err(Error::parse(source, format!("line {}: expected four finite numbers `minx miny maxx maxy`, got `{line}`", n + 1)));
+            return Err(Error::parse(
+                source,
+                format!("line {}: expected four finite numbers `minx miny maxx maxy`, got `{line}`", n + 1),
+            ));
         }
         if vals[2] < vals[0] || vals[3] < vals[1] {
             return Err(Error::parse(source, format!("line {}: max is below min in `{line}`", n + 1)));

@@ -25,11 +25,8 @@ pub const EMBREE_MAJOR: u32 = if cfg!(embree4) { 4 } else { 3 };
 #[allow(clippy::field_reassign_with_default)] // the struct's fields depend on Embree's build options
 fn query_args(coherent: bool) -> QueryArgs {
     let mut ctx = sys::RTCIntersectContext::default();
-    ctx.flags = if coherent {
-        sys::RTC_INTERSECT_CONTEXT_FLAG_COHERENT
-    } else {
-        sys::RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT
-    };
+    ctx.flags =
+        if coherent { sys::RTC_INTERSECT_CONTEXT_FLAG_COHERENT } else { sys::RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT };
     ctx.filter = None;
     for id in ctx.instID.iter_mut() {
         *id = sys::RTC_INVALID_GEOMETRY_ID;
@@ -44,11 +41,7 @@ fn query_args(coherent: bool) -> QueryArgs {
 #[allow(clippy::field_reassign_with_default)] // the struct's fields depend on Embree's build options
 fn query_args(coherent: bool) -> QueryArgs {
     let mut args = sys::RTCIntersectArguments::default();
-    args.flags = if coherent {
-        sys::RTC_RAY_QUERY_FLAG_COHERENT
-    } else {
-        sys::RTC_RAY_QUERY_FLAG_INCOHERENT
-    };
+    args.flags = if coherent { sys::RTC_RAY_QUERY_FLAG_COHERENT } else { sys::RTC_RAY_QUERY_FLAG_INCOHERENT };
     args.feature_mask = sys::RTC_FEATURE_FLAG_ALL;
     args.context = std::ptr::null_mut();
     args.filter = None;

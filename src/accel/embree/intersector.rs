@@ -54,11 +54,7 @@ impl EmbreeIntersector {
     }
 
     /// As [`EmbreeIntersector::new`], on an existing device.
-    pub fn with_device(
-        device: &Device,
-        meshes: &[(u32, &Mesh)],
-        quality: BuildQuality,
-    ) -> Result<EmbreeIntersector> {
+    pub fn with_device(device: &Device, meshes: &[(u32, &Mesh)], quality: BuildQuality) -> Result<EmbreeIntersector> {
         let start = Instant::now();
         let mut builder = SceneBuilder::new(device, quality)?;
         let mut objects = Vec::with_capacity(meshes.len());
@@ -66,14 +62,9 @@ impl EmbreeIntersector {
         for &(object, mesh) in meshes {
             // f64 -> f32 at the Embree boundary: Embree stores and intersects single-precision
             // vertices. World coordinates are millimetres, so rounding costs ~1e-7 relative.
-            let positions: Vec<[f32; 3]> = mesh
-                .positions
-                .iter()
-                .map(|p| p.as_vec3().to_array())
-                .collect();
+            let positions: Vec<[f32; 3]> = mesh.positions.iter().map(|p| p.as_vec3().to_array()).collect();
             let name = format!("mesh of scene object {object}");
-            let geometry =
-                TriangleGeometry::new(device, &positions, &mesh.triangles, quality, &name)?;
+            let geometry = TriangleGeometry::new(device, &positions, &mesh.triangles, quality, &name)?;
             let id = builder.attach(geometry)? as usize;
             if objects.len() <= id {
                 objects.resize(id + 1, u32::MAX);
@@ -85,17 +76,8 @@ impl EmbreeIntersector {
             }
         }
         let scene = builder.commit()?;
-        let extent = if lo.cmple(hi).all() {
-            (hi - lo).length()
-        } else {
-            0.0
-        };
-        Ok(EmbreeIntersector {
-            scene,
-            objects,
-            extent,
-            build_seconds: start.elapsed().as_secs_f64(),
-        })
+        let extent = if lo.cmple(hi).all() { (hi - lo).length() } else { 0.0 };
+        Ok(EmbreeIntersector { scene, objects, extent, build_seconds: start.elapsed().as_secs_f64() })
     }
 
     /// Wall-clock seconds that [`EmbreeIntersector::new`] took after the device existed:
@@ -137,10 +119,7 @@ impl EmbreeIntersector {
             // f32 -> f64: `t` is in units of the ray's (unnormalised) `dir`, as for every backend.
             t: f64::from(raw.t),
             object,
-            surface: Surface::Triangle {
-                index: raw.prim_id,
-                bary: DVec2::new(f64::from(raw.u), f64::from(raw.v)),
-            },
+            surface: Surface::Triangle { index: raw.prim_id, bary: DVec2::new(f64::from(raw.u), f64::from(raw.v)) },
         })
     }
 }
@@ -176,9 +155,7 @@ impl Intersector for EmbreeIntersector {
         if t_max.is_nan() || t_max <= 0.0 {
             return None;
         }
-        self.scene
-            .intersect1(&raw_ray(ray, t_max))
-            .and_then(|h| self.to_hit(h))
+        self.scene.intersect1(&raw_ray(ray, t_max)).and_then(|h| self.to_hit(h))
     }
 
     /// Traces each run of 16 consecutive rays as one packet (`rtcIntersect16` with the
@@ -186,18 +163,9 @@ impl Intersector for EmbreeIntersector {
     /// is ~2x faster than `rtcIntersect1` per ray; incoherent runs, where packets are slower,
     /// go one ray at a time. Same hits either way.
     fn intersect_many(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
-        debug_assert_eq!(
-            rays.len(),
-            hits.len(),
-            "intersect_many: rays and hits differ in length"
-        );
+        debug_assert_eq!(rays.len(), hits.len(), "intersect_many: rays and hits differ in length");
         let n = rays.len().min(hits.len());
-        let blank = RawRay {
-            org: [0.0; 3],
-            dir: [0.0; 3],
-            tnear: 0.0,
-            tfar: 0.0,
-        };
+        let blank = RawRay { org: [0.0; 3], dir: [0.0; 3], tnear: 0.0, tfar: 0.0 };
         let mut packet = [blank; PACKET];
         let mut found: [Option<RawHit>; PACKET] = [None; PACKET];
         for (ray_chunk, hit_chunk) in rays[..n].chunks(PACKET).zip(hits[..n].chunks_mut(PACKET)) {
@@ -235,10 +203,7 @@ mod tests {
         for &x in &[0.1f64, 1.0 / 3.0, 1e-30, 12345.678901, 1e39, f64::MAX] {
             let f = f32_at_most(x);
             assert!(f64::from(f) <= x, "{x} -> {f}");
-            assert!(
-                f64::from(f32::from_bits(f.to_bits() + 1)) > x || f == f32::MAX,
-                "{x} -> {f} not the largest"
-            );
+            assert!(f64::from(f32::from_bits(f.to_bits() + 1)) > x || f == f32::MAX, "{x} -> {f} not the largest");
         }
         assert_eq!(f32_at_most(f64::INFINITY), f32::INFINITY);
         assert_eq!(f32_at_most(2.0), 2.0);

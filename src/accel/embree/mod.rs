@@ -54,9 +54,7 @@ fn live_dec() {
 
 /// BVH build quality (Embree's `RTC_BUILD_QUALITY_*`): `Low` builds fastest, `High` (spatial
 /// splits) traces fastest.
-#[derive(
-    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize,
-)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum BuildQuality {
     Low,
@@ -95,11 +93,7 @@ pub fn error_code_name(code: u32) -> &'static str {
 /// [`Error::Embree`]; `during` names the API call that failed.
 pub fn embree_error(code: u32, message: Option<&str>, during: &str) -> Error {
     let name = error_code_name(code);
-    let code = if name == "RTC_ERROR_UNRECOGNISED" {
-        format!("{name}({code})")
-    } else {
-        name.to_string()
-    };
+    let code = if name == "RTC_ERROR_UNRECOGNISED" { format!("{name}({code})") } else { name.to_string() };
     let message = match message {
         Some(m) if !m.is_empty() => format!("{during}: {m}"),
         _ => format!("{during}: (Embree gave no message)"),
@@ -113,11 +107,7 @@ type ErrorSink = Mutex<Vec<(u32, String)>>;
 
 /// Embree's error callback. `user_ptr` is the device's [`ErrorSink`]. It must not unwind into
 /// C, so it only records and never panics (a poisoned lock is still usable).
-unsafe extern "C" fn error_callback(
-    user_ptr: *mut c_void,
-    code: sys::RTCError,
-    message: *const c_char,
-) {
+unsafe extern "C" fn error_callback(user_ptr: *mut c_void, code: sys::RTCError, message: *const c_char) {
     if user_ptr.is_null() {
         return;
     }
@@ -126,9 +116,7 @@ unsafe extern "C" fn error_callback(
     } else {
         // SAFETY: Embree passes a NUL-terminated C string that is valid for the duration of the
         // callback; we copy it out before returning.
-        unsafe { CStr::from_ptr(message) }
-            .to_string_lossy()
-            .into_owned()
+        unsafe { CStr::from_ptr(message) }.to_string_lossy().into_owned()
     };
     // SAFETY: `user_ptr` is the address of the `ErrorSink` boxed inside `DeviceInner`, registered
     // by `Device::with_config` and unregistered in `DeviceInner::drop` before that box is
@@ -181,9 +169,7 @@ pub struct Device {
 
 impl std::fmt::Debug for Device {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Device")
-            .field("embree_major", &EMBREE_MAJOR)
-            .finish_non_exhaustive()
+        f.debug_struct("Device").field("embree_major", &EMBREE_MAJOR).finish_non_exhaustive()
     }
 }
 
@@ -195,37 +181,23 @@ impl Device {
 
     /// A device with an Embree configuration string (e.g. `"threads=1,verbose=0"`).
     pub fn with_config(config: &str) -> Result<Device> {
-        let c_config = CString::new(config).map_err(|_| {
-            Error::invalid(
-                "Embree device",
-                "config",
-                "configuration string contains a NUL byte",
-            )
-        })?;
+        let c_config = CString::new(config)
+            .map_err(|_| Error::invalid("Embree device", "config", "configuration string contains a NUL byte"))?;
         // SAFETY: `c_config` is a valid NUL-terminated string that lives across the call.
         let raw = unsafe { sys::rtcNewDevice(c_config.as_ptr()) };
         if raw.is_null() {
             // SAFETY: passing NULL asks for the error of the failed device construction, which
             // the Embree API documents as the way to query it.
             let code = unsafe { sys::rtcGetDeviceError(std::ptr::null_mut()) };
-            return Err(embree_error(
-                code,
-                None,
-                &format!("rtcNewDevice(\"{config}\")"),
-            ));
+            return Err(embree_error(code, None, &format!("rtcNewDevice(\"{config}\")")));
         }
         live_inc();
-        let inner = DeviceInner {
-            raw,
-            sink: Box::new(Mutex::new(Vec::new())),
-        };
+        let inner = DeviceInner { raw, sink: Box::new(Mutex::new(Vec::new())) };
         let sink_ptr = &*inner.sink as *const ErrorSink as *mut c_void;
         // SAFETY: `raw` is the live device just created; the sink pointer stays valid until
         // `DeviceInner::drop` unregisters the callback (the box is never moved out or replaced).
         unsafe { sys::rtcSetDeviceErrorFunction(raw, Some(error_callback), sink_ptr) };
-        Ok(Device {
-            inner: Arc::new(inner),
-        })
+        Ok(Device { inner: Arc::new(inner) })
     }
 
     fn raw(&self) -> sys::RTCDevice {
@@ -245,10 +217,7 @@ impl Device {
             Ok(g) => g,
             Err(poisoned) => poisoned.into_inner(),
         };
-        let message = sink
-            .iter()
-            .rposition(|(c, _)| *c == code)
-            .map(|i| sink.remove(i).1);
+        let message = sink.iter().rposition(|(c, _)| *c == code).map(|i| sink.remove(i).1);
         sink.clear();
         Err(embree_error(code, message.as_deref(), during))
     }
@@ -300,26 +269,15 @@ impl TriangleGeometry {
                 ),
             ));
         }
-        if let Some((i, p)) = positions
-            .iter()
-            .enumerate()
-            .find(|(_, p)| !p.iter().all(|c| c.is_finite()))
-        {
+        if let Some((i, p)) = positions.iter().enumerate().find(|(_, p)| !p.iter().all(|c| c.is_finite())) {
             return Err(Error::invalid(
                 source_name,
                 format!("positions[{i}]"),
-                format!(
-                    "vertex ({}, {}, {}) is not finite in single precision",
-                    p[0], p[1], p[2]
-                ),
+                format!("vertex ({}, {}, {}) is not finite in single precision", p[0], p[1], p[2]),
             ));
         }
         let n = positions.len();
-        if let Some((i, t)) = triangles
-            .iter()
-            .enumerate()
-            .find(|(_, t)| t.iter().any(|&k| k as usize >= n))
-        {
+        if let Some((i, t)) = triangles.iter().enumerate().find(|(_, t)| t.iter().any(|&k| k as usize >= n)) {
             return Err(Error::invalid(
                 source_name,
                 format!("triangles[{i}]"),
@@ -331,28 +289,15 @@ impl TriangleGeometry {
         let raw = unsafe { sys::rtcNewGeometry(device.raw(), sys::RTC_GEOMETRY_TYPE_TRIANGLE) };
         if raw.is_null() {
             device.check("rtcNewGeometry")?;
-            return Err(embree_error(
-                sys::RTC_ERROR_UNKNOWN,
-                None,
-                "rtcNewGeometry returned NULL",
-            ));
+            return Err(embree_error(sys::RTC_ERROR_UNKNOWN, None, "rtcNewGeometry returned NULL"));
         }
         live_inc();
         // From here on, `geometry`'s Drop releases `raw` on every early return.
-        let geometry = TriangleGeometry {
-            raw,
-            device: device.clone(),
-            triangles: triangles.len(),
-        };
+        let geometry = TriangleGeometry { raw, device: device.clone(), triangles: triangles.len() };
         device.check("rtcNewGeometry")?;
 
-        let vertex_ptr =
-            geometry.new_buffer(sys::RTC_BUFFER_TYPE_VERTEX, sys::RTC_FORMAT_FLOAT3, n)?;
-        let index_ptr = geometry.new_buffer(
-            sys::RTC_BUFFER_TYPE_INDEX,
-            sys::RTC_FORMAT_UINT3,
-            triangles.len(),
-        )?;
+        let vertex_ptr = geometry.new_buffer(sys::RTC_BUFFER_TYPE_VERTEX, sys::RTC_FORMAT_FLOAT3, n)?;
+        let index_ptr = geometry.new_buffer(sys::RTC_BUFFER_TYPE_INDEX, sys::RTC_FORMAT_UINT3, triangles.len())?;
         // SAFETY: Embree returned buffers of exactly `n` (resp. `triangles.len()`) items of 12
         // bytes (`FLOAT3` / `UINT3`, byte stride 12), 4-byte aligned (Embree aligns buffers to at
         // least 16 bytes), owned by the geometry and not accessed by Embree until commit. The
@@ -363,11 +308,7 @@ impl TriangleGeometry {
                 std::ptr::copy_nonoverlapping(positions.as_ptr(), vertex_ptr.cast::<[f32; 3]>(), n);
             }
             if !triangles.is_empty() {
-                std::ptr::copy_nonoverlapping(
-                    triangles.as_ptr(),
-                    index_ptr.cast::<[u32; 3]>(),
-                    triangles.len(),
-                );
+                std::ptr::copy_nonoverlapping(triangles.as_ptr(), index_ptr.cast::<[u32; 3]>(), triangles.len());
             }
         }
         // SAFETY: `raw` is a live geometry; quality is one of Embree's valid enum values.
@@ -381,22 +322,13 @@ impl TriangleGeometry {
     }
 
     /// Allocates an Embree-owned buffer of `count` 12-byte items; returns its address.
-    fn new_buffer(
-        &self,
-        kind: sys::RTCBufferType,
-        format: sys::RTCFormat,
-        count: usize,
-    ) -> Result<*mut c_void> {
+    fn new_buffer(&self, kind: sys::RTCBufferType, format: sys::RTCFormat, count: usize) -> Result<*mut c_void> {
         // SAFETY: `raw` is a live geometry; stride 12 matches FLOAT3/UINT3; Embree allocates the
         // buffer (with its own padding for vector loads) and keeps it alive with the geometry.
         let ptr = unsafe { sys::rtcSetNewGeometryBuffer(self.raw, kind, 0, format, 12, count) };
         self.device.check("rtcSetNewGeometryBuffer")?;
         if ptr.is_null() && count > 0 {
-            return Err(embree_error(
-                sys::RTC_ERROR_OUT_OF_MEMORY,
-                None,
-                "rtcSetNewGeometryBuffer returned NULL",
-            ));
+            return Err(embree_error(sys::RTC_ERROR_OUT_OF_MEMORY, None, "rtcSetNewGeometryBuffer returned NULL"));
         }
         Ok(ptr)
     }
@@ -443,21 +375,10 @@ impl SceneBuilder {
         let raw = unsafe { sys::rtcNewScene(device.raw()) };
         if raw.is_null() {
             device.check("rtcNewScene")?;
-            return Err(embree_error(
-                sys::RTC_ERROR_UNKNOWN,
-                None,
-                "rtcNewScene returned NULL",
-            ));
+            return Err(embree_error(sys::RTC_ERROR_UNKNOWN, None, "rtcNewScene returned NULL"));
         }
         live_inc();
-        let builder = SceneBuilder {
-            handle: SceneHandle {
-                raw,
-                device: device.clone(),
-            },
-            geometries: 0,
-            triangles: 0,
-        };
+        let builder = SceneBuilder { handle: SceneHandle { raw, device: device.clone() }, geometries: 0, triangles: 0 };
         device.check("rtcNewScene")?;
         // SAFETY: `raw` is a live, uncommitted scene owned by `builder`; the flag and quality are
         // valid enum values.
@@ -490,11 +411,7 @@ impl SceneBuilder {
         // SAFETY: the scene is live and owned by `self`; all attached geometries are committed.
         unsafe { sys::rtcCommitScene(self.handle.raw) };
         self.handle.device.check("rtcCommitScene")?;
-        Ok(Scene {
-            handle: self.handle,
-            geometries: self.geometries,
-            triangles: self.triangles,
-        })
+        Ok(Scene { handle: self.handle, geometries: self.geometries, triangles: self.triangles })
     }
 }
 
@@ -511,10 +428,7 @@ impl RawRay {
     /// Whether Embree may be asked about this ray: finite origin and direction, finite
     /// `tnear >= 0`, and `tfar >= tnear` (`tfar` may be `+inf`).
     pub fn is_valid(&self) -> bool {
-        self.org
-            .iter()
-            .chain(self.dir.iter())
-            .all(|c| c.is_finite())
+        self.org.iter().chain(self.dir.iter()).all(|c| c.is_finite())
             && self.tnear.is_finite()
             && self.tnear >= 0.0
             && self.tfar >= self.tnear
@@ -573,10 +487,7 @@ unsafe impl Sync for Scene {}
 
 impl std::fmt::Debug for Scene {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Scene")
-            .field("geometries", &self.geometries)
-            .field("triangles", &self.triangles)
-            .finish()
+        f.debug_struct("Scene").field("geometries", &self.geometries).field("triangles", &self.triangles).finish()
     }
 }
 
@@ -596,10 +507,7 @@ impl Scene {
         if !ray.is_valid() {
             return None;
         }
-        let mut rayhit = sys::RTCRayHit {
-            ray: ray.to_sys(),
-            hit: sys::RTCHit::default(),
-        };
+        let mut rayhit = sys::RTCRayHit { ray: ray.to_sys(), hit: sys::RTCHit::default() };
         rayhit.hit.geomID = sys::RTC_INVALID_GEOMETRY_ID;
         rayhit.hit.instID.fill(sys::RTC_INVALID_GEOMETRY_ID);
         // SAFETY: the scene is live and committed; `rayhit` is a properly aligned (checked at
@@ -634,16 +542,8 @@ impl Scene {
     /// # Panics
     /// If `rays.len() > 16` or `hits.len() != rays.len()` (caller bugs, not data errors).
     pub fn intersect16(&self, rays: &[RawRay], hits: &mut [Option<RawHit>], coherent: bool) {
-        assert!(
-            rays.len() <= 16,
-            "intersect16: {} rays given, at most 16 fit a packet",
-            rays.len()
-        );
-        assert_eq!(
-            rays.len(),
-            hits.len(),
-            "intersect16: rays and hits differ in length"
-        );
+        assert!(rays.len() <= 16, "intersect16: {} rays given, at most 16 fit a packet", rays.len());
+        assert_eq!(rays.len(), hits.len(), "intersect16: rays and hits differ in length");
         let mut valid = Valid16([0; 16]);
         let mut packet = sys::RTCRayHit16::default();
         for (lane, ray) in rays.iter().enumerate() {
@@ -671,23 +571,18 @@ impl Scene {
             // SAFETY: the scene is live and committed; `valid` and `packet` are 64-byte aligned
             // locals (checked at compile time), initialised for every lane (inactive lanes are
             // ignored by Embree), and only this call accesses them.
-            unsafe {
-                compat::intersect16(valid.0.as_ptr(), self.handle.raw, &mut packet, coherent)
-            };
+            unsafe { compat::intersect16(valid.0.as_ptr(), self.handle.raw, &mut packet, coherent) };
         }
         for (lane, hit) in hits.iter_mut().enumerate() {
             let h = &packet.hit;
-            *hit =
-                (valid.0[lane] != 0 && h.geomID[lane] != sys::RTC_INVALID_GEOMETRY_ID).then(|| {
-                    RawHit {
-                        t: packet.ray.tfar[lane],
-                        u: h.u[lane],
-                        v: h.v[lane],
-                        ng: [h.Ng_x[lane], h.Ng_y[lane], h.Ng_z[lane]],
-                        geom_id: h.geomID[lane],
-                        prim_id: h.primID[lane],
-                    }
-                });
+            *hit = (valid.0[lane] != 0 && h.geomID[lane] != sys::RTC_INVALID_GEOMETRY_ID).then(|| RawHit {
+                t: packet.ray.tfar[lane],
+                u: h.u[lane],
+                v: h.v[lane],
+                ng: [h.Ng_x[lane], h.Ng_y[lane], h.Ng_z[lane]],
+                geom_id: h.geomID[lane],
+                prim_id: h.primID[lane],
+            });
         }
     }
 
@@ -697,11 +592,7 @@ impl Scene {
     /// # Panics
     /// If `hits.len() != rays.len()`.
     pub fn intersect_packets(&self, rays: &[RawRay], hits: &mut [Option<RawHit>]) {
-        assert_eq!(
-            rays.len(),
-            hits.len(),
-            "intersect_packets: rays and hits differ in length"
-        );
+        assert_eq!(rays.len(), hits.len(), "intersect_packets: rays and hits differ in length");
         for (r, h) in rays.chunks(16).zip(hits.chunks_mut(16)) {
             self.intersect16(r, h, true);
         }
