@@ -519,24 +519,11 @@ fn assess_with<R: RadianceField>(
         || {
             jobs.par_iter().try_for_each(|j| -> Result<()> {
                 let attrs: Vec<(&str, String)> = j.attributes.iter().map(|(k, v)| (*k, v.clone())).collect();
-                let t0 = Instant::now();
                 crate::io::exr::write_rgb(&out.join(format!("{}.exr", j.stem)), j.image, None, &attrs)?;
-                let t1 = Instant::now();
-                let r = crate::io::png::write_preview(&out.join(format!("{}.png", j.stem)), j.image);
-                if std::env::var_os("INIMTRACE_DEBUG").is_some() {
-                    eprintln!("{} exr {:?} png {:?}", j.stem, t1 - t0, t1.elapsed());
-                }
-                r
+                crate::io::png::write_preview(&out.join(format!("{}.png", j.stem)), j.image)
             })
         },
-        || {
-            let t0 = Instant::now();
-            let r = crate::io::figure::write_montage(&out.join("figure.png"), &figure_rows, &labels);
-            if std::env::var_os("INIMTRACE_DEBUG").is_some() {
-                eprintln!("figure {:?}", t0.elapsed());
-            }
-            r
-        },
+        || crate::io::figure::write_montage(&out.join("figure.png"), &figure_rows, &labels),
     );
     image_result?;
     figure_result?;

@@ -152,7 +152,7 @@ impl Intersector for AnalyticRects {
                 let inv_dz = 1.0 / ray.dir.z;
                 for r in order {
                     let t = (r.z - ray.origin.z) * inv_dz;
-                    if !(t < t_max) {
+                    if t >= t_max || t.is_nan() {
                         return None; // sorted: every later plane is farther still
                     }
                     let u = (ray.origin.x + t * ray.dir.x - r.cx) * r.inv_hx;

@@ -192,8 +192,8 @@ mod tests {
 
     #[test]
     fn fast_floor_matches_floor() {
-        for x in [-2.5, -2.0, -1.0000001, -0.5, -0.0, 0.0, 0.3, 0.5, 1.0, 1.9999999, 1e9, -1e9, 3.0e9, -3.0e9] {
-            let expect = (x as f64).floor().clamp(i32::MIN as f64, i32::MAX as f64) as i32;
+        for x in [-2.5f64, -2.0, -1.0000001, -0.5, -0.0, 0.0, 0.3, 0.5, 1.0, 1.9999999, 1e9, -1e9, 3.0e9, -3.0e9] {
+            let expect = x.floor().clamp(i32::MIN as f64, i32::MAX as f64) as i32;
             assert_eq!(floor_to_i32(x), expect, "{x}");
         }
         assert_eq!(floor_to_i32(f64::NAN), 0);

@@ -172,7 +172,7 @@ pub const PUPIL_CENTER_SINGULAR_TOLERANCE: f64 = 1e-9;
 /// Errors when PupilCenter has no answer for this display and eye position.
 pub fn check_pupil_center(display: &Display, eye: DVec3) -> Result<()> {
     let l = display.lenslet_z() - eye.z;
-    if !(l > 0.0) {
+    if l <= 0.0 || l.is_nan() {
         return Err(Error::Singular(format!(
             "PupilCenter needs the eye in front of the lenslets, but the eye is at z = {} and the lenslets at z = {}",
             eye.z,
