@@ -122,6 +122,53 @@ impl<I: Intersector + ?Sized> Copy for SceneTracer<'_, I> {}
 /// a fused fast kernel for a special kind of scene.
 pub trait RadianceField: Sync {
     fn radiance(&self, ray: &Ray) -> DVec3;
+
+    /// Sum of the radiance along every ray of `bundle` around `base`. Fields may override this
+    /// with a faster path that must return exactly the same sum.
+    fn radiance_sum(&self, base: &Ray, bundle: &RayBundle) -> DVec3 {
+        let mut sum = DVec3::ZERO;
+        for k in 0..bundle.shifts.len() {
+            sum += self.radiance(&bundle.ray(base, k));
+        }
+        sum
+    }
+}
+
+/// Rays that differ from a base ray by constant shifts of their start (x, y) and slope
+/// (x, y): LensletAverage's samples of one pixel (eq. (1b) is affine in the lenslet point).
+#[derive(Clone, Debug, PartialEq)]
+pub struct RayBundle {
+    /// (start shift, slope shift) per ray.
+    pub shifts: Vec<(DVec2, DVec2)>,
+    /// Component-wise bounds of the start and slope shifts.
+    pub start_min: DVec2,
+    pub start_max: DVec2,
+    pub slope_min: DVec2,
+    pub slope_max: DVec2,
+}
+
+impl RayBundle {
+    pub fn new(shifts: Vec<(DVec2, DVec2)>) -> Self {
+        let inf = DVec2::splat(f64::INFINITY);
+        let (mut a, mut b, mut c, mut d) = (inf, -inf, inf, -inf);
+        for (ds, dw) in &shifts {
+            a = a.min(*ds);
+            b = b.max(*ds);
+            c = c.min(*dw);
+            d = d.max(*dw);
+        }
+        Self { shifts, start_min: a, start_max: b, slope_min: c, slope_max: d }
+    }
+
+    /// Ray `k` of the bundle around `base` (only x and y are shifted).
+    #[inline(always)]
+    pub fn ray(&self, base: &Ray, k: usize) -> Ray {
+        let (ds, dw) = self.shifts[k];
+        Ray {
+            origin: DVec3::new(base.origin.x + ds.x, base.origin.y + ds.y, base.origin.z),
+            dir: DVec3::new(base.dir.x + dw.x, base.dir.y + dw.y, base.dir.z),
+        }
+    }
 }
 
 impl<I: Intersector + ?Sized> RadianceField for SceneTracer<'_, I> {
@@ -226,7 +273,7 @@ pub fn render_display_image<R: RadianceField + ?Sized>(
     let z_ref = settings.reference_plane_z;
     let gain = display.lenslet_power() - 1.0 / display.lenslets_to_lcd;
     let reach = display.lenslet_z() - z_ref;
-    let lenslet_shifts: Vec<(DVec2, DVec2)> = match method {
+    let bundle = RayBundle::new(match method {
         Method::LensletAverage { grid } => stratified(grid)
             .into_iter()
             .map(|f| {
@@ -235,9 +282,9 @@ pub fn render_display_image<R: RadianceField + ?Sized>(
             })
             .collect(),
         _ => vec![(DVec2::ZERO, DVec2::ZERO)],
-    };
+    });
     let eye = settings.eye_position;
-    let inv_count = 1.0 / (pixel_samples.len() * lenslet_shifts.len()) as f64;
+    let inv_count = 1.0 / (pixel_samples.len() * bundle.shifts.len()) as f64;
 
     let mut image = RgbImage::new(nx, ny);
     image.pixels.par_chunks_mut(nx).enumerate().for_each(|(row, out)| {
@@ -252,11 +299,11 @@ pub fn render_display_image<R: RadianceField + ?Sized>(
                     _ => lenslet_center,
                 };
                 let base = camera_ray(display, x3, lenslet_center, p, z_ref);
-                let (start, slope) = (base.origin.truncate(), base.dir.truncate());
-                for (d_start, d_slope) in &lenslet_shifts {
-                    let ray = Ray { origin: (start + *d_start).extend(z_ref), dir: (slope + *d_slope).extend(1.0) };
-                    sum += tracer.radiance(&ray);
-                }
+                sum += if bundle.shifts.len() == 1 {
+                    tracer.radiance(&bundle.ray(&base, 0))
+                } else {
+                    tracer.radiance_sum(&base, &bundle)
+                };
             }
             let v = sum * inv_count;
             *px = [v.x as f32, v.y as f32, v.z as f32];

@@ -93,7 +93,7 @@ impl BarChart {
     }
 
     /// True when `uv` lies on a bar (grid lookup).
-    #[inline]
+    #[inline(always)]
     pub fn is_bar(&self, uv: DVec2) -> bool {
         let fi = (uv.x + 1.0) * (0.5 * GRID as f64);
         let fj = (uv.y + 1.0) * (0.5 * GRID as f64);
