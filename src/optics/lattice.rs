@@ -18,6 +18,10 @@ pub struct Lattice {
     pub matrix: DMat2,
     inverse: DMat2,
     axis_aligned: bool,
+    /// For axis-aligned lattices: the pitch matrix's diagonal and its inverse's, so the hot
+    /// paths skip the zero products (same values as the full products for finite input).
+    diagonal: DVec2,
+    inverse_diagonal: DVec2,
 }
 
 impl Lattice {
@@ -30,7 +34,15 @@ impl Lattice {
             return None;
         }
         let axis_aligned = matrix.x_axis.y == 0.0 && matrix.y_axis.x == 0.0;
-        Some(Self { shift, matrix, inverse: matrix.inverse(), axis_aligned })
+        let inverse = matrix.inverse();
+        Some(Self {
+            shift,
+            matrix,
+            inverse,
+            axis_aligned,
+            diagonal: DVec2::new(matrix.x_axis.x, matrix.y_axis.y),
+            inverse_diagonal: DVec2::new(inverse.x_axis.x, inverse.y_axis.y),
+        })
     }
 
     /// A square lattice of the given pitch, centred on the optical axis.
@@ -55,15 +67,23 @@ impl Lattice {
     }
 
     /// Centre of cell `index`.
-    #[inline]
+    #[inline(always)]
     pub fn center(&self, index: IVec2) -> DVec2 {
-        self.shift + self.matrix * index.as_dvec2()
+        if self.axis_aligned {
+            self.shift + self.diagonal * index.as_dvec2()
+        } else {
+            self.shift + self.matrix * index.as_dvec2()
+        }
     }
 
     /// Continuous lattice coordinates of a point: `M^-1 (p - shift)`.
-    #[inline]
+    #[inline(always)]
     pub fn coordinates(&self, p: DVec2) -> DVec2 {
-        self.inverse * (p - self.shift)
+        if self.axis_aligned {
+            (p - self.shift) * self.inverse_diagonal
+        } else {
+            self.inverse * (p - self.shift)
+        }
     }
 
     /// Area of one cell (mm^2).
@@ -77,7 +97,7 @@ impl Lattice {
     /// rounded candidate and its eight neighbours are compared (enough for a reduced basis,
     /// e.g. hexagonal (p, 0), (p/2, p sqrt(3)/2) or any rotation of a rectangular lattice).
     /// `nearest_brute_force` is the slow twin that tests check this against.
-    #[inline]
+    #[inline(always)]
     pub fn nearest(&self, p: DVec2) -> IVec2 {
         let u = self.coordinates(p);
         let rounded = IVec2::new(round_half_up(u.x), round_half_up(u.y));
@@ -129,12 +149,11 @@ fn round_half_up(x: f64) -> i32 {
     floor_to_i32(x + 0.5)
 }
 
-/// `floor(x)` as an `i32` without a libm call (baseline x86-64 has no rounding instruction):
-/// truncate, then step down for negative non-integers. `as` saturates and maps NaN to 0.
+/// `floor(x)` as an `i32`; `as` saturates and maps NaN to 0. (With x86-64-v2, set in
+/// `.cargo/config.toml`, `floor` is one `roundsd` instruction.)
 #[inline(always)]
 pub fn floor_to_i32(x: f64) -> i32 {
-    let i = x as i32;
-    i.saturating_sub((x < i as f64) as i32)
+    x.floor() as i32
 }
 
 #[cfg(test)]

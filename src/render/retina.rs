@@ -116,20 +116,23 @@ pub fn simulate_stack(
         let row0 = band * TILE;
         let band_rows = out.len() / (n * stride);
         let mut acc = vec![0f64; TILE * TILE * stride];
+        let mut tangents = vec![DVec2::ZERO; TILE * TILE];
         for col0 in (0..n).step_by(TILE) {
             let tile_cols = TILE.min(n - col0);
             acc.iter_mut().for_each(|a| *a = 0.0);
             for frac in &subpixels {
+                for r in 0..band_rows {
+                    for c in 0..tile_cols {
+                        tangents[r * TILE + c] = retina.tangent(row0 + r, col0 + c, *frac);
+                    }
+                }
                 for k in 0..pupil.len() {
                     for r in 0..band_rows {
                         for c in 0..tile_cols {
-                            let t = retina.tangent(row0 + r, col0 + c, *frac);
+                            let t = tangents[r * TILE + c];
                             if let Some(idx) = fast.pixel_index(t, k) {
-                                let src = &packed[idx * stride..(idx + 1) * stride];
                                 let dst = &mut acc[(r * TILE + c) * stride..(r * TILE + c + 1) * stride];
-                                for (a, v) in dst.iter_mut().zip(src) {
-                                    *a += *v as f64;
-                                }
+                                add_f32(dst, &packed[idx * stride..(idx + 1) * stride]);
                             }
                         }
                     }
@@ -152,6 +155,24 @@ pub fn simulate_stack(
         }
     }
     Ok(images)
+}
+
+/// `dst += src`, unrolled for the common strides (one to three display images).
+#[inline(always)]
+fn add_f32(dst: &mut [f64], src: &[f32]) {
+    #[inline(always)]
+    fn fixed<const N: usize>(dst: &mut [f64], src: &[f32]) {
+        let (d, s): (&mut [f64; N], &[f32; N]) = (dst.try_into().expect("stride"), src.try_into().expect("stride"));
+        for j in 0..N {
+            d[j] += s[j] as f64;
+        }
+    }
+    match src.len() {
+        3 => fixed::<3>(dst, src),
+        6 => fixed::<6>(dst, src),
+        9 => fixed::<9>(dst, src),
+        _ => dst.iter_mut().zip(src).for_each(|(a, v)| *a += *v as f64),
+    }
 }
 
 /// The eye -> LCD trace of [`eye_to_lcd`] with the per-eye constants folded in, for the hot
