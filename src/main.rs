@@ -236,7 +236,9 @@ fn run() -> Result<()> {
                     report.total_seconds, report.threads, report.backend
                 );
             }
-            eprintln!("wrote {}", out.display());
+            if !quiet {
+                eprintln!("wrote {}", out.display());
+            }
         }
         Command::RenderDisplay { method, setup, samples_per_pixel, reference_plane, out } => {
             let (scene, display) = load_setup(&setup)?;
