@@ -128,8 +128,12 @@ impl RadianceField for FacingPlanes<'_> {
         let mut last = self.rects.len();
         for (i, r) in self.rects.iter().enumerate() {
             let t = r.z - base.origin.z; // > 0: the bundle starts in front of every plane
-            let lo = DVec2::new(base.origin.x, base.origin.y) + bundle.start_min + (base.dir.truncate() + bundle.slope_min) * t;
-            let hi = DVec2::new(base.origin.x, base.origin.y) + bundle.start_max + (base.dir.truncate() + bundle.slope_max) * t;
+            let lo = DVec2::new(base.origin.x, base.origin.y)
+                + bundle.start_min
+                + (base.dir.truncate() + bundle.slope_min) * t;
+            let hi = DVec2::new(base.origin.x, base.origin.y)
+                + bundle.start_max
+                + (base.dir.truncate() + bundle.slope_max) * t;
             let (u0, u1) = ((lo.x - r.cx) * r.inv_hx, (hi.x - r.cx) * r.inv_hx);
             let (v0, v1) = ((lo.y - r.cy) * r.inv_hy, (hi.y - r.cy) * r.inv_hy);
             let (umin, umax) = (u0.min(u1), u0.max(u1));
