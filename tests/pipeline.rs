@@ -309,3 +309,83 @@ fn shipped_scene_and_experiment_files_match_the_builtins() {
     assert_eq!(fw.cases[1].eye.pupil_samples().len(), 21);
     assert_eq!(paper.cases[1].eye.pupil_samples().len(), 52);
 }
+
+#[test]
+fn pupil_center_rays_pass_through_the_pupil_centre_and_singularity_is_refused() {
+    use inimtrace::render::display_image::{camera_ray, check_pupil_center, pupil_center_point};
+    let display = Display::paper();
+    let lcd = display.lcd;
+    let mut rng = Lcg(11);
+    for eye in [DVec3::ZERO, DVec3::new(1.5, -0.7, 0.0), DVec3::new(-2.0, 1.0, 3.0)] {
+        check_pupil_center(&display, eye).unwrap();
+        for _ in 0..2000 {
+            let (r, c) = ((rng.next() * 2160.0) as usize, (rng.next() * 2160.0) as usize);
+            let x3 = lcd.pixel_center(r, c);
+            let xc = display.lenslets.center(display.elemental_image_of(x3));
+            let p = pupil_center_point(&display, x3, xc, eye);
+            let ray = camera_ray(&display, x3, xc, p, 0.0);
+            let at_eye = ray.origin + ray.dir * (eye.z - ray.origin.z);
+            assert!((at_eye.truncate() - eye.truncate()).length() < 1e-9, "{at_eye:?} vs {eye:?}");
+        }
+    }
+    let mut singular = Display::paper();
+    singular.lenslets_to_lcd = 1.0 / (1.0 / singular.focal_length - 1.0 / singular.eye_to_lenslets);
+    let e = check_pupil_center(&singular, DVec3::ZERO).unwrap_err().to_string();
+    assert!(e.contains("PupilCenter") && e.contains("pupil centre onto the LCD"), "{e}");
+    let s = DisplayRenderSettings::default();
+    let scene = Scene::paper();
+    let backend = AnalyticRects::new(&scene).unwrap();
+    let field = SceneTracer { scene: &scene, backend: &backend };
+    assert!(render_display_image(&singular, Method::PupilCenter, &s, &field, &Progress::hidden()).is_err());
+    // LC and LA do not depend on the eye and still render.
+    let mut small = singular.clone();
+    small.lcd.resolution = [64, 64];
+    assert!(render_display_image(&small, Method::LensletCenter, &s, &field, &Progress::hidden()).is_ok());
+}
+
+#[test]
+fn the_reference_plane_moves_ray_starts_along_the_same_lines() {
+    use inimtrace::render::display_image::camera_ray;
+    let display = Display::paper();
+    let mut rng = Lcg(12);
+    for _ in 0..1000 {
+        let x3 = DVec2::new(rng.range(-10.8, 10.8), rng.range(-10.8, 10.8));
+        let xc = display.lenslets.center(display.elemental_image_of(x3));
+        let p = xc + DVec2::new(rng.range(-0.6, 0.6), rng.range(-0.6, 0.6));
+        let a = camera_ray(&display, x3, xc, p, 0.0);
+        let b = camera_ray(&display, x3, xc, p, 150.0);
+        assert_eq!(a.dir, b.dir);
+        let a_at_b = a.origin + a.dir * (150.0 - a.origin.z);
+        assert!((a_at_b - b.origin).length() < 1e-9);
+        // Both pass through p on the lenslet plane.
+        let at_lenslets = a.origin + a.dir * (display.lenslet_z() - a.origin.z);
+        assert!((at_lenslets.truncate() - p).length() < 1e-12);
+    }
+    // Geometry between the eye and the reference plane is skipped: a plane at z = 100 hides the
+    // scene from rays starting at z = 0 but not from rays starting at z = 150.
+    let scene = Scene {
+        name: "occluder".into(),
+        objects: vec![
+            Object {
+                name: "near".into(),
+                shape: Shape::Rect(Rect::facing_eye(DVec3::new(0.0, 0.0, 100.0), 1e4, 1e4)),
+                material: Material::Albedo(DVec3::ZERO),
+            },
+            Object {
+                name: "far".into(),
+                shape: Shape::Rect(Rect::facing_eye(DVec3::new(0.0, 0.0, 500.0), 1e4, 1e4)),
+                material: Material::Albedo(DVec3::ONE),
+            },
+        ],
+        background: DVec3::ZERO,
+    };
+    let backend = AnalyticRects::new(&scene).unwrap();
+    let field = SceneTracer { scene: &scene, backend: &backend };
+    let d = small_display(32);
+    let near =
+        render_display_image(&d, Method::LensletCenter, &DisplayRenderSettings::default(), &field, &Progress::hidden())
+            .unwrap();
+    let far_settings = DisplayRenderSettings { reference_plane_z: 150.0, ..DisplayRenderSettings::default() };
+    let far = render_display_image(&d, Method::LensletCenter, &far_settings, &field, &Progress::hidden()).unwrap();
+    assert!(near.pixels.iter().all(|p| *p == [0.0; 3]) && far.pixels.iter().all(|p| *p == [1.0; 3]));
+}
