@@ -188,6 +188,24 @@ fn bad_input_gives_one_clear_error_and_never_panics() {
     let p = w("empty.exr", "");
     expect_error(&["simulate", &p, "--pinhole", "--out", &out], &["empty.exr"]);
 
+    // An EXR display image holding NaN: refused with the pixel and channel named.
+    {
+        use exr::prelude::*;
+        let mut g = vec![0.5f32; 16];
+        g[5] = f32::NAN;
+        let channels = AnyChannels::sort(SmallVec::from_vec(vec![
+            AnyChannel::new("R", FlatSamples::F32(vec![0.5; 16])),
+            AnyChannel::new("G", FlatSamples::F32(g)),
+            AnyChannel::new("B", FlatSamples::F32(vec![0.5; 16])),
+        ]));
+        let p = d.join("nan.exr");
+        Image::from_channels((4, 4), channels).write().to_file(&p).unwrap();
+        expect_error(
+            &["simulate", p.to_str().unwrap(), "--pinhole", "--out", &out],
+            &["nan.exr", "row 1", "col 1", "channel G"],
+        );
+    }
+
     // An output directory that cannot be created.
     let blocker = w("blocker", "a file where a directory should be");
     expect_error(&["assess", "--out", &format!("{blocker}/sub")], &["blocker"]);

@@ -157,12 +157,25 @@ fn exr_without_rgb_is_an_error() {
 
 #[test]
 fn bad_samples_in_exr_name_pixel_and_channel() {
+    use exr::prelude::*;
     let dir = tempfile::tempdir().unwrap();
     for (value, kind) in [(f32::NAN, "NaN"), (f32::INFINITY, "infinite"), (-0.25, "negative")] {
         let path = dir.path().join(format!("bad_{kind}.exr"));
-        let mut img = RgbImage::filled(6, 4, [0.5; 3]);
-        img.set(2, 5, [0.5, value, 0.5]);
-        write_rgb(&path, &img, None, &[]).unwrap();
+        // Written with the exr crate directly: our writer refuses non-finite values.
+        let mut g = vec![0.5f32; 24];
+        g[2 * 6 + 5] = value;
+        let channels = AnyChannels::sort(SmallVec::from_vec(vec![
+            AnyChannel::new("R", FlatSamples::F32(vec![0.5; 24])),
+            AnyChannel::new("G", FlatSamples::F32(g)),
+            AnyChannel::new("B", FlatSamples::F32(vec![0.5; 24])),
+        ]));
+        Image::from_channels((6, 4), channels).write().to_file(&path).unwrap();
+        if value.is_nan() || value.is_infinite() {
+            let mut img = RgbImage::filled(6, 4, [0.5; 3]);
+            img.set(2, 5, [0.5, value, 0.5]);
+            let w = write_rgb(&dir.path().join("refused.exr"), &img, None, &[]).unwrap_err().to_string();
+            assert!(w.contains("row 2, col 5") && w.contains("non-finite"), "{w}");
+        }
         let e = read_rgb(&path).unwrap_err().to_string();
         for needle in [path.display().to_string(), "row 2".into(), "col 5".into(), "channel G".into(), kind.into()] {
             assert!(e.contains(&needle), "`{e}` lacks `{needle}`");

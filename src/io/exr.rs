@@ -93,6 +93,14 @@ pub fn write_rgb(path: &Path, img: &RgbImage, depth: Option<&[f32]>, attributes:
             ));
         }
     }
+    // The same policy as reading: no NaN or infinite radiance ever leaves inimtrace.
+    if let Some(i) = img.pixels.iter().position(|p| p.iter().any(|v| !v.is_finite())) {
+        return Err(Error::invalid(
+            source,
+            format!("pixel (row {}, col {})", i / img.width, i % img.width),
+            format!("refusing to write a non-finite value {:?} (this is a bug in the renderer)", img.pixels[i]),
+        ));
+    }
 
     let mut layer_attributes = LayerAttributes::default();
     let mut other: HashMap<Text, AttributeValue> = HashMap::new();

@@ -96,6 +96,8 @@ impl Lattice {
     /// Axis-aligned lattices: rounding the lattice coordinates is exact. Other lattices: the
     /// rounded candidate and its eight neighbours are compared (enough for a reduced basis,
     /// e.g. hexagonal (p, 0), (p/2, p sqrt(3)/2) or any rotation of a rectangular lattice).
+    /// Distances are compared in lattice coordinates through the metric `M^T M`, so a point
+    /// exactly half-way between two centres is an exact tie, which the rounded candidate wins.
     /// `nearest_brute_force` is the slow twin that tests check this against.
     #[inline(always)]
     pub fn nearest(&self, p: DVec2) -> IVec2 {
@@ -104,35 +106,28 @@ impl Lattice {
         if self.axis_aligned {
             return rounded;
         }
-        let mut best = rounded;
-        let mut best_d2 = (self.center(rounded) - p).length_squared();
-        for dj in -1..=1 {
-            for di in -1..=1 {
-                if di == 0 && dj == 0 {
-                    continue;
-                }
-                let cand = rounded + IVec2::new(di, dj);
-                let d2 = (self.center(cand) - p).length_squared();
-                if d2 < best_d2 {
-                    best = cand;
-                    best_d2 = d2;
-                }
-            }
-        }
-        best
+        self.nearest_around(u, rounded, 1)
     }
 
-    /// Slow, obviously correct twin of [`Lattice::nearest`]: scans every cell within `radius`
-    /// indices of the rounded coordinates. Ties go to the rounded candidate, as in `nearest`.
+    /// Slow, obviously correct twin of [`Lattice::nearest`]: compares every cell within `radius`
+    /// indices of the rounded coordinates, also for axis-aligned lattices.
     pub fn nearest_brute_force(&self, p: DVec2, radius: i32) -> IVec2 {
         let u = self.coordinates(p);
         let rounded = IVec2::new(round_half_up(u.x), round_half_up(u.y));
+        self.nearest_around(u, rounded, radius)
+    }
+
+    /// The candidate within `radius` of `rounded` with the smallest squared distance
+    /// `d^T (M^T M) d`, `d = u - candidate`; ties keep `rounded`, then the first found.
+    #[inline(always)]
+    fn nearest_around(&self, u: DVec2, rounded: IVec2, radius: i32) -> IVec2 {
+        let dist2 = |cand: IVec2| (self.matrix * (u - cand.as_dvec2())).length_squared();
         let mut best = rounded;
-        let mut best_d2 = (self.center(rounded) - p).length_squared();
+        let mut best_d2 = dist2(rounded);
         for dj in -radius..=radius {
             for di in -radius..=radius {
                 let cand = rounded + IVec2::new(di, dj);
-                let d2 = (self.center(cand) - p).length_squared();
+                let d2 = dist2(cand);
                 if d2 < best_d2 {
                     best = cand;
                     best_d2 = d2;
@@ -143,10 +138,14 @@ impl Lattice {
     }
 }
 
-/// `floor(x + 0.5)` as an index. Saturates for absurd inputs and maps NaN to 0 (never panics).
+/// Nearest integer to `x`, halves rounding up, as an index; saturates for absurd inputs and
+/// maps NaN to 0 (never panics). Written as `floor(x)` plus a test of the fractional part
+/// (computed exactly) rather than `floor(x + 0.5)`, whose addition rounds 0.49999999999999994
+/// up to 1.
 #[inline(always)]
 fn round_half_up(x: f64) -> i32 {
-    floor_to_i32(x + 0.5)
+    let f = x.floor();
+    floor_to_i32(f).saturating_add((x - f >= 0.5) as i32)
 }
 
 /// `floor(x)` as an `i32`; `as` saturates and maps NaN to 0. (With x86-64-v2, set in
@@ -195,10 +194,27 @@ mod tests {
     }
 
     #[test]
+    fn rounding_is_exact_near_halves() {
+        assert_eq!(round_half_up(0.49999999999999994), 0);
+        assert_eq!(round_half_up(0.5), 1);
+        assert_eq!(round_half_up(-0.5), 0);
+        assert_eq!(round_half_up(-1.5), -1);
+        assert_eq!(round_half_up(-1.5000000000000002), -2);
+        assert_eq!(round_half_up(2.4999999999999996), 2);
+        assert_eq!(round_half_up(f64::NAN), 0);
+        assert_eq!(round_half_up(1e300), i32::MAX);
+    }
+
+    #[test]
     fn square_lattice_boundary_goes_to_upper_cell() {
-        let lat = Lattice::square(1.2).unwrap();
-        assert_eq!(lat.nearest(DVec2::new(0.6, -0.6)), IVec2::new(1, 0));
-        assert_eq!(lat.nearest(DVec2::new(0.599_999, 0.0)), IVec2::new(0, 0));
+        // Pitch 2: the boundaries x = +-1, 3, ... are exact in binary, so these are exact ties.
+        let lat = Lattice::square(2.0).unwrap();
+        assert_eq!(lat.nearest(DVec2::new(1.0, -1.0)), IVec2::new(1, 0));
+        assert_eq!(lat.nearest(DVec2::new(-1.0, 3.0)), IVec2::new(0, 2));
+        assert_eq!(lat.nearest_brute_force(DVec2::new(1.0, -1.0), 3), IVec2::new(1, 0));
+        assert_eq!(lat.nearest(DVec2::new(0.999_999, 0.0)), IVec2::new(0, 0));
+        // 0.6 in binary is a hair below the true boundary of a 1.2 mm lattice: cell 0.
+        assert_eq!(Lattice::square(1.2).unwrap().nearest(DVec2::new(0.6, 0.0)), IVec2::new(0, 0));
     }
 
     #[test]
