@@ -6,7 +6,8 @@ cd "$(dirname "$0")/.."
 cases=${1:-20000}
 cargo test --release --test fuzz --no-run --quiet
 for t in fuzz_experiment_toml fuzz_display_toml fuzz_display_yaml fuzz_scene_toml fuzz_obj fuzz_ply_ascii fuzz_ply_binary fuzz_exr; do
-    start=$(date +%s.%N)
+    start=$(date +%s%N)
     if PROPTEST_CASES=$cases cargo test --release --quiet --test fuzz "$t" -- --exact > /tmp/fuzz-$t.log 2>&1; then r=ok; else r=FAILED; fi
-    printf '%-22s %6s cases  %6.1f s  %s\n' "$t" "$cases" "$(echo "$(date +%s.%N) - $start" | bc)" "$r"
+    ms=$(( ($(date +%s%N) - start) / 1000000 ))
+    printf '%-22s %6s cases  %7d ms  %s\n' "$t" "$cases" "$ms" "$r"
 done
