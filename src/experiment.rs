@@ -193,8 +193,11 @@ pub struct Experiment {
 impl Experiment {
     /// Resolves a spec; `source` names its file (for errors), `base` resolves relative paths.
     pub fn from_spec(spec: ExperimentSpec, source: &str, base: &Path) -> Result<Self> {
-        let display = config::load_display(&spec.display, base)?;
-        let scene = config::load_scene(&spec.scene, base)?;
+        // Name the experiment file and its field as well as the file that failed.
+        let display = config::load_display(&spec.display, base)
+            .map_err(|e| Error::invalid(source, "display", format!("cannot load `{}`: {e}", spec.display)))?;
+        let scene = config::load_scene(&spec.scene, base)
+            .map_err(|e| Error::invalid(source, "scene", format!("cannot load `{}`: {e}", spec.scene)))?;
         let dr = &spec.display_render;
         let mut methods = Vec::new();
         for (i, m) in spec.methods.iter().enumerate() {

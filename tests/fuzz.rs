@@ -191,3 +191,14 @@ proptest! {
         check(&seed, &m, exr)?;
     }
 }
+
+/// Regression (found by `fuzz_experiment_toml`): a mistyped `builtin:paper` became a missing
+/// relative path and the error named only that path; it now names the experiment and field too.
+#[test]
+fn regression_mistyped_builtin_names_the_experiment_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("exp.toml");
+    std::fs::write(&p, "name = \"x\"\nscene = \"cuiltin:paper\"\n[[eye_cases]]\nname = \"A\"\npinhole = true\n").unwrap();
+    let e = inimtrace::experiment::Experiment::load(&p).unwrap_err().to_string();
+    assert!(e.contains("exp.toml") && e.contains("`scene`") && e.contains("cuiltin:paper"), "{e}");
+}
