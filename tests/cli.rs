@@ -210,3 +210,49 @@ fn bad_input_gives_one_clear_error_and_never_panics() {
     let blocker = w("blocker", "a file where a directory should be");
     expect_error(&["assess", "--out", &format!("{blocker}/sub")], &["blocker"]);
 }
+
+/// The broken inputs kept under tests/data/bad/, run as a new user would: each exits non-zero
+/// with one line naming the file and the field or line, never panics, and leaves no
+/// `results.json` (the marker of a complete run) behind.
+#[test]
+fn every_file_in_tests_data_bad_fails_cleanly() {
+    let bad = root().join("tests/data/bad");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let o = out.to_str().unwrap();
+    let f = |name: &str| bad.join(name).display().to_string();
+    let cases: Vec<(Vec<String>, Vec<&str>)> = vec![
+        (vec!["assess".into(), f("missing.toml")], vec!["missing.toml", "No such file"]),
+        (vec!["assess".into(), f("a_directory.obj")], vec!["a_directory.obj", "directory"]),
+        (vec!["assess".into(), f("empty.toml")], vec!["empty.toml", "missing field `name`"]),
+        (vec!["assess".into(), f("not_utf8.toml")], vec!["not_utf8.toml", "UTF-8"]),
+        (vec!["assess".into(), f("wrong_type.toml")], vec!["wrong_type.toml", "line 3", "pupil_diameter"]),
+        (vec!["assess".into(), f("unknown_key.toml")], vec!["unknown_key.toml", "line 2", "focus"]),
+        (vec!["assess".into(), f("negative_pupil.toml")], vec!["negative_pupil.toml", "pupil_diameter"]),
+        (vec!["assess".into(), f("nan_focus.toml")], vec!["nan_focus.toml", "focus_mm"]),
+        (
+            vec!["info".into(), "--display".into(), f("negative_size_display.toml")],
+            vec!["negative_size_display.toml", "lcd.size[0]"],
+        ),
+        (
+            vec!["info".into(), "--display".into(), f("zero_resolution_display.toml")],
+            vec!["zero_resolution_display.toml", "lcd.resolution[0]"],
+        ),
+        (
+            vec!["info".into(), "--display".into(), f("singular_pitch_display.toml")],
+            vec!["singular_pitch_display.toml", "lenslets.pitch", "singular"],
+        ),
+        (vec!["info".into(), "--display".into(), f("nan_display.yaml")], vec!["nan_display.yaml", "lenslettoorigin"]),
+        (vec!["info".into(), "--display".into(), f("malformed_display.yaml")], vec!["malformed_display.yaml", "YAML"]),
+        (vec!["compare".into(), f("truncated.exr"), f("truncated.exr")], vec!["truncated.exr"]),
+        (vec!["simulate".into(), f("text.exr"), "--pinhole".into()], vec!["text.exr"]),
+    ];
+    for (mut args, needles) in cases {
+        if args[0] == "assess" || args[0] == "simulate" {
+            args.extend(["--out".into(), if args[0] == "assess" { o.into() } else { format!("{o}/sim.exr") }]);
+        }
+        let refs: Vec<&str> = args.iter().map(String::as_str).collect();
+        expect_error(&refs, &needles);
+        assert!(!out.join("results.json").exists(), "{args:?} left a complete-looking run behind");
+    }
+}

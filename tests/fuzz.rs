@@ -198,7 +198,8 @@ proptest! {
 fn regression_mistyped_builtin_names_the_experiment_field() {
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path().join("exp.toml");
-    std::fs::write(&p, "name = \"x\"\nscene = \"cuiltin:paper\"\n[[eye_cases]]\nname = \"A\"\npinhole = true\n").unwrap();
+    std::fs::write(&p, "name = \"x\"\nscene = \"cuiltin:paper\"\n[[eye_cases]]\nname = \"A\"\npinhole = true\n")
+        .unwrap();
     let e = inimtrace::experiment::Experiment::load(&p).unwrap_err().to_string();
     assert!(e.contains("exp.toml") && e.contains("`scene`") && e.contains("cuiltin:paper"), "{e}");
 }
