@@ -8,6 +8,7 @@
 //! the top. Optics is computed in `f64`.
 
 pub mod accel;
+pub mod bench;
 pub mod error;
 pub mod experiment;
 pub mod io;

@@ -94,6 +94,16 @@ enum Command {
         #[arg(long, default_value = "wang2004")]
         ssim: String,
     },
+    /// Speed against error for every method and backend, and the convergence of every sampling
+    /// parameter; writes bench.csv, bench.json and plots (PNG, SVG).
+    Bench {
+        /// Small sizes (LCD 540 x 540, retina 128 x 128).
+        #[arg(long)]
+        quick: bool,
+        /// Output directory (default: out/bench or out/bench-quick).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// Describe a display (central depth plane and more) and write the built-in files.
     Info {
         /// Display TOML or OpenCV YAML (default: the paper's).
@@ -312,6 +322,28 @@ fn run() -> Result<()> {
                 "SSIM  {:.5}  (R {:.5}, G {:.5}, B {:.5}; constants {})",
                 s.mean, s.channels[0], s.channels[1], s.channels[2], constants
             );
+        }
+        Command::Bench { quick, out } => {
+            let out = out.unwrap_or_else(|| PathBuf::from(if quick { "out/bench-quick" } else { "out/bench" }));
+            let rows = inimtrace::bench::run(&inimtrace::bench::BenchOptions { quick, out: out.clone(), quiet })?;
+            println!("| series | backend | method | parameter | seconds | Mrays/s | PSNR (dB) | SSIM |");
+            println!("|---|---|---|---:|---:|---:|---:|---:|");
+            for r in &rows {
+                println!(
+                    "| {} | {} | {} | {} | {:.3} | {:.1} | {:.2} | {:.4} |",
+                    r.series,
+                    r.backend,
+                    r.method,
+                    r.parameter,
+                    r.seconds,
+                    r.rays_per_second / 1e6,
+                    r.psnr_db,
+                    r.ssim
+                );
+            }
+            if !quiet {
+                eprintln!("wrote {}", out.display());
+            }
         }
         Command::Info { display, print } => {
             if let Some(what) = print {

@@ -256,3 +256,36 @@ fn every_file_in_tests_data_bad_fails_cleanly() {
         assert!(!out.join("results.json").exists(), "{args:?} left a complete-looking run behind");
     }
 }
+
+/// `inimtrace bench --quick` writes its CSV, JSON and plots, and the convergence series approach
+/// their references.
+#[test]
+fn bench_quick_writes_well_formed_reports() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("bench");
+    let (ok, stdout, stderr) = inimtrace(&["bench", "--quick", "--out", out.to_str().unwrap()]);
+    assert!(ok, "{stderr}");
+    assert!(stdout.contains("| la_grid |"));
+    for f in
+        ["bench.csv", "bench.json", "method.png", "method.svg", "la_grid.png", "pupil_grid.svg", "retina_samples.png"]
+    {
+        assert!(out.join(f).is_file(), "missing {f}");
+    }
+    let rows: Vec<serde_json::Value> =
+        serde_json::from_str(&std::fs::read_to_string(out.join("bench.json")).unwrap()).unwrap();
+    let psnr = |series: &str, p: u64| {
+        rows.iter()
+            .find(|r| r["series"] == series && r["parameter"] == p)
+            .map(|r| r["psnr_db"].as_f64().unwrap())
+            .unwrap()
+    };
+    assert!(psnr("la_grid", 8) > psnr("la_grid", 1) + 5.0);
+    assert!(psnr("pupil_grid", 16) > psnr("pupil_grid", 2) + 5.0);
+    assert!(psnr("retina_samples", 8) > psnr("retina_samples", 1) + 5.0);
+    for r in &rows {
+        assert!(r["psnr_db"].as_f64().unwrap().is_finite() && r["seconds"].as_f64().unwrap() > 0.0, "{r}");
+        assert!(r["git_revision"].as_str().is_some() && r["threads"].as_u64().unwrap() >= 1);
+    }
+    let csv = std::fs::read_to_string(out.join("bench.csv")).unwrap();
+    assert_eq!(csv.lines().count(), rows.len() + 1);
+}
