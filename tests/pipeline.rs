@@ -145,6 +145,8 @@ fn white_scene() -> Scene {
             material: Material::Albedo(DVec3::ONE),
         }],
         background: DVec3::ZERO,
+        light: None,
+        warnings: Vec::new(),
     }
 }
 

@@ -118,16 +118,98 @@ impl<I: Intersector + ?Sized> Clone for SceneTracer<'_, I> {
 }
 impl<I: Intersector + ?Sized> Copy for SceneTracer<'_, I> {}
 
+/// What one ray sees: its radiance and the distance to what it hit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample {
+    pub radiance: DVec3,
+    /// World distance (mm) from the ray's origin to its hit along the ray; `+inf` for a miss;
+    /// NaN when the field does not know (fields that only implement `radiance`).
+    pub depth: f64,
+}
+
+impl Default for Sample {
+    fn default() -> Self {
+        Sample { radiance: DVec3::ZERO, depth: f64::NAN }
+    }
+}
+
 /// Anything that tells the radiance seen along a ray: a scene with an intersection backend, or
 /// a fused fast kernel for a special kind of scene.
+///
+/// Renderers hand rays over in batches ([`RadianceField::sample_many`]) laid out so that
+/// consecutive rays are neighbours (adjacent pixels, same sub-sample), which lets mesh backends
+/// trace them as packets. The defaults fall back to one ray at a time.
 pub trait RadianceField: Sync {
     fn radiance(&self, ray: &Ray) -> DVec3;
+
+    /// Radiance and hit distance. Default: the depth is unknown (NaN).
+    fn sample(&self, ray: &Ray) -> Sample {
+        Sample { radiance: self.radiance(ray), depth: f64::NAN }
+    }
+
+    /// [`RadianceField::sample`] of every ray (`out.len() == rays.len()`).
+    fn sample_many(&self, rays: &[Ray], out: &mut [Sample]) {
+        for (ray, o) in rays.iter().zip(out.iter_mut()) {
+            *o = self.sample(ray);
+        }
+    }
+}
+
+/// World distance of a hit at ray parameter `t` (`+inf` for a miss).
+#[inline]
+fn hit_distance(ray: &Ray, t: Option<f64>) -> f64 {
+    t.map_or(f64::INFINITY, |t| t * ray.dir.length())
 }
 
 impl<I: Intersector + ?Sized> RadianceField for SceneTracer<'_, I> {
     #[inline]
     fn radiance(&self, ray: &Ray) -> DVec3 {
-        self.scene.radiance(self.backend.intersect(ray, f64::INFINITY).as_ref())
+        self.scene.shade(ray, self.backend.intersect(ray, f64::INFINITY).as_ref(), self.backend)
+    }
+
+    #[inline]
+    fn sample(&self, ray: &Ray) -> Sample {
+        let hit = self.backend.intersect(ray, f64::INFINITY);
+        Sample {
+            radiance: self.scene.shade(ray, hit.as_ref(), self.backend),
+            depth: hit_distance(ray, hit.map(|h| h.t)),
+        }
+    }
+
+    /// Intersects the whole batch with [`Intersector::intersect_many`] (packets on coherent
+    /// runs for backends that have them), then shades.
+    fn sample_many(&self, rays: &[Ray], out: &mut [Sample]) {
+        let mut hits = vec![None; rays.len()];
+        self.backend.intersect_many(rays, &mut hits);
+        for ((ray, hit), o) in rays.iter().zip(&hits).zip(out.iter_mut()) {
+            *o = Sample {
+                radiance: self.scene.shade(ray, hit.as_ref(), self.backend),
+                depth: hit_distance(ray, hit.map(|h| h.t)),
+            };
+        }
+    }
+}
+
+/// A radiance field that does not know depths (a fused kernel) paired with a backend that
+/// does: radiance from `field`, depth from `depth`'s nearest hit. Costs one extra intersection
+/// per ray; used to write the display EXR's `Z` channel on the fused analytic path.
+pub struct WithDepth<'a, F: RadianceField + ?Sized, I: Intersector + ?Sized> {
+    pub field: &'a F,
+    pub depth: &'a I,
+}
+
+impl<F: RadianceField + ?Sized, I: Intersector + ?Sized> RadianceField for WithDepth<'_, F, I> {
+    #[inline]
+    fn radiance(&self, ray: &Ray) -> DVec3 {
+        self.field.radiance(ray)
+    }
+
+    #[inline]
+    fn sample(&self, ray: &Ray) -> Sample {
+        Sample {
+            radiance: self.field.radiance(ray),
+            depth: hit_distance(ray, self.depth.intersect(ray, f64::INFINITY).map(|h| h.t)),
+        }
     }
 }
 
@@ -201,6 +283,26 @@ pub fn render_display_image<R: RadianceField + ?Sized>(
     tracer: &R,
     progress: &Progress,
 ) -> Result<RgbImage> {
+    render_display_image_with_depth(display, method, settings, tracer, progress).map(|(img, _)| img)
+}
+
+/// [`render_display_image`] plus a depth plane (row-major, one `f32` per LCD pixel): the mean
+/// world distance (mm, along each camera ray from its start on the reference plane) over the
+/// pixel's rays that hit something, `+inf` when none did. For LC and PC with one sample per
+/// pixel that is the distance of the pixel's one ray; for LA and multi-sample pixels it is the
+/// mean over the hitting rays (misses do not count). `None` when the field does not know
+/// depths (see [`WithDepth`]).
+///
+/// Rays are traced one display row at a time through [`RadianceField::sample_many`], ordered
+/// sub-sample by sub-sample with the row's pixels consecutive (coherent runs for packets);
+/// every pixel still sums its samples in the same order as a per-pixel loop would.
+pub fn render_display_image_with_depth<R: RadianceField + ?Sized>(
+    display: &Display,
+    method: Method,
+    settings: &DisplayRenderSettings,
+    tracer: &R,
+    progress: &Progress,
+) -> Result<(RgbImage, Option<Vec<f32>>)> {
     if method == Method::PupilCenter {
         check_pupil_center(display, settings.eye_position)?;
     }
@@ -239,13 +341,17 @@ pub fn render_display_image<R: RadianceField + ?Sized>(
     let eye = settings.eye_position;
     let inv_count = 1.0 / (pixel_samples.len() * lenslet_shifts.len()) as f64;
 
+    let per_pixel = pixel_samples.len() * lenslet_shifts.len();
     let mut image = RgbImage::new(nx, ny);
-    image.pixels.par_chunks_mut(nx).enumerate().for_each(|(row, out)| {
-        for (col, px) in out.iter_mut().enumerate() {
+    let mut depth = vec![0f32; nx * ny];
+    let depth_known = std::sync::atomic::AtomicBool::new(true);
+    image.pixels.par_chunks_mut(nx).zip(depth.par_chunks_mut(nx)).enumerate().for_each(|(row, (out, zout))| {
+        // rays[s * nx + col]: sample s of pixel col, s = (pixel sample, lenslet shift) in order.
+        let mut rays = vec![Ray { origin: DVec3::ZERO, dir: DVec3::Z }; per_pixel * nx];
+        for col in 0..nx {
             let center = lcd.pixel_center(row, col);
             let lenslet_center = display.lenslets.center(display.elemental_image_of(center));
-            let mut sum = DVec3::ZERO;
-            for frac in &pixel_samples {
+            for (f, frac) in pixel_samples.iter().enumerate() {
                 let x3 = lcd.pixel_point(row, col, *frac);
                 let p = match method {
                     Method::PupilCenter => pupil_center_point(display, x3, lenslet_center, eye),
@@ -253,15 +359,34 @@ pub fn render_display_image<R: RadianceField + ?Sized>(
                 };
                 let base = camera_ray(display, x3, lenslet_center, p, z_ref);
                 let (start, slope) = (base.origin.truncate(), base.dir.truncate());
-                for (d_start, d_slope) in &lenslet_shifts {
-                    let ray = Ray { origin: (start + *d_start).extend(z_ref), dir: (slope + *d_slope).extend(1.0) };
-                    sum += tracer.radiance(&ray);
+                for (k, (d_start, d_slope)) in lenslet_shifts.iter().enumerate() {
+                    let s = f * lenslet_shifts.len() + k;
+                    rays[s * nx + col] =
+                        Ray { origin: (start + *d_start).extend(z_ref), dir: (slope + *d_slope).extend(1.0) };
+                }
+            }
+        }
+        let mut samples = vec![Sample::default(); rays.len()];
+        tracer.sample_many(&rays, &mut samples);
+        for (col, (px, z)) in out.iter_mut().zip(zout.iter_mut()).enumerate() {
+            let mut sum = DVec3::ZERO;
+            let (mut zsum, mut hits) = (0.0, 0usize);
+            for s in 0..per_pixel {
+                let sample = &samples[s * nx + col];
+                sum += sample.radiance;
+                if sample.depth.is_finite() {
+                    zsum += sample.depth;
+                    hits += 1;
+                } else if sample.depth.is_nan() {
+                    depth_known.store(false, std::sync::atomic::Ordering::Relaxed);
                 }
             }
             let v = sum * inv_count;
             *px = [v.x as f32, v.y as f32, v.z as f32];
+            *z = if hits > 0 { (zsum / hits as f64) as f32 } else { f32::INFINITY };
         }
         progress.inc(1);
     });
-    Ok(image)
+    let depth = depth_known.into_inner().then_some(depth);
+    Ok((image, depth))
 }

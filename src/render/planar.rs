@@ -53,7 +53,7 @@ impl<'a> FacingPlanes<'a> {
                 Material::Chart { chart, bar, backing } => {
                     FlatMaterial::Chart { chart: chart.clone(), bar: *bar, backing: *backing }
                 }
-                Material::VertexColor => return None,
+                Material::VertexColor | Material::Texture(_) => return None,
             };
             rects.push((
                 k,

@@ -12,7 +12,7 @@
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 
-use super::display_image::RadianceField;
+use super::display_image::{RadianceField, Sample};
 use crate::accel::Ray;
 use crate::error::{Error, Result};
 use crate::optics::display::PixelIndexer;
@@ -220,15 +220,26 @@ pub fn ground_truth<R: RadianceField + ?Sized>(
     let pupil = eye.pupil_samples();
     let subpixels = retina.subpixel_offsets();
     let inv_count = 1.0 / (pupil.len() * subpixels.len()) as f64;
+    // Rays of one retina row go to the field together, laid out [sub-pixel][pupil][column] so
+    // that consecutive rays are neighbouring pixels through the same pupil point (coherent runs
+    // for packets); every pixel sums in the order sub-pixel sample, then pupil sample.
+    let per_pixel = subpixels.len() * pupil.len();
     let mut image = RgbImage::new(n, n);
     image.pixels.par_chunks_mut(n).enumerate().for_each(|(row, out)| {
+        let mut rays = Vec::with_capacity(per_pixel * n);
+        for frac in &subpixels {
+            for s in &pupil {
+                for col in 0..n {
+                    rays.push(eye_scene_ray(eye, retina.tangent(row, col, *frac), *s));
+                }
+            }
+        }
+        let mut samples = vec![Sample::default(); rays.len()];
+        tracer.sample_many(&rays, &mut samples);
         for (col, px) in out.iter_mut().enumerate() {
             let mut sum = DVec3::ZERO;
-            for frac in &subpixels {
-                let t = retina.tangent(row, col, *frac);
-                for s in &pupil {
-                    sum += tracer.radiance(&eye_scene_ray(eye, t, *s));
-                }
+            for k in 0..per_pixel {
+                sum += samples[k * n + col].radiance;
             }
             let v = sum * inv_count;
             *px = [v.x as f32, v.y as f32, v.z as f32];
