@@ -8,7 +8,7 @@ use std::borrow::Cow;
 use std::fmt;
 use std::str::FromStr;
 
-use super::display_image::{RadianceField, SceneTracer, WithDepth};
+use super::display_image::{RadianceField, SceneTracer};
 use super::planar::FacingPlanes;
 use crate::accel::analytic::AnalyticRects;
 use crate::accel::brute::BruteForce;
@@ -56,7 +56,7 @@ impl fmt::Display for BackendChoice {
 /// The fields a render uses: `shade` for radiance only (fastest), `with_depth` when hit
 /// distances are wanted too (the display EXR's `Z` channel). For mesh backends and the
 /// generic analytic path they are the same object; the fused planar kernel does not know
-/// depths and is paired with the analytic backend for them ([`WithDepth`]).
+/// depths, so display images come from the generic analytic tracer (same radiance).
 pub struct Fields<'a> {
     pub shade: &'a dyn RadianceField,
     pub with_depth: &'a dyn RadianceField,
@@ -105,15 +105,13 @@ pub fn with_fields<T>(scene: &Scene, choice: BackendChoice, f: impl FnOnce(Field
             }
             let backend = AnalyticRects::new(scene)?;
             let fused = if scene.light.is_none() { FacingPlanes::new(scene, &backend) } else { None };
+            let tracer = SceneTracer { scene, backend: &backend };
             match fused {
-                Some(fast) => {
-                    let depth = WithDepth { field: &fast, depth: &backend };
-                    f(Fields { shade: &fast, with_depth: &depth, name: "analytic (fused planar kernel)" })
-                }
-                None => {
-                    let tracer = SceneTracer { scene, backend: &backend };
-                    f(Fields { shade: &tracer, with_depth: &tracer, name: "analytic" })
-                }
+                // The fused kernel does not know depths; the generic analytic tracer does, and
+                // returns bit-identical radiance (tests/pipeline.rs checks), at one
+                // intersection per ray, so it renders the display images (with their Z).
+                Some(fast) => f(Fields { shade: &fast, with_depth: &tracer, name: "analytic (fused planar kernel)" }),
+                None => f(Fields { shade: &tracer, with_depth: &tracer, name: "analytic" }),
             }
         }
         BackendChoice::Brute => {

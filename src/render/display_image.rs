@@ -147,6 +147,13 @@ pub trait RadianceField: Sync {
         Sample { radiance: self.radiance(ray), depth: f64::NAN }
     }
 
+    /// Whether [`RadianceField::sample_many`] gains from long batches of neighbouring rays
+    /// (packets). Renderers then trace blocks of pixels at once; otherwise pixel by pixel,
+    /// which is cheaper for fields whose per-ray cost is tiny. Same results either way.
+    fn prefers_batches(&self) -> bool {
+        false
+    }
+
     /// [`RadianceField::sample`] of every ray (`out.len() == rays.len()`).
     fn sample_many(&self, rays: &[Ray], out: &mut [Sample]) {
         for (ray, o) in rays.iter().zip(out.iter_mut()) {
@@ -174,6 +181,10 @@ impl<I: Intersector + ?Sized> RadianceField for SceneTracer<'_, I> {
             radiance: self.scene.shade(ray, hit.as_ref(), self.backend),
             depth: hit_distance(ray, hit.map(|h| h.t)),
         }
+    }
+
+    fn prefers_batches(&self) -> bool {
+        self.backend.prefers_batches()
     }
 
     /// Intersects the whole batch with [`Intersector::intersect_many`] (packets on coherent
@@ -274,6 +285,10 @@ pub fn check_pupil_center(display: &Display, eye: DVec3) -> Result<()> {
     Ok(())
 }
 
+/// Pixels of one display row traced as one batch (for fields that prefer batches): enough for
+/// long coherent runs (packets of 16), small enough that a batch's rays stay in cache.
+const BLOCK: usize = 128;
+
 /// Renders the display image for `method`. Every pixel is finite; rays that hit nothing carry
 /// the scene's background.
 pub fn render_display_image<R: RadianceField + ?Sized>(
@@ -293,8 +308,8 @@ pub fn render_display_image<R: RadianceField + ?Sized>(
 /// mean over the hitting rays (misses do not count). `None` when the field does not know
 /// depths (see [`WithDepth`]).
 ///
-/// Rays are traced one display row at a time through [`RadianceField::sample_many`], ordered
-/// sub-sample by sub-sample with the row's pixels consecutive (coherent runs for packets);
+/// Rays are traced in blocks of a display row's pixels through [`RadianceField::sample_many`],
+/// ordered sub-sample by sub-sample with the block's pixels consecutive (coherent runs for packets);
 /// every pixel still sums its samples in the same order as a per-pixel loop would.
 pub fn render_display_image_with_depth<R: RadianceField + ?Sized>(
     display: &Display,
@@ -345,45 +360,55 @@ pub fn render_display_image_with_depth<R: RadianceField + ?Sized>(
     let mut image = RgbImage::new(nx, ny);
     let mut depth = vec![0f32; nx * ny];
     let depth_known = std::sync::atomic::AtomicBool::new(true);
+    let block = if tracer.prefers_batches() { BLOCK } else { 1 };
     image.pixels.par_chunks_mut(nx).zip(depth.par_chunks_mut(nx)).enumerate().for_each(|(row, (out, zout))| {
-        // rays[s * nx + col]: sample s of pixel col, s = (pixel sample, lenslet shift) in order.
-        let mut rays = vec![Ray { origin: DVec3::ZERO, dir: DVec3::Z }; per_pixel * nx];
-        for col in 0..nx {
-            let center = lcd.pixel_center(row, col);
-            let lenslet_center = display.lenslets.center(display.elemental_image_of(center));
-            for (f, frac) in pixel_samples.iter().enumerate() {
-                let x3 = lcd.pixel_point(row, col, *frac);
-                let p = match method {
-                    Method::PupilCenter => pupil_center_point(display, x3, lenslet_center, eye),
-                    _ => lenslet_center,
-                };
-                let base = camera_ray(display, x3, lenslet_center, p, z_ref);
-                let (start, slope) = (base.origin.truncate(), base.dir.truncate());
-                for (k, (d_start, d_slope)) in lenslet_shifts.iter().enumerate() {
-                    let s = f * lenslet_shifts.len() + k;
-                    rays[s * nx + col] =
-                        Ray { origin: (start + *d_start).extend(z_ref), dir: (slope + *d_slope).extend(1.0) };
+        let mut rays = Vec::with_capacity(per_pixel * block);
+        let mut samples = Vec::with_capacity(per_pixel * block);
+        for col0 in (0..nx).step_by(block) {
+            let cols = block.min(nx - col0);
+            // rays[s * cols + c]: sample s of pixel col0 + c, s = (pixel sample, lenslet shift).
+            rays.clear();
+            rays.resize(per_pixel * cols, Ray { origin: DVec3::ZERO, dir: DVec3::Z });
+            for c in 0..cols {
+                let col = col0 + c;
+                let center = lcd.pixel_center(row, col);
+                let lenslet_center = display.lenslets.center(display.elemental_image_of(center));
+                for (f, frac) in pixel_samples.iter().enumerate() {
+                    let x3 = lcd.pixel_point(row, col, *frac);
+                    let p = match method {
+                        Method::PupilCenter => pupil_center_point(display, x3, lenslet_center, eye),
+                        _ => lenslet_center,
+                    };
+                    let base = camera_ray(display, x3, lenslet_center, p, z_ref);
+                    let (start, slope) = (base.origin.truncate(), base.dir.truncate());
+                    for (k, (d_start, d_slope)) in lenslet_shifts.iter().enumerate() {
+                        let s = f * lenslet_shifts.len() + k;
+                        rays[s * cols + c] =
+                            Ray { origin: (start + *d_start).extend(z_ref), dir: (slope + *d_slope).extend(1.0) };
+                    }
                 }
             }
-        }
-        let mut samples = vec![Sample::default(); rays.len()];
-        tracer.sample_many(&rays, &mut samples);
-        for (col, (px, z)) in out.iter_mut().zip(zout.iter_mut()).enumerate() {
-            let mut sum = DVec3::ZERO;
-            let (mut zsum, mut hits) = (0.0, 0usize);
-            for s in 0..per_pixel {
-                let sample = &samples[s * nx + col];
-                sum += sample.radiance;
-                if sample.depth.is_finite() {
-                    zsum += sample.depth;
-                    hits += 1;
-                } else if sample.depth.is_nan() {
-                    depth_known.store(false, std::sync::atomic::Ordering::Relaxed);
+            samples.clear();
+            samples.resize(rays.len(), Sample::default());
+            tracer.sample_many(&rays, &mut samples);
+            let block = out[col0..col0 + cols].iter_mut().zip(zout[col0..col0 + cols].iter_mut());
+            for (c, (px, z)) in block.enumerate() {
+                let mut sum = DVec3::ZERO;
+                let (mut zsum, mut hits) = (0.0, 0usize);
+                for s in 0..per_pixel {
+                    let sample = &samples[s * cols + c];
+                    sum += sample.radiance;
+                    if sample.depth.is_finite() {
+                        zsum += sample.depth;
+                        hits += 1;
+                    } else if sample.depth.is_nan() {
+                        depth_known.store(false, std::sync::atomic::Ordering::Relaxed);
+                    }
                 }
+                let v = sum * inv_count;
+                *px = [v.x as f32, v.y as f32, v.z as f32];
+                *z = if hits > 0 { (zsum / hits as f64) as f32 } else { f32::INFINITY };
             }
-            let v = sum * inv_count;
-            *px = [v.x as f32, v.y as f32, v.z as f32];
-            *z = if hits > 0 { (zsum / hits as f64) as f32 } else { f32::INFINITY };
         }
         progress.inc(1);
     });

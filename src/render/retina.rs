@@ -220,29 +220,36 @@ pub fn ground_truth<R: RadianceField + ?Sized>(
     let pupil = eye.pupil_samples();
     let subpixels = retina.subpixel_offsets();
     let inv_count = 1.0 / (pupil.len() * subpixels.len()) as f64;
-    // Rays of one retina row go to the field together, laid out [sub-pixel][pupil][column] so
+    // Rays of a block of one retina row go to the field together, laid out [sub-pixel][pupil][column] so
     // that consecutive rays are neighbouring pixels through the same pupil point (coherent runs
     // for packets); every pixel sums in the order sub-pixel sample, then pupil sample.
     let per_pixel = subpixels.len() * pupil.len();
     let mut image = RgbImage::new(n, n);
+    let block = if tracer.prefers_batches() { 128 } else { 1 };
     image.pixels.par_chunks_mut(n).enumerate().for_each(|(row, out)| {
-        let mut rays = Vec::with_capacity(per_pixel * n);
-        for frac in &subpixels {
-            for s in &pupil {
-                for col in 0..n {
-                    rays.push(eye_scene_ray(eye, retina.tangent(row, col, *frac), *s));
+        let mut rays = Vec::with_capacity(per_pixel * block);
+        let mut samples = Vec::with_capacity(per_pixel * block);
+        for col0 in (0..n).step_by(block) {
+            let cols = block.min(n - col0);
+            rays.clear();
+            for frac in &subpixels {
+                for s in &pupil {
+                    for col in col0..col0 + cols {
+                        rays.push(eye_scene_ray(eye, retina.tangent(row, col, *frac), *s));
+                    }
                 }
             }
-        }
-        let mut samples = vec![Sample::default(); rays.len()];
-        tracer.sample_many(&rays, &mut samples);
-        for (col, px) in out.iter_mut().enumerate() {
-            let mut sum = DVec3::ZERO;
-            for k in 0..per_pixel {
-                sum += samples[k * n + col].radiance;
+            samples.clear();
+            samples.resize(rays.len(), Sample::default());
+            tracer.sample_many(&rays, &mut samples);
+            for (c, px) in out[col0..col0 + cols].iter_mut().enumerate() {
+                let mut sum = DVec3::ZERO;
+                for k in 0..per_pixel {
+                    sum += samples[k * cols + c].radiance;
+                }
+                let v = sum * inv_count;
+                *px = [v.x as f32, v.y as f32, v.z as f32];
             }
-            let v = sum * inv_count;
-            *px = [v.x as f32, v.y as f32, v.z as f32];
         }
         progress.inc(1);
     });
