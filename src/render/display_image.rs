@@ -190,13 +190,18 @@ impl<I: Intersector + ?Sized> RadianceField for SceneTracer<'_, I> {
     /// Intersects the whole batch with [`Intersector::intersect_many`] (packets on coherent
     /// runs for backends that have them), then shades.
     fn sample_many(&self, rays: &[Ray], out: &mut [Sample]) {
-        let mut hits = vec![None; rays.len()];
-        self.backend.intersect_many(rays, &mut hits);
-        for ((ray, hit), o) in rays.iter().zip(&hits).zip(out.iter_mut()) {
-            *o = Sample {
-                radiance: self.scene.shade(ray, hit.as_ref(), self.backend),
-                depth: hit_distance(ray, hit.map(|h| h.t)),
-            };
+        // Chunks of 256 (a multiple of the 16-ray packet) with the hits on the stack.
+        const CHUNK: usize = 256;
+        let mut hits = [None; CHUNK];
+        for (rays, out) in rays.chunks(CHUNK).zip(out.chunks_mut(CHUNK)) {
+            let hits = &mut hits[..rays.len()];
+            self.backend.intersect_many(rays, hits);
+            for ((ray, hit), o) in rays.iter().zip(hits.iter()).zip(out.iter_mut()) {
+                *o = Sample {
+                    radiance: self.scene.shade(ray, hit.as_ref(), self.backend),
+                    depth: hit_distance(ray, hit.map(|h| h.t)),
+                };
+            }
         }
     }
 }

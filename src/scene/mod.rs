@@ -207,7 +207,7 @@ impl Scene {
         let n = self.normal(ray, hit);
         let to_light = -light.direction;
         let cos = n.dot(to_light);
-        if !(cos > 0.0) {
+        if cos.is_nan() || cos <= 0.0 {
             return DVec3::ZERO;
         }
         let p = ray.origin + hit.t * ray.dir;
