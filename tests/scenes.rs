@@ -466,3 +466,45 @@ fn brute_force_backend_refuses_big_scenes() {
     assert!(e.contains("brute") && e.contains("96000"), "{e}");
     let _ = BruteForce::new(&[]).unwrap();
 }
+
+#[test]
+fn display_exr_gets_a_z_channel_with_inf_for_misses() {
+    // A small square: most LCD rays miss it (Z = +inf), the ones that hit see z = 300.
+    let dir = tempfile::tempdir().unwrap();
+    let scene = load(
+        "name = \"sq\"\n[[objects]]\ntype = \"rect\"\ncenter = [0, 0, 300]\nsize = [40, 40]\nmaterial = { albedo = [1, 1, 1] }\n",
+        dir.path(),
+    )
+    .unwrap();
+    let display = small_display(216);
+    for choice in [BackendChoice::Analytic, BackendChoice::Embree] {
+        let (img, z) = with_fields(&scene, choice, |f| {
+            render_display_image_with_depth(
+                &display,
+                Method::LensletAverage { grid: 2 },
+                &DisplayRenderSettings::default(),
+                f.with_depth,
+                &Progress::hidden(),
+            )
+        })
+        .unwrap();
+        let z = z.unwrap();
+        let path = dir.path().join(format!("{choice}.exr"));
+        inimtrace::io::exr::write_rgb(&path, &img, Some(&z), &[]).unwrap();
+        let (back, zb) = inimtrace::io::exr::read_rgb_depth(&path).unwrap();
+        assert!(back == img);
+        let zb = zb.unwrap();
+        assert_eq!(zb, z);
+        let (mut hit, mut miss) = (0, 0);
+        for (p, d) in img.pixels.iter().zip(&zb) {
+            if p[0] == 0.0 {
+                assert_eq!(*d, f32::INFINITY, "{choice}: a pixel whose rays all miss has Z = +inf");
+                miss += 1;
+            } else {
+                assert!(*d >= 300.0 && *d < 330.0, "{choice}: {d}");
+                hit += 1;
+            }
+        }
+        assert!(hit > 100 && miss > 100, "{hit} {miss}");
+    }
+}
