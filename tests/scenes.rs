@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use glam::{DVec2, DVec3};
+use glam::DVec3;
 use inimtrace::accel::analytic::AnalyticRects;
 use inimtrace::accel::brute::BruteForce;
 use inimtrace::accel::{Intersector, Ray};
@@ -55,9 +55,11 @@ fn render_all(scene: &Scene, choice: BackendChoice) -> Rendered {
     let display = small_display(540);
     let settings = DisplayRenderSettings::default();
     let methods = [Method::LensletCenter, Method::PupilCenter, Method::LensletAverage { grid: 3 }];
-    let eyes = [Eye::pinhole(), Eye::thin_lens(5.0, Focus::Millimetres(300.0), 4), {
-        Eye::thin_lens(5.0, Focus::Millimetres(600.0), 4)
-    }];
+    let eyes = [
+        Eye::pinhole(),
+        Eye::thin_lens(5.0, Focus::Millimetres(300.0), 4),
+        Eye::thin_lens(5.0, Focus::Millimetres(600.0), 4),
+    ];
     let retina = Retina { resolution: 128, ..Retina::default() };
     with_fields(scene, choice, |fields| {
         let mut displays = Vec::new();
@@ -383,7 +385,6 @@ fn textures_are_looked_up_through_uvs() {
         Ok(())
     })
     .unwrap();
-    let _ = DVec2::ZERO;
 }
 
 #[test]

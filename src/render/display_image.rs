@@ -206,29 +206,6 @@ impl<I: Intersector + ?Sized> RadianceField for SceneTracer<'_, I> {
     }
 }
 
-/// A radiance field that does not know depths (a fused kernel) paired with a backend that
-/// does: radiance from `field`, depth from `depth`'s nearest hit. Costs one extra intersection
-/// per ray; used to write the display EXR's `Z` channel on the fused analytic path.
-pub struct WithDepth<'a, F: RadianceField + ?Sized, I: Intersector + ?Sized> {
-    pub field: &'a F,
-    pub depth: &'a I,
-}
-
-impl<F: RadianceField + ?Sized, I: Intersector + ?Sized> RadianceField for WithDepth<'_, F, I> {
-    #[inline]
-    fn radiance(&self, ray: &Ray) -> DVec3 {
-        self.field.radiance(ray)
-    }
-
-    #[inline]
-    fn sample(&self, ray: &Ray) -> Sample {
-        Sample {
-            radiance: self.field.radiance(ray),
-            depth: hit_distance(ray, self.depth.intersect(ray, f64::INFINITY).map(|h| h.t)),
-        }
-    }
-}
-
 /// The eye-side camera ray for light leaving LCD point `lcd_point` through lenslet-plane point
 /// `lenslet_point`, refracted by the lenslet centred at `lenslet_center`; it starts on the plane
 /// `z = reference_z` and has unit z component.
@@ -311,7 +288,7 @@ pub fn render_display_image<R: RadianceField + ?Sized>(
 /// pixel's rays that hit something, `+inf` when none did. For LC and PC with one sample per
 /// pixel that is the distance of the pixel's one ray; for LA and multi-sample pixels it is the
 /// mean over the hitting rays (misses do not count). `None` when the field does not know
-/// depths (see [`WithDepth`]).
+/// depths (fields that only implement `radiance`, such as the fused planar kernel).
 ///
 /// Rays are traced in blocks of a display row's pixels through [`RadianceField::sample_many`],
 /// ordered sub-sample by sub-sample with the block's pixels consecutive (coherent runs for packets);

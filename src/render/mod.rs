@@ -8,7 +8,7 @@ pub mod retina;
 pub use backend::{with_fields, BackendChoice, Fields};
 pub use display_image::{
     render_display_image, render_display_image_with_depth, DisplayRenderSettings, Method, RadianceField, Sample,
-    SceneTracer, WithDepth,
+    SceneTracer,
 };
 pub use planar::FacingPlanes;
 pub use retina::{ground_truth, simulate};
