@@ -509,3 +509,34 @@ fn display_exr_gets_a_z_channel_with_inf_for_misses() {
         assert!(hit > 100 && miss > 100, "{hit} {miss}");
     }
 }
+
+#[test]
+fn cli_reports_backend_and_degenerate_triangles() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("d.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nf 1 2 3\nf 1 2 4\n").unwrap();
+    std::fs::write(
+        dir.path().join("d.toml"),
+        "name = \"d\"\n[[objects]]\ntype = \"mesh\"\nfile = \"d.obj\"\ntransform = { scale = [100, 100, 100], translation = [0, 0, 300] }\nmaterial = { albedo = [1, 1, 1] }\n",
+    )
+    .unwrap();
+    let run = |backend: &str| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_inimtrace"))
+            .args(["ground-truth", "--pinhole", "--retina", "16", "--backend", backend, "--scene"])
+            .arg(dir.path().join("d.toml"))
+            .arg("-o")
+            .arg(dir.path().join(format!("gt_{backend}.exr")))
+            .output()
+            .unwrap()
+    };
+    let ok = run("auto");
+    let err = String::from_utf8_lossy(&ok.stderr);
+    assert!(ok.status.success(), "{err}");
+    assert!(err.contains("warning:") && err.contains("dropped 1 degenerate"), "{err}");
+    assert!(err.contains("backend: embree (picked by auto"), "{err}");
+    let attrs = inimtrace::io::exr::read_attributes(&dir.path().join("gt_auto.exr")).unwrap();
+    assert!(attrs.iter().any(|(k, v)| k == "inimtrace:backend" && v == "embree"), "{attrs:?}");
+    let bad = run("analytic");
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("analytic backend cannot intersect"));
+    assert!(!run("warp").status.success());
+}
