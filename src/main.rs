@@ -7,7 +7,6 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand};
 use glam::DVec3;
 
-use inimtrace::accel::analytic::AnalyticRects;
 use inimtrace::experiment::{self, Experiment, ExperimentSpec, RunOptions};
 use inimtrace::io::config;
 use inimtrace::metrics::{self, SsimConstants};
@@ -15,7 +14,7 @@ use inimtrace::optics::{Aperture, Display, Eye, Focus, Retina};
 use inimtrace::progress::Progress;
 use inimtrace::render::retina::simulate;
 use inimtrace::render::{
-    ground_truth, render_display_image, DisplayRenderSettings, FacingPlanes, Method, RadianceField, SceneTracer,
+    ground_truth, render_display_image_with_depth, with_fields, BackendChoice, DisplayRenderSettings, Fields, Method,
 };
 use inimtrace::scene::Scene;
 
@@ -48,6 +47,11 @@ enum Command {
         /// Output directory (default: out/<experiment name>).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Scene TOML replacing the experiment's scene.
+        #[arg(long)]
+        scene: Option<PathBuf>,
+        #[command(flatten)]
+        backend: BackendArg,
     },
     /// Render one display image.
     RenderDisplay {
@@ -62,9 +66,11 @@ enum Command {
         /// z of the reference plane camera rays start on (mm).
         #[arg(long, default_value_t = 0.0)]
         reference_plane: f64,
-        /// Output EXR (a PNG preview is written beside it).
+        /// Output EXR with R, G, B and Z (hit distance, mm) channels; a PNG preview is written beside it.
         #[arg(long, short)]
         out: PathBuf,
+        #[command(flatten)]
+        backend: BackendArg,
     },
     /// Simulate the perceived retinal image of a display image (any EXR of the LCD's resolution).
     Simulate {
@@ -85,6 +91,8 @@ enum Command {
         eye: EyeArgs,
         #[arg(long, short)]
         out: PathBuf,
+        #[command(flatten)]
+        backend: BackendArg,
     },
     /// PSNR and SSIM of two RGB EXR images of the same size.
     Compare {
@@ -114,6 +122,38 @@ enum Command {
         #[arg(long)]
         print: Option<String>,
     },
+}
+
+/// Scene intersection backend.
+#[derive(Args)]
+struct BackendArg {
+    /// auto (analytic for rectangle-only scenes, else embree), analytic, embree, or brute
+    /// (brute force, small scenes only).
+    #[arg(long = "backend", default_value = "auto")]
+    backend: String,
+}
+
+impl BackendArg {
+    fn choice(&self) -> Result<BackendChoice> {
+        self.backend.parse().map_err(anyhow::Error::msg)
+    }
+}
+
+/// Prints what loading the scene noticed (always) and which backend runs (unless quiet).
+fn announce(scene: &Scene, backend: BackendChoice, quiet: bool) {
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
+    if !quiet {
+        let picked = inimtrace::render::backend::resolve(scene, backend);
+        let how = if backend == BackendChoice::Auto { "picked by auto" } else { "as asked" };
+        eprintln!(
+            "backend: {picked} ({how}; scene `{}`: {} object(s), {} triangle(s) when tessellated)",
+            scene.name,
+            scene.objects.len(),
+            scene.triangle_count()
+        );
+    }
 }
 
 /// Scene and display.
@@ -185,20 +225,26 @@ fn load_setup(setup: &Setup) -> Result<(Scene, Display)> {
     Ok((scene, display))
 }
 
-/// Runs `f` with the fastest radiance field for the scene.
-fn with_field<T>(scene: &Scene, f: impl FnOnce(&dyn RadianceField) -> Result<T>) -> Result<T> {
-    let backend = AnalyticRects::new(scene)?;
-    match FacingPlanes::new(scene, &backend) {
-        Some(fast) => f(&fast),
-        None => f(&SceneTracer { scene, backend: &backend }),
-    }
+/// Runs `f` with the radiance fields of the chosen backend.
+fn with_field<T>(scene: &Scene, backend: BackendChoice, f: impl FnOnce(Fields<'_>) -> Result<T>) -> Result<T> {
+    let mut out = None;
+    with_fields(scene, backend, |fields| {
+        out = Some(f(fields));
+        Ok(())
+    })?;
+    out.expect("with_fields ran the closure")
 }
 
-fn write_image(path: &Path, img: &inimtrace::raster::RgbImage, attrs: &[(&str, String)]) -> Result<()> {
+fn write_image(
+    path: &Path,
+    img: &inimtrace::raster::RgbImage,
+    depth: Option<&[f32]>,
+    attrs: &[(&str, String)],
+) -> Result<()> {
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     }
-    inimtrace::io::exr::write_rgb(path, img, None, attrs)?;
+    inimtrace::io::exr::write_rgb(path, img, depth, attrs)?;
     inimtrace::io::png::write_preview(&path.with_extension("png"), img)?;
     Ok(())
 }
@@ -221,16 +267,22 @@ fn run() -> Result<()> {
     let quiet = cli.quiet;
     let start = Instant::now();
     match cli.command {
-        Command::Assess { experiment, out } => {
-            let exp = match &experiment {
+        Command::Assess { experiment, out, scene, backend } => {
+            let backend = backend.choice()?;
+            let mut exp = match &experiment {
                 Some(p) => Experiment::load(p)?,
                 None => Experiment::paper(),
             };
+            if let Some(p) = &scene {
+                exp.scene = config::load_scene(&p.to_string_lossy(), Path::new(""))?;
+                exp.spec.scene = p.display().to_string();
+            }
+            announce(&exp.scene, backend, quiet);
             let out = out.unwrap_or_else(|| PathBuf::from("out").join(&exp.name));
             if !quiet {
                 eprintln!("{}", exp.display.summary());
             }
-            let report = experiment::assess(&exp, &out, RunOptions { quiet })?;
+            let report = experiment::assess(&exp, &out, RunOptions { quiet, backend })?;
             print!("{}", experiment::table_markdown(&report, &exp));
             if cli.timings {
                 for s in &report.stages {
@@ -250,28 +302,33 @@ fn run() -> Result<()> {
                 eprintln!("wrote {}", out.display());
             }
         }
-        Command::RenderDisplay { method, setup, samples_per_pixel, reference_plane, out } => {
+        Command::RenderDisplay { method, setup, samples_per_pixel, reference_plane, out, backend } => {
+            let backend = backend.choice()?;
             let (scene, display) = load_setup(&setup)?;
+            announce(&scene, backend, quiet);
             let method: Method = method.parse().map_err(anyhow::Error::msg)?;
             let settings = DisplayRenderSettings {
                 samples_per_pixel,
                 reference_plane_z: reference_plane,
                 eye_position: DVec3::ZERO,
             };
-            let img = with_field(&scene, |field| {
+            let (img, depth, name) = with_field(&scene, backend, |fields| {
                 let p =
                     Progress::new(display.lcd.rows() as u64, &format!("display image {}", method.short_name()), quiet);
-                let img = render_display_image(&display, method, &settings, field, &p)?;
+                let (img, depth) = render_display_image_with_depth(&display, method, &settings, fields.with_depth, &p)?;
                 p.finish();
-                Ok(img)
+                Ok((img, depth, fields.name))
             })?;
             write_image(
                 &out,
                 &img,
+                depth.as_deref(),
                 &[
                     ("inimtrace:kind", "display image".into()),
                     ("inimtrace:method", method.to_string()),
                     ("inimtrace:display", display.summary()),
+                    ("inimtrace:backend", name.into()),
+                    ("inimtrace:Z", experiment::Z_CHANNEL_NOTE.into()),
                 ],
             )?;
         }
@@ -286,22 +343,30 @@ fn run() -> Result<()> {
             write_image(
                 &out,
                 &sim[0],
+                None,
                 &[
                     ("inimtrace:kind", "simulated retinal image".into()),
                     ("inimtrace:source", display_image.display().to_string()),
                 ],
             )?;
         }
-        Command::GroundTruth { setup, eye, out } => {
+        Command::GroundTruth { setup, eye, out, backend } => {
+            let backend = backend.choice()?;
             let (scene, _) = load_setup(&setup)?;
             let (eye, retina) = eye.eye()?;
-            let img = with_field(&scene, |field| {
+            announce(&scene, backend, quiet);
+            let (img, name) = with_field(&scene, backend, |fields| {
                 let p = Progress::new(retina.resolution as u64, "ground truth", quiet);
-                let img = ground_truth(&eye, &retina, field, &p);
+                let img = ground_truth(&eye, &retina, fields.shade, &p);
                 p.finish();
-                Ok(img)
+                Ok((img, fields.name))
             })?;
-            write_image(&out, &img, &[("inimtrace:kind", "ground truth retinal image".into())])?;
+            write_image(
+                &out,
+                &img,
+                None,
+                &[("inimtrace:kind", "ground truth retinal image".into()), ("inimtrace:backend", name.into())],
+            )?;
         }
         Command::Compare { a, b, ssim } => {
             let constants: SsimConstants = ssim.parse()?;

@@ -236,6 +236,8 @@ fn hexagonal_tilted_partial_and_off_axis() {
             material: Material::Albedo(DVec3::ONE),
         }],
         background: DVec3::ZERO,
+        light: None,
+        warnings: Vec::new(),
     };
     let mut partial = small(540);
     // EIs only cover the central half of the LCD: pixels outside still belong to the nearest EI
@@ -290,6 +292,8 @@ fn far_planes_and_infinite_focus() {
                 material: Material::Albedo(DVec3::ONE),
             }],
             background: DVec3::ZERO,
+            light: None,
+            warnings: Vec::new(),
         };
         let backend = AnalyticRects::new(&scene).unwrap();
         let fused = FacingPlanes::new(&scene, &backend).unwrap();

@@ -145,6 +145,8 @@ fn white_scene() -> Scene {
             material: Material::Albedo(DVec3::ONE),
         }],
         background: DVec3::ZERO,
+        light: None,
+        warnings: Vec::new(),
     }
 }
 
@@ -378,6 +380,8 @@ fn the_reference_plane_moves_ray_starts_along_the_same_lines() {
             },
         ],
         background: DVec3::ZERO,
+        light: None,
+        warnings: Vec::new(),
     };
     let backend = AnalyticRects::new(&scene).unwrap();
     let field = SceneTracer { scene: &scene, backend: &backend };

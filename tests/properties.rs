@@ -87,6 +87,8 @@ proptest! {
             name: "uniform".into(),
             objects: vec![Object { name: "wall".into(), shape: Shape::Rect(Rect::facing_eye(DVec3::new(0.0, 0.0, 700.0), 1e6, 1e6)), material: Material::Albedo(DVec3::splat(grey)) }],
             background: DVec3::splat(grey),
+            light: None,
+            warnings: Vec::new(),
         };
         let backend = AnalyticRects::new(&scene).unwrap();
         let field = SceneTracer { scene: &scene, backend: &backend };

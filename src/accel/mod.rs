@@ -54,6 +54,12 @@ pub trait Intersector: Send + Sync {
         }
     }
 
+    /// Whether [`Intersector::intersect_many`] is faster on long runs of neighbouring rays than
+    /// one ray at a time (packets or streams). Renderers batch rays only for such backends.
+    fn prefers_batches(&self) -> bool {
+        false
+    }
+
     /// True when anything blocks the ray with `0 < t < t_max` (shadow rays).
     fn occluded(&self, ray: &Ray, t_max: f64) -> bool {
         self.intersect(ray, t_max).is_some()

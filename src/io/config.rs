@@ -12,8 +12,10 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::optics::{Display, Lattice, Lcd};
+use crate::scene::image_texture::{Filter, ImageTexture, Wrap};
+use crate::scene::mesh_io::{self, Transform};
 use crate::scene::usaf::{self, ChartScale};
-use crate::scene::{Material, Object, Rect, Scene, Shape};
+use crate::scene::{procedural, Light, Material, Object, Rect, Scene, Shape};
 
 /// Reads a whole file, with the path in the error.
 pub fn read_text(path: &Path) -> Result<String> {
@@ -355,16 +357,39 @@ pub struct MaterialSpec {
     pub bar_albedo: Option<[f64; 3]>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub backing_albedo: Option<[f64; 3]>,
+    /// Meshes: interpolate the file's per-vertex colours (`vertex_color = true`; the file must
+    /// have colours).
+    #[serde(default, alias = "vertex-color", skip_serializing_if = "Option::is_none")]
+    pub vertex_color: Option<bool>,
+    /// Meshes: a PNG texture looked up by the file's uvs (relative to the scene file), or
+    /// `"mtl"` for the OBJ material's `map_Kd`. See [`crate::scene::image_texture`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub texture: Option<PathBuf>,
+    /// Texture filter: "bilinear" (default) or "nearest".
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub filter: Option<Filter>,
+    /// UVs outside [0, 1]: "repeat" (default) or "clamp".
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wrap: Option<Wrap>,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(rename_all = "kebab-case")]
 pub enum ShapeKind {
     Rect,
+    Mesh,
+    SphereGrid,
 }
 
-/// One scene object. A `rect` facing the eye is given by `center` and `size` (width along x,
-/// height along y); any other orientation by `center`, `half_u` and `half_v`.
+/// One scene object.
+/// - `type = "rect"`: facing the eye, given by `center` and `size` (width along x, height
+///   along y); any other orientation by `center`, `half_u` and `half_v`.
+/// - `type = "mesh"`: a triangle mesh from `file` (OBJ or PLY, relative to the scene file),
+///   placed by `transform = { scale, rotation_deg, translation }` (see
+///   [`crate::scene::mesh_io::Transform`]).
+/// - `type = "sphere-grid"`: `count = [nx, ny]` UV spheres of `radius` with `segments`
+///   longitudes, `spacing` mm apart in the plane `z = center.z`, centred on `center`
+///   ([`crate::scene::procedural::sphere_grid`]).
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct ObjectSpec {
@@ -372,7 +397,20 @@ pub struct ObjectSpec {
     pub name: Option<String>,
     #[serde(rename = "type")]
     pub kind: ShapeKind,
-    pub center: [f64; 3],
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub center: Option<[f64; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub file: Option<PathBuf>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub transform: Option<Transform>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub count: Option<[usize; 2]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub spacing: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radius: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub segments: Option<usize>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub size: Option<[f64; 2]>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -389,8 +427,28 @@ pub struct SceneSpec {
     /// Radiance of rays that hit nothing (default black).
     #[serde(default)]
     pub background: [f64; 3],
+    /// Optional distant light (`[light] type = "distant"`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub light: Option<LightSpec>,
     #[serde(rename = "objects")]
     pub objects: Vec<ObjectSpec>,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(rename_all = "kebab-case")]
+pub enum LightKind {
+    Distant,
+}
+
+/// `[light]`: a distant light travelling along `direction` (normalised on load) with linear
+/// RGB `radiance`.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct LightSpec {
+    #[serde(rename = "type")]
+    pub kind: LightKind,
+    pub direction: [f64; 3],
+    pub radiance: [f64; 3],
 }
 
 fn finite3(src: &str, field: &str, v: [f64; 3]) -> Result<DVec3> {
@@ -415,43 +473,169 @@ impl SceneSpec {
         let background = albedo3(src, "background", self.background)?;
         let mut objects = Vec::with_capacity(self.objects.len());
         let mut framework_chart = None;
+        let mut warnings = Vec::new();
         for (i, o) in self.objects.iter().enumerate() {
             let f = |name: &str| format!("objects[{i}].{name}");
-            let center = finite3(src, &f("center"), o.center)?;
-            let rect = match (o.size, o.half_u, o.half_v) {
-                (Some([w, h]), None, None) => {
-                    if !(w.is_finite() && h.is_finite() && w > 0.0 && h > 0.0) {
-                        return Err(Error::invalid(
-                            src,
-                            f("size"),
-                            format!("width and height must be positive and finite, got [{w}, {h}]"),
-                        ));
-                    }
-                    Rect::facing_eye(center, w, h)
-                }
-                (None, Some(u), Some(v)) => {
-                    let (hu, hv) = (finite3(src, &f("half_u"), u)?, finite3(src, &f("half_v"), v)?);
-                    if hu.cross(hv).length() == 0.0 {
-                        return Err(Error::invalid(
-                            src,
-                            f("half_u"),
-                            "half_u and half_v must be non-zero and not parallel",
-                        ));
-                    }
-                    Rect { center, half_u: hu, half_v: hv }
-                }
-                _ => {
-                    return Err(Error::invalid(
+            let only = |allowed: &[&str]| -> Result<()> {
+                let given = [
+                    ("center", o.center.is_some()),
+                    ("size", o.size.is_some()),
+                    ("half_u", o.half_u.is_some()),
+                    ("half_v", o.half_v.is_some()),
+                    ("file", o.file.is_some()),
+                    ("transform", o.transform.is_some()),
+                    ("count", o.count.is_some()),
+                    ("spacing", o.spacing.is_some()),
+                    ("radius", o.radius.is_some()),
+                    ("segments", o.segments.is_some()),
+                ];
+                match given.iter().find(|(name, set)| *set && !allowed.contains(name)) {
+                    Some((name, _)) => Err(Error::invalid(
                         src,
-                        f("size"),
-                        "give either `size = [width, height]` (facing the eye) or both `half_u` and `half_v`",
-                    ))
+                        f(name),
+                        format!("not a field of a `{:?}` object (allowed: {})", o.kind, allowed.join(", "))
+                            .to_lowercase(),
+                    )),
+                    None => Ok(()),
                 }
             };
+            let mut mesh_texture = None;
+            let shape = match o.kind {
+                ShapeKind::Rect => {
+                    only(&["center", "size", "half_u", "half_v"])?;
+                    let center = finite3(
+                        src,
+                        &f("center"),
+                        o.center.ok_or_else(|| Error::invalid(src, f("center"), "missing (a rect needs `center`)"))?,
+                    )?;
+                    Shape::Rect(self.rect(src, i, center, o)?)
+                }
+                ShapeKind::Mesh => {
+                    only(&["file", "transform"])?;
+                    let file = o.file.as_ref().ok_or_else(|| {
+                        Error::invalid(src, f("file"), "missing (a mesh needs `file = \"path.obj\"` or .ply)")
+                    })?;
+                    let transform = o.transform.unwrap_or_default();
+                    transform.validate(src).map_err(|e| match e {
+                        Error::Invalid { source_name, field, message } => {
+                            Error::invalid(source_name, f(&format!("transform.{field}")), message)
+                        }
+                        other => other,
+                    })?;
+                    let path = base.join(file);
+                    // Name the scene file and field as well as the mesh file and its line/element.
+                    let loaded =
+                        mesh_io::load_mesh(&path).map_err(|e| Error::invalid(src, f("file"), e.to_string()))?;
+                    if loaded.dropped_degenerate > 0 {
+                        warnings.push(format!(
+                            "{}: dropped {} degenerate (zero-area) triangle(s) of {} (objects[{i}])",
+                            src,
+                            loaded.dropped_degenerate,
+                            path.display()
+                        ));
+                    }
+                    mesh_texture = loaded.texture;
+                    let mut mesh = loaded.mesh;
+                    transform.apply(&mut mesh);
+                    // A transform can push finite vertices past f64 range, or flatten triangles.
+                    mesh.validate(&format!("{} (objects[{i}], {} after transform)", src, path.display()))?;
+                    let flattened = mesh.remove_degenerate();
+                    if mesh.triangles.is_empty() {
+                        return Err(Error::invalid(src, f("transform"), "leaves no triangle with non-zero area"));
+                    }
+                    if flattened > 0 {
+                        warnings.push(format!(
+                            "{src}: the transform of objects[{i}] made {flattened} triangle(s) of {} degenerate; dropped",
+                            path.display()
+                        ));
+                    }
+                    Shape::Mesh(Arc::new(mesh))
+                }
+                ShapeKind::SphereGrid => {
+                    only(&["center", "count", "spacing", "radius", "segments"])?;
+                    let center = finite3(
+                        src,
+                        &f("center"),
+                        o.center.ok_or_else(|| Error::invalid(src, f("center"), "missing"))?,
+                    )?;
+                    let count = o.count.ok_or_else(|| Error::invalid(src, f("count"), "missing ([nx, ny])"))?;
+                    if count[0] == 0 || count[1] == 0 || count[0] * count[1] > 1_000_000 {
+                        return Err(Error::invalid(src, f("count"), format!("need 1..=1e6 spheres, got {count:?}")));
+                    }
+                    let positive = |name: &str, v: Option<f64>| -> Result<f64> {
+                        match v {
+                            Some(x) if x.is_finite() && x > 0.0 => Ok(x),
+                            Some(x) => {
+                                Err(Error::invalid(src, f(name), format!("must be positive and finite, got {x}")))
+                            }
+                            None => Err(Error::invalid(src, f(name), "missing")),
+                        }
+                    };
+                    let radius = positive("radius", o.radius)?;
+                    let spacing = positive("spacing", o.spacing)?;
+                    let segments = o.segments.unwrap_or(32);
+                    if !(4..=4096).contains(&segments) {
+                        return Err(Error::invalid(src, f("segments"), format!("must be 4..=4096, got {segments}")));
+                    }
+                    let tris = count[0] * count[1] * 2 * segments * (segments / 2 - 1);
+                    if tris > 100_000_000 {
+                        return Err(Error::invalid(src, f("count"), format!("{tris} triangles is over 1e8")));
+                    }
+                    Shape::Mesh(Arc::new(procedural::sphere_grid(center, count, spacing, radius, segments)))
+                }
+            };
+            let rect = match &shape {
+                Shape::Rect(r) => Some(*r),
+                Shape::Mesh(_) => None,
+            };
             let m = &o.material;
-            let material = match (&m.albedo, &m.chart) {
-                (Some(a), None) => Material::Albedo(albedo3(src, &f("material.albedo"), *a)?),
-                (None, Some(kind)) => {
+            let texture_fields = m.texture.is_some() || m.filter.is_some() || m.wrap.is_some();
+            let vertex_color = m.vertex_color.unwrap_or(false);
+            let material = match (&m.albedo, &m.chart, vertex_color, texture_fields) {
+                (Some(a), None, false, false) => Material::Albedo(albedo3(src, &f("material.albedo"), *a)?),
+                (None, None, true, false) => match &shape {
+                    Shape::Mesh(mesh) if mesh.colors.is_some() => Material::VertexColor,
+                    Shape::Mesh(_) => {
+                        return Err(Error::invalid(
+                            src,
+                            f("material.vertex_color"),
+                            "the mesh has no per-vertex colours (give `albedo` instead)",
+                        ))
+                    }
+                    Shape::Rect(_) => {
+                        return Err(Error::invalid(src, f("material.vertex_color"), "only meshes have vertex colours"))
+                    }
+                },
+                (None, None, false, true) => {
+                    let Shape::Mesh(mesh) = &shape else {
+                        return Err(Error::invalid(src, f("material.texture"), "image textures are for meshes"));
+                    };
+                    let texture = m
+                        .texture
+                        .as_ref()
+                        .ok_or_else(|| Error::invalid(src, f("material.texture"), "missing (a PNG path or \"mtl\")"))?;
+                    let path = if texture.as_os_str() == "mtl" {
+                        mesh_texture.clone().ok_or_else(|| {
+                            Error::invalid(src, f("material.texture"), "\"mtl\": the OBJ's material has no map_Kd")
+                        })?
+                    } else {
+                        base.join(texture)
+                    };
+                    if mesh.uvs.is_none() {
+                        return Err(Error::invalid(
+                            src,
+                            f("material.texture"),
+                            "the mesh file has no texture coordinates (vt / u v) to look the texture up with",
+                        ));
+                    }
+                    let tex = ImageTexture::load(&path, m.filter.unwrap_or_default(), m.wrap.unwrap_or_default())
+                        .map_err(|e| Error::invalid(src, f("material.texture"), e.to_string()))?;
+                    Material::Texture(Arc::new(tex))
+                }
+                (None, Some(kind), false, false) => {
+                    let Some(rect) = rect else {
+                        return Err(Error::invalid(src, f("material.chart"), "charts are for rects"));
+                    };
                     let chart = match kind {
                         ChartKind::Framework => {
                             framework_chart.get_or_insert_with(|| Arc::new(usaf::framework_chart())).clone()
@@ -495,20 +679,62 @@ impl SceneSpec {
                     return Err(Error::invalid(
                         src,
                         f("material"),
-                        "give exactly one of `albedo = [r, g, b]` or `chart = \"framework\" | \"usaf\" | \"file\"`",
+                        "give exactly one of `albedo = [r, g, b]`, `chart = \"framework\" | \"usaf\" | \"file\"` \
+                         (rects), `vertex_color = true` or `texture = \"file.png\"` (meshes)",
                     ))
                 }
             };
-            objects.push(Object {
-                name: o.name.clone().unwrap_or_else(|| format!("object {i}")),
-                shape: Shape::Rect(rect),
-                material,
-            });
+            objects.push(Object { name: o.name.clone().unwrap_or_else(|| format!("object {i}")), shape, material });
         }
         if objects.is_empty() {
             return Err(Error::invalid(src, "objects", "a scene needs at least one object"));
         }
-        Ok(Scene { name: self.name.clone(), objects, background })
+        let light = match &self.light {
+            None => None,
+            Some(l) => {
+                let d = finite3(src, "light.direction", l.direction)?;
+                if d.length() == 0.0 {
+                    return Err(Error::invalid(src, "light.direction", "must be non-zero"));
+                }
+                let radiance = albedo3(src, "light.radiance", l.radiance)?;
+                Some(Light { direction: d.normalize(), radiance })
+            }
+        };
+        Ok(Scene { name: self.name.clone(), objects, background, light, warnings })
+    }
+
+    fn rect(&self, src: &str, i: usize, center: DVec3, o: &ObjectSpec) -> Result<Rect> {
+        let f = |name: &str| format!("objects[{i}].{name}");
+        Ok(match (o.size, o.half_u, o.half_v) {
+            (Some([w, h]), None, None) => {
+                if !(w.is_finite() && h.is_finite() && w > 0.0 && h > 0.0) {
+                    return Err(Error::invalid(
+                        src,
+                        f("size"),
+                        format!("width and height must be positive and finite, got [{w}, {h}]"),
+                    ));
+                }
+                Rect::facing_eye(center, w, h)
+            }
+            (None, Some(u), Some(v)) => {
+                let (hu, hv) = (finite3(src, &f("half_u"), u)?, finite3(src, &f("half_v"), v)?);
+                if hu.cross(hv).length() == 0.0 {
+                    return Err(Error::invalid(
+                        src,
+                        f("half_u"),
+                        "half_u and half_v must be non-zero and not parallel",
+                    ));
+                }
+                Rect { center, half_u: hu, half_v: hv }
+            }
+            _ => {
+                return Err(Error::invalid(
+                    src,
+                    f("size"),
+                    "give either `size = [width, height]` (facing the eye) or both `half_u` and `half_v`",
+                ))
+            }
+        })
     }
 
     /// The paper's scene as a file (written to `scenes/paper.toml`).
@@ -516,15 +742,15 @@ impl SceneSpec {
         let chart = |name: &str, c: [f64; 3], w: f64| ObjectSpec {
             name: Some(name.into()),
             kind: ShapeKind::Rect,
-            center: c,
+            center: Some(c),
             size: Some([w, w]),
-            half_u: None,
-            half_v: None,
             material: MaterialSpec { chart: Some(ChartKind::Framework), ..Default::default() },
+            ..ObjectSpec::rect_default()
         };
         SceneSpec {
             name: "paper".into(),
             background: [0.0; 3],
+            light: None,
             objects: vec![
                 chart("near chart", [-45.0, -45.0, 300.0], 90.0),
                 chart("centre chart", [0.0, 0.0, 400.0], 120.0),
@@ -532,13 +758,32 @@ impl SceneSpec {
                 ObjectSpec {
                     name: Some("background".into()),
                     kind: ShapeKind::Rect,
-                    center: [200.0, 0.0, 1302.0],
+                    center: Some([200.0, 0.0, 1302.0]),
                     size: Some([2000.0, 2000.0]),
-                    half_u: None,
-                    half_v: None,
                     material: MaterialSpec { albedo: Some([0.2, 0.7, 0.8]), ..Default::default() },
+                    ..ObjectSpec::rect_default()
                 },
             ],
+        }
+    }
+}
+
+impl ObjectSpec {
+    fn rect_default() -> Self {
+        ObjectSpec {
+            name: None,
+            kind: ShapeKind::Rect,
+            center: None,
+            file: None,
+            transform: None,
+            count: None,
+            spacing: None,
+            radius: None,
+            segments: None,
+            size: None,
+            half_u: None,
+            half_v: None,
+            material: MaterialSpec::default(),
         }
     }
 }

@@ -118,19 +118,98 @@ impl<I: Intersector + ?Sized> Clone for SceneTracer<'_, I> {
 }
 impl<I: Intersector + ?Sized> Copy for SceneTracer<'_, I> {}
 
+/// What one ray sees: its radiance and the distance to what it hit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample {
+    pub radiance: DVec3,
+    /// World distance (mm) from the ray's origin to its hit along the ray; `+inf` for a miss;
+    /// NaN when the field does not know (fields that only implement `radiance`).
+    pub depth: f64,
+}
+
+impl Default for Sample {
+    fn default() -> Self {
+        Sample { radiance: DVec3::ZERO, depth: f64::NAN }
+    }
+}
+
 /// Anything that tells the radiance seen along a ray: a scene with an intersection backend, or
 /// a fused fast kernel for a special kind of scene.
+///
+/// Renderers hand rays over in batches ([`RadianceField::sample_many`]) laid out so that
+/// consecutive rays are neighbours (adjacent pixels, same sub-sample), which lets mesh backends
+/// trace them as packets. The defaults fall back to one ray at a time.
 pub trait RadianceField: Sync {
     fn radiance(&self, ray: &Ray) -> DVec3;
 
-    /// Sum of the radiance along every ray of `bundle` around `base`. Fields may override this
-    /// with a faster path that must return exactly the same sum.
-    fn radiance_sum(&self, base: &Ray, bundle: &RayBundle) -> DVec3 {
-        let mut sum = DVec3::ZERO;
-        for k in 0..bundle.shifts.len() {
-            sum += self.radiance(&bundle.ray(base, k));
+    /// Radiance and hit distance. Default: the depth is unknown (NaN).
+    fn sample(&self, ray: &Ray) -> Sample {
+        Sample { radiance: self.radiance(ray), depth: f64::NAN }
+    }
+
+    /// Whether [`RadianceField::sample_many`] gains from long batches of neighbouring rays
+    /// (packets). Renderers then trace blocks of pixels at once; otherwise pixel by pixel,
+    /// which is cheaper for fields whose per-ray cost is tiny. Same results either way.
+    fn prefers_batches(&self) -> bool {
+        false
+    }
+
+    /// [`RadianceField::sample`] of every ray (`out.len() == rays.len()`).
+    fn sample_many(&self, rays: &[Ray], out: &mut [Sample]) {
+        for (ray, o) in rays.iter().zip(out.iter_mut()) {
+            *o = self.sample(ray);
         }
-        sum
+    }
+
+    /// Sums over the rays of `bundle` around `base`: radiance, hit distance of the rays that
+    /// hit, their count, and whether every depth was known. Fields may override this with a
+    /// faster path that must return exactly the same sums.
+    fn sample_sum(&self, base: &Ray, bundle: &RayBundle) -> BundleSum {
+        let mut acc = BundleSum::default();
+        for k in 0..bundle.shifts.len() {
+            acc.add(self.sample(&bundle.ray(base, k)));
+        }
+        acc
+    }
+}
+
+/// Sums over a bundle of rays ([`RadianceField::sample_sum`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BundleSum {
+    pub radiance: DVec3,
+    /// Sum of the finite hit distances.
+    pub depth: f64,
+    /// Number of rays that hit something.
+    pub hits: usize,
+    /// False when some ray's depth was unknown (NaN).
+    pub depth_known: bool,
+}
+
+impl Default for BundleSum {
+    fn default() -> Self {
+        Self { radiance: DVec3::ZERO, depth: 0.0, hits: 0, depth_known: true }
+    }
+}
+
+impl BundleSum {
+    /// Adds another bundle's sums (renderers sum each pixel sample's bundle, then the bundles).
+    #[inline(always)]
+    pub fn merge(&mut self, other: BundleSum) {
+        self.radiance += other.radiance;
+        self.depth += other.depth;
+        self.hits += other.hits;
+        self.depth_known &= other.depth_known;
+    }
+
+    #[inline(always)]
+    pub fn add(&mut self, s: Sample) {
+        self.radiance += s.radiance;
+        if s.depth.is_finite() {
+            self.depth += s.depth;
+            self.hits += 1;
+        } else if s.depth.is_nan() {
+            self.depth_known = false;
+        }
     }
 }
 
@@ -171,10 +250,47 @@ impl RayBundle {
     }
 }
 
+/// World distance of a hit at ray parameter `t` (`+inf` for a miss).
+#[inline]
+fn hit_distance(ray: &Ray, t: Option<f64>) -> f64 {
+    t.map_or(f64::INFINITY, |t| t * ray.dir.length())
+}
+
 impl<I: Intersector + ?Sized> RadianceField for SceneTracer<'_, I> {
     #[inline]
     fn radiance(&self, ray: &Ray) -> DVec3 {
-        self.scene.radiance(self.backend.intersect(ray, f64::INFINITY).as_ref())
+        self.scene.shade(ray, self.backend.intersect(ray, f64::INFINITY).as_ref(), self.backend)
+    }
+
+    #[inline]
+    fn sample(&self, ray: &Ray) -> Sample {
+        let hit = self.backend.intersect(ray, f64::INFINITY);
+        Sample {
+            radiance: self.scene.shade(ray, hit.as_ref(), self.backend),
+            depth: hit_distance(ray, hit.map(|h| h.t)),
+        }
+    }
+
+    fn prefers_batches(&self) -> bool {
+        self.backend.prefers_batches()
+    }
+
+    /// Intersects the whole batch with [`Intersector::intersect_many`] (packets on coherent
+    /// runs for backends that have them), then shades.
+    fn sample_many(&self, rays: &[Ray], out: &mut [Sample]) {
+        // Chunks of 256 (a multiple of the 16-ray packet) with the hits on the stack.
+        const CHUNK: usize = 256;
+        let mut hits = [None; CHUNK];
+        for (rays, out) in rays.chunks(CHUNK).zip(out.chunks_mut(CHUNK)) {
+            let hits = &mut hits[..rays.len()];
+            self.backend.intersect_many(rays, hits);
+            for ((ray, hit), o) in rays.iter().zip(hits.iter()).zip(out.iter_mut()) {
+                *o = Sample {
+                    radiance: self.scene.shade(ray, hit.as_ref(), self.backend),
+                    depth: hit_distance(ray, hit.map(|h| h.t)),
+                };
+            }
+        }
     }
 }
 
@@ -239,6 +355,10 @@ pub fn check_pupil_center(display: &Display, eye: DVec3) -> Result<()> {
     Ok(())
 }
 
+/// Pixels of one display row traced as one batch (for fields that prefer batches): enough for
+/// long coherent runs (packets of 16), small enough that a batch's rays stay in cache.
+const BLOCK: usize = 128;
+
 /// Renders the display image for `method`. Every pixel is finite; rays that hit nothing carry
 /// the scene's background.
 pub fn render_display_image<R: RadianceField + ?Sized>(
@@ -248,6 +368,26 @@ pub fn render_display_image<R: RadianceField + ?Sized>(
     tracer: &R,
     progress: &Progress,
 ) -> Result<RgbImage> {
+    render_display_image_with_depth(display, method, settings, tracer, progress).map(|(img, _)| img)
+}
+
+/// [`render_display_image`] plus a depth plane (row-major, one `f32` per LCD pixel): the mean
+/// world distance (mm, along each camera ray from its start on the reference plane) over the
+/// pixel's rays that hit something, `+inf` when none did. For LC and PC with one sample per
+/// pixel that is the distance of the pixel's one ray; for LA and multi-sample pixels it is the
+/// mean over the hitting rays (misses do not count). `None` when the field does not know
+/// depths (fields that only implement `radiance`, such as the fused planar kernel).
+///
+/// Rays are traced in blocks of a display row's pixels through [`RadianceField::sample_many`],
+/// ordered sub-sample by sub-sample with the block's pixels consecutive (coherent runs for packets);
+/// every pixel still sums its samples in the same order as a per-pixel loop would.
+pub fn render_display_image_with_depth<R: RadianceField + ?Sized>(
+    display: &Display,
+    method: Method,
+    settings: &DisplayRenderSettings,
+    tracer: &R,
+    progress: &Progress,
+) -> Result<(RgbImage, Option<Vec<f32>>)> {
     if method == Method::PupilCenter {
         check_pupil_center(display, settings.eye_position)?;
     }
@@ -286,29 +426,87 @@ pub fn render_display_image<R: RadianceField + ?Sized>(
     let eye = settings.eye_position;
     let inv_count = 1.0 / (pixel_samples.len() * bundle.shifts.len()) as f64;
 
+    let per_pixel = pixel_samples.len() * bundle.shifts.len();
     let mut image = RgbImage::new(nx, ny);
-    image.pixels.par_chunks_mut(nx).enumerate().for_each(|(row, out)| {
-        for (col, px) in out.iter_mut().enumerate() {
-            let center = lcd.pixel_center(row, col);
-            let lenslet_center = display.lenslets.center(display.elemental_image_of(center));
-            let mut sum = DVec3::ZERO;
-            for frac in &pixel_samples {
-                let x3 = lcd.pixel_point(row, col, *frac);
-                let p = match method {
-                    Method::PupilCenter => pupil_center_point(display, x3, lenslet_center, eye),
-                    _ => lenslet_center,
-                };
-                let base = camera_ray(display, x3, lenslet_center, p, z_ref);
-                sum += if bundle.shifts.len() == 1 {
-                    tracer.radiance(&bundle.ray(&base, 0))
-                } else {
-                    tracer.radiance_sum(&base, &bundle)
-                };
-            }
-            let v = sum * inv_count;
-            *px = [v.x as f32, v.y as f32, v.z as f32];
+    let mut depth = vec![0f32; nx * ny];
+    let depth_known = std::sync::atomic::AtomicBool::new(true);
+    // The base ray (LC or PC, or LA's centre) of pixel sample `frac` of pixel (row, col).
+    let base_ray = |row: usize, col: usize, frac: DVec2| {
+        let center = lcd.pixel_center(row, col);
+        let lenslet_center = display.lenslets.center(display.elemental_image_of(center));
+        let x3 = lcd.pixel_point(row, col, frac);
+        let p = match method {
+            Method::PupilCenter => pupil_center_point(display, x3, lenslet_center, eye),
+            _ => lenslet_center,
+        };
+        camera_ray(display, x3, lenslet_center, p, z_ref)
+    };
+    let finish = |acc: BundleSum, px: &mut [f32; 3], z: &mut f32| {
+        if !acc.depth_known {
+            depth_known.store(false, std::sync::atomic::Ordering::Relaxed);
         }
-        progress.inc(1);
-    });
-    Ok(image)
+        let v = acc.radiance * inv_count;
+        *px = [v.x as f32, v.y as f32, v.z as f32];
+        *z = if acc.hits > 0 { (acc.depth / acc.hits as f64) as f32 } else { f32::INFINITY };
+    };
+    if tracer.prefers_batches() {
+        // Blocks of a row's pixels, ordered sample-major, so that packets see neighbouring rays.
+        image.pixels.par_chunks_mut(nx).zip(depth.par_chunks_mut(nx)).enumerate().for_each(|(row, (out, zout))| {
+            let mut rays = Vec::with_capacity(per_pixel * BLOCK);
+            let mut samples = Vec::with_capacity(per_pixel * BLOCK);
+            for col0 in (0..nx).step_by(BLOCK) {
+                let cols = BLOCK.min(nx - col0);
+                // rays[s * cols + c]: sample s of pixel col0 + c, s = (pixel sample, lenslet shift).
+                rays.clear();
+                rays.resize(per_pixel * cols, Ray { origin: DVec3::ZERO, dir: DVec3::Z });
+                for c in 0..cols {
+                    for (f, frac) in pixel_samples.iter().enumerate() {
+                        let base = base_ray(row, col0 + c, *frac);
+                        for k in 0..bundle.shifts.len() {
+                            rays[(f * bundle.shifts.len() + k) * cols + c] = bundle.ray(&base, k);
+                        }
+                    }
+                }
+                samples.clear();
+                samples.resize(rays.len(), Sample::default());
+                tracer.sample_many(&rays, &mut samples);
+                let block = out[col0..col0 + cols].iter_mut().zip(zout[col0..col0 + cols].iter_mut());
+                for (c, (px, z)) in block.enumerate() {
+                    let mut acc = BundleSum::default();
+                    for f in 0..pixel_samples.len() {
+                        let mut part = BundleSum::default();
+                        for k in 0..bundle.shifts.len() {
+                            part.add(samples[(f * bundle.shifts.len() + k) * cols + c]);
+                        }
+                        acc.merge(part);
+                    }
+                    finish(acc, px, z);
+                }
+            }
+            progress.inc(1);
+        });
+    } else {
+        // Pixel by pixel; each pixel sample's lenslet rays go to the field as one bundle, which
+        // fast fields cull as a whole. The sums are in the same order as the batched path.
+        image.pixels.par_chunks_mut(nx).zip(depth.par_chunks_mut(nx)).enumerate().for_each(|(row, (out, zout))| {
+            for (col, (px, z)) in out.iter_mut().zip(zout.iter_mut()).enumerate() {
+                let mut acc = BundleSum::default();
+                for frac in &pixel_samples {
+                    let base = base_ray(row, col, *frac);
+                    let part = if bundle.shifts.len() == 1 {
+                        let mut one = BundleSum::default();
+                        one.add(tracer.sample(&bundle.ray(&base, 0)));
+                        one
+                    } else {
+                        tracer.sample_sum(&base, &bundle)
+                    };
+                    acc.merge(part);
+                }
+                finish(acc, px, z);
+            }
+            progress.inc(1);
+        });
+    }
+    let depth = depth_known.into_inner().then_some(depth);
+    Ok((image, depth))
 }

@@ -8,7 +8,7 @@ use std::sync::Arc;
 
 use glam::{DVec2, DVec3};
 
-use super::display_image::{RadianceField, RayBundle, SceneTracer};
+use super::display_image::{BundleSum, RadianceField, RayBundle, Sample, SceneTracer};
 use crate::accel::analytic::AnalyticRects;
 use crate::accel::Ray;
 use crate::scene::{BarChart, Material, Scene, Shape};
@@ -42,6 +42,9 @@ impl<'a> FacingPlanes<'a> {
     /// `None` when the scene is not made only of eye-facing axis-aligned rectangles with albedo
     /// or chart materials.
     pub fn new(scene: &'a Scene, backend: &'a AnalyticRects) -> Option<Self> {
+        if scene.light.is_some() {
+            return None; // shading needs normals and shadow rays: the generic path
+        }
         let mut rects = Vec::with_capacity(scene.objects.len());
         for (k, o) in scene.objects.iter().enumerate() {
             let Shape::Rect(r) = &o.shape else { return None };
@@ -53,7 +56,7 @@ impl<'a> FacingPlanes<'a> {
                 Material::Chart { chart, bar, backing } => {
                     FlatMaterial::Chart { chart: chart.clone(), bar: *bar, backing: *backing }
                 }
-                Material::VertexColor => return None,
+                Material::VertexColor | Material::Texture(_) => return None,
             };
             rects.push((
                 k,
@@ -111,29 +114,73 @@ enum Cover {
 /// (about 1e-13 here), far below a texel of the chart.
 const BUNDLE_MARGIN: f64 = 1e-9;
 
+impl FacingPlanes<'_> {
+    /// Radiance and hit parameter `t` of a ray the fast path can take (`None` for a miss).
+    #[inline(always)]
+    fn trace_fast(&self, ray: &Ray) -> (DVec3, Option<f64>) {
+        // Camera and eye rays have dz = 1; (z - oz) * (1/1) is (z - oz) exactly, so skipping the
+        // division changes no bit.
+        let inv_dz = if ray.dir.z == 1.0 { 1.0 } else { 1.0 / ray.dir.z };
+        for r in &self.rects {
+            let t = (r.z - ray.origin.z) * inv_dz;
+            let u = (ray.origin.x + t * ray.dir.x - r.cx) * r.inv_hx;
+            let v = (ray.origin.y + t * ray.dir.y - r.cy) * r.inv_hy;
+            if u.abs() <= 1.0 && v.abs() <= 1.0 {
+                return (r.shade(u, v), Some(t));
+            }
+        }
+        (self.background, None)
+    }
+
+    #[inline(always)]
+    fn takes(&self, ray: &Ray) -> bool {
+        ray.dir.z > 0.0 && ray.origin.z < self.min_z
+    }
+}
+
+/// World distance of a hit at parameter `t` (as [`SceneTracer`] reports it), `+inf` for a miss.
+#[inline(always)]
+fn distance(ray: &Ray, t: Option<f64>) -> f64 {
+    t.map_or(f64::INFINITY, |t| t * ray.dir.length())
+}
+
 impl RadianceField for FacingPlanes<'_> {
+    #[inline(always)]
+    fn radiance(&self, ray: &Ray) -> DVec3 {
+        if !self.takes(ray) {
+            return self.fallback.radiance(ray);
+        }
+        self.trace_fast(ray).0
+    }
+
+    #[inline(always)]
+    fn sample(&self, ray: &Ray) -> Sample {
+        if !self.takes(ray) {
+            return self.fallback.sample(ray);
+        }
+        let (radiance, t) = self.trace_fast(ray);
+        Sample { radiance, depth: distance(ray, t) }
+    }
+
     /// Bundle culling: bounds on the bundle's footprint on each rectangle (from the bounds of
     /// its start and slope shifts) show which rectangles no ray can hit and which one every ray
-    /// hits first; each ray then computes `u`, `v` exactly as [`FacingPlanes::radiance`] does,
-    /// so the sum is the same bit for bit (tested).
-    fn radiance_sum(&self, base: &Ray, bundle: &RayBundle) -> DVec3 {
+    /// hits first; each ray then computes `t`, `u`, `v` exactly as the single-ray path does,
+    /// so the sums are the same bit for bit (tested).
+    fn sample_sum(&self, base: &Ray, bundle: &RayBundle) -> BundleSum {
+        let mut acc = BundleSum::default();
         if !(base.dir.z == 1.0 && base.origin.z < self.min_z) || self.rects.len() > 16 {
-            let mut sum = DVec3::ZERO;
             for k in 0..bundle.shifts.len() {
-                sum += self.radiance(&bundle.ray(base, k));
+                acc.add(self.sample(&bundle.ray(base, k)));
             }
-            return sum;
+            return acc;
         }
         let mut cover = [Cover::None; 16];
         let mut last = self.rects.len();
         for (i, r) in self.rects.iter().enumerate() {
             let t = r.z - base.origin.z; // > 0: the bundle starts in front of every plane
-            let lo = DVec2::new(base.origin.x, base.origin.y)
-                + bundle.start_min
-                + (base.dir.truncate() + bundle.slope_min) * t;
-            let hi = DVec2::new(base.origin.x, base.origin.y)
-                + bundle.start_max
-                + (base.dir.truncate() + bundle.slope_max) * t;
+            let start = DVec2::new(base.origin.x, base.origin.y);
+            let lo = start + bundle.start_min + (base.dir.truncate() + bundle.slope_min) * t;
+            let hi = start + bundle.start_max + (base.dir.truncate() + bundle.slope_max) * t;
             let (u0, u1) = ((lo.x - r.cx) * r.inv_hx, (hi.x - r.cx) * r.inv_hx);
             let (v0, v1) = ((lo.y - r.cy) * r.inv_hy, (hi.y - r.cy) * r.inv_hy);
             let (umin, umax) = (u0.min(u1), u0.max(u1));
@@ -149,43 +196,24 @@ impl RadianceField for FacingPlanes<'_> {
                 cover[i] = Cover::Some;
             }
         }
-        let mut sum = DVec3::ZERO;
         'rays: for k in 0..bundle.shifts.len() {
             let ray = bundle.ray(base, k);
             for (r, c) in self.rects[..last].iter().zip(&cover[..last]) {
                 if *c == Cover::None {
                     continue;
                 }
+                // dz = 1 here, so t needs no division (see trace_fast).
                 let t = r.z - ray.origin.z;
                 let u = (ray.origin.x + t * ray.dir.x - r.cx) * r.inv_hx;
                 let v = (ray.origin.y + t * ray.dir.y - r.cy) * r.inv_hy;
                 if *c == Cover::All || (u.abs() <= 1.0 && v.abs() <= 1.0) {
-                    sum += r.shade(u, v);
+                    acc.add(Sample { radiance: r.shade(u, v), depth: distance(&ray, Some(t)) });
                     continue 'rays;
                 }
             }
-            sum += self.background;
+            acc.add(Sample { radiance: self.background, depth: f64::INFINITY });
         }
-        sum
-    }
-
-    #[inline(always)]
-    fn radiance(&self, ray: &Ray) -> DVec3 {
-        if !(ray.dir.z > 0.0 && ray.origin.z < self.min_z) {
-            return self.fallback.radiance(ray);
-        }
-        // Camera and eye rays have dz = 1; (z - oz) * (1/1) is (z - oz) exactly, so skipping the
-        // division changes no bit.
-        let inv_dz = if ray.dir.z == 1.0 { 1.0 } else { 1.0 / ray.dir.z };
-        for r in &self.rects {
-            let t = (r.z - ray.origin.z) * inv_dz;
-            let u = (ray.origin.x + t * ray.dir.x - r.cx) * r.inv_hx;
-            let v = (ray.origin.y + t * ray.dir.y - r.cy) * r.inv_hy;
-            if u.abs() <= 1.0 && v.abs() <= 1.0 {
-                return r.shade(u, v);
-            }
-        }
-        self.background
+        acc
     }
 }
 
@@ -212,6 +240,7 @@ mod tests {
             };
             let a = fast.radiance(&ray);
             assert_eq!(a, slow.radiance(&ray), "{ray:?}");
+            assert_eq!(fast.sample(&ray), slow.sample(&ray), "{ray:?}");
             dark += (a == DVec3::ZERO) as usize;
         }
         assert!(dark > 1000, "bars and misses are exercised: {dark}");
@@ -241,7 +270,7 @@ mod tests {
                 origin: DVec3::new(next() * 30.0 - 15.0, next() * 30.0 - 15.0, 0.0),
                 dir: DVec3::new(next() * 0.7 - 0.35, next() * 0.7 - 0.35, 1.0),
             };
-            assert_eq!(fast.radiance_sum(&base, &bundle), slow.radiance_sum(&base, &bundle), "{base:?}");
+            assert_eq!(fast.sample_sum(&base, &bundle), slow.sample_sum(&base, &bundle), "{base:?}");
         }
     }
 }

@@ -12,7 +12,7 @@
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 
-use super::display_image::RadianceField;
+use super::display_image::{RadianceField, Sample};
 use crate::accel::Ray;
 use crate::error::{Error, Result};
 use crate::optics::display::PixelIndexer;
@@ -241,18 +241,54 @@ pub fn ground_truth<R: RadianceField + ?Sized>(
     let pupil = eye.pupil_samples();
     let subpixels = retina.subpixel_offsets();
     let inv_count = 1.0 / (pupil.len() * subpixels.len()) as f64;
+    // Rays of a block of one retina row go to the field together, laid out [sub-pixel][pupil][column] so
+    // that consecutive rays are neighbouring pixels through the same pupil point (coherent runs
+    // for packets); every pixel sums in the order sub-pixel sample, then pupil sample.
+    let per_pixel = subpixels.len() * pupil.len();
     let mut image = RgbImage::new(n, n);
+    if !tracer.prefers_batches() {
+        // One ray at a time, straight to the field's radiance (no depth, no buffers).
+        image.pixels.par_chunks_mut(n).enumerate().for_each(|(row, out)| {
+            for (col, px) in out.iter_mut().enumerate() {
+                let mut sum = DVec3::ZERO;
+                for frac in &subpixels {
+                    let t = retina.tangent(row, col, *frac);
+                    for s in &pupil {
+                        sum += tracer.radiance(&eye_scene_ray(eye, t, *s));
+                    }
+                }
+                let v = sum * inv_count;
+                *px = [v.x as f32, v.y as f32, v.z as f32];
+            }
+            progress.inc(1);
+        });
+        return image;
+    }
+    let block = 128;
     image.pixels.par_chunks_mut(n).enumerate().for_each(|(row, out)| {
-        for (col, px) in out.iter_mut().enumerate() {
-            let mut sum = DVec3::ZERO;
+        let mut rays = Vec::with_capacity(per_pixel * block);
+        let mut samples = Vec::with_capacity(per_pixel * block);
+        for col0 in (0..n).step_by(block) {
+            let cols = block.min(n - col0);
+            rays.clear();
             for frac in &subpixels {
-                let t = retina.tangent(row, col, *frac);
                 for s in &pupil {
-                    sum += tracer.radiance(&eye_scene_ray(eye, t, *s));
+                    for col in col0..col0 + cols {
+                        rays.push(eye_scene_ray(eye, retina.tangent(row, col, *frac), *s));
+                    }
                 }
             }
-            let v = sum * inv_count;
-            *px = [v.x as f32, v.y as f32, v.z as f32];
+            samples.clear();
+            samples.resize(rays.len(), Sample::default());
+            tracer.sample_many(&rays, &mut samples);
+            for (c, px) in out[col0..col0 + cols].iter_mut().enumerate() {
+                let mut sum = DVec3::ZERO;
+                for k in 0..per_pixel {
+                    sum += samples[k * cols + c].radiance;
+                }
+                let v = sum * inv_count;
+                *px = [v.x as f32, v.y as f32, v.z as f32];
+            }
         }
         progress.inc(1);
     });

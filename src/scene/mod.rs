@@ -1,13 +1,17 @@
-//! Scene description (paper Sec. 4.1, Fig. 3): objects with a shape and a material. Radiance
-//! equals albedo (the paper's scene needs nothing more: matte front-facing planes lit from
-//! behind the eye). Rays that hit nothing see `background`.
+//! Scene description (paper Sec. 4.1, Fig. 3): objects with a shape and a material. Without a
+//! light, radiance equals albedo (the paper's scene needs nothing more: matte front-facing
+//! planes lit from behind the eye). With an optional distant [`Light`] (as the published
+//! framework lit the paper's scene) surfaces are Lambertian and shadow rays are traced; see
+//! [`Scene::shade`]. Rays that hit nothing see `background`.
 //!
 //! Shapes are analytic rectangles (intersected exactly in `f64` by
 //! [`crate::accel::analytic::AnalyticRects`]) or triangle meshes. Every rectangle can be
 //! tessellated ([`Rect::to_mesh`]) so that every scene renders with every mesh backend.
 
+pub mod image_texture;
 pub mod mesh;
 pub mod mesh_io;
+pub mod procedural;
 pub mod texture;
 pub mod usaf;
 
@@ -15,7 +19,8 @@ use std::sync::Arc;
 
 use glam::{DVec2, DVec3};
 
-use crate::accel::{Hit, Surface};
+use crate::accel::{Hit, Intersector, Ray, Surface};
+pub use image_texture::ImageTexture;
 pub use mesh::Mesh;
 pub use texture::{Bar, BarChart};
 
@@ -63,6 +68,17 @@ pub enum Material {
     Chart { chart: Arc<BarChart>, bar: DVec3, backing: DVec3 },
     /// Per-vertex colours of a mesh, interpolated.
     VertexColor,
+    /// An image looked up by the mesh's interpolated texture coordinates (objects without
+    /// texture coordinates see the texture's mean colour).
+    Texture(Arc<ImageTexture>),
+}
+
+/// A distant light: parallel light travelling along `direction` (unit), with `radiance` (linear
+/// RGB) scaled so that a surface facing it head-on has radiance `albedo * radiance`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Light {
+    pub direction: DVec3,
+    pub radiance: DVec3,
 }
 
 #[derive(Clone, Debug)]
@@ -78,7 +94,17 @@ pub struct Scene {
     pub objects: Vec<Object>,
     /// Radiance seen by rays that hit nothing.
     pub background: DVec3,
+    /// Optional distant light; `None` = radiance is albedo.
+    pub light: Option<Light>,
+    /// Notes from loading the scene (e.g. degenerate triangles dropped) for the caller to show.
+    pub warnings: Vec<String>,
 }
+
+/// Corner uvs of a tessellated [`Rect`] ([`Rect::to_mesh`]), by triangle.
+const RECT_TRIANGLE_UVS: [[DVec2; 3]; 2] = [
+    [DVec2::new(-1.0, -1.0), DVec2::new(1.0, -1.0), DVec2::new(1.0, 1.0)],
+    [DVec2::new(-1.0, -1.0), DVec2::new(1.0, 1.0), DVec2::new(-1.0, 1.0)],
+];
 
 impl Scene {
     /// The paper's scene, as its framework built it (see `data/README` notes in the README):
@@ -105,7 +131,20 @@ impl Scene {
                 },
             ],
             background: DVec3::ZERO,
+            light: None,
+            warnings: Vec::new(),
         }
+    }
+
+    /// Total triangles of the scene's meshes (tessellated rectangles count 2).
+    pub fn triangle_count(&self) -> usize {
+        self.objects
+            .iter()
+            .map(|o| match &o.shape {
+                Shape::Rect(_) => 2,
+                Shape::Mesh(m) => m.triangle_count(),
+            })
+            .sum()
     }
 
     /// True when every object is an analytic primitive.
@@ -119,16 +158,69 @@ impl Scene {
         match hit.surface {
             Surface::Analytic { uv } => Some(uv),
             Surface::Triangle { index, bary } => match &self.objects.get(hit.object as usize)?.shape {
-                Shape::Rect(r) => {
-                    let m = r.to_mesh();
-                    Some(m.interpolate(m.uvs.as_deref()?, index, bary))
+                Shape::Rect(_) => {
+                    // Same as interpolating `Rect::to_mesh()`'s uvs, without building the mesh.
+                    let [a, b, c] = RECT_TRIANGLE_UVS.get(index as usize)?;
+                    Some(*a * (1.0 - bary.x - bary.y) + *b * bary.x + *c * bary.y)
                 }
                 Shape::Mesh(m) => m.uvs.as_ref().map(|uvs| m.interpolate(uvs, index, bary)),
             },
         }
     }
 
-    /// Radiance leaving the hit point toward the ray's origin (= albedo).
+    /// The unit surface normal at a hit, facing the ray (`dot(normal, ray.dir) <= 0`):
+    /// the geometric normal for rectangles, the interpolated vertex normal for meshes that have
+    /// normals (the geometric one for those that do not, or where interpolation gives zero).
+    pub fn normal(&self, ray: &Ray, hit: &Hit) -> DVec3 {
+        let Some(object) = self.objects.get(hit.object as usize) else { return -ray.dir.normalize_or_zero() };
+        let n = match (&object.shape, hit.surface) {
+            (Shape::Rect(r), _) => r.half_u.cross(r.half_v),
+            (Shape::Mesh(m), Surface::Triangle { index, bary }) if (index as usize) < m.triangles.len() => {
+                let interpolated = m.normals.as_ref().map(|ns| m.interpolate(ns, index, bary)).unwrap_or(DVec3::ZERO);
+                if interpolated.length_squared() > 0.0 && interpolated.is_finite() {
+                    interpolated
+                } else {
+                    let [p0, p1, p2] = m.triangle_positions(index as usize);
+                    (p1 - p0).cross(p2 - p0)
+                }
+            }
+            _ => -ray.dir,
+        };
+        let n = n.normalize_or_zero();
+        if n.dot(ray.dir) > 0.0 {
+            -n
+        } else {
+            n
+        }
+    }
+
+    /// Radiance leaving the hit of `ray` toward the ray's origin. Without a light it is the
+    /// albedo ([`Scene::radiance`]), exactly. With a distant light it is
+    /// `albedo * light.radiance * max(0, dot(n, -light.direction))` with `n` the normal facing
+    /// the ray ([`Scene::normal`]), or zero when a shadow ray toward the light (through
+    /// `backend.occluded`) is blocked. The shadow ray starts a small distance off the surface
+    /// along `n` (1e-4 of the hit point's largest coordinate, at least 1e-4 mm) so that
+    /// rounding of the hit point (f32 in Embree) does not shadow the surface itself.
+    pub fn shade<I: Intersector + ?Sized>(&self, ray: &Ray, hit: Option<&Hit>, backend: &I) -> DVec3 {
+        let albedo = self.radiance(hit);
+        let (Some(light), Some(hit)) = (self.light, hit) else { return albedo };
+        let n = self.normal(ray, hit);
+        let to_light = -light.direction;
+        let cos = n.dot(to_light);
+        if cos.is_nan() || cos <= 0.0 {
+            return DVec3::ZERO;
+        }
+        let p = ray.origin + hit.t * ray.dir;
+        let eps = 1e-4 * p.abs().max_element().max(1.0);
+        let shadow = Ray { origin: p + eps * n, dir: to_light };
+        if backend.occluded(&shadow, f64::INFINITY) {
+            return DVec3::ZERO;
+        }
+        albedo * light.radiance * cos
+    }
+
+    /// Albedo at the hit: the radiance leaving it toward the ray's origin when the scene has no
+    /// light; the background for a miss.
     #[inline]
     pub fn radiance(&self, hit: Option<&Hit>) -> DVec3 {
         let Some(hit) = hit else { return self.background };
@@ -145,6 +237,10 @@ impl Scene {
                     None => DVec3::ONE,
                 },
                 _ => DVec3::ONE,
+            },
+            Material::Texture(tex) => match self.surface_uv(hit) {
+                Some(uv) => tex.sample(uv),
+                None => tex.mean,
             },
         }
     }

@@ -186,6 +186,10 @@ impl Intersector for EmbreeIntersector {
         }
     }
 
+    fn prefers_batches(&self) -> bool {
+        true
+    }
+
     fn occluded(&self, ray: &Ray, t_max: f64) -> bool {
         if t_max.is_nan() || t_max <= 0.0 {
             return false;

@@ -1,0 +1,153 @@
+//! Choosing the scene-intersection backend for a render (paper Sec. 3.1: rays traced into the
+//! 3-D scene). `auto` picks the exact analytic backend (with its fused planar kernel when the
+//! scene allows it) for scenes made only of rectangles, and Embree otherwise. Mesh backends
+//! see every rectangle tessellated into two triangles ([`Rect::to_mesh`]), so every scene
+//! renders with every mesh backend.
+
+use std::borrow::Cow;
+use std::fmt;
+use std::str::FromStr;
+
+use super::display_image::{RadianceField, SceneTracer};
+use super::planar::FacingPlanes;
+use crate::accel::analytic::AnalyticRects;
+use crate::accel::brute::BruteForce;
+use crate::error::{Error, Result};
+use crate::scene::{Mesh, Rect, Scene, Shape};
+
+/// Largest scene (in triangles) the brute-force backend accepts: it tests every triangle for
+/// every ray, so it is for small scenes and tests only.
+pub const BRUTE_MAX_TRIANGLES: usize = 10_000;
+
+/// `--backend`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum BackendChoice {
+    #[default]
+    Auto,
+    Analytic,
+    Embree,
+    Brute,
+}
+
+impl FromStr for BackendChoice {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "auto" => Ok(Self::Auto),
+            "analytic" => Ok(Self::Analytic),
+            "embree" => Ok(Self::Embree),
+            "brute" | "brute-force" => Ok(Self::Brute),
+            _ => Err(format!("unknown backend `{s}`: expected auto, analytic, embree or brute")),
+        }
+    }
+}
+
+impl fmt::Display for BackendChoice {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::Auto => "auto",
+            Self::Analytic => "analytic",
+            Self::Embree => "embree",
+            Self::Brute => "brute",
+        })
+    }
+}
+
+/// The fields a render uses: `shade` for radiance only (fastest), `with_depth` when hit
+/// distances are wanted too (the display EXR's `Z` channel). For mesh backends and the
+/// generic analytic path they are the same object; the fused planar kernel does not know
+/// depths, so display images come from the generic analytic tracer (same radiance).
+pub struct Fields<'a> {
+    pub shade: &'a dyn RadianceField,
+    pub with_depth: &'a dyn RadianceField,
+    /// What ran, for reports: "analytic (fused planar kernel)", "analytic", "embree", "brute".
+    pub name: &'static str,
+}
+
+/// Resolves `auto`: analytic for rectangle-only scenes, else Embree (or an error without it).
+pub fn resolve(scene: &Scene, choice: BackendChoice) -> BackendChoice {
+    match choice {
+        BackendChoice::Auto if scene.is_analytic() => BackendChoice::Analytic,
+        BackendChoice::Auto => BackendChoice::Embree,
+        other => other,
+    }
+}
+
+/// Every object as a triangle mesh, paired with its object index (rectangles tessellated).
+pub fn scene_meshes(scene: &Scene) -> Vec<(u32, Cow<'_, Mesh>)> {
+    scene
+        .objects
+        .iter()
+        .enumerate()
+        .map(|(i, o)| {
+            let mesh = match &o.shape {
+                Shape::Rect(r) => Cow::Owned(Rect::to_mesh(r)),
+                Shape::Mesh(m) => Cow::Borrowed(m.as_ref()),
+            };
+            (i as u32, mesh)
+        })
+        .collect()
+}
+
+/// Builds the backend `choice` asks for and runs `f` with its fields.
+///
+/// Errors: `analytic` on a scene with meshes, `brute` on a scene over
+/// [`BRUTE_MAX_TRIANGLES`], `embree` in a build without the `embree` feature
+/// ([`Error::Unsupported`]), and backend construction errors.
+pub fn with_fields<T>(scene: &Scene, choice: BackendChoice, f: impl FnOnce(Fields<'_>) -> Result<T>) -> Result<T> {
+    match resolve(scene, choice) {
+        BackendChoice::Analytic | BackendChoice::Auto => {
+            if !scene.is_analytic() {
+                return Err(Error::Unsupported(format!(
+                    "scene `{}` has triangle meshes, which the analytic backend cannot intersect: use --backend embree (or auto)",
+                    scene.name
+                )));
+            }
+            let backend = AnalyticRects::new(scene)?;
+            let fused = if scene.light.is_none() { FacingPlanes::new(scene, &backend) } else { None };
+            let tracer = SceneTracer { scene, backend: &backend };
+            match fused {
+                // The fused kernel does not know depths; the generic analytic tracer does, and
+                // returns bit-identical radiance (tests/pipeline.rs checks), at one
+                // intersection per ray, so it renders the display images (with their Z).
+                Some(fast) => f(Fields { shade: &fast, with_depth: &fast, name: "analytic (fused planar kernel)" }),
+                None => f(Fields { shade: &tracer, with_depth: &tracer, name: "analytic" }),
+            }
+        }
+        BackendChoice::Brute => {
+            let n = scene.triangle_count();
+            if n > BRUTE_MAX_TRIANGLES {
+                return Err(Error::Unsupported(format!(
+                    "the brute-force backend is for small scenes (at most {BRUTE_MAX_TRIANGLES} triangles); scene `{}` has {n}: use --backend embree",
+                    scene.name
+                )));
+            }
+            let meshes = scene_meshes(scene);
+            let refs: Vec<(u32, &Mesh)> = meshes.iter().map(|(i, m)| (*i, m.as_ref())).collect();
+            let backend = BruteForce::new(&refs)?;
+            let tracer = SceneTracer { scene, backend: &backend };
+            f(Fields { shade: &tracer, with_depth: &tracer, name: "brute" })
+        }
+        BackendChoice::Embree => with_embree(scene, f),
+    }
+}
+
+#[cfg(feature = "embree")]
+fn with_embree<T>(scene: &Scene, f: impl FnOnce(Fields<'_>) -> Result<T>) -> Result<T> {
+    use crate::accel::embree::{BuildQuality, EmbreeIntersector};
+    let meshes = scene_meshes(scene);
+    let refs: Vec<(u32, &Mesh)> = meshes.iter().map(|(i, m)| (*i, m.as_ref())).collect();
+    let backend = EmbreeIntersector::new(&refs, BuildQuality::Medium)?;
+    drop(refs);
+    drop(meshes);
+    let tracer = SceneTracer { scene, backend: &backend };
+    f(Fields { shade: &tracer, with_depth: &tracer, name: "embree" })
+}
+
+#[cfg(not(feature = "embree"))]
+fn with_embree<T>(scene: &Scene, _f: impl FnOnce(Fields<'_>) -> Result<T>) -> Result<T> {
+    Err(Error::Unsupported(format!(
+        "scene `{}` needs the Embree backend, but this build has no Embree (rebuild with the default `embree` feature)",
+        scene.name
+    )))
+}
