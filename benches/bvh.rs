@@ -82,6 +82,7 @@ fn bench_rays(c: &mut Criterion) {
         return;
     };
     let meshes = [(0, &mesh)];
+    #[cfg_attr(not(feature = "embree"), allow(unused_mut))]
     let mut backends: Vec<(&'static str, Box<dyn Intersector>)> = vec![
         ("bvh-cwbvh", Box::new(BvhIntersector::with_layout(&meshes, BvhLayout::Cwbvh).unwrap())),
         ("bvh-bvh2", Box::new(BvhIntersector::with_layout(&meshes, BvhLayout::Bvh2).unwrap())),

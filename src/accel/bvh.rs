@@ -267,7 +267,8 @@ impl BvhIntersector {
             t0 = t0.max(a);
             t1 = t1.min(b);
         }
-        if !(t0 <= t1) {
+        // Also refuses NaN (non-finite rays).
+        if !matches!(t0.partial_cmp(&t1), Some(std::cmp::Ordering::Less | std::cmp::Ordering::Equal)) {
             return None;
         }
         let len = ray.dir.length();
