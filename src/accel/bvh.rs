@@ -262,7 +262,8 @@ impl BvhIntersector {
                 }
                 continue;
             }
-            let (a, b) = ((self.lo[k] - o) / d, (self.hi[k] - o) / d);
+            let inv = 1.0 / d;
+            let (a, b) = ((self.lo[k] - o) * inv, (self.hi[k] - o) * inv);
             let (a, b) = if a <= b { (a, b) } else { (b, a) };
             t0 = t0.max(a);
             t1 = t1.min(b);
