@@ -127,7 +127,7 @@ enum Command {
 /// Scene intersection backend.
 #[derive(Args)]
 struct BackendArg {
-    /// auto (analytic for rectangle-only scenes, else embree), analytic, embree, or brute
+    /// auto (analytic for rectangle-only scenes, else embree), analytic, embree, bvh (pure Rust), or brute
     /// (brute force, small scenes only).
     #[arg(long = "backend", default_value = "auto")]
     backend: String,

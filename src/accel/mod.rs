@@ -4,6 +4,7 @@
 
 pub mod analytic;
 pub mod brute;
+pub mod bvh;
 #[cfg(feature = "embree")]
 pub mod embree;
 

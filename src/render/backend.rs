@@ -26,6 +26,8 @@ pub enum BackendChoice {
     Auto,
     Analytic,
     Embree,
+    /// The pure-Rust BVH (obvhs tree, f64 watertight triangle test).
+    Bvh,
     Brute,
 }
 
@@ -36,8 +38,9 @@ impl FromStr for BackendChoice {
             "auto" => Ok(Self::Auto),
             "analytic" => Ok(Self::Analytic),
             "embree" => Ok(Self::Embree),
+            "bvh" => Ok(Self::Bvh),
             "brute" | "brute-force" => Ok(Self::Brute),
-            _ => Err(format!("unknown backend `{s}`: expected auto, analytic, embree or brute")),
+            _ => Err(format!("unknown backend `{s}`: expected auto, analytic, embree, bvh or brute")),
         }
     }
 }
@@ -48,6 +51,7 @@ impl fmt::Display for BackendChoice {
             Self::Auto => "auto",
             Self::Analytic => "analytic",
             Self::Embree => "embree",
+            Self::Bvh => "bvh",
             Self::Brute => "brute",
         })
     }
@@ -129,6 +133,13 @@ pub fn with_fields<T>(scene: &Scene, choice: BackendChoice, f: impl FnOnce(Field
             f(Fields { shade: &tracer, with_depth: &tracer, name: "brute" })
         }
         BackendChoice::Embree => with_embree(scene, f),
+        BackendChoice::Bvh => {
+            let meshes = scene_meshes(scene);
+            let refs: Vec<(u32, &Mesh)> = meshes.iter().map(|(i, m)| (*i, m.as_ref())).collect();
+            let backend = crate::accel::bvh::BvhIntersector::new(&refs)?;
+            let tracer = SceneTracer { scene, backend: &backend };
+            f(Fields { shade: &tracer, with_depth: &tracer, name: "bvh" })
+        }
     }
 }
 
