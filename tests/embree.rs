@@ -70,7 +70,7 @@ fn brute(meshes: &[(u32, &Mesh)], ray: &Ray, t_max: f64) -> Option<BruteHit> {
         for tri in 0..mesh.triangles.len() {
             if let Some((t, u, v)) = ray_plane(ray.origin, ray.dir, tri_points(mesh, tri)) {
                 let inside = u >= 0.0 && v >= 0.0 && u + v <= 1.0;
-                if inside && t > 0.0 && t < t_max && best.map_or(true, |b| t < b.t) {
+                if inside && t > 0.0 && t < t_max && best.is_none_or(|b| t < b.t) {
                     best = Some(BruteHit { t, object, tri: tri as u32, u, v });
                 }
             }
