@@ -247,7 +247,29 @@ fn every_file_in_tests_data_bad_fails_cleanly() {
         (vec!["compare".into(), f("truncated.exr"), f("truncated.exr")], vec!["truncated.exr"]),
         (vec!["simulate".into(), f("text.exr"), "--pinhole".into()], vec!["text.exr"]),
     ];
+    // Broken meshes reached through a scene file, as a user would.
+    let mesh_scene = |mesh: &str| -> String {
+        let p = dir.path().join(format!("scene_{mesh}.toml"));
+        std::fs::write(
+            &p,
+            format!("name = \"m\"\n[[objects]]\ntype = \"mesh\"\nfile = \"{}\"\nmaterial = {{ albedo = [1.0, 1.0, 1.0] }}\n", f(mesh)),
+        )
+        .unwrap();
+        p.display().to_string()
+    };
+    let mut cases = cases;
+    for (mesh, needles) in [
+        ("truncated.ply", vec!["truncated.ply", "face 3 of 5"]),
+        ("index_out_of_range.obj", vec!["index_out_of_range.obj", "line 5"]),
+        ("nan_vertex.obj", vec!["nan_vertex.obj", "line"]),
+        ("empty.obj", vec!["empty.obj"]),
+    ] {
+        cases.push((vec!["ground-truth".into(), "--scene".into(), mesh_scene(mesh), "--pinhole".into()], needles));
+    }
     for (mut args, needles) in cases {
+        if args[0] == "ground-truth" {
+            args.extend(["--out".into(), format!("{o}/gt.exr")]);
+        }
         if args[0] == "assess" || args[0] == "simulate" {
             args.extend(["--out".into(), if args[0] == "assess" { o.into() } else { format!("{o}/sim.exr") }]);
         }
