@@ -101,14 +101,17 @@ impl EmbreeIntersector {
         let Some(first) = rays.first() else {
             return false;
         };
+        // Spread of unit directions, |u - u0|^2 = 2 - 2 cos, and of origins, both compared
+        // squared: one square root per ray (its direction's length) instead of three.
         let u0 = first.dir.normalize_or_zero();
-        let mut dir_spread = 0.0f64;
-        let mut origin_spread = 0.0f64;
+        let mut cos_min = 1.0f64;
+        let mut origin_spread2 = 0.0f64;
         for r in &rays[1..] {
-            dir_spread = dir_spread.max((r.dir.normalize_or_zero() - u0).length());
-            origin_spread = origin_spread.max((r.origin - first.origin).length());
+            cos_min = cos_min.min(r.dir.dot(u0) / r.dir.length());
+            origin_spread2 = origin_spread2.max((r.origin - first.origin).length_squared());
         }
-        let spread = dir_spread + origin_spread / self.extent.max(f64::MIN_POSITIVE);
+        let dir_spread = (2.0 - 2.0 * cos_min).max(0.0).sqrt();
+        let spread = dir_spread + origin_spread2.sqrt() / self.extent.max(f64::MIN_POSITIVE);
         // NaN (non-finite rays) compares false: such chunks go one ray at a time.
         spread < COHERENT_SPREAD
     }
