@@ -17,19 +17,9 @@ use inimtrace::accel::bvh::{BvhIntersector, BvhLayout};
 use inimtrace::accel::{Intersector, Ray};
 use inimtrace::scene::mesh::Mesh;
 
-/// Small deterministic generator (xorshift64*), uniform in [0, 1).
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.next()
-    }
-}
+#[path = "../tests/common/mod.rs"]
+mod common;
+use common::Rng;
 
 /// The bunny, 60 mm tall, centred 300 mm in front of the eye.
 fn bunny() -> Option<Mesh> {

@@ -7,6 +7,9 @@ use inimtrace::accel::brute::{BruteForce, WatertightRay};
 use inimtrace::accel::{Hit, Intersector, Ray, Surface};
 use inimtrace::scene::mesh::Mesh;
 
+mod common;
+use common::Rng;
+
 fn ray(origin: DVec3, dir: DVec3) -> Ray {
     Ray { origin, dir }
 }
@@ -113,23 +116,6 @@ fn cube() -> Mesh {
 /// Icosahedron subdivided `levels` times, vertices on the unit sphere.
 fn icosphere(levels: usize) -> Mesh {
     inimtrace::scene::procedural::icosphere(levels, DVec3::ZERO, 1.0)
-}
-
-/// Small deterministic generator (xorshift64*), uniform in [0, 1).
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.next()
-    }
-    fn vec(&mut self, lo: f64, hi: f64) -> DVec3 {
-        DVec3::new(self.range(lo, hi), self.range(lo, hi), self.range(lo, hi))
-    }
 }
 
 /// Points exactly on the cube's edges and face diagonals (all coordinates dyadic).

@@ -17,6 +17,9 @@ use inimtrace::scene::mesh::Mesh;
 use inimtrace::Error;
 use rayon::prelude::*;
 
+mod common;
+use common::Rng;
+
 /// `live_objects()` is process-wide and tests run in parallel: ordinary tests hold this lock
 /// shared while they own Embree objects; the leak test holds it exclusively.
 static EMBREE: RwLock<()> = RwLock::new(());
@@ -139,33 +142,6 @@ fn grid_cube(n: u32) -> Mesh {
         }
     }
     mesh(pos, tris)
-}
-
-/// Small deterministic generator (xorshift64*), so the tests need no RNG crate.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.next()
-    }
-    fn vec(&mut self, lo: f64, hi: f64) -> DVec3 {
-        DVec3::new(self.range(lo, hi), self.range(lo, hi), self.range(lo, hi))
-    }
-    fn unit(&mut self) -> DVec3 {
-        loop {
-            let v = self.vec(-1.0, 1.0);
-            let l = v.length();
-            if l > 0.1 && l <= 1.0 {
-                return v / l;
-            }
-        }
-    }
 }
 
 /// A bumpy icosphere (radially perturbed vertices, so neighbouring triangles are not coplanar)

@@ -14,16 +14,9 @@ use inimtrace::render::retina::{simulate, FastTransfer};
 use inimtrace::render::{ground_truth, render_display_image, DisplayRenderSettings, FacingPlanes, Method, SceneTracer};
 use inimtrace::scene::{Material, Object, Rect, Scene, Shape};
 
-struct Lcg(u64);
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.next()
-    }
-}
+mod common;
+
+use common::Lcg;
 
 fn hidden() -> Progress {
     Progress::hidden()
@@ -228,17 +221,7 @@ fn tilted_display() -> Display {
 /// off-axis eye near the edge of the eye box with PupilCenter.
 #[test]
 fn hexagonal_tilted_partial_and_off_axis() {
-    let white = Scene {
-        name: "white".into(),
-        objects: vec![Object {
-            name: "wall".into(),
-            shape: Shape::Rect(Rect::facing_eye(DVec3::new(0.0, 0.0, 500.0), 1e5, 1e5)),
-            material: Material::Albedo(DVec3::ONE),
-        }],
-        background: DVec3::ZERO,
-        light: None,
-        warnings: Vec::new(),
-    };
+    let white = common::white_wall();
     let mut partial = small(540);
     // EIs only cover the central half of the LCD: pixels outside still belong to the nearest EI
     // (ownership is a nearest-centre rule, it never fails), lenslets beyond the array's nominal

@@ -13,17 +13,9 @@ use inimtrace::render::{ground_truth, render_display_image, DisplayRenderSetting
 use inimtrace::scene::{Material, Object, Rect, Scene, Shape};
 use std::path::Path;
 
-/// Deterministic pseudo-random numbers in [0, 1).
-struct Lcg(u64);
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.next()
-    }
-}
+mod common;
+
+use common::Lcg;
 
 fn small_display(res: usize) -> Display {
     let mut d = Display::paper();
@@ -136,24 +128,10 @@ fn fused_kernel_and_generic_backend_render_the_same_images() {
     );
 }
 
-fn white_scene() -> Scene {
-    Scene {
-        name: "white".into(),
-        objects: vec![Object {
-            name: "wall".into(),
-            shape: Shape::Rect(Rect::facing_eye(DVec3::new(0.0, 0.0, 500.0), 1e5, 1e5)),
-            material: Material::Albedo(DVec3::ONE),
-        }],
-        background: DVec3::ZERO,
-        light: None,
-        warnings: Vec::new(),
-    }
-}
-
 #[test]
 fn uniform_white_scene_looks_white_wherever_rays_land_on_the_lcd() {
     let display = small_display(432);
-    let scene = white_scene();
+    let scene = common::white_wall();
     let backend = AnalyticRects::new(&scene).unwrap();
     let field = SceneTracer { scene: &scene, backend: &backend };
     let s = DisplayRenderSettings::default();
