@@ -74,6 +74,7 @@ fn bench_rays(c: &mut Criterion) {
     let meshes = [(0, &mesh)];
     #[cfg_attr(not(feature = "embree"), allow(unused_mut))]
     let mut backends: Vec<(&'static str, Box<dyn Intersector>)> = vec![
+        ("bvh-bvh4", Box::new(BvhIntersector::with_layout(&meshes, BvhLayout::Bvh4).unwrap())),
         ("bvh-cwbvh", Box::new(BvhIntersector::with_layout(&meshes, BvhLayout::Cwbvh).unwrap())),
         ("bvh-bvh2", Box::new(BvhIntersector::with_layout(&meshes, BvhLayout::Bvh2).unwrap())),
     ];
@@ -124,7 +125,9 @@ fn bench_build(c: &mut Criterion) {
     let meshes = [(0, &mesh)];
     let mut group = c.benchmark_group("build_2m_triangles");
     group.sample_size(10);
-    for (name, layout) in [("bvh-cwbvh", BvhLayout::Cwbvh), ("bvh-bvh2", BvhLayout::Bvh2)] {
+    for (name, layout) in
+        [("bvh-bvh4", BvhLayout::Bvh4), ("bvh-cwbvh", BvhLayout::Cwbvh), ("bvh-bvh2", BvhLayout::Bvh2)]
+    {
         group.bench_function(name, |b| {
             b.iter_batched(|| (), |_| BvhIntersector::with_layout(&meshes, layout).unwrap(), BatchSize::PerIteration)
         });

@@ -13,7 +13,7 @@ use inimtrace::scene::mesh::Mesh;
 mod common;
 use common::Rng;
 
-const LAYOUTS: [BvhLayout; 2] = [BvhLayout::Cwbvh, BvhLayout::Bvh2];
+const LAYOUTS: [BvhLayout; 3] = [BvhLayout::Bvh4, BvhLayout::Cwbvh, BvhLayout::Bvh2];
 
 fn ray(origin: DVec3, dir: DVec3) -> Ray {
     Ray { origin, dir }

@@ -29,8 +29,10 @@ use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
 use obvhs::cwbvh::CwBvh;
 use obvhs::ploc::{PlocBuilder, PlocSearchDistance, SortPrecision};
 use obvhs::ray::{Ray as CullRay, RayHit};
+use rayon::prelude::*;
 
 use crate::accel::brute::WatertightRay;
+use crate::accel::bvh4::{self, Bvh4};
 use crate::accel::{Hit, Intersector, Ray, Surface};
 use crate::error::{Error, Result};
 use crate::scene::mesh::Mesh;
@@ -52,8 +54,11 @@ const CWBVH_MAX_DEPTH: usize = 30;
 /// Tree layout of a [`BvhIntersector`] (see docs/BVH.md for their measured speeds).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum BvhLayout {
-    /// obvhs's compressed 8-wide BVH (Ylitie et al. 2017), up to 3 triangles per leaf.
+    /// inimtrace's own 4-wide BVH ([`crate::accel::bvh4::Bvh4`]: binned SAH, up to 4 triangles
+    /// per leaf, SSE node test).
     #[default]
+    Bvh4,
+    /// obvhs's compressed 8-wide BVH (Ylitie et al. 2017), up to 3 triangles per leaf.
     Cwbvh,
     /// obvhs's binary BVH with leaf collapsing.
     Bvh2,
@@ -69,6 +74,7 @@ struct Tri {
 
 enum Tree {
     Empty,
+    Own(Bvh4),
     Cw(CwBvh),
     Bin(Bvh2),
 }
@@ -90,6 +96,7 @@ impl std::fmt::Debug for BvhIntersector {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let layout = match self.tree {
             Tree::Empty => "empty",
+            Tree::Own(_) => "bvh4",
             Tree::Cw(_) => "cwbvh",
             Tree::Bin(_) => "bvh2",
         };
@@ -135,27 +142,31 @@ impl BvhIntersector {
     /// As [`BvhIntersector::new`], with a chosen tree layout.
     pub fn with_layout(meshes: &[(u32, &Mesh)], layout: BvhLayout) -> Result<BvhIntersector> {
         let start = Instant::now();
-        let mut tris = Vec::new();
+        // The non-empty meshes, each with the global index of its first triangle.
+        let mut parts: Vec<(u32, &Mesh, usize)> = Vec::new();
+        let mut n = 0usize;
         let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
         for &(object, mesh) in meshes {
             if mesh.triangles.is_empty() {
                 continue;
             }
             mesh.validate(&format!("scene object {object}"))?;
-            tris.reserve(mesh.triangles.len());
-            for i in 0..mesh.triangles.len() {
-                let p = mesh.triangle_positions(i);
-                for q in p {
-                    lo = lo.min(q);
-                    hi = hi.max(q);
-                }
-                tris.push(Tri { p, object, index: i as u32 });
-            }
+            let (mesh_lo, mesh_hi) = mesh.bounds();
+            lo = lo.min(mesh_lo);
+            hi = hi.max(mesh_hi);
+            parts.push((object, mesh, n));
+            n += mesh.triangles.len();
         }
-        if tris.is_empty() {
+        // Triangle `i` over all meshes, in the caller's order.
+        let tri_of = |i: usize| {
+            let k = parts.partition_point(|p| p.2 <= i) - 1;
+            let (object, mesh, first) = parts[k];
+            Tri { p: mesh.triangle_positions(i - first), object, index: (i - first) as u32 }
+        };
+        if n == 0 {
             return Ok(BvhIntersector {
                 tree: Tree::Empty,
-                tris,
+                tris: Vec::new(),
                 lo: DVec3::INFINITY,
                 hi: DVec3::NEG_INFINITY,
                 scale: 1.0,
@@ -180,42 +191,71 @@ impl BvhIntersector {
         let pad = PAD_REL * scale;
         // f64 -> f32 for the tree's culling boxes only: each box is padded by `pad`, far more
         // than the rounding of the conversion.
-        let aabbs: Vec<Aabb> = tris
-            .iter()
-            .map(|t| {
-                let mn = t.p[0].min(t.p[1]).min(t.p[2]) - pad;
-                let mx = t.p[0].max(t.p[1]).max(t.p[2]) + pad;
-                Aabb::new(Vec3A::from(mn.as_vec3()), Vec3A::from(mx.as_vec3()))
-            })
-            .collect();
-
-        // PLOC with the smallest search distance and no reinsertion pass: on the bunny this traced
-        // as fast as obvhs's "medium" preset (search distance Medium, reinsertion 0.05) or faster,
-        // and builds faster (docs/BVH.md). The BVH2 is kept so that its depth can be checked
-        // before converting to CWBVH.
-        let n = aabbs.len();
-        let mut bvh2 = PlocBuilder::with_capacity(n).build(
-            PlocSearchDistance::Minimum,
-            &aabbs,
-            (0..n as u32).collect(),
-            SortPrecision::U64,
-            3,
-        );
-        let depth = bvh2_depth(&bvh2);
-        let tree = if layout == BvhLayout::Cwbvh && depth <= CWBVH_MAX_DEPTH {
-            Tree::Cw(bvh2_to_cwbvh(&bvh2, 3, true, false))
-        } else {
-            obvhs::bvh2::leaf_collapser::collapse(&mut bvh2, 8, 3.0);
-            ReinsertionOptimizer::default().run(&mut bvh2, 0.1, None);
-            bvh2.max_depth = bvh2_depth(&bvh2).max(depth) + 2;
-            Tree::Bin(bvh2)
+        let padded_box = |t: &Tri| {
+            let mn = t.p[0].min(t.p[1]).min(t.p[2]) - pad;
+            let mx = t.p[0].max(t.p[1]).max(t.p[2]) + pad;
+            (Vec3A::from(mn.as_vec3()), Vec3A::from(mx.as_vec3()))
+        };
+        if layout == BvhLayout::Bvh4 {
+            if n > bvh4::MAX_PRIMITIVES {
+                return Err(Error::invalid(
+                    "scene meshes",
+                    "triangles",
+                    format!("{n} triangles exceed the BVH's limit of {}", bvh4::MAX_PRIMITIVES),
+                ));
+            }
+            let tree = Bvh4::build_with(n, |i| {
+                let (lo, hi) = padded_box(&tri_of(i));
+                bvh4::Aabb { lo, hi }
+            });
+            // The f64 triangles, copied once, straight into tree order.
+            let tris = tree.slots().par_iter().map(|&i| tri_of(i as usize)).collect();
+            return Ok(BvhIntersector {
+                tree: Tree::Own(tree),
+                tris,
+                lo: lo - 2.0 * pad,
+                hi: hi + 2.0 * pad,
+                scale,
+                build_seconds: start.elapsed().as_secs_f64(),
+            });
+        }
+        let tris: Vec<Tri> = (0..n).into_par_iter().map(tri_of).collect();
+        let tree = {
+            let aabbs: Vec<Aabb> = tris
+                .par_iter()
+                .map(|t| {
+                    let (lo, hi) = padded_box(t);
+                    Aabb::new(lo, hi)
+                })
+                .collect();
+            // PLOC with the smallest search distance and no reinsertion pass: on the bunny this
+            // traced as fast as obvhs's "medium" preset (search distance Medium, reinsertion
+            // 0.05) or faster, and builds faster (docs/BVH.md). The BVH2 is kept so that its
+            // depth can be checked before converting to CWBVH.
+            let n = aabbs.len();
+            let mut bvh2 = PlocBuilder::with_capacity(n).build(
+                PlocSearchDistance::Minimum,
+                &aabbs,
+                (0..n as u32).collect(),
+                SortPrecision::U64,
+                3,
+            );
+            let depth = bvh2_depth(&bvh2);
+            if layout == BvhLayout::Cwbvh && depth <= CWBVH_MAX_DEPTH {
+                Tree::Cw(bvh2_to_cwbvh(&bvh2, 3, true, false))
+            } else {
+                obvhs::bvh2::leaf_collapser::collapse(&mut bvh2, 8, 3.0);
+                ReinsertionOptimizer::default().run(&mut bvh2, 0.1, None);
+                bvh2.max_depth = bvh2_depth(&bvh2).max(depth) + 2;
+                Tree::Bin(bvh2)
+            }
         };
         let order = match &tree {
             Tree::Cw(t) => &t.primitive_indices,
             Tree::Bin(t) => &t.primitive_indices,
-            Tree::Empty => unreachable!("non-empty scene"),
+            Tree::Own(_) | Tree::Empty => unreachable!("obvhs layouts only"),
         };
-        let tris: Vec<Tri> = order.iter().map(|&i| tris[i as usize]).collect();
+        let tris: Vec<Tri> = order.par_iter().map(|&i| tris[i as usize]).collect();
         Ok(BvhIntersector {
             tree,
             tris,
@@ -241,6 +281,7 @@ impl BvhIntersector {
     pub fn layout(&self) -> Option<BvhLayout> {
         match self.tree {
             Tree::Empty => None,
+            Tree::Own(_) => Some(BvhLayout::Bvh4),
             Tree::Cw(_) => Some(BvhLayout::Cwbvh),
             Tree::Bin(_) => Some(BvhLayout::Bvh2),
         }
@@ -330,6 +371,16 @@ impl Intersector for BvhIntersector {
         let mut raw = RayHit::none();
         match &self.tree {
             Tree::Empty => return None,
+            Tree::Own(bvh) => {
+                let ray4 = bvh4::CullRay::new(cull.origin, cull.direction, cull.tmax);
+                bvh.traverse(&ray4, |first, count, t_cull| {
+                    let mut t_cull = t_cull;
+                    for slot in first..first + count {
+                        t_cull = t_cull.min(test(&cull, slot));
+                    }
+                    t_cull
+                });
+            }
             Tree::Cw(bvh) => {
                 bvh.ray_traverse(cull, &mut raw, &mut test);
             }
@@ -365,6 +416,18 @@ impl Intersector for BvhIntersector {
         };
         match &self.tree {
             Tree::Empty => false,
+            Tree::Own(bvh) => {
+                let ray4 = bvh4::CullRay::new(cull.origin, cull.direction, cull.tmax);
+                let mut hit = false;
+                bvh.traverse(&ray4, |first, count, t_cull| {
+                    if (first..first + count).any(|slot| test(&cull, slot) < 0.0) {
+                        hit = true;
+                        return -1.0;
+                    }
+                    t_cull
+                });
+                hit
+            }
             Tree::Cw(bvh) => !bvh.ray_traverse_miss(cull, test),
             Tree::Bin(bvh) => !bvh.ray_traverse_miss(cull, test),
         }

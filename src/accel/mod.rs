@@ -5,6 +5,7 @@
 pub mod analytic;
 pub mod brute;
 pub mod bvh;
+pub mod bvh4;
 #[cfg(feature = "embree")]
 pub mod embree;
 
