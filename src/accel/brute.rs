@@ -54,29 +54,39 @@ impl WatertightRay {
             return None;
         }
         let a = d.abs();
-        let kz = if a.x >= a.y && a.x >= a.z {
-            0
+        // (kx, ky, kz): kz is the dominant axis; kx, ky the other two, swapped when d[kz] < 0 to
+        // keep the winding.
+        let (kx, ky, kz) = if a.x >= a.y && a.x >= a.z {
+            if d.x < 0.0 {
+                (2, 1, 0)
+            } else {
+                (1, 2, 0)
+            }
         } else if a.y >= a.z {
-            1
+            if d.y < 0.0 {
+                (0, 2, 1)
+            } else {
+                (2, 0, 1)
+            }
+        } else if d.z < 0.0 {
+            (1, 0, 2)
         } else {
-            2
+            (0, 1, 2)
         };
-        let mut kx = (kz + 1) % 3;
-        let mut ky = (kx + 1) % 3;
-        if d[kz] < 0.0 {
-            std::mem::swap(&mut kx, &mut ky);
-        }
+        let d = d.to_array();
         Some(WatertightRay { origin: ray.origin, kx, ky, kz, sx: d[kx] / d[kz], sy: d[ky] / d[kz], sz: 1.0 / d[kz] })
     }
 
     /// Intersects triangle `(p0, p1, p2)` (either side). Returns `(t, bary)` when
     /// `0 < t < t_max`, with Embree's barycentrics: hit point = `(1 - u - v) p0 + u p1 + v p2`.
     /// Rays parallel to the triangle's plane (including rays inside the plane) miss.
+    #[inline(always)]
     pub fn intersect(&self, p0: DVec3, p1: DVec3, p2: DVec3, t_max: f64) -> Option<(f64, DVec2)> {
         let (kx, ky, kz) = (self.kx, self.ky, self.kz);
-        let a = p0 - self.origin;
-        let b = p1 - self.origin;
-        let c = p2 - self.origin;
+        // Arrays rather than DVec3 for the permuted reads (indexing a DVec3 is a branch chain).
+        let a = (p0 - self.origin).to_array();
+        let b = (p1 - self.origin).to_array();
+        let c = (p2 - self.origin).to_array();
         // Shear and scale the vertices into ray space (the ray becomes the +z axis).
         let ax = a[kx] - self.sx * a[kz];
         let ay = a[ky] - self.sy * a[kz];

@@ -287,6 +287,55 @@ impl BvhIntersector {
         }
     }
 
+    /// Sets up the culling ray of the own 4-wide tree. When the origin is within `2 S` of the
+    /// coordinate origin (so its `f32` rounding and that of the slab differences stay a few
+    /// `2^-24 S`, far below the box padding) and the direction's length is moderate, this is
+    /// just `ray` rounded to `f32`, in `ray`'s units of `t` (no division, no square root);
+    /// otherwise the clipped, rescaled ray of [`BvhIntersector::cull_ray`].
+    #[inline]
+    fn cull_ray4(&self, ray: &Ray, t_max: f64) -> Option<(bvh4::CullRay, f64, f64)> {
+        if t_max.is_nan() || t_max <= 0.0 {
+            return None;
+        }
+        let len2 = ray.dir.length_squared();
+        if ray.origin.abs().max_element() <= 2.0 * self.scale && (1e-20..=1e20).contains(&len2) {
+            // f64 -> f32 for the culling ray only (never for a hit decision); `t_max` is
+            // rounded up so that no box before it is culled.
+            let tmax = if t_max.is_finite() { (t_max as f32) * (1.0 + 1e-6) } else { f32::INFINITY };
+            return Some((bvh4::CullRay::new(ray.origin.as_vec3a(), ray.dir.as_vec3a(), tmax), 0.0, 1.0));
+        }
+        let (cull, t0, to_cull) = self.cull_ray(ray, t_max)?;
+        Some((bvh4::CullRay::new(cull.origin, cull.direction, cull.tmax), t0, to_cull))
+    }
+
+    /// [`Intersector::intersect`] over the own 4-wide tree (same hits as the other layouts).
+    #[inline]
+    fn intersect_bvh4(&self, bvh: &Bvh4, ray: &Ray, t_max: f64) -> Option<Hit> {
+        let wray = WatertightRay::new(ray)?;
+        let (cull, t0, to_cull) = self.cull_ray4(ray, t_max)?;
+        let mut best: Option<(f64, u32, u32, DVec2)> = None;
+        bvh.traverse(&cull, |first, count, mut t_cull| {
+            for tri in &self.tris[first..first + count] {
+                // The original t_max, not the best t so far, so that exact ties are seen.
+                let Some((t, bary)) = wray.intersect(tri.p[0], tri.p[1], tri.p[2], t_max) else {
+                    continue;
+                };
+                let better = match best {
+                    None => true,
+                    Some((bt, bo, bi, _)) => t < bt || (t == bt && (tri.object, tri.index) < (bo, bi)),
+                };
+                if better {
+                    best = Some((t, tri.object, tri.index, bary));
+                    // Boxes reaching t are entered at least the padding earlier, so rounding
+                    // here cannot cull one.
+                    t_cull = t_cull.min(((t - t0) * to_cull) as f32);
+                }
+            }
+            t_cull
+        });
+        best.map(|(t, object, index, bary)| Hit { t, object, surface: Surface::Triangle { index, bary } })
+    }
+
     /// Sets up the `f32` culling ray for `ray` with `0 < t < t_max`: `None` when the ray
     /// misses the padded scene box within that range. Returns the ray, the `t` (in `ray`'s
     /// units) of its start, and the factor from `ray`'s `t` to the culling ray's `t`.
@@ -347,6 +396,9 @@ impl Intersector for BvhIntersector {
     /// Nearest hit with `0 < t < t_max`. Equal `t` is broken as in
     /// [`crate::accel::brute::BruteForce`]: lowest object index, then lowest triangle index.
     fn intersect(&self, ray: &Ray, t_max: f64) -> Option<Hit> {
+        if let Tree::Own(bvh) = &self.tree {
+            return self.intersect_bvh4(bvh, ray, t_max);
+        }
         let wray = WatertightRay::new(ray)?;
         let (cull, t0, to_cull) = self.cull_ray(ray, t_max)?;
         let mut best: Option<(f64, u32, u32, DVec2)> = None;
@@ -371,16 +423,7 @@ impl Intersector for BvhIntersector {
         let mut raw = RayHit::none();
         match &self.tree {
             Tree::Empty => return None,
-            Tree::Own(bvh) => {
-                let ray4 = bvh4::CullRay::new(cull.origin, cull.direction, cull.tmax);
-                bvh.traverse(&ray4, |first, count, t_cull| {
-                    let mut t_cull = t_cull;
-                    for slot in first..first + count {
-                        t_cull = t_cull.min(test(&cull, slot));
-                    }
-                    t_cull
-                });
-            }
+            Tree::Own(_) => unreachable!("handled by intersect_bvh4"),
             Tree::Cw(bvh) => {
                 bvh.ray_traverse(cull, &mut raw, &mut test);
             }
@@ -404,6 +447,23 @@ impl Intersector for BvhIntersector {
         let Some(wray) = WatertightRay::new(ray) else {
             return false;
         };
+        if let Tree::Own(bvh) = &self.tree {
+            let Some((cull, _, _)) = self.cull_ray4(ray, t_max) else {
+                return false;
+            };
+            let mut hit = false;
+            bvh.traverse(&cull, |first, count, t_cull| {
+                if self.tris[first..first + count]
+                    .iter()
+                    .any(|tri| wray.intersect(tri.p[0], tri.p[1], tri.p[2], t_max).is_some())
+                {
+                    hit = true;
+                    return -1.0;
+                }
+                t_cull
+            });
+            return hit;
+        }
         let Some((cull, _, _)) = self.cull_ray(ray, t_max) else {
             return false;
         };
@@ -416,18 +476,7 @@ impl Intersector for BvhIntersector {
         };
         match &self.tree {
             Tree::Empty => false,
-            Tree::Own(bvh) => {
-                let ray4 = bvh4::CullRay::new(cull.origin, cull.direction, cull.tmax);
-                let mut hit = false;
-                bvh.traverse(&ray4, |first, count, t_cull| {
-                    if (first..first + count).any(|slot| test(&cull, slot) < 0.0) {
-                        hit = true;
-                        return -1.0;
-                    }
-                    t_cull
-                });
-                hit
-            }
+            Tree::Own(_) => unreachable!("handled above"),
             Tree::Cw(bvh) => !bvh.ray_traverse_miss(cull, test),
             Tree::Bin(bvh) => !bvh.ray_traverse_miss(cull, test),
         }

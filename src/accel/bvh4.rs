@@ -35,9 +35,8 @@ pub const MAX_PRIMITIVES: usize = 1 << 27;
 /// Set in an [`Item`]'s index bits (see there).
 const ID_TAG: u32 = 0x4000_0000;
 
-/// Traversal stack entries: at most 3 per level of a tree of depth
-/// `SAH_MAX_DEPTH + ceil(27 / 2) + 1`.
-const STACK: usize = 3 * (SAH_MAX_DEPTH + 16) + 1;
+/// Traversal stack entries kept in a fixed array (trees up to depth 21; deeper ones use a `Vec`).
+const SMALL_STACK: usize = 64;
 
 /// Child reference: an interior node's index, a leaf (`LEAF` bit, count - 1 in bits 27..=30,
 /// first slot in bits 0..=26), or [`EMPTY`].
@@ -108,23 +107,20 @@ pub struct CullRay {
 }
 
 impl CullRay {
-    /// `dir` need not be normalised; `t` is in its units. Zero components are fine (their
-    /// inverse is clamped to +-1e30, so no `0 * inf` NaN can arise in the slab test).
+    /// `dir` need not be normalised; `t` is in its units. A zero (or subnormal) component gets
+    /// an infinite inverse: the slab bounds are then `+-inf` (the ray never leaves or never
+    /// enters that slab), or NaN when the origin lies exactly on a face plane, which culls the
+    /// box or ignores that axis. Either is safe for boxes padded around their primitives, as the
+    /// mesh backend's are: a ray inside a face plane cannot reach a primitive strictly inside.
     pub fn new(origin: Vec3A, dir: Vec3A, t_max: f32) -> CullRay {
-        let inv = |d: f32| {
-            if d == 0.0 {
-                1e30f32.copysign(d)
-            } else {
-                (1.0 / d).clamp(-1e30, 1e30)
-            }
-        };
+        let inv = dir.recip();
         CullRay {
             ox: Vec4::splat(origin.x),
             oy: Vec4::splat(origin.y),
             oz: Vec4::splat(origin.z),
-            ix: Vec4::splat(inv(dir.x)),
-            iy: Vec4::splat(inv(dir.y)),
-            iz: Vec4::splat(inv(dir.z)),
+            ix: Vec4::splat(inv.x),
+            iy: Vec4::splat(inv.y),
+            iz: Vec4::splat(inv.z),
             t_max,
         }
     }
@@ -264,12 +260,22 @@ impl Bvh4 {
     /// one passed: boxes entered beyond it are skipped from then on); a negative value ends the
     /// traversal (any-hit queries).
     #[inline]
-    pub fn traverse(&self, ray: &CullRay, mut leaf: impl FnMut(usize, usize, f32) -> f32) {
+    pub fn traverse(&self, ray: &CullRay, leaf: impl FnMut(usize, usize, f32) -> f32) {
+        // At most 3 entries per level are pending; a small array (cheap to set up per ray)
+        // serves every tree of usual depth.
+        if 3 * self.depth < SMALL_STACK {
+            self.traverse_in(&mut [(0, 0.0); SMALL_STACK], ray, leaf);
+        } else {
+            self.traverse_in(&mut vec![(0, 0.0); 3 * self.depth + 1], ray, leaf);
+        }
+    }
+
+    #[inline]
+    fn traverse_in(&self, stack: &mut [(u32, f32)], ray: &CullRay, mut leaf: impl FnMut(usize, usize, f32) -> f32) {
         let mut t_max = ray.t_max;
-        if self.root == EMPTY || !(t_max >= 0.0) {
+        if self.root == EMPTY || t_max.is_nan() || t_max < 0.0 {
             return;
         }
-        let mut stack = [(0u32, 0f32); STACK];
         let mut sp = 0usize;
         let mut current = self.root;
         loop {
@@ -430,7 +436,9 @@ fn split(items: &mut [Item], offset: usize, cb: &Box4, depth: usize) -> (Part, P
         // Bin index = round((centroid - lo) * scale) in 0..=BINS-1, read off the mantissa of
         // that value plus 2^23 (cheaper than a checked float-to-int conversion; any monotonic
         // mapping works, as long as binning and partitioning use the same one).
-        let scale = Vec4::select(extent.cmpgt(Vec4::ZERO), Vec4::splat((BINS - 1) as f32) / extent, Vec4::ZERO);
+        // Fewer bins for small nodes: the sweep over the bins costs as much as binning there.
+        let nb = n.clamp(4, BINS);
+        let scale = Vec4::select(extent.cmpgt(Vec4::ZERO), Vec4::splat((nb - 1) as f32) / extent, Vec4::ZERO);
         let lo = cb.lo * Vec4::new(1.0, 1.0, 1.0, 0.0);
         let bin_of = |it: &Item| {
             let b = (it.center2() - lo) * scale + Vec4::splat(MAGIC);
@@ -440,23 +448,30 @@ fn split(items: &mut [Item], offset: usize, cb: &Box4, depth: usize) -> (Part, P
                 (b.z.to_bits() & BIN_MASK) as usize,
             ]
         };
-        let bin_items = |items: &[Item]| {
-            let mut bins = Bins::EMPTY;
+        let bin_items = |bins: &mut Bins, items: &[Item]| {
             for it in items {
                 let b = bin_of(it);
-                for axis in 0..3 {
-                    bins.boxes[axis][b[axis]].grow(it);
-                    bins.counts[axis][b[axis]] += 1;
+                for (axis, &bin) in b.iter().enumerate() {
+                    bins.boxes[axis][bin].grow(it);
+                    bins.counts[axis][bin] += 1;
                 }
             }
-            bins
         };
-        let Bins { boxes, counts } = if n >= PARALLEL_BINNING_MIN {
+        let mut bins = Bins::EMPTY;
+        if n >= PARALLEL_BINNING_MIN {
             use rayon::prelude::*;
-            items.par_chunks(PARALLEL_BINNING_MIN / 4).map(bin_items).reduce(|| Bins::EMPTY, Bins::merge)
+            bins = items
+                .par_chunks(PARALLEL_BINNING_MIN / 4)
+                .map(|chunk| {
+                    let mut b = Bins::EMPTY;
+                    bin_items(&mut b, chunk);
+                    b
+                })
+                .reduce(|| Bins::EMPTY, Bins::merge);
         } else {
-            bin_items(items)
-        };
+            bin_items(&mut bins, items);
+        }
+        let (boxes, counts) = (&bins.boxes, &bins.counts);
         let mut best = f32::INFINITY;
         let mut cut: Option<(usize, usize, Box4, Box4)> = None; // axis, first right bin, boxes
         for axis in 0..3 {
@@ -466,13 +481,13 @@ fn split(items: &mut [Item], offset: usize, cb: &Box4, depth: usize) -> (Part, P
             // Right-to-left sweep: box and area x count of the right side for each cut.
             let mut right = [(Box4::EMPTY, 0f32); BINS];
             let (mut acc, mut count) = (Box4::EMPTY, 0u32);
-            for b in (1..BINS).rev() {
+            for b in (1..nb).rev() {
                 acc.grow_box(&boxes[axis][b]);
                 count += counts[axis][b];
                 right[b] = (acc, acc.half_area() * count as f32);
             }
             let (mut acc, mut count) = (Box4::EMPTY, 0u32);
-            for b in 1..BINS {
+            for b in 1..nb {
                 acc.grow_box(&boxes[axis][b - 1]);
                 count += counts[axis][b - 1];
                 if count == 0 || count as usize == n {
@@ -634,4 +649,176 @@ fn four_parts(items: &mut [Item], offset: usize, cb: Box4, depth: usize) -> ([Pa
         }
     }
     (parts, m)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A small deterministic generator (xorshift) for test boxes and rays.
+    struct Rng(u64);
+    impl Rng {
+        fn next(&mut self) -> f32 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 7;
+            self.0 ^= self.0 << 17;
+            (self.0 >> 40) as f32 / (1u64 << 24) as f32
+        }
+        fn range(&mut self, a: f32, b: f32) -> f32 {
+            a + (b - a) * self.next()
+        }
+    }
+
+    fn random_boxes(rng: &mut Rng, n: usize) -> Vec<Aabb> {
+        (0..n)
+            .map(|_| {
+                let c = Vec3A::new(rng.range(-50.0, 50.0), rng.range(-50.0, 50.0), rng.range(250.0, 350.0));
+                let h = Vec3A::new(rng.range(0.01, 2.0), rng.range(0.01, 2.0), rng.range(0.01, 2.0));
+                Aabb { lo: c - h, hi: c + h }
+            })
+            .collect()
+    }
+
+    /// Every slot once; every child box contains the boxes below it.
+    fn check_structure(bvh: &Bvh4, boxes: &[Aabb]) {
+        let mut seen = vec![false; boxes.len()];
+        for &p in bvh.slots() {
+            assert!(!std::mem::replace(&mut seen[p as usize], true), "primitive {p} in two slots");
+        }
+        assert!(seen.iter().all(|&s| s), "a primitive is missing");
+        let contains = |outer: &Aabb, inner: &Aabb| outer.lo.cmple(inner.lo).all() && outer.hi.cmpge(inner.hi).all();
+        // Box of a subtree (recomputed from the primitives), checked against the parent's copy.
+        fn subtree(bvh: &Bvh4, r: u32, slots: &mut Vec<usize>) {
+            if r & LEAF != 0 {
+                let first = (r & ((1 << 27) - 1)) as usize;
+                slots.extend(first..first + (((r >> 27) & 0xF) + 1) as usize);
+                return;
+            }
+            for &c in &bvh.nodes[r as usize].child {
+                if c != EMPTY {
+                    subtree(bvh, c, slots);
+                }
+            }
+        }
+        let mut leaf_slots = Vec::new();
+        if bvh.root != EMPTY {
+            subtree(bvh, bvh.root, &mut leaf_slots);
+        }
+        leaf_slots.sort_unstable();
+        assert_eq!(leaf_slots, (0..boxes.len()).collect::<Vec<_>>(), "leaves do not cover the slots exactly once");
+        for node in &bvh.nodes {
+            for i in 0..4 {
+                let c = node.child[i];
+                if c == EMPTY {
+                    continue;
+                }
+                let child_box = Aabb {
+                    lo: Vec3A::new(node.lo_x[i], node.lo_y[i], node.lo_z[i]),
+                    hi: Vec3A::new(node.hi_x[i], node.hi_y[i], node.hi_z[i]),
+                };
+                let mut below = Vec::new();
+                subtree(bvh, c, &mut below);
+                assert!((1..=LEAF_MAX).contains(&below.len()) || c & LEAF == 0, "leaf of {} primitives", below.len());
+                for s in below {
+                    let b = boxes[bvh.slots()[s] as usize];
+                    assert!(contains(&child_box, &b), "child box {child_box:?} does not contain {b:?}");
+                }
+            }
+        }
+    }
+
+    /// The leaves the fast traversal visits when nothing is pruned, sorted.
+    fn visited(bvh: &Bvh4, ray: &CullRay) -> Vec<(usize, usize)> {
+        let mut out = Vec::new();
+        bvh.traverse(ray, |first, count, t| {
+            out.push((first, count));
+            t
+        });
+        out.sort_unstable();
+        out
+    }
+
+    #[test]
+    fn structure_and_traversal_match_the_scan_of_all_nodes() {
+        let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
+        for n in [0usize, 1, 3, 4, 5, 17, 100, 5000, 40_000] {
+            let boxes = random_boxes(&mut rng, n);
+            let bvh = Bvh4::build(&boxes);
+            check_structure(&bvh, &boxes);
+            for k in 0..300 {
+                let o = Vec3A::new(rng.range(-3.0, 3.0), rng.range(-3.0, 3.0), rng.range(-3.0, 3.0));
+                let target = Vec3A::new(rng.range(-60.0, 60.0), rng.range(-60.0, 60.0), rng.range(240.0, 360.0));
+                let t_max = if k % 3 == 0 { rng.range(0.5, 1.2) } else { f32::INFINITY };
+                let ray = CullRay::new(o, target - o, t_max);
+                let mut slow = bvh.leaves_entered(&ray);
+                slow.sort_unstable();
+                assert_eq!(visited(&bvh, &ray), slow, "n = {n}, ray {k}");
+            }
+        }
+    }
+
+    #[test]
+    fn coincident_and_exponentially_spread_boxes_build_bounded_trees() {
+        // All centroids equal: splits fall back to halving by position.
+        let same = vec![Aabb { lo: Vec3A::splat(-1.0), hi: Vec3A::splat(1.0) }; 1000];
+        let bvh = Bvh4::build(&same);
+        check_structure(&bvh, &same);
+        assert!(bvh.depth() <= 6, "depth {}", bvh.depth());
+        let ray = CullRay::new(Vec3A::new(0.0, 0.0, -10.0), Vec3A::Z, f32::INFINITY);
+        assert_eq!(visited(&bvh, &ray).iter().map(|l| l.1).sum::<usize>(), 1000);
+
+        // Boxes at 6^i along x, sizes spanning 37 orders of magnitude.
+        let spread: Vec<Aabb> = (0..48)
+            .map(|i| {
+                let x = 6f32.powi(i);
+                Aabb { lo: Vec3A::new(x, -1.0, -1.0), hi: Vec3A::new(x * 1.1, 1.0, 1.0) }
+            })
+            .collect();
+        let bvh = Bvh4::build(&spread);
+        check_structure(&bvh, &spread);
+        assert!(bvh.depth() <= SAH_MAX_DEPTH + 16, "depth {}", bvh.depth());
+        let ray = CullRay::new(Vec3A::new(0.5, 0.0, 0.0), Vec3A::X, f32::INFINITY);
+        let mut slow = bvh.leaves_entered(&ray);
+        slow.sort_unstable();
+        assert_eq!(visited(&bvh, &ray), slow);
+        // The heap-stack path (taken by trees deeper than SMALL_STACK / 3) visits the same leaves.
+        let mut heap = Vec::new();
+        bvh.traverse_in(&mut vec![(0, 0.0); 3 * bvh.depth() + 1], &ray, |first, count, t| {
+            heap.push((first, count));
+            t
+        });
+        heap.sort_unstable();
+        assert_eq!(heap, slow);
+        assert_eq!(slow.iter().map(|l| l.1).sum::<usize>(), 48);
+    }
+
+    #[test]
+    fn pruning_keeps_the_nearest_box() {
+        // Each primitive "hits" where the ray enters its box; the traversal, pruning with the
+        // best hit so far, must find the same nearest entry as a scan of every box.
+        let mut rng = Rng(42);
+        let boxes = random_boxes(&mut rng, 20_000);
+        let bvh = Bvh4::build(&boxes);
+        let entry = |b: &Aabb, o: Vec3A, d: Vec3A| {
+            let inv = d.recip();
+            let (a, c) = ((b.lo - o) * inv, (b.hi - o) * inv);
+            let (t0, t1) = (a.min(c).max_element().max(0.0), a.max(c).min_element());
+            (t0 <= t1).then_some(t0)
+        };
+        for _ in 0..500 {
+            let o = Vec3A::new(rng.range(-3.0, 3.0), rng.range(-3.0, 3.0), 0.0);
+            let d = Vec3A::new(rng.range(-60.0, 60.0), rng.range(-60.0, 60.0), 300.0) - o;
+            let brute = boxes.iter().filter_map(|b| entry(b, o, d)).fold(f32::INFINITY, f32::min);
+            let mut best = f32::INFINITY;
+            bvh.traverse(&CullRay::new(o, d, f32::INFINITY), |first, count, t| {
+                for s in first..first + count {
+                    if let Some(e) = entry(&boxes[bvh.slots()[s] as usize], o, d) {
+                        best = best.min(e);
+                    }
+                }
+                t.min(best)
+            });
+            assert_eq!(best, brute);
+        }
+    }
 }
