@@ -1,5 +1,7 @@
 //! Criterion benchmarks of the pure-Rust BVH backend against Embree (when the `embree` feature
-//! is on), one thread: nearest-hit queries on the Stanford bunny for coherent camera rays
+//! is on), one thread: nearest-hit queries on the pipeline's own rays of scenes/bunny.toml (LC
+//! display rays and ground-truth eye rays, the speed targets), and on the bare Stanford
+//! bunny for coherent camera rays
 //! (a pinhole image traced row by row, like the display rays), eye-like rays (random points of
 //! a 4 mm pupil towards random points around the bunny) and incoherent rays (random origins
 //! around the bunny, random directions); and the build time of both on a 2-million-triangle
@@ -64,6 +66,38 @@ fn ray_sets() -> Vec<(&'static str, Vec<Ray>)> {
 
 fn trace_all(backend: &dyn Intersector, rays: &[Ray]) -> usize {
     rays.iter().filter(|r| backend.intersect(r, f64::INFINITY).is_some()).count()
+}
+
+/// The speed targets are on the pipeline's own rays: scenes/bunny.toml (bunny and a
+/// tessellated USAF square), LC display rays of 32 LCD rows and ground-truth eye rays of 2 retina
+/// rows (the ray sets of benches/embree.rs), one ray at a time on one thread.
+fn bench_pipeline_rays(c: &mut Criterion) {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/bunny.toml");
+    let Ok(scene) = inimtrace::io::config::load_scene(&path.to_string_lossy(), std::path::Path::new("")) else {
+        eprintln!("scenes/bunny.toml could not be loaded (glmark2-data missing?): skipping the pipeline rays");
+        return;
+    };
+    let meshes = inimtrace::render::backend::scene_meshes(&scene);
+    let refs: Vec<(u32, &Mesh)> = meshes.iter().map(|(i, m)| (*i, m.as_ref())).collect();
+    #[cfg_attr(not(feature = "embree"), allow(unused_mut))]
+    let mut backends: Vec<(&'static str, Box<dyn Intersector>)> = vec![
+        ("bvh-bvh4", Box::new(BvhIntersector::with_layout(&refs, BvhLayout::Bvh4).unwrap())),
+        ("bvh-cwbvh", Box::new(BvhIntersector::with_layout(&refs, BvhLayout::Cwbvh).unwrap())),
+    ];
+    #[cfg(feature = "embree")]
+    {
+        use inimtrace::accel::embree::{BuildQuality, EmbreeIntersector};
+        backends.push(("embree", Box::new(EmbreeIntersector::new(&refs, BuildQuality::High).unwrap())));
+    }
+    for (set, rays) in [("display", common::bunny_display_rays(32)), ("eye", common::bunny_eye_rays(2))] {
+        let mut group = c.benchmark_group(format!("bunny_scene_{set}"));
+        group.throughput(Throughput::Elements(rays.len() as u64));
+        group.sample_size(30);
+        for (name, backend) in &backends {
+            group.bench_function(*name, |b| b.iter(|| trace_all(black_box(backend.as_ref()), black_box(&rays))));
+        }
+        group.finish();
+    }
 }
 
 fn bench_rays(c: &mut Criterion) {
@@ -146,5 +180,5 @@ fn bench_build(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_rays, bench_build);
+criterion_group!(benches, bench_pipeline_rays, bench_rays, bench_build);
 criterion_main!(benches);

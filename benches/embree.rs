@@ -21,52 +21,20 @@ use glam::DVec3;
 use inimtrace::accel::embree::{BuildQuality, EmbreeIntersector, RawRay};
 use inimtrace::accel::{Intersector, Ray};
 use inimtrace::io::config;
-use inimtrace::optics::{Display, Eye, Focus, Retina};
 use inimtrace::render::backend::scene_meshes;
-use inimtrace::render::display_image::camera_ray;
-use inimtrace::render::retina::eye_scene_ray;
 use inimtrace::render::{RadianceField, Sample, SceneTracer};
 use inimtrace::scene::{Mesh, Scene};
 use rayon::prelude::*;
+
+#[path = "../tests/common/mod.rs"]
+mod common;
+use common::{bunny_display_rays as display_rays, bunny_eye_rays as eye_rays};
 
 fn bunny() -> Scene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/bunny.toml");
     let mut scene = config::load_scene(&path.to_string_lossy(), Path::new("")).expect("scenes/bunny.toml");
     scene.light = None;
     scene
-}
-
-/// LC camera rays of `rows` LCD rows through the middle of the paper display, row-major.
-fn display_rays(rows: usize) -> Vec<Ray> {
-    let d = Display::paper();
-    let r0 = d.lcd.rows() / 2 - rows / 2;
-    let mut rays = Vec::with_capacity(rows * d.lcd.columns());
-    for row in r0..r0 + rows {
-        for col in 0..d.lcd.columns() {
-            let x3 = d.lcd.pixel_center(row, col);
-            let c = d.lenslets.center(d.elemental_image_of(x3));
-            rays.push(camera_ray(&d, x3, c, c, 0.0));
-        }
-    }
-    rays
-}
-
-/// Ground-truth eye rays (5 mm pupil, 8 x 8 grid, focus 386 mm) of `rows` retina rows
-/// (512 px, +-0.3) through the middle, each row laid out [pupil sample][column].
-fn eye_rays(rows: usize) -> Vec<Ray> {
-    let eye = Eye::thin_lens(5.0, Focus::Millimetres(386.0), 8);
-    let retina = Retina::default();
-    let pupil = eye.pupil_samples();
-    let r0 = retina.resolution / 2 - rows / 2;
-    let mut rays = Vec::new();
-    for row in r0..r0 + rows {
-        for s in &pupil {
-            for col in 0..retina.resolution {
-                rays.push(eye_scene_ray(&eye, retina.tangent(row, col, glam::DVec2::splat(0.5)), *s));
-            }
-        }
-    }
-    rays
 }
 
 fn raw(rays: &[Ray]) -> Vec<RawRay> {

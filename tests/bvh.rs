@@ -125,6 +125,39 @@ fn agrees_with_brute_force_on_closed_icosphere() {
 }
 
 #[test]
+fn far_origins_axis_parallel_and_extreme_length_rays_agree_with_brute_force() {
+    // The own tree's culling ray has two set-ups: the ray rounded to f32 as it is (origin within
+    // 2 S of the coordinate origin, moderate direction length) and the clipped, rescaled ray
+    // (far origins, tiny or huge directions). Axis-parallel rays give infinite inverse
+    // directions. All must find the brute-force hits.
+    let centre = DVec3::new(3.0, -2.0, 300.0);
+    let m = icosphere(3, centre, 30.0);
+    let brute = BruteForce::new(&[(0, &m)]).unwrap();
+    let mut rng = Rng(4242);
+    let mut rays = Vec::new();
+    for i in 0..1200 {
+        let target = centre + rng.vec(-32.0, 32.0);
+        let origin = match i % 4 {
+            0 => centre + rng.vec(-1.0, 1.0).normalize() * 1e5, // far: clipped path
+            1 => rng.vec(-2.0, 2.0),
+            2 => centre + rng.vec(-10.0, 10.0), // inside the sphere
+            _ => rng.vec(-1.0, 1.0) * 1e3,
+        };
+        let scale = [1e-9, 1e-3, 1.0, 1e4, 1e9][i % 5];
+        rays.push(ray(origin, (target - origin) * scale));
+        // Axis-parallel through the sphere (zero direction components), both directions.
+        let p = centre + rng.vec(-25.0, 25.0);
+        let axis = [DVec3::X, DVec3::Y, DVec3::Z][i % 3] * if i % 2 == 0 { 1.0 } else { -1.0 };
+        rays.push(ray(p - axis * 100.0, axis));
+    }
+    for layout in LAYOUTS {
+        let bvh = BvhIntersector::with_layout(&[(0, &m)], layout).unwrap();
+        let hits = check_agreement(&bvh, &brute, &rays, f64::INFINITY);
+        assert!(hits > 1500, "{layout:?}: {hits} hits");
+    }
+}
+
+#[test]
 fn rays_through_shared_edges_and_vertices_never_escape() {
     let centre = DVec3::new(0.5, 0.25, 100.0);
     let m = icosphere(3, centre, 10.0);

@@ -4,17 +4,19 @@
 //! ([`crate::accel::brute::BruteForce`]): same triangle, same `t`, same barycentrics, same
 //! tie-breaking.
 //!
-//! The hierarchy comes from the `obvhs` crate (PLOC build, then
-//! either an 8-wide compressed CWBVH or the binary BVH2; see docs/BVH.md for the measurement
-//! behind the default). Precision, deliberately split:
+//! The hierarchy is inimtrace's own 4-wide BVH ([`crate::accel::bvh4`], the default
+//! [`BvhLayout::Bvh4`]); the `obvhs` crate's CWBVH and BVH2 are kept as [`BvhLayout`]s for
+//! comparison (docs/BVH.md has the measurements behind the default). Precision, deliberately
+//! split:
 //!
 //! * The tree stores `f32` boxes and is traversed with an `f32` copy of the ray. This is only
 //!   used to *cull*: it never decides a hit. Every triangle box is padded by
 //!   [`PAD_REL`] times the scene scale `S` (the largest vertex coordinate magnitude or scene
 //!   diagonal), which is far more than the rounding of the `f32` ray and box arithmetic
 //!   (a few `2^-24 S`), so a box that holds a triangle the exact ray hits is never culled.
-//!   To keep the `f32` origin near the scene (so that its rounding stays ~`2^-24 S`), the
-//!   culling ray starts where the exact ray enters the padded scene box.
+//!   To keep the `f32` origin near the scene (so that its rounding stays ~`2^-24 S`), a ray whose
+//!   origin is farther than `2 S` from the coordinate origin (or, for the obvhs layouts, every
+//!   ray) is culled from where it enters the padded scene box instead.
 //! * Every triangle test is the shared watertight test
 //!   [`WatertightRay`](crate::accel::brute::WatertightRay) in `f64` on the original `f64`
 //!   vertices and ray, and the nearest-hit bookkeeping is done in `f64`.
@@ -367,7 +369,9 @@ impl BvhIntersector {
         let unit = self.scale * CULL_DIR_REL;
         // f64 -> f32 for the culling ray only (never for a hit decision).
         let origin = Vec3A::from((ray.origin + t0 * ray.dir).as_vec3());
-        let dir = (ray.dir / len * unit).as_vec3();
+        // -0.0 components become +0.0: obvhs's CWBVH takes the ray's octant from the sign
+        // test `d < 0`, which must agree with the sign of the (clamped) inverse below.
+        let dir = (ray.dir / len * unit).as_vec3().map(|c| if c == 0.0 { 0.0 } else { c });
         let inv = |d: f32| {
             if d == 0.0 {
                 1e30f32.copysign(d)

@@ -26,7 +26,7 @@ pub enum BackendChoice {
     Auto,
     Analytic,
     Embree,
-    /// The pure-Rust BVH (obvhs tree, f64 watertight triangle test).
+    /// The pure-Rust BVH (inimtrace's own 4-wide tree, f64 watertight triangle test).
     Bvh,
     Brute,
 }

@@ -61,3 +61,40 @@ pub fn white_wall() -> inimtrace::scene::Scene {
         warnings: Vec::new(),
     }
 }
+
+/// The pipeline's rays, as the benches trace them on scenes/bunny.toml: LC camera rays of `rows` LCD rows through the middle of the paper display, row-major.
+pub fn bunny_display_rays(rows: usize) -> Vec<inimtrace::accel::Ray> {
+    let d = inimtrace::optics::Display::paper();
+    let r0 = d.lcd.rows() / 2 - rows / 2;
+    let mut rays = Vec::with_capacity(rows * d.lcd.columns());
+    for row in r0..r0 + rows {
+        for col in 0..d.lcd.columns() {
+            let x3 = d.lcd.pixel_center(row, col);
+            let c = d.lenslets.center(d.elemental_image_of(x3));
+            rays.push(inimtrace::render::display_image::camera_ray(&d, x3, c, c, 0.0));
+        }
+    }
+    rays
+}
+
+/// Ground-truth eye rays (5 mm pupil, 8 x 8 grid, focus 386 mm) of `rows` retina rows
+/// (512 px, +-0.3) through the middle, each row laid out [pupil sample][column].
+pub fn bunny_eye_rays(rows: usize) -> Vec<inimtrace::accel::Ray> {
+    let eye = inimtrace::optics::Eye::thin_lens(5.0, inimtrace::optics::Focus::Millimetres(386.0), 8);
+    let retina = inimtrace::optics::Retina::default();
+    let pupil = eye.pupil_samples();
+    let r0 = retina.resolution / 2 - rows / 2;
+    let mut rays = Vec::new();
+    for row in r0..r0 + rows {
+        for s in &pupil {
+            for col in 0..retina.resolution {
+                rays.push(inimtrace::render::retina::eye_scene_ray(
+                    &eye,
+                    retina.tangent(row, col, glam::DVec2::splat(0.5)),
+                    *s,
+                ));
+            }
+        }
+    }
+    rays
+}
