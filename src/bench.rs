@@ -1237,7 +1237,7 @@ where
         chart
             .draw_series(std::iter::once(Text::new(
                 format!("{}: {} s", setting(&c.series, r.parameter, r.samples), secs(r.seconds)),
-                (r.samples as f64 * 1.04, r.psnr_db.min(120.0) + 0.35),
+                (r.samples as f64 * 1.06, r.psnr_db.min(120.0) + 0.6),
                 ("sans-serif", 12),
             )))
             .map_err(e2s)?;

@@ -279,35 +279,180 @@ fn every_file_in_tests_data_bad_fails_cleanly() {
     }
 }
 
-/// `inimtrace bench --quick` writes its CSV, JSON and plots, and the convergence series approach
-/// their references.
+/// Splits one CSV line (fields with commas are quoted, `""` is a quote).
+fn csv_fields(line: &str) -> Vec<String> {
+    let (mut fields, mut cur, mut quoted, mut chars) = (Vec::new(), String::new(), false, line.chars().peekable());
+    while let Some(c) = chars.next() {
+        match (c, quoted) {
+            ('"', true) if chars.peek() == Some(&'"') => {
+                cur.push('"');
+                chars.next();
+            }
+            ('"', _) => quoted = !quoted,
+            (',', false) => fields.push(std::mem::take(&mut cur)),
+            _ => cur.push(c),
+        }
+    }
+    fields.push(cur);
+    fields
+}
+
+/// `inimtrace bench --quick` writes its CSVs, JSON, Markdown report and plots; every backend
+/// that can render the paper's scene measures every method on the display image and on each
+/// focused eye case; the convergence series approach their references; LA with k = 1 is LC.
 #[test]
 fn bench_quick_writes_well_formed_reports() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("bench");
     let (ok, stdout, stderr) = inimtrace(&["bench", "--quick", "--out", out.to_str().unwrap()]);
     assert!(ok, "{stderr}");
-    assert!(stdout.contains("| la_grid |"));
-    for f in
-        ["bench.csv", "bench.json", "method.png", "method.svg", "la_grid.png", "pupil_grid.svg", "retina_samples.png"]
-    {
+    assert!(stdout.contains("| la_grid |"), "{stdout}");
+    for f in ["bench.csv", "builds.csv", "bench.json", "bench.md", "summary.md"] {
         assert!(out.join(f).is_file(), "missing {f}");
     }
-    let rows: Vec<serde_json::Value> =
-        serde_json::from_str(&std::fs::read_to_string(out.join("bench.json")).unwrap()).unwrap();
-    let psnr = |series: &str, p: u64| {
-        rows.iter()
-            .find(|r| r["series"] == series && r["parameter"] == p)
-            .map(|r| r["psnr_db"].as_f64().unwrap())
-            .unwrap()
-    };
-    assert!(psnr("la_grid", 8) > psnr("la_grid", 1) + 5.0);
-    assert!(psnr("pupil_grid", 16) > psnr("pupil_grid", 2) + 5.0);
-    assert!(psnr("retina_samples", 8) > psnr("retina_samples", 1) + 5.0);
-    for r in &rows {
-        assert!(r["psnr_db"].as_f64().unwrap().is_finite() && r["seconds"].as_f64().unwrap() > 0.0, "{r}");
-        assert!(r["git_revision"].as_str().is_some() && r["threads"].as_u64().unwrap() >= 1);
+    for name in ["speed_psnr", "speed_ssim", "la_grid", "pupil_grid", "retina_samples"] {
+        let png = std::fs::read(out.join(format!("{name}.png"))).unwrap();
+        assert!(png.starts_with(b"\x89PNG\r\n\x1a\n") && png.len() > 10_000, "{name}.png");
+        let svg = std::fs::read_to_string(out.join(format!("{name}.svg"))).unwrap();
+        assert!(svg.contains("<svg") && svg.trim_end().ends_with("</svg>"), "{name}.svg");
     }
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("bench.json")).unwrap()).unwrap();
+    let rows = report["rows"].as_array().unwrap();
+    let backends: Vec<&str> = report["backends"].as_array().unwrap().iter().map(|b| b.as_str().unwrap()).collect();
+    let mut expected = vec!["analytic-fused", "analytic"];
+    if cfg!(feature = "embree") {
+        expected.push("embree");
+    }
+    expected.push("bvh");
+    assert_eq!(backends, expected);
+
+    // Every row: finite scores, a time, its settings and provenance.
+    for r in rows {
+        let psnr = r["psnr_db"].as_f64().unwrap();
+        let ssim = r["ssim"].as_f64().unwrap();
+        assert!(psnr.is_finite() && psnr > 5.0 && psnr < 200.0, "{r}");
+        assert!(ssim > 0.0 && ssim <= 1.0, "{r}");
+        assert!(r["seconds"].as_f64().unwrap() > 0.0 && r["rays_per_second"].as_f64().unwrap() > 0.0, "{r}");
+        assert!(r["git_revision"].as_str().is_some_and(|s| !s.is_empty()), "{r}");
+        assert!(r["threads"].as_u64().unwrap() >= 1 && r["cores"].as_u64().unwrap() >= 1, "{r}");
+        assert_eq!(r["lcd_resolution"], 540);
+        assert_eq!(r["retina_resolution"], 128);
+        assert!(!r["reference"].as_str().unwrap().is_empty(), "{r}");
+    }
+
+    // Methods x backends: the display image and every focused eye case of the paper's
+    // experiment (Near 300, Cen 400, Far 600 mm).
+    let cases: Vec<(String, f64)> = report["eye_cases"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| (c[0].as_str().unwrap().to_string(), c[1].as_f64().unwrap()))
+        .collect();
+    assert_eq!(cases, [("Near".to_string(), 300.0), ("Cen".to_string(), 400.0), ("Far".to_string(), 600.0)]);
+    let method_row = |b: &str, m: &str, eye: &str| {
+        let found: Vec<&serde_json::Value> = rows
+            .iter()
+            .filter(|r| r["series"] == "method" && r["backend"] == b && r["method"] == m && r["eye_case"] == eye)
+            .collect();
+        assert_eq!(found.len(), 1, "{b} {m} {eye}");
+        found[0]
+    };
+    for m in ["LC", "PC", "LA"] {
+        for eye in ["", "Near", "Cen", "Far"] {
+            let reference = method_row("analytic-fused", m, eye);
+            assert_eq!(reference["quantity"], if eye.is_empty() { "display" } else { "perceived" });
+            for b in &backends {
+                let r = method_row(b, m, eye);
+                // Same scene, same rays: the analytic kernels agree bit for bit, and the mesh
+                // backends (tessellated rectangles) to well within a hundredth of a dB.
+                let d = (r["psnr_db"].as_f64().unwrap() - reference["psnr_db"].as_f64().unwrap()).abs();
+                assert!(if *b == "analytic" { d == 0.0 } else { d < 0.01 }, "{b} {m} {eye}: {d} dB");
+                if !eye.is_empty() {
+                    let display = method_row(b, m, "");
+                    assert!(r["seconds"].as_f64().unwrap() > display["seconds"].as_f64().unwrap());
+                    assert_eq!(r["pupil_grid"], 8);
+                }
+            }
+        }
+        // LA (5 x 5) traces 25 times LC's camera rays.
+        assert_eq!(method_row("bvh", "LA", "")["rays"], 25 * method_row("bvh", "LC", "")["rays"].as_u64().unwrap());
+    }
+    // LA is the most accurate method for every focused eye (the paper's finding).
+    for (eye, _) in &cases {
+        let p = |m: &str| method_row("analytic-fused", m, eye)["psnr_db"].as_f64().unwrap();
+        assert!(p("LA") > p("LC") && p("LC") > p("PC"), "{eye}");
+    }
+
+    // Convergence: each series gets closer to its reference overall, at a stated rate.
+    let series = |s: &str| -> Vec<(u64, f64)> {
+        rows.iter()
+            .filter(|r| r["series"] == s)
+            .map(|r| (r["parameter"].as_u64().unwrap(), r["psnr_db"].as_f64().unwrap()))
+            .collect()
+    };
+    assert_eq!(series("la_grid").iter().map(|p| p.0).collect::<Vec<_>>(), (1..=8).collect::<Vec<_>>());
+    assert_eq!(series("pupil_grid").iter().map(|p| p.0).collect::<Vec<_>>(), [2, 3, 4, 5, 6, 8, 10, 12, 16]);
+    assert_eq!(series("retina_samples").iter().map(|p| p.0).collect::<Vec<_>>(), [1, 2, 4, 8]);
+    for s in ["la_grid", "pupil_grid", "retina_samples"] {
+        let pts = series(s);
+        assert!(pts.last().unwrap().1 > pts[0].1 + 10.0, "{s}: {pts:?}");
+        // Overall decrease: no point falls more than 0.5 dB below the point at half its index.
+        for i in 2..pts.len() {
+            assert!(pts[i].1 > pts[i / 2].1 - 0.5, "{s}: {pts:?}");
+        }
+        let c = report["convergence"].as_array().unwrap().iter().find(|c| c["series"] == s).unwrap();
+        let rate = c["rate"].as_f64().unwrap();
+        assert!((-2.0..-0.2).contains(&rate), "{s}: rate {rate}");
+        assert_eq!(c["converged_psnr_db"].as_f64().unwrap(), pts.last().unwrap().1);
+        let within = &c["first_within_tolerance"];
+        let first = pts.iter().position(|p| p.1 >= pts.last().unwrap().1 - 0.1).unwrap();
+        assert_eq!(within["parameter"].as_u64().unwrap(), pts[first].0, "{s}");
+    }
+    // LA at k = 1 is LC, bit for bit.
+    assert_eq!(report["checks"]["la_k1_equals_lc"], true);
+
+    // Builds: each mesh backend over the 4 tessellated rectangles.
+    let builds = report["builds"].as_array().unwrap();
+    assert_eq!(builds.len(), expected.len() - 2);
+    for b in builds {
+        assert_eq!(b["triangles"], 8);
+        assert!(b["build_seconds"].as_f64().unwrap() >= 0.0);
+    }
+    let builds_csv = std::fs::read_to_string(out.join("builds.csv")).unwrap();
+    assert_eq!(builds_csv.lines().count(), builds.len() + 1);
+    assert!(builds_csv.lines().any(|l| l.starts_with("bvh,8,")), "{builds_csv}");
+
+    // The CSV holds the same rows, every line as many fields as the header.
     let csv = std::fs::read_to_string(out.join("bench.csv")).unwrap();
-    assert_eq!(csv.lines().count(), rows.len() + 1);
+    let lines: Vec<Vec<String>> = csv.lines().map(csv_fields).collect();
+    assert_eq!(lines.len(), rows.len() + 1);
+    let col = |name: &str| lines[0].iter().position(|h| h == name).unwrap();
+    for (fields, r) in lines[1..].iter().zip(rows) {
+        assert_eq!(fields.len(), lines[0].len(), "{fields:?}");
+        assert_eq!(fields[col("series")], r["series"].as_str().unwrap());
+        assert_eq!(fields[col("backend")], r["backend"].as_str().unwrap());
+        assert_eq!(fields[col("reference")], r["reference"].as_str().unwrap());
+        // (serde_json's float parsing may differ from Rust's in the last bit.)
+        let (a, b) = (fields[col("psnr_db")].parse::<f64>().unwrap(), r["psnr_db"].as_f64().unwrap());
+        assert!((a - b).abs() <= 1e-12 * b.abs(), "{a} {b}");
+    }
+
+    // The Markdown report: the methods x backends table, builds, convergence and the check.
+    let md = std::fs::read_to_string(out.join("bench.md")).unwrap();
+    for needle in ["| LA | bvh |", "| LC | analytic-fused |", "| bvh | 8 |", "rate p", "bit for bit the same"] {
+        assert!(md.contains(needle), "bench.md lacks `{needle}`");
+    }
+    assert!(std::fs::read_to_string(out.join("summary.md")).unwrap().contains("| PC | analytic |"));
+}
+
+#[test]
+fn bench_with_a_missing_scene_names_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o");
+    expect_error(
+        &["bench", "--quick", "--scene", "no-such-scene.toml", "--out", out.to_str().unwrap()],
+        &["no-such-scene.toml"],
+    );
+    assert!(!out.join("bench.json").exists());
 }
