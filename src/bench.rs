@@ -1211,7 +1211,7 @@ where
         .margin(14)
         .x_label_area_size(40)
         .y_label_area_size(56)
-        .build_cartesian_2d((n0 * 0.7..n1 * 1.6).log_scale(), (p0 - 1.5)..(p1 + 2.5))
+        .build_cartesian_2d((n0 * 0.7..n1 * 3.0).log_scale(), (p0 - 2.0)..(p1 + 2.5))
         .map_err(e2s)?;
     chart
         .configure_mesh()
@@ -1233,11 +1233,14 @@ where
         .label(format!("{} ({} backend)", c.series, c.backend))
         .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
     chart.draw_series(line.iter().map(|p| Circle::new(*p, 4, color.filled()))).map_err(e2s)?;
-    for r in &pts {
+    // The wall time beside each point, alternately above-left and below-right of it so that
+    // neighbours do not overlap.
+    for (i, r) in pts.iter().enumerate() {
+        let (dx, dy) = if i % 2 == 0 { (0.8, 0.9) } else { (1.08, -0.5) };
         chart
             .draw_series(std::iter::once(Text::new(
                 format!("{}: {} s", setting(&c.series, r.parameter, r.samples), secs(r.seconds)),
-                (r.samples as f64 * 1.06, r.psnr_db.min(120.0) + 0.6),
+                (r.samples as f64 * dx, r.psnr_db.min(120.0) + dy),
                 ("sans-serif", 12),
             )))
             .map_err(e2s)?;
