@@ -7,12 +7,14 @@
 //! quantity (not against the ground truth: that is `assess`'s Table 1):
 //!
 //! - **speed against error** (`series = "method"`): for every backend and method (LC, PC, LA at
-//!   the paper's k = 5), with 1 and 2 x 2 samples per display pixel, the display image against
-//!   the same method with 4 x 4 samples per pixel (LA: and a finer lenslet grid), and the
-//!   perceived image of every focused eye case of the paper's experiment (pupil grid 8, one
-//!   sample per retina pixel) against the reference display image seen by a finer eye (pupil
-//!   grid 16, 4 x 4 samples per retina pixel). Perceived rows time the display render plus the
-//!   simulation, which is the cost of getting that image from scratch;
+//!   the paper's k = 5), at each of [`Sizes::display_samples`] samples per display pixel (the
+//!   paper's one by default), the display image against the same method with 4 x 4 samples per
+//!   pixel (LA: also an 8 x 8 lenslet grid), and the perceived image of every focused eye case
+//!   of the paper's experiment (pupil grid 8, one sample per retina pixel) against the
+//!   reference display image seen by a finer eye (pupil grid 12, 4 x 4 samples per retina
+//!   pixel). Perceived rows time the display render plus the simulation, which is the cost of
+//!   getting that image from scratch. References are rendered once, on the first (fastest)
+//!   backend;
 //! - **convergence** (`la_grid`, `pupil_grid`, `retina_samples`), on the fastest backend: the
 //!   LA display image for k = 1..8 against k = 16; the LC perceived image at the first focused
 //!   eye case for n = 2..16 against n = 32; the ground truth at that eye case for 1, 2 x 2,
