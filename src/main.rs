@@ -109,7 +109,8 @@ enum Command {
         #[arg(long)]
         quick: bool,
         /// Scene TOML (default: the paper's scene). Rectangle-only scenes run on the analytic
-        /// backends and the mesh backends; scenes with meshes on the mesh backends.
+        /// backends and the mesh backends; scenes with meshes on the mesh backends only (slow at
+        /// full size: the LA reference traces 1,024 camera rays per display pixel; try --quick).
         #[arg(long)]
         scene: Option<PathBuf>,
         /// Output directory (default: out/bench or out/bench-quick).
