@@ -18,16 +18,27 @@
 //! - **convergence** (`la_grid`, `pupil_grid`, `retina_samples`), on the fastest backend: the
 //!   LA display image for k = 1..8 against k = 16; the LC perceived image at the first focused
 //!   eye case for n = 2..16 against n = 32; the ground truth at that eye case for 1, 2 x 2,
-//!   4 x 4, 8 x 8 samples per retina pixel against 16 x 16.
+//!   3 x 3, 4 x 4 samples per retina pixel against 8 x 8 (until the Table 1 series existed: 1,
+//!   2 x 2, 4 x 4, 8 x 8 against 16 x 16, a minute more of the full run for the same rate);
+//! - **Table 1 convergence** (`series = "table1"`, the swept parameter in `sweep`), on the
+//!   fastest backend: the quantity users report, the paper's Table 1 (PSNR and SSIM of the
+//!   perceived image against the ground-truth retinal image, per method and eye case, computed
+//!   by the stage functions of [`crate::experiment`] that `assess` runs), with one sampling
+//!   parameter swept and the others at the paper's settings: samples per retina pixel, samples
+//!   per display pixel, the eye's pupil grid n and LA's k. The value at a sweep's highest setting
+//!   is taken as converged; [`Table1Sweep`] reports the cheapest setting within
+//!   [`CONVERGED_TOLERANCE_DB`] of it, for every method and eye case at once and per method.
 //!
 //! Writes `bench.csv` (one row per measured point, with the core count, git revision and every
 //! setting), `builds.csv` (acceleration-structure build time and triangle count per mesh
 //! backend), `bench.json` (all of it, plus the observed convergence rates and checks),
 //! `bench.md` (the report), `summary.md` (its tables, for the README) and plots as PNG and SVG
-//! (plotters): `speed_psnr`, `speed_ssim`, `la_grid`, `pupil_grid`, `retina_samples`.
+//! (plotters): `speed_psnr`, `speed_ssim`, `la_grid`, `pupil_grid`, `retina_samples`, `table1`.
 
+use std::collections::HashMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
 
 use plotters::coord::Shift;
@@ -39,9 +50,9 @@ use crate::accel::bvh::BvhIntersector;
 #[cfg(feature = "embree")]
 use crate::accel::embree::{BuildQuality, EmbreeIntersector};
 use crate::error::{Error, Result};
-use crate::experiment::ExperimentSpec;
+use crate::experiment::{self, Experiment, ExperimentSpec};
 use crate::metrics::{self, SsimConstants};
-use crate::optics::{Display, Eye, Focus, Retina};
+use crate::optics::{Aperture, Display, Eye, Focus, Retina};
 use crate::progress::Progress;
 use crate::raster::RgbImage;
 use crate::render::backend::scene_meshes;
@@ -97,6 +108,13 @@ pub struct Sizes {
     pub pupil_grid_reference: usize,
     pub retina_samples: Vec<usize>,
     pub retina_samples_reference: usize,
+    /// Table 1 convergence: the settings of each sweep, lowest first (each includes the
+    /// paper's setting; the highest is taken as converged): samples per retina pixel and per
+    /// display pixel (per axis), the pupil grid n, LA's k.
+    pub table1_retina_samples: Vec<usize>,
+    pub table1_display_samples: Vec<usize>,
+    pub table1_pupil_grids: Vec<usize>,
+    pub table1_la_grids: Vec<usize>,
 }
 
 impl Sizes {
@@ -114,12 +132,20 @@ impl Sizes {
             la_grid_reference: 16,
             pupil_grids: vec![2, 3, 4, 5, 6, 8, 10, 12, 16],
             pupil_grid_reference: 32,
-            retina_samples: vec![1, 2, 4, 8],
-            retina_samples_reference: 16,
+            retina_samples: vec![1, 2, 3, 4],
+            retina_samples_reference: 8,
+            table1_retina_samples: vec![1, 2, 3, 4],
+            table1_display_samples: vec![1, 2, 3, 4],
+            table1_pupil_grids: vec![2, 3, 4, 5, 6, 8, 10, 12, 16],
+            // Every sweep of the Table 1 series recomputes the whole Table 1 (3 display images,
+            // 4 ground truths and simulations) at each setting: about 3 minutes of the full run
+            // on 2 shared cores. The highest settings are what fits; see `last_step_db`.
+            table1_la_grids: vec![1, 2, 3, 4, 5, 6, 8],
         }
     }
 
-    /// `--quick`: the same sweeps at a quarter of the LCD's and retina's resolution.
+    /// `--quick`: the same sweeps at a quarter of the LCD's and retina's resolution (a
+    /// sixteenth of the pixels).
     pub fn quick() -> Self {
         Self { lcd_resolution: 540, retina_resolution: 128, ..Self::full() }
     }
@@ -145,9 +171,14 @@ impl BenchOptions {
 /// One measured point.
 #[derive(Clone, Debug, Serialize)]
 pub struct BenchRow {
-    /// "method", "la_grid", "pupil_grid", "retina_samples".
+    /// "method", "la_grid", "pupil_grid", "retina_samples", "table1".
     pub series: String,
-    /// What was rendered and scored: "display", "perceived" or "ground_truth".
+    /// The parameter `parameter` holds: "display_samples" (`method` series), the series' own
+    /// name (`la_grid`, `pupil_grid`, `retina_samples`), or the swept parameter of a `table1`
+    /// row: "retina_samples", "display_samples", "pupil_grid" or "la_grid".
+    pub sweep: String,
+    /// What was rendered and scored: "display", "perceived" or "ground_truth" (`table1` rows:
+    /// "perceived", scored against the ground truth).
     pub quantity: String,
     /// Eye case of perceived and ground-truth images ("Near"); empty for display images.
     pub eye_case: String,
@@ -162,11 +193,15 @@ pub struct BenchRow {
     /// inside the circle for `pupil_grid`.
     pub samples: usize,
     /// Wall time. Perceived rows of the `method` series: display render plus simulation.
+    /// `table1` rows: computing the whole Table 1 at that setting (every display image, ground
+    /// truth, simulation and score; no files), the same for each of the point's rows.
     pub seconds: f64,
     /// Rays traced: camera rays of the display render, plus eye rays of the simulation.
+    /// `table1` rows: every camera and eye ray (ground truths and simulations) of the point.
     pub rays: u64,
     pub rays_per_second: f64,
-    /// Mean of the R, G, B PSNRs against the reference (peak 1, linear values).
+    /// Mean of the R, G, B PSNRs against the reference (peak 1, linear values). `table1`
+    /// rows: Table 1's PSNR (perceived image against the ground truth).
     pub psnr_db: f64,
     /// Mean SSIM (Wang 2004 constants) of R, G, B against the reference.
     pub ssim: f64,
@@ -240,6 +275,47 @@ pub struct Checks {
     pub la_k1_equals_lc: bool,
 }
 
+/// The cheapest setting of a Table 1 sweep at which a set of Table-1 PSNRs is within
+/// [`CONVERGED_TOLERANCE_DB`] of their converged values (those at the sweep's highest setting).
+#[derive(Clone, Debug, Serialize)]
+pub struct Table1Within {
+    /// "all" (every method and eye case at once) or a method ("LC", "PC", "LA": its eye cases).
+    pub methods: String,
+    pub parameter: usize,
+    pub samples: usize,
+    /// Computing the whole Table 1 at that setting.
+    pub seconds: f64,
+    /// Largest |PSNR - converged PSNR| at that setting over those methods and eye cases.
+    pub max_diff_db: f64,
+    /// Every higher setting of the sweep is within the tolerance too.
+    pub stays_within: bool,
+}
+
+/// One Table 1 sweep: its settings, their cost, and which reach the converged Table 1.
+#[derive(Clone, Debug, Serialize)]
+pub struct Table1Sweep {
+    /// "retina_samples", "display_samples", "pupil_grid" or "la_grid".
+    pub sweep: String,
+    pub backend: String,
+    /// The paper's setting of the swept parameter (the others stay at theirs).
+    pub paper_parameter: usize,
+    /// Settings in sweep order (fewest samples first), and the seconds each cost.
+    pub parameters: Vec<usize>,
+    pub seconds: Vec<f64>,
+    /// The highest setting, whose Table 1 is taken as converged.
+    pub converged_parameter: usize,
+    /// Largest |PSNR - converged PSNR| over every method and eye case at the paper's setting.
+    pub paper_max_diff_db: Option<f64>,
+    /// Largest change of any Table-1 PSNR over the sweep's last step (second-highest to highest
+    /// setting). Above the tolerance, the sweep has not levelled off: its "converged" Table 1 is
+    /// only the best it measured, and the setting within tolerance is its highest.
+    pub last_step_db: Option<f64>,
+    /// The cheapest setting within tolerance for every method and eye case at once...
+    pub all_methods: Option<Table1Within>,
+    /// ... and for each method on its own (its eye cases).
+    pub per_method: Vec<Table1Within>,
+}
+
 /// Wall time of a step that is not a measured point (references, scoring, writing).
 #[derive(Clone, Debug, Serialize)]
 pub struct StageTime {
@@ -267,6 +343,8 @@ pub struct BenchReport {
     pub backends: Vec<String>,
     pub builds: Vec<BuildRecord>,
     pub convergence: Vec<ConvergenceSummary>,
+    /// Table 1 convergence, one entry per sweep.
+    pub table1: Vec<Table1Sweep>,
     pub checks: Checks,
     /// Where the rest of the time went.
     pub stages: Vec<StageTime>,
@@ -330,6 +408,23 @@ pub fn first_within(psnr: &[f64], tolerance: f64) -> Option<usize> {
     psnr.iter().position(|p| *p >= last - tolerance)
 }
 
+/// Largest |a - b| over two equally long lists; infinite when their lengths differ or a
+/// difference is NaN.
+pub fn max_abs_diff(a: &[f64], b: &[f64]) -> f64 {
+    if a.len() != b.len() {
+        return f64::INFINITY;
+    }
+    a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, |m, d| if d.is_nan() { f64::INFINITY } else { m.max(d) })
+}
+
+/// Index of the cheapest point of a sweep (the first: sweeps go from fewest to most samples)
+/// whose every value is within `tolerance` of the same value at the last point (the converged
+/// values): `points[i]` holds the values of point i, in the same order at every point.
+pub fn cheapest_within(points: &[Vec<f64>], tolerance: f64) -> Option<usize> {
+    let last = points.last()?;
+    points.iter().position(|p| max_abs_diff(p, last) <= tolerance)
+}
+
 /// A backend that can render the scene: its radiance field, and how long it took to set up.
 struct Backend<'a> {
     name: &'static str,
@@ -350,6 +445,7 @@ impl Ctx {
     fn row(&self, series: &str, quantity: &str, backend: &str, method: &str) -> BenchRow {
         BenchRow {
             series: series.into(),
+            sweep: series.into(),
             quantity: quantity.into(),
             eye_case: String::new(),
             focus_mm: None,
@@ -496,7 +592,7 @@ pub fn run(opts: &BenchOptions, scene: &Scene, scene_label: &str) -> Result<Benc
     stage(&mut stages, "set up backends (including the builds)", t);
 
     let hidden = Progress::hidden();
-    let progress = Progress::new(backends.len() as u64 + 4, "bench", opts.quiet);
+    let progress = Progress::new(backends.len() as u64 + 4 + TABLE1_SWEEPS.len() as u64, "bench", opts.quiet);
     let mut rows = Vec::new();
     let la = Method::LensletAverage { grid: paper.display_render.la_grid };
     let methods = [Method::LensletCenter, Method::PupilCenter, la];
@@ -550,6 +646,7 @@ pub fn run(opts: &BenchOptions, scene: &Scene, scene_label: &str) -> Result<Benc
                         Method::LensletAverage { grid } => grid,
                         _ => 1,
                     },
+                    sweep: "display_samples".into(),
                     ..ctx.row("method", "display", b.name, method.short_name())
                 };
                 rows.push(measured(
@@ -666,10 +763,23 @@ pub fn run(opts: &BenchOptions, scene: &Scene, scene_label: &str) -> Result<Benc
         rows.push(measured(row, secs, ret_px * (k * k * pupil_samples) as u64, score(&gt, &reference)?));
     }
     progress.inc(1);
+    drop(reference);
+
+    // 5. Table 1 convergence, on the fastest backend.
+    let t = Instant::now();
+    table1_series(sz, scene, &display, best.field, best.name, &ctx, &progress, &mut rows)?;
+    stage(&mut stages, "Table 1 convergence (wall time of every sweep, scoring included)", t);
     progress.finish();
     stages.push(StageTime { stage: "scoring (PSNR and SSIM)".into(), seconds: score_seconds.get() });
 
     let convergence = ["la_grid", "pupil_grid", "retina_samples"].iter().filter_map(|s| summarize(s, &rows)).collect();
+    let paper_setting = |sweep: &str| match sweep {
+        "retina_samples" => paper.eye.retina_samples,
+        "display_samples" => paper.display_render.samples_per_pixel,
+        "pupil_grid" => paper.eye.pupil_grid,
+        _ => paper.display_render.la_grid,
+    };
+    let table1 = TABLE1_SWEEPS.iter().filter_map(|s| summarize_table1(s, paper_setting(s), &rows)).collect();
     let report = BenchReport {
         mode: opts.mode.clone(),
         scene: scene_label.into(),
@@ -686,6 +796,7 @@ pub fn run(opts: &BenchOptions, scene: &Scene, scene_label: &str) -> Result<Benc
         backends: backends.iter().map(|b| b.name.to_string()).collect(),
         builds,
         convergence,
+        table1,
         checks: Checks { la_k1_equals_lc },
         stages,
         load_average: [load_at_start, load_average()],
@@ -700,6 +811,230 @@ pub fn run(opts: &BenchOptions, scene: &Scene, scene_label: &str) -> Result<Benc
     report.total_seconds = start.elapsed().as_secs_f64();
     write_json(&report, &opts.out)?;
     Ok(report)
+}
+
+/// Sweeps of the Table 1 series, in report order.
+pub const TABLE1_SWEEPS: [&str; 4] = ["retina_samples", "display_samples", "pupil_grid", "la_grid"];
+
+/// A setting of the Table 1 series.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+struct Table1Setting {
+    /// Samples per retina pixel and per display pixel, per axis.
+    retina: usize,
+    display: usize,
+    /// Pupil grid n.
+    pupil: usize,
+    /// LA's k.
+    la: usize,
+}
+
+impl Table1Setting {
+    fn with(self, sweep: &str, v: usize) -> Self {
+        match sweep {
+            "retina_samples" => Self { retina: v, ..self },
+            "display_samples" => Self { display: v, ..self },
+            "pupil_grid" => Self { pupil: v, ..self },
+            _ => Self { la: v, ..self },
+        }
+    }
+}
+
+/// Table 1 at one setting.
+#[derive(Clone)]
+struct Table1Point {
+    exp: Experiment,
+    scores: Vec<experiment::Score>,
+    /// Computing all of it from scratch (cached stages counted at their measured time).
+    seconds: f64,
+    rays: u64,
+}
+
+/// Computes Table 1 at any setting with `assess`'s stage functions. Images that a sweep does
+/// not change (the display images at the paper's display settings, the ground truths at the
+/// paper's eye settings) are computed once and their measured time counted at every point that
+/// uses them; the paper's own setting, shared by every sweep, is computed once.
+struct Table1Runner<'a> {
+    base: Experiment,
+    paper: Table1Setting,
+    field: &'a dyn RadianceField,
+    displays: HashMap<(Method, usize), (Arc<RgbImage>, f64)>,
+    gts: HashMap<(String, usize, usize), (Arc<RgbImage>, f64)>,
+    points: HashMap<Table1Setting, Table1Point>,
+}
+
+fn stage_seconds(stages: &[experiment::StageTime]) -> f64 {
+    stages.iter().map(|s| s.seconds).sum()
+}
+
+impl Table1Runner<'_> {
+    fn experiment(&self, s: Table1Setting) -> Experiment {
+        let mut e = self.base.clone();
+        e.retina.samples_per_pixel = s.retina;
+        e.spec.eye.retina_samples = s.retina;
+        e.render.samples_per_pixel = s.display;
+        e.spec.display_render.samples_per_pixel = s.display;
+        for c in &mut e.cases {
+            c.eye.pupil_grid = s.pupil;
+        }
+        e.spec.eye.pupil_grid = s.pupil;
+        for m in &mut e.methods {
+            if let Method::LensletAverage { grid } = m {
+                *grid = s.la;
+            }
+        }
+        e.spec.display_render.la_grid = s.la;
+        e
+    }
+
+    fn point(&mut self, s: Table1Setting) -> Result<Table1Point> {
+        if let Some(p) = self.points.get(&s) {
+            return Ok(p.clone());
+        }
+        let exp = self.experiment(s);
+        let mut seconds = 0.0;
+        let mut displays: Vec<Arc<RgbImage>> = Vec::new();
+        for m in &exp.methods {
+            let key = (*m, s.display);
+            if let Some((img, t)) = self.displays.get(&key) {
+                seconds += t;
+                displays.push(img.clone());
+                continue;
+            }
+            let one = Experiment { methods: vec![*m], ..exp.clone() };
+            let mut stages = Vec::new();
+            let (mut img, _depth) = experiment::render_display_images(&one, self.field, true, &mut stages)?;
+            let t = stage_seconds(&stages);
+            let img = Arc::new(img.remove(0));
+            let paper_la = !matches!(m, Method::LensletAverage { .. }) || s.la == self.paper.la;
+            if s.display == self.paper.display && paper_la {
+                self.displays.insert(key, (img.clone(), t));
+            }
+            seconds += t;
+            displays.push(img);
+        }
+        let mut stages = Vec::new();
+        let refs: Vec<&RgbImage> = displays.iter().map(|d| d.as_ref()).collect();
+        let stack = experiment::pack_display_images(&exp, &refs, &mut stages)?;
+        let mut gts: Vec<Arc<RgbImage>> = Vec::new();
+        let mut sims = Vec::new();
+        for case in &exp.cases {
+            let key = (case.name.clone(), s.pupil, s.retina);
+            match self.gts.get(&key) {
+                Some((img, t)) => {
+                    seconds += t;
+                    gts.push(img.clone());
+                }
+                None => {
+                    let mut st = Vec::new();
+                    let img = Arc::new(experiment::ground_truth_image(&exp, case, self.field, true, &mut st));
+                    let t = stage_seconds(&st);
+                    if s.pupil == self.paper.pupil && s.retina == self.paper.retina {
+                        self.gts.insert(key, (img.clone(), t));
+                    }
+                    seconds += t;
+                    gts.push(img);
+                }
+            }
+            sims.push(experiment::perceived_images(&exp, case, &stack, true, &mut stages)?);
+        }
+        drop(stack);
+        let scores = experiment::table1_scores(&exp, &gts, &sims, &mut stages)?;
+        seconds += stage_seconds(&stages);
+        let lcd_px = (exp.display.lcd.columns() * exp.display.lcd.rows()) as u64;
+        let ret_px = (exp.retina.resolution * exp.retina.resolution) as u64;
+        let camera_rays: u64 =
+            exp.methods.iter().map(|m| lcd_px * (s.display * s.display * m.lenslet_samples()) as u64).sum();
+        // Ground truth and simulation each trace every retina sample through every pupil sample.
+        let eye_rays: u64 =
+            exp.cases.iter().map(|c| 2 * ret_px * (s.retina * s.retina * c.eye.pupil_samples().len()) as u64).sum();
+        let p = Table1Point { exp, scores, seconds, rays: camera_rays + eye_rays };
+        if s == self.paper {
+            self.points.insert(s, p.clone());
+        }
+        Ok(p)
+    }
+}
+
+/// Runs every Table 1 sweep of `sz` on `field`, appending one row per setting, method and eye
+/// case to `rows`.
+#[allow(clippy::too_many_arguments)]
+fn table1_series(
+    sz: &Sizes,
+    scene: &Scene,
+    display: &Display,
+    field: &dyn RadianceField,
+    backend: &str,
+    ctx: &Ctx,
+    progress: &Progress,
+    rows: &mut Vec<BenchRow>,
+) -> Result<()> {
+    let mut base = Experiment::from_spec(ExperimentSpec::paper(), "built-in paper experiment", Path::new("."))?;
+    base.name = "bench-table1".into();
+    base.scene = scene.clone();
+    base.display = display.clone();
+    base.retina.resolution = sz.retina_resolution;
+    base.spec.eye.retina_resolution = sz.retina_resolution;
+    let la = base
+        .methods
+        .iter()
+        .find_map(|m| match m {
+            Method::LensletAverage { grid } => Some(*grid),
+            _ => None,
+        })
+        .unwrap_or(1);
+    let paper = Table1Setting {
+        retina: base.retina.samples_per_pixel,
+        display: base.render.samples_per_pixel,
+        pupil: base.spec.eye.pupil_grid,
+        la,
+    };
+    let mut runner =
+        Table1Runner { base, paper, field, displays: HashMap::new(), gts: HashMap::new(), points: HashMap::new() };
+    for sweep in TABLE1_SWEEPS {
+        let settings = match sweep {
+            "retina_samples" => &sz.table1_retina_samples,
+            "display_samples" => &sz.table1_display_samples,
+            "pupil_grid" => &sz.table1_pupil_grids,
+            _ => &sz.table1_la_grids,
+        };
+        for &v in settings {
+            let s = paper.with(sweep, v);
+            let p = runner.point(s)?;
+            // Pupil samples of the setting: those of the thin-lens eye cases (a pinhole has one).
+            let kept = p.exp.cases.iter().map(|c| c.eye.pupil_samples().len()).max().unwrap_or(1);
+            for sc in &p.scores {
+                let Some(case) = p.exp.cases.iter().find(|c| c.name == sc.eye_case) else { continue };
+                let pupil_samples = case.eye.pupil_samples().len();
+                let la_grid = if sc.method == "LA" { s.la } else { 1 };
+                let samples = match sweep {
+                    "pupil_grid" => kept,
+                    _ => v * v,
+                };
+                let psnr = sc.psnr.mean;
+                let r = BenchRow {
+                    sweep: sweep.into(),
+                    eye_case: sc.eye_case.clone(),
+                    focus_mm: match case.eye.aperture {
+                        Aperture::ThinLens { focus, .. } => Some(focus.distance_mm()),
+                        Aperture::Pinhole => None,
+                    },
+                    parameter: v,
+                    samples,
+                    display_samples: s.display,
+                    la_grid,
+                    pupil_grid: s.pupil,
+                    pupil_samples,
+                    retina_samples: s.retina,
+                    reference: "ground truth (same eye, same samples per retina pixel)".into(),
+                    ..ctx.row("table1", "perceived", backend, &sc.method)
+                };
+                let q = (if psnr.is_finite() { psnr.min(IDENTICAL_PSNR_DB) } else { IDENTICAL_PSNR_DB }, sc.ssim.mean);
+                rows.push(measured(r, p.seconds, p.rays, q));
+            }
+        }
+        progress.inc(1);
+    }
+    Ok(())
 }
 
 fn summarize(series: &str, rows: &[BenchRow]) -> Option<ConvergenceSummary> {
@@ -722,6 +1057,66 @@ fn summarize(series: &str, rows: &[BenchRow]) -> Option<ConvergenceSummary> {
         highest_parameter: last.parameter,
         highest_seconds: last.seconds,
         first_within_tolerance: within,
+    })
+}
+
+/// The methods of the Table 1 rows, in first-seen order.
+fn table1_methods(rows: &[&BenchRow]) -> Vec<String> {
+    let mut methods: Vec<String> = Vec::new();
+    for r in rows {
+        if !methods.contains(&r.method) {
+            methods.push(r.method.clone());
+        }
+    }
+    methods
+}
+
+fn summarize_table1(sweep: &str, paper_parameter: usize, rows: &[BenchRow]) -> Option<Table1Sweep> {
+    let pts: Vec<&BenchRow> = rows.iter().filter(|r| r.series == "table1" && r.sweep == sweep).collect();
+    let mut parameters: Vec<usize> = Vec::new();
+    for r in &pts {
+        if !parameters.contains(&r.parameter) {
+            parameters.push(r.parameter);
+        }
+    }
+    let last = *parameters.last()?;
+    let at = |p: usize| pts.iter().filter(move |r| r.parameter == p);
+    let seconds: Vec<f64> = parameters.iter().map(|&p| at(p).next().map(|r| r.seconds).unwrap_or(f64::NAN)).collect();
+    let within = |methods: &str| -> Option<Table1Within> {
+        let keep = |r: &&&BenchRow| methods == "all" || r.method == methods;
+        let values: Vec<Vec<f64>> =
+            parameters.iter().map(|&p| at(p).filter(keep).map(|r| r.psnr_db).collect()).collect();
+        let i = cheapest_within(&values, CONVERGED_TOLERANCE_DB)?;
+        let converged = values.last()?;
+        let first = at(parameters[i]).next()?;
+        Some(Table1Within {
+            methods: methods.into(),
+            parameter: parameters[i],
+            samples: first.samples,
+            seconds: first.seconds,
+            max_diff_db: max_abs_diff(&values[i], converged),
+            stays_within: values[i..].iter().all(|v| max_abs_diff(v, converged) <= CONVERGED_TOLERANCE_DB),
+        })
+    };
+    let paper_max_diff_db = parameters.contains(&paper_parameter).then(|| {
+        let v = |p: usize| at(p).map(|r| r.psnr_db).collect::<Vec<_>>();
+        max_abs_diff(&v(paper_parameter), &v(last))
+    });
+    let last_step_db = (parameters.len() >= 2).then(|| {
+        let v = |p: usize| at(p).map(|r| r.psnr_db).collect::<Vec<_>>();
+        max_abs_diff(&v(parameters[parameters.len() - 2]), &v(last))
+    });
+    Some(Table1Sweep {
+        sweep: sweep.into(),
+        backend: pts.first()?.backend.clone(),
+        paper_parameter,
+        last_step_db,
+        parameters: parameters.clone(),
+        seconds,
+        converged_parameter: last,
+        paper_max_diff_db,
+        all_methods: within("all"),
+        per_method: table1_methods(&pts).iter().filter_map(|m| within(m)).collect(),
     })
 }
 
@@ -748,13 +1143,14 @@ fn csv_field(s: &str) -> String {
 /// `bench.csv`: one line per row, the columns of [`BenchRow`] in order.
 pub fn rows_csv(rows: &[BenchRow]) -> String {
     let mut csv = String::from(
-        "series,quantity,eye_case,focus_mm,backend,method,parameter,samples,seconds,rays,rays_per_second,psnr_db,ssim,\
+        "series,sweep,quantity,eye_case,focus_mm,backend,method,parameter,samples,seconds,rays,rays_per_second,psnr_db,ssim,\
          scene,lcd_resolution,retina_resolution,display_samples,la_grid,pupil_grid,pupil_samples,retina_samples,\
          reference,threads,cores,git_revision\n",
     );
     for r in rows {
         let fields = [
             csv_field(&r.series),
+            csv_field(&r.sweep),
             csv_field(&r.quantity),
             csv_field(&r.eye_case),
             r.focus_mm.map(|f| f.to_string()).unwrap_or_default(),
@@ -819,6 +1215,9 @@ fn write_reports(report: &BenchReport, out: &Path) -> Result<()> {
     }
     for s in &report.convergence {
         draw_plot!(out, s.series, (900, 560), |area| plot_convergence(area, report, s));
+    }
+    if !report.table1.is_empty() {
+        draw_plot!(out, "table1", (1400, 1100), |area| plot_table1(area, report));
     }
     Ok(())
 }
@@ -969,6 +1368,7 @@ fn markdown(rep: &BenchReport) -> (String, String) {
             within
         );
     }
+    table1_summary_markdown(rep, &mut s);
     let _ = writeln!(
         s,
         "\nCheck: LA with k = 1 renders {} display image as LC.",
@@ -980,7 +1380,8 @@ fn markdown(rep: &BenchReport) -> (String, String) {
     let _ = writeln!(
         full,
         "\n## Plots\n\n![PSNR against wall time](speed_psnr.png)\n\n![SSIM against wall time](speed_ssim.png)\n\n\
-         ![LA lenslet grid](la_grid.png)\n\n![pupil grid](pupil_grid.png)\n\n![samples per retina pixel](retina_samples.png)\n"
+         ![LA lenslet grid](la_grid.png)\n\n![pupil grid](pupil_grid.png)\n\n![samples per retina pixel](retina_samples.png)\n\n\
+         ![Table 1 convergence](table1.png)\n"
     );
     let _ = writeln!(
         full,
@@ -1030,7 +1431,238 @@ fn markdown(rep: &BenchReport) -> (String, String) {
             );
         }
     }
+    table1_detail_markdown(rep, &mut full);
     (s, full)
+}
+
+/// What a Table 1 sweep varies, for tables and plots.
+fn table1_sweep_name(sweep: &str) -> &'static str {
+    match sweep {
+        "retina_samples" => "samples per retina pixel, k x k",
+        "display_samples" => "samples per display pixel, k x k",
+        "pupil_grid" => "pupil grid n x n",
+        _ => "LA lenslet grid k x k",
+    }
+}
+
+fn table1_setting(sweep: &str, parameter: usize, samples: usize) -> String {
+    match sweep {
+        "retina_samples" => format!("{parameter}x{parameter} per retina pixel"),
+        "display_samples" => format!("{parameter}x{parameter} per display pixel"),
+        "pupil_grid" => format!("pupil n = {parameter} ({samples})"),
+        _ => format!("LA k = {parameter}"),
+    }
+}
+
+fn table1_rows<'a>(rep: &'a BenchReport, sweep: &'a str) -> impl Iterator<Item = &'a BenchRow> + 'a {
+    rep.rows.iter().filter(move |r| r.series == "table1" && r.sweep == sweep)
+}
+
+fn table1_samples(rep: &BenchReport, sweep: &str, parameter: usize) -> usize {
+    table1_rows(rep, sweep).find(|r| r.parameter == parameter).map(|r| r.samples).unwrap_or(0)
+}
+
+fn table1_within_text(t: &Table1Sweep, w: &Option<Table1Within>, diff: bool) -> String {
+    match w {
+        Some(w) => format!(
+            "{}, {} s{}{}",
+            table1_setting(&t.sweep, w.parameter, w.samples),
+            secs(w.seconds),
+            if diff { format!(" ({:.2})", w.max_diff_db) } else { String::new() },
+            if w.stays_within { "" } else { " *" }
+        ),
+        None => "-".into(),
+    }
+}
+
+/// The Table 1 convergence section of summary.md.
+fn table1_summary_markdown(rep: &BenchReport, s: &mut String) {
+    let Some(first) = rep.table1.first() else { return };
+    let methods: Vec<String> = first.per_method.iter().map(|w| w.methods.clone()).collect();
+    let cases: Vec<String> = {
+        let mut v: Vec<String> = Vec::new();
+        for r in table1_rows(rep, &first.sweep) {
+            if !v.contains(&r.eye_case) {
+                v.push(r.eye_case.clone());
+            }
+        }
+        v
+    };
+    let _ = writeln!(
+        s,
+        "\n**Table 1 convergence** on the {} backend: the paper's Table 1 as `inimtrace assess` computes it (PSNR of \
+         the perceived image against the ground-truth retinal image, mean of R, G, B; {} x {}), with one sampling \
+         parameter swept and the others at the paper's settings ({}x{} per retina pixel, {}x{} per display pixel, \
+         pupil n = {}, LA k = {}). Converged: the Table 1 of the sweep's highest setting. Seconds: computing the \
+         whole Table 1 at that setting ({} display images, {} ground truths and simulations, the scores; no files); \
+         images a sweep does not change are computed once and their time counted at each setting. \"Within {} \
+         dB\": the cheapest setting (fewest samples) whose Table-1 PSNRs are all within {} dB of their converged \
+         values, for every method and eye case at once (\"all\") and for each method's {} eye cases{}.\n",
+        first.backend,
+        methods.join(", "),
+        cases.join(", "),
+        rep.retina_samples,
+        rep.retina_samples,
+        rep.table1.iter().find(|t| t.sweep == "display_samples").map(|t| t.paper_parameter).unwrap_or(1),
+        rep.table1.iter().find(|t| t.sweep == "display_samples").map(|t| t.paper_parameter).unwrap_or(1),
+        rep.pupil_grid,
+        rep.la_grid,
+        methods.len(),
+        cases.len(),
+        CONVERGED_TOLERANCE_DB,
+        CONVERGED_TOLERANCE_DB,
+        cases.len(),
+        if rep.table1.iter().flat_map(|t| t.all_methods.iter().chain(&t.per_method)).any(|w| !w.stays_within) {
+            format!("; `*`: a higher setting of the sweep is again more than {CONVERGED_TOLERANCE_DB} dB away")
+        } else {
+            String::new()
+        }
+    );
+    let mut head = format!(
+        "| parameter swept | settings | paper's setting: largest diff. to converged (dB) | converged: highest \
+         setting, s | last step (dB) | within {CONVERGED_TOLERANCE_DB} dB, all: setting, s (largest diff., dB) |"
+    );
+    let mut rule = "|---|---|---:|---:|---:|---:|".to_string();
+    for m in &methods {
+        let _ = write!(head, " {m} |");
+        rule.push_str("---:|");
+    }
+    let _ = writeln!(s, "{head}\n{rule}");
+    for t in &rep.table1 {
+        let paper = match t.paper_max_diff_db {
+            Some(d) => format!(
+                "{}: {:.2}",
+                table1_setting(&t.sweep, t.paper_parameter, table1_samples(rep, &t.sweep, t.paper_parameter)),
+                d
+            ),
+            None => "-".into(),
+        };
+        let _ = write!(
+            s,
+            "| {} | {} | {} | {}, {} s | {} | {} |",
+            table1_sweep_name(&t.sweep),
+            t.parameters.iter().map(|p| p.to_string()).collect::<Vec<_>>().join(", "),
+            paper,
+            table1_setting(&t.sweep, t.converged_parameter, table1_samples(rep, &t.sweep, t.converged_parameter)),
+            t.seconds.last().map(|v| secs(*v)).unwrap_or_default(),
+            t.last_step_db.map(|d| format!("{d:.2}")).unwrap_or_else(|| "-".into()),
+            table1_within_text(t, &t.all_methods, true)
+        );
+        for m in &methods {
+            let w = t.per_method.iter().find(|w| &w.methods == m).cloned();
+            let _ = write!(s, " {} |", table1_within_text(t, &w, false));
+        }
+        s.push('\n');
+    }
+    // The answer in words.
+    let answers: Vec<String> = rep
+        .table1
+        .iter()
+        .filter_map(|t| {
+            t.all_methods.as_ref().map(|w| {
+                let open = t.last_step_db.is_some_and(|d| d > CONVERGED_TOLERANCE_DB);
+                format!(
+                    "{} ({} s{})",
+                    table1_setting(&t.sweep, w.parameter, w.samples),
+                    secs(w.seconds),
+                    if open {
+                        format!(
+                            "; the sweep's highest setting, not levelled off: its last step still moves Table 1 by \
+                             {:.2} dB",
+                            t.last_step_db.unwrap_or(f64::NAN)
+                        )
+                    } else {
+                        String::new()
+                    }
+                )
+            })
+        })
+        .collect();
+    let paper_off: Vec<String> = rep
+        .table1
+        .iter()
+        .filter_map(|t| t.paper_max_diff_db.map(|d| format!("{d:.2} dB ({})", table1_sweep_name(&t.sweep))))
+        .collect();
+    let _ = writeln!(
+        s,
+        "\nOne parameter at a time, every method and eye case of Table 1 is within {} dB of its converged value \
+         from: {}. At the paper's settings Table 1 is off its converged value by up to {}.",
+        CONVERGED_TOLERANCE_DB,
+        answers.join("; "),
+        paper_off.join(", ")
+    );
+}
+
+/// Every point of every Table 1 sweep, for bench.md.
+fn table1_detail_markdown(rep: &BenchReport, full: &mut String) {
+    for t in &rep.table1 {
+        let rows: Vec<&BenchRow> = table1_rows(rep, &t.sweep).collect();
+        let mut cases: Vec<String> = Vec::new();
+        let mut methods: Vec<String> = Vec::new();
+        for r in &rows {
+            if !cases.contains(&r.eye_case) {
+                cases.push(r.eye_case.clone());
+            }
+            if !methods.contains(&r.method) {
+                methods.push(r.method.clone());
+            }
+        }
+        let value = |p: usize, c: &str, m: &str, ssim: bool| {
+            rows.iter()
+                .find(|r| r.parameter == p && r.eye_case == c && r.method == m)
+                .map(|r| if ssim { format!("{:.4}", r.ssim) } else { f2(r.psnr_db) })
+                .unwrap_or_else(|| "-".into())
+        };
+        let converged: Vec<f64> =
+            rows.iter().filter(|r| r.parameter == t.converged_parameter).map(|r| r.psnr_db).collect();
+        for ssim in [false, true] {
+            let _ = writeln!(
+                full,
+                "\n## Table 1 convergence: {}{}\n\n{} of the perceived image against the ground truth ({} backend), \
+                 the other parameters at the paper's settings; s: computing the whole Table 1 at that setting{}.\n",
+                table1_sweep_name(&t.sweep),
+                if ssim { " (SSIM)" } else { "" },
+                if ssim { "SSIM (Wang 2004)" } else { "PSNR (dB)" },
+                t.backend,
+                if ssim {
+                    ""
+                } else {
+                    "; largest diff.: largest |PSNR - converged PSNR| over every method and eye case"
+                }
+            );
+            let mut head = "| setting | s | Mrays/s |".to_string();
+            let mut rule = "|---|---:|---:|".to_string();
+            for c in &cases {
+                let _ = write!(head, " {c} {} |", methods.join(" / "));
+                rule.push_str("---:|");
+            }
+            if !ssim {
+                head.push_str(" largest diff. (dB) |");
+                rule.push_str("---:|");
+            }
+            let _ = writeln!(full, "{head}\n{rule}");
+            for (i, &p) in t.parameters.iter().enumerate() {
+                let Some(first) = rows.iter().find(|r| r.parameter == p) else { continue };
+                let _ = write!(
+                    full,
+                    "| {}{} | {} | {} |",
+                    table1_setting(&t.sweep, p, first.samples),
+                    if p == t.paper_parameter { " (paper)" } else { "" },
+                    secs(t.seconds[i]),
+                    mrays(first)
+                );
+                for c in &cases {
+                    let v: Vec<String> = methods.iter().map(|m| value(p, c, m, ssim)).collect();
+                    let _ = write!(full, " {} |", v.join(" / "));
+                }
+                if !ssim {
+                    let here: Vec<f64> = rows.iter().filter(|r| r.parameter == p).map(|r| r.psnr_db).collect();
+                    let _ = write!(full, " {:.3} |", max_abs_diff(&here, &converged));
+                }
+                full.push('\n');
+            }
+        }
+    }
 }
 
 fn load_text(v: Option<f64>) -> String {
@@ -1280,6 +1912,138 @@ where
     area.present().map_err(e2s)
 }
 
+/// Table 1 convergence: one panel per sweep, x = the swept setting, y = Table 1's PSNR, one line
+/// per method (colour) and eye case (marker); the seconds of each setting along the top, the
+/// paper's setting and the cheapest setting within the tolerance for every method and eye case
+/// as vertical lines.
+fn plot_table1<DB: DrawingBackend>(area: DrawingArea<DB, Shift>, rep: &BenchReport) -> PlotResult
+where
+    DB::ErrorType: 'static,
+{
+    area.fill(&WHITE).map_err(e2s)?;
+    let area = area
+        .titled("Table 1 (perceived vs ground truth) against each sampling setting", ("sans-serif", 24))
+        .map_err(e2s)?;
+    let cells = area.split_evenly((rep.table1.len().div_ceil(2).max(1), 2));
+    for (i, (t, cell)) in rep.table1.iter().zip(cells.iter()).enumerate() {
+        let rows: Vec<&BenchRow> = table1_rows(rep, &t.sweep).collect();
+        if rows.is_empty() {
+            continue;
+        }
+        let mut cases: Vec<String> = Vec::new();
+        for r in &rows {
+            if !cases.contains(&r.eye_case) {
+                cases.push(r.eye_case.clone());
+            }
+        }
+        let (x0, x1) = range(t.parameters.iter().map(|p| *p as f64));
+        let (v0, v1) = range(rows.iter().map(|r| r.psnr_db.min(120.0)));
+        let pad = ((v1 - v0) * 0.08).max(0.3);
+        let top = v1 + 3.0 * pad;
+        let xpad = ((x1 - x0) * 0.06).max(0.3);
+        let mut chart = ChartBuilder::on(cell)
+            .caption(
+                format!("{} (others at the paper's; {} backend)", table1_sweep_name(&t.sweep), t.backend),
+                ("sans-serif", 17),
+            )
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(56)
+            .build_cartesian_2d((x0 - xpad)..(x1 + xpad), (v0 - pad)..top)
+            .map_err(e2s)?;
+        chart
+            .configure_mesh()
+            .max_light_lines(1)
+            .x_labels(t.parameters.len().max(2))
+            .x_label_formatter(&|v| format!("{v:.0}"))
+            .x_desc(match t.sweep.as_str() {
+                "pupil_grid" => "n (pupil grid n x n)",
+                "la_grid" => "k (LA lenslet grid k x k)",
+                _ => "k (k x k samples per pixel)",
+            })
+            .y_desc("Table 1 PSNR (dB)")
+            .y_label_formatter(&|v| format!("{v:.1}"))
+            .draw()
+            .map_err(e2s)?;
+        // Vertical lines: the paper's setting, and the cheapest setting within the tolerance.
+        let gray = RGBColor(150, 150, 150);
+        let paper = t.paper_parameter as f64;
+        let anno =
+            chart.draw_series(LineSeries::new([(paper, v0 - pad), (paper, top)], gray.stroke_width(2))).map_err(e2s)?;
+        if i == 0 {
+            anno.label("paper's setting")
+                .legend(move |(x, y)| PathElement::new(vec![(x - 8, y), (x + 8, y)], gray.stroke_width(2)));
+        }
+        if let Some(w) = &t.all_methods {
+            let gold = RGBColor(230, 150, 0);
+            let x = w.parameter as f64;
+            let anno =
+                chart.draw_series(LineSeries::new([(x, v0 - pad), (x, top)], gold.stroke_width(3))).map_err(e2s)?;
+            if i == 0 {
+                anno.label(format!("within {CONVERGED_TOLERANCE_DB} dB of converged (all)"))
+                    .legend(move |(x, y)| PathElement::new(vec![(x - 8, y), (x + 8, y)], gold.stroke_width(3)));
+            }
+        }
+        for m in ["LC", "PC", "LA"] {
+            let color = method_color(m);
+            for (ci, c) in cases.iter().enumerate() {
+                let line: Vec<(f64, f64)> = rows
+                    .iter()
+                    .filter(|r| r.method == m && &r.eye_case == c)
+                    .map(|r| (r.parameter as f64, r.psnr_db.min(120.0)))
+                    .collect();
+                if line.is_empty() {
+                    continue;
+                }
+                chart.draw_series(LineSeries::new(line.clone(), color.stroke_width(2))).map_err(e2s)?;
+                chart
+                    .draw_series(line.iter().map(|p| EmptyElement::at(*p) + marker_element(ci, color)))
+                    .map_err(e2s)?;
+            }
+            if i == 0 {
+                let style = color.stroke_width(2);
+                chart
+                    .draw_series(std::iter::empty::<PathElement<(f64, f64)>>())
+                    .map_err(e2s)?
+                    .label(m)
+                    .legend(move |(x, y)| PathElement::new(vec![(x - 8, y), (x + 8, y)], style));
+            }
+        }
+        if i == 0 {
+            for (ci, c) in cases.iter().enumerate() {
+                let black = RGBColor(60, 60, 60);
+                chart
+                    .draw_series(std::iter::empty::<PathElement<(f64, f64)>>())
+                    .map_err(e2s)?
+                    .label(c.clone())
+                    .legend(move |(x, y)| EmptyElement::at((x, y)) + marker_element(ci, black));
+            }
+        }
+        // Seconds of each setting along the top, on two alternating rows.
+        for (k, (p, sec)) in t.parameters.iter().zip(&t.seconds).enumerate() {
+            let y = if k % 2 == 0 { top - 0.9 * pad } else { top - 2.0 * pad };
+            chart
+                .draw_series(std::iter::once(Text::new(
+                    format!("{} s", secs(*sec)),
+                    (*p as f64 - 0.25 * xpad, y),
+                    ("sans-serif", 12),
+                )))
+                .map_err(e2s)?;
+        }
+        if i == 0 {
+            chart
+                .configure_series_labels()
+                .position(SeriesLabelPosition::LowerRight)
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .label_font(("sans-serif", 13))
+                .draw()
+                .map_err(e2s)?;
+        }
+    }
+    area.present().map_err(e2s)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1304,6 +2068,22 @@ mod tests {
         assert_eq!(first_within(&[20.0, 30.0, 34.2, 34.0], 0.1), Some(2));
         assert_eq!(first_within(&[20.0, 30.0, 33.8, 34.0], 0.1), Some(3));
         assert_eq!(first_within(&[], 0.1), None);
+    }
+
+    #[test]
+    fn cheapest_setting_within_tolerance_of_the_converged_values() {
+        // Two values per point; the last point is converged.
+        let pts = vec![vec![20.0, 30.0], vec![21.95, 30.5], vec![21.9, 30.05], vec![22.0, 30.0]];
+        assert_eq!(cheapest_within(&pts, 0.1), Some(2));
+        // Overshooting counts as away from converged too.
+        let pts = vec![vec![22.2, 30.0], vec![22.05, 30.0], vec![22.0, 30.0]];
+        assert_eq!(cheapest_within(&pts, 0.1), Some(1));
+        // The highest setting always qualifies; nothing to compare without points.
+        assert_eq!(cheapest_within(&[vec![1.0], vec![5.0]], 0.1), Some(1));
+        assert_eq!(cheapest_within(&[], 0.1), None);
+        // NaN and length mismatches never qualify.
+        assert_eq!(cheapest_within(&[vec![f64::NAN, 30.0], vec![22.0], vec![22.0, 30.0]], 0.1), Some(2));
+        assert_eq!(max_abs_diff(&[1.0, 2.0], &[1.5, 1.0]), 1.0);
     }
 
     #[test]

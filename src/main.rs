@@ -428,6 +428,21 @@ fn run() -> Result<()> {
                     c.rate.map(|p| format!("{p:.2}")).unwrap_or_else(|| "?".into())
                 );
             }
+            for t in &report.table1 {
+                let within = |w: &inimtrace::bench::Table1Within| format!("{} ({:.2} s)", w.parameter, w.seconds);
+                let per: Vec<String> = t.per_method.iter().map(|w| format!("{} {}", w.methods, within(w))).collect();
+                let tol = inimtrace::bench::CONVERGED_TOLERANCE_DB;
+                println!(
+                    "table1 {}: converged = {} (last step {} dB{}); within {tol} dB for every method and eye case at {}; \
+                     per method: {}",
+                    t.sweep,
+                    t.converged_parameter,
+                    t.last_step_db.map(|d| format!("{d:.2}")).unwrap_or_else(|| "?".into()),
+                    if t.last_step_db.is_some_and(|d| d > tol) { ", not levelled off" } else { "" },
+                    t.all_methods.as_ref().map(within).unwrap_or_else(|| "-".into()),
+                    per.join(", ")
+                );
+            }
             if cli.timings {
                 eprintln!("{:>8.3} s  bench ({} run)", report.total_seconds, report.mode);
             }
