@@ -43,6 +43,7 @@ use std::time::Instant;
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 use serde::Serialize;
 
 use crate::accel::analytic::AnalyticRects;
@@ -1915,26 +1916,36 @@ where
 /// Table 1 convergence: one panel per sweep, x = the swept setting, y = Table 1's PSNR, one line
 /// per method (colour) and eye case (marker); the seconds of each setting along the top, the
 /// paper's setting and the cheapest setting within the tolerance for every method and eye case
-/// as vertical lines.
+/// as vertical lines; the legend in a strip along the bottom.
 fn plot_table1<DB: DrawingBackend>(area: DrawingArea<DB, Shift>, rep: &BenchReport) -> PlotResult
 where
     DB::ErrorType: 'static,
 {
     area.fill(&WHITE).map_err(e2s)?;
     let area = area
-        .titled("Table 1 (perceived vs ground truth) against each sampling setting", ("sans-serif", 24))
+        .titled(
+            "Table 1 PSNR (perceived image vs ground truth) against each sampling setting; labels: seconds for the \
+             whole Table 1",
+            ("sans-serif", 22),
+        )
         .map_err(e2s)?;
-    let cells = area.split_evenly((rep.table1.len().div_ceil(2).max(1), 2));
-    for (i, (t, cell)) in rep.table1.iter().zip(cells.iter()).enumerate() {
+    let (_, h) = area.dim_in_pixel();
+    let (panels, strip) = area.split_vertically(h.saturating_sub(44));
+    let gray = RGBColor(150, 150, 150);
+    let gold = RGBColor(230, 150, 0);
+    let centred =
+        |size: u32| ("sans-serif", size).into_font().into_text_style(&panels).pos(Pos::new(HPos::Center, VPos::Center));
+    let mut cases: Vec<String> = Vec::new();
+    for r in rep.rows.iter().filter(|r| r.series == "table1") {
+        if !cases.contains(&r.eye_case) {
+            cases.push(r.eye_case.clone());
+        }
+    }
+    let cells = panels.split_evenly((rep.table1.len().div_ceil(2).max(1), 2));
+    for (t, cell) in rep.table1.iter().zip(cells.iter()) {
         let rows: Vec<&BenchRow> = table1_rows(rep, &t.sweep).collect();
         if rows.is_empty() {
             continue;
-        }
-        let mut cases: Vec<String> = Vec::new();
-        for r in &rows {
-            if !cases.contains(&r.eye_case) {
-                cases.push(r.eye_case.clone());
-            }
         }
         let (x0, x1) = range(t.parameters.iter().map(|p| *p as f64));
         let (v0, v1) = range(rows.iter().map(|r| r.psnr_db.min(120.0)));
@@ -1966,23 +1977,11 @@ where
             .draw()
             .map_err(e2s)?;
         // Vertical lines: the paper's setting, and the cheapest setting within the tolerance.
-        let gray = RGBColor(150, 150, 150);
         let paper = t.paper_parameter as f64;
-        let anno =
-            chart.draw_series(LineSeries::new([(paper, v0 - pad), (paper, top)], gray.stroke_width(2))).map_err(e2s)?;
-        if i == 0 {
-            anno.label("paper's setting")
-                .legend(move |(x, y)| PathElement::new(vec![(x - 8, y), (x + 8, y)], gray.stroke_width(2)));
-        }
+        chart.draw_series(LineSeries::new([(paper, v0 - pad), (paper, top)], gray.stroke_width(2))).map_err(e2s)?;
         if let Some(w) = &t.all_methods {
-            let gold = RGBColor(230, 150, 0);
             let x = w.parameter as f64;
-            let anno =
-                chart.draw_series(LineSeries::new([(x, v0 - pad), (x, top)], gold.stroke_width(3))).map_err(e2s)?;
-            if i == 0 {
-                anno.label(format!("within {CONVERGED_TOLERANCE_DB} dB of converged (all)"))
-                    .legend(move |(x, y)| PathElement::new(vec![(x - 8, y), (x + 8, y)], gold.stroke_width(3)));
-            }
+            chart.draw_series(LineSeries::new([(x, v0 - pad), (x, top)], gold.stroke_width(3))).map_err(e2s)?;
         }
         for m in ["LC", "PC", "LA"] {
             let color = method_color(m);
@@ -2000,46 +1999,40 @@ where
                     .draw_series(line.iter().map(|p| EmptyElement::at(*p) + marker_element(ci, color)))
                     .map_err(e2s)?;
             }
-            if i == 0 {
-                let style = color.stroke_width(2);
-                chart
-                    .draw_series(std::iter::empty::<PathElement<(f64, f64)>>())
-                    .map_err(e2s)?
-                    .label(m)
-                    .legend(move |(x, y)| PathElement::new(vec![(x - 8, y), (x + 8, y)], style));
-            }
-        }
-        if i == 0 {
-            for (ci, c) in cases.iter().enumerate() {
-                let black = RGBColor(60, 60, 60);
-                chart
-                    .draw_series(std::iter::empty::<PathElement<(f64, f64)>>())
-                    .map_err(e2s)?
-                    .label(c.clone())
-                    .legend(move |(x, y)| EmptyElement::at((x, y)) + marker_element(ci, black));
-            }
         }
         // Seconds of each setting along the top, on two alternating rows.
         for (k, (p, sec)) in t.parameters.iter().zip(&t.seconds).enumerate() {
-            let y = if k % 2 == 0 { top - 0.9 * pad } else { top - 2.0 * pad };
+            let y = if k % 2 == 0 { top - 0.8 * pad } else { top - 1.9 * pad };
             chart
-                .draw_series(std::iter::once(Text::new(
-                    format!("{} s", secs(*sec)),
-                    (*p as f64 - 0.25 * xpad, y),
-                    ("sans-serif", 12),
-                )))
+                .draw_series(std::iter::once(Text::new(format!("{} s", secs(*sec)), (*p as f64, y), centred(12))))
                 .map_err(e2s)?;
         }
-        if i == 0 {
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::LowerRight)
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .label_font(("sans-serif", 13))
-                .draw()
-                .map_err(e2s)?;
-        }
+    }
+    // The legend strip.
+    let label = ("sans-serif", 14).into_font().into_text_style(&strip).pos(Pos::new(HPos::Left, VPos::Center));
+    let y = 22;
+    let mut x = 30;
+    for m in ["LC", "PC", "LA"] {
+        strip.draw(&PathElement::new(vec![(x, y), (x + 24, y)], method_color(m).stroke_width(2))).map_err(e2s)?;
+        strip.draw(&Text::new(m.to_string(), (x + 30, y), label.clone())).map_err(e2s)?;
+        x += 80;
+    }
+    for (ci, c) in cases.iter().enumerate() {
+        strip.draw(&(EmptyElement::at((x + 8, y)) + marker_element(ci, RGBColor(60, 60, 60)))).map_err(e2s)?;
+        strip.draw(&Text::new(c.clone(), (x + 20, y), label.clone())).map_err(e2s)?;
+        x += 90;
+    }
+    for (color, width, text) in [
+        (gray, 2, "paper's setting".to_string()),
+        (
+            gold,
+            3,
+            format!("cheapest setting within {CONVERGED_TOLERANCE_DB} dB of converged, every method and eye case"),
+        ),
+    ] {
+        strip.draw(&PathElement::new(vec![(x, y - 10), (x, y + 10)], color.stroke_width(width))).map_err(e2s)?;
+        strip.draw(&Text::new(text.clone(), (x + 10, y), label.clone())).map_err(e2s)?;
+        x += 40 + 7 * text.len() as i32;
     }
     area.present().map_err(e2s)
 }

@@ -24,6 +24,10 @@ fn tiny() -> Sizes {
         pupil_grid_reference: 8,
         retina_samples: vec![1, 2],
         retina_samples_reference: 4,
+        table1_retina_samples: vec![1, 2],
+        table1_display_samples: vec![1, 2],
+        table1_pupil_grids: vec![4, 8],
+        table1_la_grids: vec![1, 5],
     }
 }
 
@@ -106,4 +110,15 @@ fn mesh_scene_runs_on_the_mesh_backends_only() {
         assert_eq!(c.backend, expected[0]);
         assert!(c.rate.is_some_and(|p| p < 0.0), "{c:?}");
     }
+    // So does the Table 1 series: every sweep, 3 methods x 4 eye cases per setting.
+    assert_eq!(report.table1.len(), 4);
+    for t in &report.table1 {
+        assert_eq!(t.backend, expected[0]);
+        assert_eq!(t.parameters.len(), 2, "{t:?}");
+        assert!(t.all_methods.is_some() && t.per_method.len() == 3, "{t:?}");
+    }
+    let table1: Vec<_> = report.rows.iter().filter(|r| r.series == "table1").collect();
+    assert_eq!(table1.len(), 4 * 2 * 12);
+    assert!(table1.iter().all(|r| r.psnr_db.is_finite() && r.psnr_db > 3.0 && r.scene == "ball"));
+    assert!(dir.path().join("table1.svg").is_file());
 }

@@ -299,7 +299,8 @@ fn csv_fields(line: &str) -> Vec<String> {
 
 /// `inimtrace bench --quick` writes its CSVs, JSON, Markdown report and plots; every backend
 /// that can render the paper's scene measures every method on the display image and on each
-/// focused eye case; the convergence series approach their references; LA with k = 1 is LC.
+/// focused eye case; the convergence series approach their references; LA with k = 1 is LC; the
+/// Table 1 series is `assess`'s Table 1, and its 0.1-dB answers are what its rows say.
 #[test]
 fn bench_quick_writes_well_formed_reports() {
     let dir = tempfile::tempdir().unwrap();
@@ -310,7 +311,7 @@ fn bench_quick_writes_well_formed_reports() {
     for f in ["bench.csv", "builds.csv", "bench.json", "bench.md", "summary.md"] {
         assert!(out.join(f).is_file(), "missing {f}");
     }
-    for name in ["speed_psnr", "speed_ssim", "la_grid", "pupil_grid", "retina_samples"] {
+    for name in ["speed_psnr", "speed_ssim", "la_grid", "pupil_grid", "retina_samples", "table1"] {
         let png = std::fs::read(out.join(format!("{name}.png"))).unwrap();
         assert!(png.starts_with(b"\x89PNG\r\n\x1a\n") && png.len() > 10_000, "{name}.png");
         let svg = std::fs::read_to_string(out.join(format!("{name}.svg"))).unwrap();
@@ -393,10 +394,10 @@ fn bench_quick_writes_well_formed_reports() {
     };
     assert_eq!(series("la_grid").iter().map(|p| p.0).collect::<Vec<_>>(), (1..=8).collect::<Vec<_>>());
     assert_eq!(series("pupil_grid").iter().map(|p| p.0).collect::<Vec<_>>(), [2, 3, 4, 5, 6, 8, 10, 12, 16]);
-    assert_eq!(series("retina_samples").iter().map(|p| p.0).collect::<Vec<_>>(), [1, 2, 4, 8]);
+    assert_eq!(series("retina_samples").iter().map(|p| p.0).collect::<Vec<_>>(), [1, 2, 3, 4]);
     for s in ["la_grid", "pupil_grid", "retina_samples"] {
         let pts = series(s);
-        assert!(pts.last().unwrap().1 > pts[0].1 + 10.0, "{s}: {pts:?}");
+        assert!(pts.last().unwrap().1 > pts[0].1 + 8.0, "{s}: {pts:?}");
         // Overall decrease: no point falls more than 0.5 dB below the point at half its index.
         for i in 2..pts.len() {
             assert!(pts[i].1 > pts[i / 2].1 - 0.5, "{s}: {pts:?}");
@@ -431,6 +432,7 @@ fn bench_quick_writes_well_formed_reports() {
     for (fields, r) in lines[1..].iter().zip(rows) {
         assert_eq!(fields.len(), lines[0].len(), "{fields:?}");
         assert_eq!(fields[col("series")], r["series"].as_str().unwrap());
+        assert_eq!(fields[col("sweep")], r["sweep"].as_str().unwrap());
         assert_eq!(fields[col("backend")], r["backend"].as_str().unwrap());
         assert_eq!(fields[col("reference")], r["reference"].as_str().unwrap());
         // (serde_json's float parsing may differ from Rust's in the last bit.)
@@ -444,6 +446,178 @@ fn bench_quick_writes_well_formed_reports() {
         assert!(md.contains(needle), "bench.md lacks `{needle}`");
     }
     assert!(std::fs::read_to_string(out.join("summary.md")).unwrap().contains("| PC | analytic |"));
+
+    check_table1_series(&report, &stdout, &out, dir.path());
+}
+
+/// The `table1` rows and summaries of a `bench --quick` report.
+fn check_table1_series(report: &serde_json::Value, stdout: &str, out: &Path, dir: &Path) {
+    let rows: Vec<&serde_json::Value> =
+        report["rows"].as_array().unwrap().iter().filter(|r| r["series"] == "table1").collect();
+    let f = |r: &serde_json::Value, k: &str| r[k].as_f64().unwrap();
+    let u = |r: &serde_json::Value, k: &str| r[k].as_u64().unwrap() as usize;
+    let sweeps: [(&str, Vec<usize>); 4] = [
+        ("retina_samples", vec![1, 2, 3, 4]),
+        ("display_samples", vec![1, 2, 3, 4]),
+        ("pupil_grid", vec![2, 3, 4, 5, 6, 8, 10, 12, 16]),
+        ("la_grid", vec![1, 2, 3, 4, 5, 6, 8]),
+    ];
+    // The paper's settings: 1 x 1 per retina and display pixel, pupil grid 8, LA 5 x 5.
+    let paper = [1, 1, 8, 5];
+    let cases = ["Pin", "Near", "Cen", "Far"];
+    let methods = ["LC", "PC", "LA"];
+    let tol = 0.1;
+    let summaries = report["table1"].as_array().unwrap();
+    assert_eq!(summaries.len(), 4);
+    // The Table 1 of the paper's settings, as every sweep measured it.
+    let mut paper_tables: Vec<Vec<f64>> = Vec::new();
+    for (si, (sweep, settings)) in sweeps.iter().enumerate() {
+        let sweep_rows: Vec<&serde_json::Value> = rows.iter().copied().filter(|r| r["sweep"] == *sweep).collect();
+        let point = |p: usize| -> Vec<&serde_json::Value> {
+            let mut v: Vec<&serde_json::Value> =
+                sweep_rows.iter().copied().filter(|r| u(r, "parameter") == p).collect();
+            v.sort_by_key(|r| {
+                let c = cases.iter().position(|c| r["eye_case"] == *c).unwrap();
+                (c, methods.iter().position(|m| r["method"] == *m).unwrap())
+            });
+            v
+        };
+        let psnr = |p: usize| point(p).iter().map(|r| f(r, "psnr_db")).collect::<Vec<_>>();
+        let mut seen: Vec<usize> = Vec::new();
+        for r in &sweep_rows {
+            if !seen.contains(&u(r, "parameter")) {
+                seen.push(u(r, "parameter"));
+            }
+        }
+        assert_eq!(&seen, settings, "{sweep}");
+        let mut rays = 0;
+        for &p in settings {
+            let pt = point(p);
+            // Every method under every eye case, scored by assess's metrics, with its settings.
+            assert_eq!(pt.len(), 12, "{sweep} {p}");
+            for (i, r) in pt.iter().enumerate() {
+                assert_eq!(r["eye_case"], cases[i / 3]);
+                assert_eq!(r["method"], methods[i % 3]);
+                assert_eq!(r["quantity"], "perceived");
+                let db = f(r, "psnr_db");
+                assert!(db.is_finite() && db > 5.0 && db < 60.0, "{r}");
+                assert!(f(r, "ssim") > 0.0 && f(r, "ssim") < 1.0, "{r}");
+                assert_eq!(f(r, "seconds"), f(pt[0], "seconds"));
+                assert_eq!(u(r, "rays"), u(pt[0], "rays"));
+                let mut expected = paper;
+                expected[si] = p;
+                let setting = [u(r, "retina_samples"), u(r, "display_samples"), u(r, "pupil_grid")];
+                assert_eq!(setting[..], expected[..3], "{r}");
+                assert_eq!(u(r, "la_grid"), if r["method"] == "LA" { expected[3] } else { 1 }, "{r}");
+            }
+            // More samples, more rays.
+            assert!(u(pt[0], "rays") > rays, "{sweep} {p}");
+            rays = u(pt[0], "rays");
+            assert!(f(pt[0], "seconds") > 0.0);
+        }
+        if settings.contains(&paper[si]) {
+            paper_tables.push(psnr(paper[si]));
+        }
+
+        // The summary: converged = the highest setting; the reported setting is within 0.1 dB of
+        // it for every method and eye case, and no cheaper setting of the sweep is.
+        let c = summaries.iter().find(|c| c["sweep"] == *sweep).unwrap();
+        let last = *settings.last().unwrap();
+        assert_eq!(u(c, "converged_parameter"), last);
+        let converged = psnr(last);
+        let diff = |p: usize, keep: &dyn Fn(usize) -> bool| {
+            psnr(p)
+                .iter()
+                .zip(&converged)
+                .enumerate()
+                .filter(|(i, _)| keep(*i))
+                .map(|(_, (a, b))| (a - b).abs())
+                .fold(0.0, f64::max)
+        };
+        let check = |w: &serde_json::Value, keep: &dyn Fn(usize) -> bool| {
+            let p = u(w, "parameter");
+            assert!(diff(p, keep) <= tol, "{sweep} {w}: {} dB", diff(p, keep));
+            assert!((f(w, "max_diff_db") - diff(p, keep)).abs() < 1e-9, "{sweep} {w}");
+            let i = settings.iter().position(|s| *s == p).unwrap();
+            for &cheaper in &settings[..i] {
+                assert!(diff(cheaper, keep) > tol, "{sweep} {w}: {cheaper} is within {tol} dB too");
+            }
+            let stays = settings[i..].iter().all(|s| diff(*s, keep) <= tol);
+            assert_eq!(w["stays_within"].as_bool().unwrap(), stays, "{sweep} {w}");
+            assert_eq!(f(w, "seconds"), f(point(p)[0], "seconds"));
+        };
+        assert_eq!(c["all_methods"]["methods"], "all");
+        check(&c["all_methods"], &|_| true);
+        let per = c["per_method"].as_array().unwrap();
+        assert_eq!(per.len(), 3);
+        for (mi, m) in methods.iter().enumerate() {
+            let w = per.iter().find(|w| w["methods"] == *m).unwrap();
+            check(w, &|i| i % 3 == mi);
+            // One method's eye cases never need more than all of them.
+            assert!(u(w, "parameter") <= u(&c["all_methods"], "parameter"));
+        }
+        let second = settings[settings.len() - 2];
+        assert!((f(c, "last_step_db") - diff(second, &|_| true)).abs() < 1e-9, "{sweep}");
+        assert!((f(c, "paper_max_diff_db") - diff(paper[si], &|_| true)).abs() < 1e-9, "{sweep}");
+        assert!(stdout.contains(&format!("table1 {sweep}: converged = {last}")), "{stdout}");
+
+        // What a sweep does not change stays bit for bit: LC and PC do not depend on LA's k, nor
+        // the pinhole eye on the pupil grid; LA with k = 1 is LC.
+        for &p in settings {
+            let (now, first) = (point(p), point(settings[0]));
+            for i in 0..12 {
+                let fixed = match *sweep {
+                    "la_grid" => i % 3 != 2,
+                    "pupil_grid" => i / 3 == 0,
+                    _ => false,
+                };
+                if fixed {
+                    assert_eq!(f(now[i], "psnr_db"), f(first[i], "psnr_db"), "{sweep} {p} {i}");
+                }
+                if *sweep == "la_grid" && p == 1 && i % 3 == 2 {
+                    assert_eq!(f(now[i], "psnr_db"), f(now[i - 2], "psnr_db"), "LA k = 1 vs LC");
+                }
+            }
+        }
+    }
+    // Every sweep holds the paper's setting; they all measured the same Table 1 there.
+    assert_eq!(paper_tables.len(), 4);
+    assert!(paper_tables.iter().all(|t| t == &paper_tables[0]));
+    // It is `inimtrace assess`'s Table 1 for the same display, retina and settings.
+    let display =
+        std::fs::read_to_string(root().join("displays/paper.toml")).unwrap().replace("[2160, 2160]", "[540, 540]");
+    std::fs::write(dir.join("display-540.toml"), display).unwrap();
+    let exp = std::fs::read_to_string(root().join("experiments/paper.toml"))
+        .unwrap()
+        .replace("../scenes/paper.toml", "builtin:paper")
+        .replace("../displays/paper.toml", "display-540.toml")
+        .replace("retina_resolution = 512", "retina_resolution = 128");
+    std::fs::write(dir.join("quick.toml"), exp).unwrap();
+    let assessed = dir.join("assessed");
+    let (ok, _, stderr) =
+        inimtrace(&["assess", dir.join("quick.toml").to_str().unwrap(), "--out", assessed.to_str().unwrap()]);
+    assert!(ok, "{stderr}");
+    let results: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(assessed.join("results.json")).unwrap()).unwrap();
+    let scores = results["scores"].as_array().unwrap();
+    assert_eq!(scores.len(), 12);
+    for (i, v) in paper_tables[0].iter().enumerate() {
+        let s = scores.iter().find(|s| s["eye_case"] == cases[i / 3] && s["method"] == methods[i % 3]).unwrap();
+        let a = s["psnr"]["mean"].as_f64().unwrap();
+        assert!((a - v).abs() <= 1e-9 * a.abs(), "{} {}: assess {a} vs bench {v}", cases[i / 3], methods[i % 3]);
+    }
+
+    // The reports.
+    let summary = std::fs::read_to_string(out.join("summary.md")).unwrap();
+    for needle in ["**Table 1 convergence**", "| samples per retina pixel, k x k | 1, 2, 3, 4 |", "within 0.1 dB"] {
+        assert!(summary.contains(needle), "summary.md lacks `{needle}`");
+    }
+    let md = std::fs::read_to_string(out.join("bench.md")).unwrap();
+    for needle in
+        ["## Table 1 convergence: pupil grid n x n", "| LA k = 5 (paper) |", "![Table 1 convergence](table1.png)"]
+    {
+        assert!(md.contains(needle), "bench.md lacks `{needle}`");
+    }
 }
 
 #[test]
