@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
 # Regenerates the README's "Speed and accuracy" section in one command: builds the release
 # binary, runs the full `inimtrace bench` (the paper's scene and display at the paper's sizes;
-# about 5 minutes on 2 cores), copies its reports and plots to docs/bench/, and replaces the
-# README block between the `speed-accuracy:begin` and `speed-accuracy:end` markers with
-# docs/bench/summary.md. Commit first: the reports name the git revision they measured
-# (`-dirty` when the tree had uncommitted changes).
+# about 6.5 minutes on the 2 shared cores, 2.5 on idle ones), copies its reports and plots to
+# docs/bench/, and replaces the README block between the `speed-accuracy:begin` and
+# `speed-accuracy:end` markers with docs/bench/summary.md. Commit first: the reports name the
+# git revision they measured (`-dirty` when the tree had uncommitted changes).
 # Usage: scripts/speed-accuracy.sh [extra `inimtrace bench` arguments, e.g. --threads 2]
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -20,7 +20,7 @@ SECONDS=0
 target/release/inimtrace bench --quiet --out "$out" "$@" > "$out/stdout.md"
 echo "inimtrace bench: ${SECONDS} s wall" >&2
 for f in bench.md summary.md bench.csv builds.csv bench.json \
-    speed_psnr speed_ssim la_grid pupil_grid retina_samples; do
+    speed_psnr speed_ssim la_grid pupil_grid retina_samples table1; do
     case $f in
         *.*) cp "$out/$f" "$docs/" ;;
         *) cp "$out/$f.png" "$out/$f.svg" "$docs/" ;;

@@ -1340,33 +1340,24 @@ fn markdown(rep: &BenchReport) -> (String, String) {
     // Convergence summary.
     let _ = writeln!(
         s,
-        "\n**Convergence** on the {} backend. Rate p: least-squares slope of ln(error) against ln(samples per pixel) \
-         over the whole sweep, error = 10^(-PSNR/20) (the geometric mean of the R, G, B RMSEs). \"Within {} dB\": the \
-         first setting whose PSNR is within {} dB of the highest setting's (the converged PSNR), and its wall \
-         time.\n\n| series | against | rate p (error ~ N^p) | highest setting: PSNR, s | first within {} dB: setting, PSNR, s |\n|---|---|---:|---:|---:|",
+        "\n**Convergence** on the {} backend, each quantity against its own high-sample reference. Rate p: \
+         least-squares slope of ln(error) against ln(samples per pixel) over the whole sweep, error = 10^(-PSNR/20) \
+         (the geometric mean of the R, G, B RMSEs). At these rates every series still gains several dB at its \
+         highest setting; which settings are enough for the numbers users report is the Table 1 convergence \
+         below.\n\n| series | against | rate p (error ~ N^p) | highest setting: PSNR, s |\n|---|---|---:|---:|",
         rep.backends.first().map(String::as_str).unwrap_or("?"),
-        CONVERGED_TOLERANCE_DB,
-        CONVERGED_TOLERANCE_DB,
-        CONVERGED_TOLERANCE_DB
     );
     for c in &rep.convergence {
-        let within = match &c.first_within_tolerance {
-            Some(w) => {
-                format!("{}, {} dB, {} s", setting(&c.series, w.parameter, w.samples), f2(w.psnr_db), secs(w.seconds))
-            }
-            None => "-".into(),
-        };
         let highest = rep.rows.iter().rfind(|r| r.series == c.series).map(|r| r.samples).unwrap_or(0);
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {}: {} dB, {} s | {} |",
+            "| {} | {} | {} | {}: {} dB, {} s |",
             c.quantity,
             c.reference,
             c.rate.map(|p| format!("{p:.2}")).unwrap_or_else(|| "-".into()),
             setting(&c.series, c.highest_parameter, highest),
             f2(c.converged_psnr_db),
             secs(c.highest_seconds),
-            within
         );
     }
     table1_summary_markdown(rep, &mut s);
@@ -2066,7 +2057,7 @@ mod tests {
     #[test]
     fn cheapest_setting_within_tolerance_of_the_converged_values() {
         // Two values per point; the last point is converged.
-        let pts = vec![vec![20.0, 30.0], vec![21.95, 30.5], vec![21.9, 30.05], vec![22.0, 30.0]];
+        let pts = vec![vec![20.0, 30.0], vec![21.95, 30.5], vec![21.93, 30.05], vec![22.0, 30.0]];
         assert_eq!(cheapest_within(&pts, 0.1), Some(2));
         // Overshooting counts as away from converged too.
         let pts = vec![vec![22.2, 30.0], vec![22.05, 30.0], vec![22.0, 30.0]];

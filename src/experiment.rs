@@ -541,6 +541,10 @@ fn stage_time(stages: &mut Vec<StageTime>, stage: &str, method: Option<&str>, ca
     });
 }
 
+/// Display images, one per method, and their depth planes (`None` where the field knows no
+/// depths).
+pub type DisplayImages = (Vec<RgbImage>, Vec<Option<Vec<f32>>>);
+
 /// Stage 1 of [`assess`]: the display image of every method of `exp` and its depth plane (when
 /// `with_depth` knows depths), each timed as a `render_display` stage.
 pub fn render_display_images<D: RadianceField + ?Sized>(
@@ -548,7 +552,7 @@ pub fn render_display_images<D: RadianceField + ?Sized>(
     with_depth: &D,
     quiet: bool,
     stages: &mut Vec<StageTime>,
-) -> Result<(Vec<RgbImage>, Vec<Option<Vec<f32>>>)> {
+) -> Result<DisplayImages> {
     let display = &exp.display;
     let mut displays = Vec::new();
     let mut depths = Vec::new();
