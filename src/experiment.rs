@@ -2,6 +2,7 @@
 //! pipeline that runs one: render the display image of every method, simulate what each eye
 //! case perceives, render the ground truth, score with PSNR and SSIM, and write every output.
 
+use std::borrow::Borrow;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -422,65 +423,20 @@ fn assess_with<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
     start: Instant,
 ) -> Result<AssessReport> {
     let mut stages = Vec::new();
-    let mut timed = |stage: &str, method: Option<&str>, case: Option<&str>, t: Instant| {
-        stages.push(StageTime {
-            stage: stage.into(),
-            method: method.map(String::from),
-            eye_case: case.map(String::from),
-            seconds: t.elapsed().as_secs_f64(),
-        });
-    };
     let display = &exp.display;
 
-    // 1. Display images.
-    let mut displays = Vec::new();
-    let mut depths = Vec::new();
-    for m in &exp.methods {
-        let t = Instant::now();
-        let p = Progress::new(display.lcd.rows() as u64, &format!("display image {}", m.short_name()), opts.quiet);
-        let (img, depth) = render_display_image_with_depth(display, *m, &exp.render, with_depth, &p)?;
-        p.finish();
-        timed("render_display", Some(m.short_name()), None, t);
-        displays.push(img);
-        depths.push(depth);
-    }
-    let t = Instant::now();
-    let stack = DisplayStack::new(display, &displays.iter().collect::<Vec<_>>())?;
-    timed("pack_display_images", None, None, t);
-
-    // 2. Per eye case: ground truth and the simulated retina of every method.
+    // 1-3. Display images, then per eye case the ground truth and the perceived image of every
+    // method, then the scores: the same stage functions `inimtrace bench` times.
+    let (displays, depths) = render_display_images(exp, with_depth, opts.quiet, &mut stages)?;
+    let stack = pack_display_images(exp, &displays.iter().collect::<Vec<_>>(), &mut stages)?;
     let mut gts = Vec::new();
     let mut sims = Vec::new();
     for case in &exp.cases {
-        let t = Instant::now();
-        let p = Progress::new(exp.retina.resolution as u64, &format!("ground truth {}", case.name), opts.quiet);
-        gts.push(ground_truth(&case.eye, &exp.retina, shade, &p));
-        p.finish();
-        timed("ground_truth", None, Some(&case.name), t);
-        let t = Instant::now();
-        let p = Progress::new(exp.retina.resolution as u64, &format!("simulate {}", case.name), opts.quiet);
-        sims.push(simulate_stack(display, &case.eye, &exp.retina, &stack, &p)?);
-        p.finish();
-        timed("simulate_all_methods", None, Some(&case.name), t);
+        gts.push(ground_truth_image(exp, case, shade, opts.quiet, &mut stages));
+        sims.push(perceived_images(exp, case, &stack, opts.quiet, &mut stages)?);
     }
     drop(stack);
-
-    // 3. Scores.
-    let t = Instant::now();
-    let pairs: Vec<(usize, usize)> =
-        (0..exp.cases.len()).flat_map(|c| (0..exp.methods.len()).map(move |m| (c, m))).collect();
-    let scores: Vec<Score> = pairs
-        .par_iter()
-        .map(|&(c, m)| -> Result<Score> {
-            Ok(Score {
-                method: exp.methods[m].short_name().into(),
-                eye_case: exp.cases[c].name.clone(),
-                psnr: metrics::psnr(&sims[c][m], &gts[c])?,
-                ssim: metrics::ssim(&sims[c][m], &gts[c], exp.ssim)?,
-            })
-        })
-        .collect::<Result<_>>()?;
-    timed("metrics", None, None, t);
+    let scores = table1_scores(exp, &gts, &sims, &mut stages)?;
 
     // 4. Images: EXR + PNG preview each, written in parallel.
     let t = Instant::now();
@@ -558,7 +514,7 @@ fn assess_with<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
     );
     image_result?;
     figure_result?;
-    timed("write_images", None, None, t);
+    stage_time(&mut stages, "write_images", None, None, t);
 
     let report = AssessReport {
         experiment: exp.name.clone(),
@@ -574,6 +530,122 @@ fn assess_with<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
     };
     write_reports(&report, exp, out)?;
     Ok(report)
+}
+
+fn stage_time(stages: &mut Vec<StageTime>, stage: &str, method: Option<&str>, case: Option<&str>, t: Instant) {
+    stages.push(StageTime {
+        stage: stage.into(),
+        method: method.map(String::from),
+        eye_case: case.map(String::from),
+        seconds: t.elapsed().as_secs_f64(),
+    });
+}
+
+/// Display images, one per method, and their depth planes (`None` where the field knows no
+/// depths).
+pub type DisplayImages = (Vec<RgbImage>, Vec<Option<Vec<f32>>>);
+
+/// Stage 1 of [`assess`]: the display image of every method of `exp` and its depth plane (when
+/// `with_depth` knows depths), each timed as a `render_display` stage.
+pub fn render_display_images<D: RadianceField + ?Sized>(
+    exp: &Experiment,
+    with_depth: &D,
+    quiet: bool,
+    stages: &mut Vec<StageTime>,
+) -> Result<DisplayImages> {
+    let display = &exp.display;
+    let mut displays = Vec::new();
+    let mut depths = Vec::new();
+    for m in &exp.methods {
+        let t = Instant::now();
+        let p = Progress::new(display.lcd.rows() as u64, &format!("display image {}", m.short_name()), quiet);
+        let (img, depth) = render_display_image_with_depth(display, *m, &exp.render, with_depth, &p)?;
+        p.finish();
+        stage_time(stages, "render_display", Some(m.short_name()), None, t);
+        displays.push(img);
+        depths.push(depth);
+    }
+    Ok((displays, depths))
+}
+
+/// The display images interleaved for the simulation (`pack_display_images` stage).
+pub fn pack_display_images(
+    exp: &Experiment,
+    displays: &[&RgbImage],
+    stages: &mut Vec<StageTime>,
+) -> Result<DisplayStack> {
+    let t = Instant::now();
+    let stack = DisplayStack::new(&exp.display, displays)?;
+    stage_time(stages, "pack_display_images", None, None, t);
+    Ok(stack)
+}
+
+/// Stage 2a of [`assess`]: the ground-truth retinal image of one eye case (`ground_truth` stage).
+pub fn ground_truth_image<S: RadianceField + ?Sized>(
+    exp: &Experiment,
+    case: &EyeCase,
+    shade: &S,
+    quiet: bool,
+    stages: &mut Vec<StageTime>,
+) -> RgbImage {
+    let t = Instant::now();
+    let p = Progress::new(exp.retina.resolution as u64, &format!("ground truth {}", case.name), quiet);
+    let gt = ground_truth(&case.eye, &exp.retina, shade, &p);
+    p.finish();
+    stage_time(stages, "ground_truth", None, Some(&case.name), t);
+    gt
+}
+
+/// Stage 2b of [`assess`]: what the eye of one eye case perceives of every display image in
+/// `stack`, all traced at once (`simulate_all_methods` stage).
+pub fn perceived_images(
+    exp: &Experiment,
+    case: &EyeCase,
+    stack: &DisplayStack,
+    quiet: bool,
+    stages: &mut Vec<StageTime>,
+) -> Result<Vec<RgbImage>> {
+    let t = Instant::now();
+    let p = Progress::new(exp.retina.resolution as u64, &format!("simulate {}", case.name), quiet);
+    let sims = simulate_stack(&exp.display, &case.eye, &exp.retina, stack, &p)?;
+    p.finish();
+    stage_time(stages, "simulate_all_methods", None, Some(&case.name), t);
+    Ok(sims)
+}
+
+/// Stage 3 of [`assess`], Table 1: PSNR and SSIM of `sims[case][method]` against `gts[case]`,
+/// for every eye case and method of `exp` (`metrics` stage). Scores are ordered by eye case,
+/// then method.
+pub fn table1_scores<G: Borrow<RgbImage> + Sync>(
+    exp: &Experiment,
+    gts: &[G],
+    sims: &[Vec<RgbImage>],
+    stages: &mut Vec<StageTime>,
+) -> Result<Vec<Score>> {
+    let t = Instant::now();
+    if gts.len() != exp.cases.len()
+        || sims.len() != exp.cases.len()
+        || sims.iter().any(|s| s.len() != exp.methods.len())
+    {
+        return Err(Error::Unsupported(
+            "table1_scores: one ground truth per eye case and one perceived image per method and eye case".into(),
+        ));
+    }
+    let pairs: Vec<(usize, usize)> =
+        (0..exp.cases.len()).flat_map(|c| (0..exp.methods.len()).map(move |m| (c, m))).collect();
+    let scores: Vec<Score> = pairs
+        .par_iter()
+        .map(|&(c, m)| -> Result<Score> {
+            Ok(Score {
+                method: exp.methods[m].short_name().into(),
+                eye_case: exp.cases[c].name.clone(),
+                psnr: metrics::psnr(&sims[c][m], gts[c].borrow())?,
+                ssim: metrics::ssim(&sims[c][m], gts[c].borrow(), exp.ssim)?,
+            })
+        })
+        .collect::<Result<_>>()?;
+    stage_time(stages, "metrics", None, None, t);
+    Ok(scores)
 }
 
 /// Table 1 as Markdown: rows are eye cases, columns PSNR per method | SSIM per method.

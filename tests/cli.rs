@@ -279,35 +279,354 @@ fn every_file_in_tests_data_bad_fails_cleanly() {
     }
 }
 
-/// `inimtrace bench --quick` writes its CSV, JSON and plots, and the convergence series approach
-/// their references.
+/// Splits one CSV line (fields with commas are quoted, `""` is a quote).
+fn csv_fields(line: &str) -> Vec<String> {
+    let (mut fields, mut cur, mut quoted, mut chars) = (Vec::new(), String::new(), false, line.chars().peekable());
+    while let Some(c) = chars.next() {
+        match (c, quoted) {
+            ('"', true) if chars.peek() == Some(&'"') => {
+                cur.push('"');
+                chars.next();
+            }
+            ('"', _) => quoted = !quoted,
+            (',', false) => fields.push(std::mem::take(&mut cur)),
+            _ => cur.push(c),
+        }
+    }
+    fields.push(cur);
+    fields
+}
+
+/// `inimtrace bench --quick` writes its CSVs, JSON, Markdown report and plots; every backend
+/// that can render the paper's scene measures every method on the display image and on each
+/// focused eye case; the convergence series approach their references; LA with k = 1 is LC; the
+/// Table 1 series is `assess`'s Table 1, and its 0.1-dB answers are what its rows say.
 #[test]
 fn bench_quick_writes_well_formed_reports() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("bench");
     let (ok, stdout, stderr) = inimtrace(&["bench", "--quick", "--out", out.to_str().unwrap()]);
     assert!(ok, "{stderr}");
-    assert!(stdout.contains("| la_grid |"));
-    for f in
-        ["bench.csv", "bench.json", "method.png", "method.svg", "la_grid.png", "pupil_grid.svg", "retina_samples.png"]
-    {
+    assert!(stdout.contains("| la_grid |"), "{stdout}");
+    for f in ["bench.csv", "builds.csv", "bench.json", "bench.md", "summary.md"] {
         assert!(out.join(f).is_file(), "missing {f}");
     }
-    let rows: Vec<serde_json::Value> =
-        serde_json::from_str(&std::fs::read_to_string(out.join("bench.json")).unwrap()).unwrap();
-    let psnr = |series: &str, p: u64| {
-        rows.iter()
-            .find(|r| r["series"] == series && r["parameter"] == p)
-            .map(|r| r["psnr_db"].as_f64().unwrap())
-            .unwrap()
-    };
-    assert!(psnr("la_grid", 8) > psnr("la_grid", 1) + 5.0);
-    assert!(psnr("pupil_grid", 16) > psnr("pupil_grid", 2) + 5.0);
-    assert!(psnr("retina_samples", 8) > psnr("retina_samples", 1) + 5.0);
-    for r in &rows {
-        assert!(r["psnr_db"].as_f64().unwrap().is_finite() && r["seconds"].as_f64().unwrap() > 0.0, "{r}");
-        assert!(r["git_revision"].as_str().is_some() && r["threads"].as_u64().unwrap() >= 1);
+    for name in ["speed_psnr", "speed_ssim", "la_grid", "pupil_grid", "retina_samples", "table1"] {
+        let png = std::fs::read(out.join(format!("{name}.png"))).unwrap();
+        assert!(png.starts_with(b"\x89PNG\r\n\x1a\n") && png.len() > 10_000, "{name}.png");
+        let svg = std::fs::read_to_string(out.join(format!("{name}.svg"))).unwrap();
+        assert!(svg.contains("<svg") && svg.trim_end().ends_with("</svg>"), "{name}.svg");
     }
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("bench.json")).unwrap()).unwrap();
+    let rows = report["rows"].as_array().unwrap();
+    let backends: Vec<&str> = report["backends"].as_array().unwrap().iter().map(|b| b.as_str().unwrap()).collect();
+    let mut expected = vec!["analytic-fused", "analytic"];
+    if cfg!(feature = "embree") {
+        expected.push("embree");
+    }
+    expected.push("bvh");
+    assert_eq!(backends, expected);
+
+    // Every row: finite scores, a time, its settings and provenance.
+    for r in rows {
+        let psnr = r["psnr_db"].as_f64().unwrap();
+        let ssim = r["ssim"].as_f64().unwrap();
+        assert!(psnr.is_finite() && psnr > 5.0 && psnr < 200.0, "{r}");
+        assert!(ssim > 0.0 && ssim <= 1.0, "{r}");
+        assert!(r["seconds"].as_f64().unwrap() > 0.0 && r["rays_per_second"].as_f64().unwrap() > 0.0, "{r}");
+        assert!(r["git_revision"].as_str().is_some_and(|s| !s.is_empty()), "{r}");
+        assert!(r["threads"].as_u64().unwrap() >= 1 && r["cores"].as_u64().unwrap() >= 1, "{r}");
+        assert_eq!(r["lcd_resolution"], 540);
+        assert_eq!(r["retina_resolution"], 128);
+        assert!(!r["reference"].as_str().unwrap().is_empty(), "{r}");
+    }
+
+    // Methods x backends: the display image and every focused eye case of the paper's
+    // experiment (Near 300, Cen 400, Far 600 mm).
+    let cases: Vec<(String, f64)> = report["eye_cases"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| (c[0].as_str().unwrap().to_string(), c[1].as_f64().unwrap()))
+        .collect();
+    assert_eq!(cases, [("Near".to_string(), 300.0), ("Cen".to_string(), 400.0), ("Far".to_string(), 600.0)]);
+    let method_row = |b: &str, m: &str, eye: &str| {
+        let found: Vec<&serde_json::Value> = rows
+            .iter()
+            .filter(|r| r["series"] == "method" && r["backend"] == b && r["method"] == m && r["eye_case"] == eye)
+            .collect();
+        assert_eq!(found.len(), 1, "{b} {m} {eye}");
+        found[0]
+    };
+    for m in ["LC", "PC", "LA"] {
+        for eye in ["", "Near", "Cen", "Far"] {
+            let reference = method_row("analytic-fused", m, eye);
+            assert_eq!(reference["quantity"], if eye.is_empty() { "display" } else { "perceived" });
+            for b in &backends {
+                let r = method_row(b, m, eye);
+                // Same scene, same rays: the analytic kernels agree bit for bit, and the mesh
+                // backends (tessellated rectangles) to well within a hundredth of a dB.
+                let d = (r["psnr_db"].as_f64().unwrap() - reference["psnr_db"].as_f64().unwrap()).abs();
+                assert!(if *b == "analytic" { d == 0.0 } else { d < 0.01 }, "{b} {m} {eye}: {d} dB");
+                if !eye.is_empty() {
+                    let display = method_row(b, m, "");
+                    assert!(r["seconds"].as_f64().unwrap() > display["seconds"].as_f64().unwrap());
+                    assert_eq!(r["pupil_grid"], 8);
+                }
+            }
+        }
+        // LA (5 x 5) traces 25 times LC's camera rays.
+        assert_eq!(method_row("bvh", "LA", "")["rays"], 25 * method_row("bvh", "LC", "")["rays"].as_u64().unwrap());
+    }
+    // LA is the most accurate method for every focused eye (the paper's finding).
+    for (eye, _) in &cases {
+        let p = |m: &str| method_row("analytic-fused", m, eye)["psnr_db"].as_f64().unwrap();
+        assert!(p("LA") > p("LC") && p("LC") > p("PC"), "{eye}");
+    }
+
+    // Convergence: each series gets closer to its reference overall, at a stated rate.
+    let series = |s: &str| -> Vec<(u64, f64)> {
+        rows.iter()
+            .filter(|r| r["series"] == s)
+            .map(|r| (r["parameter"].as_u64().unwrap(), r["psnr_db"].as_f64().unwrap()))
+            .collect()
+    };
+    assert_eq!(series("la_grid").iter().map(|p| p.0).collect::<Vec<_>>(), (1..=8).collect::<Vec<_>>());
+    assert_eq!(series("pupil_grid").iter().map(|p| p.0).collect::<Vec<_>>(), [2, 3, 4, 5, 6, 8, 10, 12, 16]);
+    assert_eq!(series("retina_samples").iter().map(|p| p.0).collect::<Vec<_>>(), [1, 2, 3, 4]);
+    for s in ["la_grid", "pupil_grid", "retina_samples"] {
+        let pts = series(s);
+        assert!(pts.last().unwrap().1 > pts[0].1 + 8.0, "{s}: {pts:?}");
+        // Overall decrease: no point falls more than 0.5 dB below the point at half its index.
+        for i in 2..pts.len() {
+            assert!(pts[i].1 > pts[i / 2].1 - 0.5, "{s}: {pts:?}");
+        }
+        let c = report["convergence"].as_array().unwrap().iter().find(|c| c["series"] == s).unwrap();
+        let rate = c["rate"].as_f64().unwrap();
+        assert!((-2.0..-0.2).contains(&rate), "{s}: rate {rate}");
+        assert_eq!(c["converged_psnr_db"].as_f64().unwrap(), pts.last().unwrap().1);
+        let within = &c["first_within_tolerance"];
+        let first = pts.iter().position(|p| p.1 >= pts.last().unwrap().1 - 0.1).unwrap();
+        assert_eq!(within["parameter"].as_u64().unwrap(), pts[first].0, "{s}");
+    }
+    // LA at k = 1 is LC, bit for bit.
+    assert_eq!(report["checks"]["la_k1_equals_lc"], true);
+
+    // Builds: each mesh backend over the 4 tessellated rectangles.
+    let builds = report["builds"].as_array().unwrap();
+    assert_eq!(builds.len(), expected.len() - 2);
+    for b in builds {
+        assert_eq!(b["triangles"], 8);
+        assert!(b["build_seconds"].as_f64().unwrap() >= 0.0);
+    }
+    let builds_csv = std::fs::read_to_string(out.join("builds.csv")).unwrap();
+    assert_eq!(builds_csv.lines().count(), builds.len() + 1);
+    assert!(builds_csv.lines().any(|l| l.starts_with("bvh,8,")), "{builds_csv}");
+
+    // The CSV holds the same rows, every line as many fields as the header.
     let csv = std::fs::read_to_string(out.join("bench.csv")).unwrap();
-    assert_eq!(csv.lines().count(), rows.len() + 1);
+    let lines: Vec<Vec<String>> = csv.lines().map(csv_fields).collect();
+    assert_eq!(lines.len(), rows.len() + 1);
+    let col = |name: &str| lines[0].iter().position(|h| h == name).unwrap();
+    for (fields, r) in lines[1..].iter().zip(rows) {
+        assert_eq!(fields.len(), lines[0].len(), "{fields:?}");
+        assert_eq!(fields[col("series")], r["series"].as_str().unwrap());
+        assert_eq!(fields[col("sweep")], r["sweep"].as_str().unwrap());
+        assert_eq!(fields[col("backend")], r["backend"].as_str().unwrap());
+        assert_eq!(fields[col("reference")], r["reference"].as_str().unwrap());
+        // (serde_json's float parsing may differ from Rust's in the last bit.)
+        let (a, b) = (fields[col("psnr_db")].parse::<f64>().unwrap(), r["psnr_db"].as_f64().unwrap());
+        assert!((a - b).abs() <= 1e-12 * b.abs(), "{a} {b}");
+    }
+
+    // The Markdown report: the methods x backends table, builds, convergence and the check.
+    let md = std::fs::read_to_string(out.join("bench.md")).unwrap();
+    for needle in ["| LA | bvh |", "| LC | analytic-fused |", "| bvh | 8 |", "rate p", "bit for bit the same"] {
+        assert!(md.contains(needle), "bench.md lacks `{needle}`");
+    }
+    assert!(std::fs::read_to_string(out.join("summary.md")).unwrap().contains("| PC | analytic |"));
+
+    check_table1_series(&report, &stdout, &out, dir.path());
+}
+
+/// The `table1` rows and summaries of a `bench --quick` report.
+fn check_table1_series(report: &serde_json::Value, stdout: &str, out: &Path, dir: &Path) {
+    let rows: Vec<&serde_json::Value> =
+        report["rows"].as_array().unwrap().iter().filter(|r| r["series"] == "table1").collect();
+    let f = |r: &serde_json::Value, k: &str| r[k].as_f64().unwrap();
+    let u = |r: &serde_json::Value, k: &str| r[k].as_u64().unwrap() as usize;
+    let sweeps: [(&str, Vec<usize>); 4] = [
+        ("retina_samples", vec![1, 2, 3, 4]),
+        ("display_samples", vec![1, 2, 3, 4]),
+        ("pupil_grid", vec![2, 3, 4, 5, 6, 8, 10, 12, 16]),
+        ("la_grid", vec![1, 2, 3, 4, 5, 6, 8]),
+    ];
+    // The paper's settings: 1 x 1 per retina and display pixel, pupil grid 8, LA 5 x 5.
+    let paper = [1, 1, 8, 5];
+    let cases = ["Pin", "Near", "Cen", "Far"];
+    let methods = ["LC", "PC", "LA"];
+    let tol = 0.1;
+    let summaries = report["table1"].as_array().unwrap();
+    assert_eq!(summaries.len(), 4);
+    // The Table 1 of the paper's settings, as every sweep measured it.
+    let mut paper_tables: Vec<Vec<f64>> = Vec::new();
+    for (si, (sweep, settings)) in sweeps.iter().enumerate() {
+        let sweep_rows: Vec<&serde_json::Value> = rows.iter().copied().filter(|r| r["sweep"] == *sweep).collect();
+        let point = |p: usize| -> Vec<&serde_json::Value> {
+            let mut v: Vec<&serde_json::Value> =
+                sweep_rows.iter().copied().filter(|r| u(r, "parameter") == p).collect();
+            v.sort_by_key(|r| {
+                let c = cases.iter().position(|c| r["eye_case"] == *c).unwrap();
+                (c, methods.iter().position(|m| r["method"] == *m).unwrap())
+            });
+            v
+        };
+        let psnr = |p: usize| point(p).iter().map(|r| f(r, "psnr_db")).collect::<Vec<_>>();
+        let mut seen: Vec<usize> = Vec::new();
+        for r in &sweep_rows {
+            if !seen.contains(&u(r, "parameter")) {
+                seen.push(u(r, "parameter"));
+            }
+        }
+        assert_eq!(&seen, settings, "{sweep}");
+        let mut rays = 0;
+        for &p in settings {
+            let pt = point(p);
+            // Every method under every eye case, scored by assess's metrics, with its settings.
+            assert_eq!(pt.len(), 12, "{sweep} {p}");
+            for (i, r) in pt.iter().enumerate() {
+                assert_eq!(r["eye_case"], cases[i / 3]);
+                assert_eq!(r["method"], methods[i % 3]);
+                assert_eq!(r["quantity"], "perceived");
+                let db = f(r, "psnr_db");
+                assert!(db.is_finite() && db > 5.0 && db < 60.0, "{r}");
+                assert!(f(r, "ssim") > 0.0 && f(r, "ssim") < 1.0, "{r}");
+                assert_eq!(f(r, "seconds"), f(pt[0], "seconds"));
+                assert_eq!(u(r, "rays"), u(pt[0], "rays"));
+                let mut expected = paper;
+                expected[si] = p;
+                let setting = [u(r, "retina_samples"), u(r, "display_samples"), u(r, "pupil_grid")];
+                assert_eq!(setting[..], expected[..3], "{r}");
+                assert_eq!(u(r, "la_grid"), if r["method"] == "LA" { expected[3] } else { 1 }, "{r}");
+            }
+            // More samples, more rays.
+            assert!(u(pt[0], "rays") > rays, "{sweep} {p}");
+            rays = u(pt[0], "rays");
+            assert!(f(pt[0], "seconds") > 0.0);
+        }
+        if settings.contains(&paper[si]) {
+            paper_tables.push(psnr(paper[si]));
+        }
+
+        // The summary: converged = the highest setting; the reported setting is within 0.1 dB of
+        // it for every method and eye case, and no cheaper setting of the sweep is.
+        let c = summaries.iter().find(|c| c["sweep"] == *sweep).unwrap();
+        let last = *settings.last().unwrap();
+        assert_eq!(u(c, "converged_parameter"), last);
+        let converged = psnr(last);
+        let diff = |p: usize, keep: &dyn Fn(usize) -> bool| {
+            psnr(p)
+                .iter()
+                .zip(&converged)
+                .enumerate()
+                .filter(|(i, _)| keep(*i))
+                .map(|(_, (a, b))| (a - b).abs())
+                .fold(0.0, f64::max)
+        };
+        let check = |w: &serde_json::Value, keep: &dyn Fn(usize) -> bool| {
+            let p = u(w, "parameter");
+            assert!(diff(p, keep) <= tol, "{sweep} {w}: {} dB", diff(p, keep));
+            assert!((f(w, "max_diff_db") - diff(p, keep)).abs() < 1e-9, "{sweep} {w}");
+            let i = settings.iter().position(|s| *s == p).unwrap();
+            for &cheaper in &settings[..i] {
+                assert!(diff(cheaper, keep) > tol, "{sweep} {w}: {cheaper} is within {tol} dB too");
+            }
+            let stays = settings[i..].iter().all(|s| diff(*s, keep) <= tol);
+            assert_eq!(w["stays_within"].as_bool().unwrap(), stays, "{sweep} {w}");
+            assert_eq!(f(w, "seconds"), f(point(p)[0], "seconds"));
+        };
+        assert_eq!(c["all_methods"]["methods"], "all");
+        check(&c["all_methods"], &|_| true);
+        let per = c["per_method"].as_array().unwrap();
+        assert_eq!(per.len(), 3);
+        for (mi, m) in methods.iter().enumerate() {
+            let w = per.iter().find(|w| w["methods"] == *m).unwrap();
+            check(w, &|i| i % 3 == mi);
+            // One method's eye cases never need more than all of them.
+            assert!(u(w, "parameter") <= u(&c["all_methods"], "parameter"));
+        }
+        let second = settings[settings.len() - 2];
+        assert!((f(c, "last_step_db") - diff(second, &|_| true)).abs() < 1e-9, "{sweep}");
+        assert!((f(c, "paper_max_diff_db") - diff(paper[si], &|_| true)).abs() < 1e-9, "{sweep}");
+        assert!(stdout.contains(&format!("table1 {sweep}: converged = {last}")), "{stdout}");
+
+        // What a sweep does not change stays bit for bit: LC and PC do not depend on LA's k, nor
+        // the pinhole eye on the pupil grid; LA with k = 1 is LC.
+        for &p in settings {
+            let (now, first) = (point(p), point(settings[0]));
+            for i in 0..12 {
+                let fixed = match *sweep {
+                    "la_grid" => i % 3 != 2,
+                    "pupil_grid" => i / 3 == 0,
+                    _ => false,
+                };
+                if fixed {
+                    assert_eq!(f(now[i], "psnr_db"), f(first[i], "psnr_db"), "{sweep} {p} {i}");
+                }
+                if *sweep == "la_grid" && p == 1 && i % 3 == 2 {
+                    assert_eq!(f(now[i], "psnr_db"), f(now[i - 2], "psnr_db"), "LA k = 1 vs LC");
+                }
+            }
+        }
+    }
+    // Every sweep holds the paper's setting; they all measured the same Table 1 there.
+    assert_eq!(paper_tables.len(), 4);
+    assert!(paper_tables.iter().all(|t| t == &paper_tables[0]));
+    // It is `inimtrace assess`'s Table 1 for the same display, retina and settings.
+    let display =
+        std::fs::read_to_string(root().join("displays/paper.toml")).unwrap().replace("[2160, 2160]", "[540, 540]");
+    std::fs::write(dir.join("display-540.toml"), display).unwrap();
+    let exp = std::fs::read_to_string(root().join("experiments/paper.toml"))
+        .unwrap()
+        .replace("../scenes/paper.toml", "builtin:paper")
+        .replace("../displays/paper.toml", "display-540.toml")
+        .replace("retina_resolution = 512", "retina_resolution = 128");
+    std::fs::write(dir.join("quick.toml"), exp).unwrap();
+    let assessed = dir.join("assessed");
+    let (ok, _, stderr) =
+        inimtrace(&["assess", dir.join("quick.toml").to_str().unwrap(), "--out", assessed.to_str().unwrap()]);
+    assert!(ok, "{stderr}");
+    let results: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(assessed.join("results.json")).unwrap()).unwrap();
+    let scores = results["scores"].as_array().unwrap();
+    assert_eq!(scores.len(), 12);
+    for (i, v) in paper_tables[0].iter().enumerate() {
+        let s = scores.iter().find(|s| s["eye_case"] == cases[i / 3] && s["method"] == methods[i % 3]).unwrap();
+        let a = s["psnr"]["mean"].as_f64().unwrap();
+        assert!((a - v).abs() <= 1e-9 * a.abs(), "{} {}: assess {a} vs bench {v}", cases[i / 3], methods[i % 3]);
+    }
+
+    // The reports.
+    let summary = std::fs::read_to_string(out.join("summary.md")).unwrap();
+    for needle in ["**Table 1 convergence**", "| samples per retina pixel, k x k | 1, 2, 3, 4 |", "within 0.1 dB"] {
+        assert!(summary.contains(needle), "summary.md lacks `{needle}`");
+    }
+    let md = std::fs::read_to_string(out.join("bench.md")).unwrap();
+    for needle in
+        ["## Table 1 convergence: pupil grid n x n", "| LA k = 5 (paper) |", "![Table 1 convergence](table1.png)"]
+    {
+        assert!(md.contains(needle), "bench.md lacks `{needle}`");
+    }
+}
+
+#[test]
+fn bench_with_a_missing_scene_names_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o");
+    expect_error(
+        &["bench", "--quick", "--scene", "no-such-scene.toml", "--out", out.to_str().unwrap()],
+        &["no-such-scene.toml"],
+    );
+    assert!(!out.join("bench.json").exists());
 }

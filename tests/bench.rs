@@ -1,0 +1,124 @@
+//! `inimtrace::bench` at tiny sizes on a scene with a triangle mesh: only the mesh backends can
+//! render it, each reports its build, and they agree. (`tests/cli.rs` runs `bench --quick` on the
+//! paper's scene.)
+
+use std::sync::Arc;
+
+use glam::DVec3;
+use inimtrace::bench::{run, BenchOptions, Sizes};
+use inimtrace::scene::procedural::icosphere;
+use inimtrace::scene::{Material, Object, Rect, Scene, Shape};
+
+fn tiny() -> Sizes {
+    Sizes {
+        lcd_resolution: 108,
+        retina_resolution: 32,
+        display_samples: vec![1, 2],
+        reference_display_samples: 3,
+        reference_la_grid: 6,
+        reference_pupil_grid: 10,
+        reference_retina_samples: 3,
+        la_grids: vec![1, 2, 3],
+        la_grid_reference: 6,
+        pupil_grids: vec![2, 4],
+        pupil_grid_reference: 8,
+        retina_samples: vec![1, 2],
+        retina_samples_reference: 4,
+        table1_retina_samples: vec![1, 2],
+        table1_display_samples: vec![1, 2],
+        table1_pupil_grids: vec![4, 8],
+        table1_la_grids: vec![1, 5],
+    }
+}
+
+#[test]
+fn mesh_scene_runs_on_the_mesh_backends_only() {
+    let scene = Scene {
+        name: "ball".into(),
+        objects: vec![
+            Object {
+                name: "ball".into(),
+                // Off the display's central depth plane (~386 mm), where every LA bundle would
+                // converge to a point and LA would equal LC.
+                shape: Shape::Mesh(Arc::new(icosphere(2, DVec3::new(10.0, -5.0, 250.0), 40.0))),
+                material: Material::Albedo(DVec3::new(0.9, 0.5, 0.2)),
+            },
+            Object {
+                name: "wall".into(),
+                shape: Shape::Rect(Rect::facing_eye(DVec3::new(0.0, 0.0, 700.0), 600.0, 600.0)),
+                material: Material::Albedo(DVec3::new(0.2, 0.7, 0.8)),
+            },
+        ],
+        background: DVec3::ZERO,
+        light: None,
+        warnings: Vec::new(),
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let opts = BenchOptions { sizes: tiny(), mode: "tiny".into(), out: dir.path().to_path_buf(), quiet: true };
+    let report = run(&opts, &scene, "ball").unwrap();
+
+    let mut expected = Vec::new();
+    if cfg!(feature = "embree") {
+        expected.push("embree");
+    }
+    expected.push("bvh");
+    assert_eq!(report.backends, expected);
+    assert_eq!(report.builds.len(), expected.len());
+    for b in &report.builds {
+        assert_eq!(b.triangles, 320 + 2, "{b:?}");
+        assert!(b.build_seconds >= 0.0 && b.constructor_seconds >= b.build_seconds * 0.5, "{b:?}");
+    }
+    assert!(report.checks.la_k1_equals_lc);
+    for f in ["bench.csv", "builds.csv", "bench.json", "bench.md", "summary.md", "speed_psnr.svg", "la_grid.png"] {
+        assert!(dir.path().join(f).is_file(), "missing {f}");
+    }
+
+    let method_rows: Vec<_> = report.rows.iter().filter(|r| r.series == "method").collect();
+    // backends x 3 methods x 2 sample counts x (display + 3 focused eye cases)
+    assert_eq!(method_rows.len(), expected.len() * 3 * 2 * 4);
+    for r in &method_rows {
+        assert!(r.psnr_db.is_finite() && r.psnr_db > 5.0 && r.psnr_db < 200.0, "{r:?}");
+        assert_eq!(r.scene, "ball");
+        // Both backends trace the same triangles: their images agree.
+        let first = method_rows
+            .iter()
+            .find(|o| {
+                o.backend == expected[0]
+                    && o.method == r.method
+                    && o.eye_case == r.eye_case
+                    && o.parameter == r.parameter
+            })
+            .unwrap();
+        assert!((r.psnr_db - first.psnr_db).abs() < 0.05, "{r:?} vs {first:?}");
+    }
+    // More samples per display pixel: closer to the reference display image.
+    for b in &expected {
+        for m in ["LC", "PC", "LA"] {
+            let p = |k: usize| {
+                method_rows
+                    .iter()
+                    .find(|r| &r.backend == b && r.method == m && r.quantity == "display" && r.parameter == k)
+                    .unwrap()
+                    .psnr_db
+            };
+            assert!(p(2) > p(1) + 1.0, "{b} {m}: {} vs {}", p(2), p(1));
+        }
+    }
+    // Convergence runs on the first backend, one summary per series.
+    assert_eq!(report.convergence.len(), 3);
+    for c in &report.convergence {
+        assert_eq!(c.backend, expected[0]);
+        assert!(c.rate.is_some_and(|p| p < 0.0), "{c:?}");
+    }
+    // So does the Table 1 series: every sweep, 3 methods x 4 eye cases per setting.
+    assert_eq!(report.table1.len(), 4);
+    for t in &report.table1 {
+        assert_eq!(t.backend, expected[0]);
+        assert_eq!(t.parameters.len(), 2, "{t:?}");
+        assert!(t.all_methods.is_some() && t.per_method.len() == 3, "{t:?}");
+    }
+    let table1: Vec<_> = report.rows.iter().filter(|r| r.series == "table1").collect();
+    assert_eq!(table1.len(), 4 * 2 * 12);
+    assert!(table1.iter().all(|r| r.psnr_db.is_finite() && r.psnr_db > 3.0 && r.scene == "ball"));
+    assert!(dir.path().join("table1.svg").is_file());
+}
