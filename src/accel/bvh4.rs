@@ -29,7 +29,7 @@ const BIN_MASK: u32 = BINS as u32 - 1;
 const MAGIC: f32 = 8_388_608.0;
 /// Nodes with at least this many primitives are binned on all three axes, smaller ones only on
 /// the axis of widest centroid spread.
-const ALL_AXES_MIN: usize = 256;
+const ALL_AXES_MIN: usize = 2048;
 /// Nodes with at least this many primitives are binned in parallel.
 const PARALLEL_BINNING_MIN: usize = 262_144;
 /// Largest primitive count a leaf reference can hold (27 bits of slot index).
