@@ -19,7 +19,7 @@ use glam::{Vec3A, Vec4};
 /// Most primitives in one leaf.
 pub const LEAF_MAX: usize = 4;
 /// Subtrees with at least this many primitives are built in parallel.
-pub const PARALLEL_MIN: usize = 16_384;
+pub const PARALLEL_MIN: usize = 131_072;
 /// Levels of SAH splits before median splits take over (see [`Bvh4::depth`]).
 pub const SAH_MAX_DEPTH: usize = 40;
 /// SAH bins per axis (a power of two, see [`BIN_MASK`]).
