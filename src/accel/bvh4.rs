@@ -762,7 +762,9 @@ mod tests {
     #[test]
     fn structure_and_traversal_match_the_scan_of_all_nodes() {
         let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
-        for n in [0usize, 1, 3, 4, 5, 17, 100, 5000, 40_000] {
+        // 300,000 exceeds PARALLEL_MIN: subtrees built in parallel and spliced.
+        const { assert!(300_000 > PARALLEL_MIN) };
+        for n in [0usize, 1, 3, 4, 5, 17, 100, 5000, 40_000, 300_000] {
             let boxes = random_boxes(&mut rng, n);
             let bvh = Bvh4::build(&boxes);
             check_structure(&bvh, &boxes);
