@@ -38,9 +38,10 @@ pub const MAX_PRIMITIVES: usize = 1 << 27;
 /// Set in an [`Item`]'s index bits (see there).
 const ID_TAG: u32 = 0x4000_0000;
 
-/// Traversal stack entries kept in a fixed array (trees up to depth 13, which covers scenes of
-/// millions of triangles; deeper ones use a `Vec`).
-const SMALL_STACK: usize = 40;
+thread_local! {
+    /// Per-thread traversal stack of [`Bvh4::traverse`] (grown to the deepest tree seen).
+    static STACK: std::cell::RefCell<Vec<(u32, f32)>> = const { std::cell::RefCell::new(Vec::new()) };
+}
 
 /// Child reference: an interior node's index, a leaf (`LEAF` bit, count - 1 in bits 27..=30,
 /// first slot in bits 0..=26), or [`EMPTY`].
@@ -267,13 +268,19 @@ impl Bvh4 {
     /// traversal (any-hit queries).
     #[inline]
     pub fn traverse(&self, ray: &CullRay, leaf: impl FnMut(usize, usize, f32) -> f32) {
-        // At most 3 entries per level are pending; a small array (cheap to set up per ray)
-        // serves every tree of usual depth.
-        if 3 * self.depth < SMALL_STACK {
-            self.traverse_in(&mut [(0, 0.0); SMALL_STACK], ray, leaf);
-        } else {
-            self.traverse_in(&mut vec![(0, 0.0); 3 * self.depth + 1], ray, leaf);
-        }
+        // At most 3 entries per level are pending. The stack lives in a per-thread buffer, so a
+        // ray does not pay for setting one up; a traversal started from inside a leaf callback
+        // (the buffer is then in use) gets a fresh one.
+        let need = 3 * self.depth + 1;
+        STACK.with(|buffer| match buffer.try_borrow_mut() {
+            Ok(mut stack) => {
+                if stack.len() < need {
+                    stack.resize(need, (0, 0.0));
+                }
+                self.traverse_in(&mut stack[..need], ray, leaf)
+            }
+            Err(_) => self.traverse_in(&mut vec![(0, 0.0); need], ray, leaf),
+        })
     }
 
     #[inline]
@@ -804,7 +811,7 @@ mod tests {
         let mut slow = bvh.leaves_entered(&ray);
         slow.sort_unstable();
         assert_eq!(visited(&bvh, &ray), slow);
-        // The heap-stack path (taken by trees deeper than SMALL_STACK / 3) visits the same leaves.
+        // A traversal with its own stack (as for a nested traversal) visits the same leaves.
         let mut heap = Vec::new();
         bvh.traverse_in(&mut vec![(0, 0.0); 3 * bvh.depth() + 1], &ray, |first, count, t| {
             heap.push((first, count));
@@ -813,6 +820,32 @@ mod tests {
         heap.sort_unstable();
         assert_eq!(heap, slow);
         assert_eq!(slow.iter().map(|l| l.1).sum::<usize>(), 48);
+    }
+
+    #[test]
+    fn nested_traversal_uses_its_own_stack() {
+        // A traversal from inside a leaf callback (the per-thread stack is busy) must work and
+        // must not disturb the outer one.
+        let mut rng = Rng(7);
+        let boxes = random_boxes(&mut rng, 3000);
+        let bvh = Bvh4::build(&boxes);
+        let ray = CullRay::new(Vec3A::ZERO, Vec3A::new(0.0, 0.0, 1.0), f32::INFINITY);
+        let (mut outer, mut inner_runs) = (Vec::new(), 0);
+        bvh.traverse(&ray, |first, count, t| {
+            outer.push((first, count));
+            assert_eq!(visited(&bvh, &ray), {
+                let mut slow = bvh.leaves_entered(&ray);
+                slow.sort_unstable();
+                slow
+            });
+            inner_runs += 1;
+            t
+        });
+        outer.sort_unstable();
+        let mut slow = bvh.leaves_entered(&ray);
+        slow.sort_unstable();
+        assert_eq!(outer, slow);
+        assert!(inner_runs > 0);
     }
 
     #[test]
