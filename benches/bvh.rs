@@ -64,6 +64,26 @@ fn ray_sets() -> Vec<(&'static str, Vec<Ray>)> {
     vec![("coherent", camera), ("eye", eye), ("incoherent", random)]
 }
 
+/// The BVH in each of `layouts`, then Embree at its high build quality (with the feature).
+fn backends(
+    meshes: &[(u32, &Mesh)],
+    layouts: &[(&'static str, BvhLayout)],
+) -> Vec<(&'static str, Box<dyn Intersector>)> {
+    #[cfg_attr(not(feature = "embree"), allow(unused_mut))]
+    let mut out: Vec<(&'static str, Box<dyn Intersector>)> = layouts
+        .iter()
+        .map(|&(name, layout)| {
+            (name, Box::new(BvhIntersector::with_layout(meshes, layout).unwrap()) as Box<dyn Intersector>)
+        })
+        .collect();
+    #[cfg(feature = "embree")]
+    {
+        use inimtrace::accel::embree::{BuildQuality, EmbreeIntersector};
+        out.push(("embree", Box::new(EmbreeIntersector::new(meshes, BuildQuality::High).unwrap())));
+    }
+    out
+}
+
 fn trace_all(backend: &dyn Intersector, rays: &[Ray]) -> usize {
     rays.iter().filter(|r| backend.intersect(r, f64::INFINITY).is_some()).count()
 }
@@ -79,16 +99,7 @@ fn bench_pipeline_rays(c: &mut Criterion) {
     };
     let meshes = inimtrace::render::backend::scene_meshes(&scene);
     let refs: Vec<(u32, &Mesh)> = meshes.iter().map(|(i, m)| (*i, m.as_ref())).collect();
-    #[cfg_attr(not(feature = "embree"), allow(unused_mut))]
-    let mut backends: Vec<(&'static str, Box<dyn Intersector>)> = vec![
-        ("bvh-bvh4", Box::new(BvhIntersector::with_layout(&refs, BvhLayout::Bvh4).unwrap())),
-        ("bvh-cwbvh", Box::new(BvhIntersector::with_layout(&refs, BvhLayout::Cwbvh).unwrap())),
-    ];
-    #[cfg(feature = "embree")]
-    {
-        use inimtrace::accel::embree::{BuildQuality, EmbreeIntersector};
-        backends.push(("embree", Box::new(EmbreeIntersector::new(&refs, BuildQuality::High).unwrap())));
-    }
+    let backends = backends(&refs, &[("bvh-bvh4", BvhLayout::Bvh4), ("bvh-cwbvh", BvhLayout::Cwbvh)]);
     for (set, rays) in [("display", common::bunny_display_rays(32)), ("eye", common::bunny_eye_rays(2))] {
         let mut group = c.benchmark_group(format!("bunny_scene_{set}"));
         group.throughput(Throughput::Elements(rays.len() as u64));
@@ -106,17 +117,10 @@ fn bench_rays(c: &mut Criterion) {
         return;
     };
     let meshes = [(0, &mesh)];
-    #[cfg_attr(not(feature = "embree"), allow(unused_mut))]
-    let mut backends: Vec<(&'static str, Box<dyn Intersector>)> = vec![
-        ("bvh-bvh4", Box::new(BvhIntersector::with_layout(&meshes, BvhLayout::Bvh4).unwrap())),
-        ("bvh-cwbvh", Box::new(BvhIntersector::with_layout(&meshes, BvhLayout::Cwbvh).unwrap())),
-        ("bvh-bvh2", Box::new(BvhIntersector::with_layout(&meshes, BvhLayout::Bvh2).unwrap())),
-    ];
-    #[cfg(feature = "embree")]
-    {
-        use inimtrace::accel::embree::{BuildQuality, EmbreeIntersector};
-        backends.push(("embree", Box::new(EmbreeIntersector::new(&meshes, BuildQuality::High).unwrap())));
-    }
+    let backends = backends(
+        &meshes,
+        &[("bvh-bvh4", BvhLayout::Bvh4), ("bvh-cwbvh", BvhLayout::Cwbvh), ("bvh-bvh2", BvhLayout::Bvh2)],
+    );
     for (set, rays) in ray_sets() {
         let mut group = c.benchmark_group(format!("bunny_{set}"));
         group.throughput(Throughput::Elements(rays.len() as u64));

@@ -33,6 +33,30 @@ use crate::accel::{Hit, Intersector, Ray, Surface};
 use crate::error::Result;
 use crate::scene::mesh::Mesh;
 
+/// The nearest hit found so far, with the deterministic tie-break shared by every triangle
+/// backend: smaller `t` wins; at equal `t`, the lower object index, then the lower triangle index.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NearestHit(Option<(f64, u32, u32, DVec2)>);
+
+impl NearestHit {
+    /// Offers a hit; returns whether it became the nearest.
+    #[inline(always)]
+    pub fn offer(&mut self, t: f64, object: u32, index: u32, bary: DVec2) -> bool {
+        let better = match self.0 {
+            None => true,
+            Some((bt, bo, bi, _)) => t < bt || (t == bt && (object, index) < (bo, bi)),
+        };
+        if better {
+            self.0 = Some((t, object, index, bary));
+        }
+        better
+    }
+
+    pub fn hit(self) -> Option<Hit> {
+        self.0.map(|(t, object, index, bary)| Hit { t, object, surface: Surface::Triangle { index, bary } })
+    }
+}
+
 /// A ray prepared for the watertight test (axis permutation and shear, computed once per ray).
 #[derive(Clone, Copy, Debug)]
 pub struct WatertightRay {
@@ -201,21 +225,14 @@ impl Intersector for BruteForce {
     /// index, then lowest triangle index.
     fn intersect(&self, ray: &Ray, t_max: f64) -> Option<Hit> {
         let wray = WatertightRay::new(ray)?;
-        let mut best: Option<(f64, u32, u32, DVec2)> = None;
+        let mut best = NearestHit::default();
         for tri in &self.tris {
             // The original t_max, not the best t so far, so that exact ties are seen.
-            let Some((t, bary)) = wray.intersect(tri.p[0], tri.p[1], tri.p[2], t_max) else {
-                continue;
-            };
-            let better = match best {
-                None => true,
-                Some((bt, bo, bi, _)) => t < bt || (t == bt && (tri.object, tri.index) < (bo, bi)),
-            };
-            if better {
-                best = Some((t, tri.object, tri.index, bary));
+            if let Some((t, bary)) = wray.intersect(tri.p[0], tri.p[1], tri.p[2], t_max) {
+                best.offer(t, tri.object, tri.index, bary);
             }
         }
-        best.map(|(t, object, index, bary)| Hit { t, object, surface: Surface::Triangle { index, bary } })
+        best.hit()
     }
 
     fn occluded(&self, ray: &Ray, t_max: f64) -> bool {

@@ -23,7 +23,7 @@
 
 use std::time::Instant;
 
-use glam::{DVec2, DVec3, Vec3A};
+use glam::{DVec3, Vec3A};
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
 use obvhs::bvh2::Bvh2;
@@ -33,9 +33,9 @@ use obvhs::ploc::{PlocBuilder, PlocSearchDistance, SortPrecision};
 use obvhs::ray::{Ray as CullRay, RayHit};
 use rayon::prelude::*;
 
-use crate::accel::brute::WatertightRay;
+use crate::accel::brute::{NearestHit, WatertightRay};
 use crate::accel::bvh4::{self, Bvh4};
-use crate::accel::{Hit, Intersector, Ray, Surface};
+use crate::accel::{Hit, Intersector, Ray};
 use crate::error::{Error, Result};
 use crate::scene::mesh::Mesh;
 
@@ -315,19 +315,14 @@ impl BvhIntersector {
     fn intersect_bvh4(&self, bvh: &Bvh4, ray: &Ray, t_max: f64) -> Option<Hit> {
         let wray = WatertightRay::new(ray)?;
         let (cull, t0, to_cull) = self.cull_ray4(ray, t_max)?;
-        let mut best: Option<(f64, u32, u32, DVec2)> = None;
+        let mut best = NearestHit::default();
         bvh.traverse(&cull, |first, count, mut t_cull| {
             for tri in &self.tris[first..first + count] {
                 // The original t_max, not the best t so far, so that exact ties are seen.
                 let Some((t, bary)) = wray.intersect(tri.p[0], tri.p[1], tri.p[2], t_max) else {
                     continue;
                 };
-                let better = match best {
-                    None => true,
-                    Some((bt, bo, bi, _)) => t < bt || (t == bt && (tri.object, tri.index) < (bo, bi)),
-                };
-                if better {
-                    best = Some((t, tri.object, tri.index, bary));
+                if best.offer(t, tri.object, tri.index, bary) {
                     // Boxes reaching t are entered at least the padding earlier, so rounding
                     // here cannot cull one.
                     t_cull = t_cull.min(((t - t0) * to_cull) as f32);
@@ -335,7 +330,7 @@ impl BvhIntersector {
             }
             t_cull
         });
-        best.map(|(t, object, index, bary)| Hit { t, object, surface: Surface::Triangle { index, bary } })
+        best.hit()
     }
 
     /// Sets up the `f32` culling ray for `ray` with `0 < t < t_max`: `None` when the ray
@@ -405,21 +400,16 @@ impl Intersector for BvhIntersector {
         }
         let wray = WatertightRay::new(ray)?;
         let (cull, t0, to_cull) = self.cull_ray(ray, t_max)?;
-        let mut best: Option<(f64, u32, u32, DVec2)> = None;
+        let mut best = NearestHit::default();
         let mut test = |_: &CullRay, slot: usize| -> f32 {
             let tri = &self.tris[slot];
             // The original t_max, not the best t so far, so that exact ties are seen.
             let Some((t, bary)) = wray.intersect(tri.p[0], tri.p[1], tri.p[2], t_max) else {
                 return f32::INFINITY;
             };
-            let better = match best {
-                None => true,
-                Some((bt, bo, bi, _)) => t < bt || (t == bt && (tri.object, tri.index) < (bo, bi)),
-            };
-            if !better {
+            if !best.offer(t, tri.object, tri.index, bary) {
                 return f32::INFINITY;
             }
-            best = Some((t, tri.object, tri.index, bary));
             // Shrinks the culling range; boxes reaching t are entered at least the padding
             // earlier, so the rounding here cannot cull one.
             ((t - t0) * to_cull) as f32
@@ -435,7 +425,7 @@ impl Intersector for BvhIntersector {
                 bvh.ray_traverse(cull, &mut raw, &mut test);
             }
         }
-        best.map(|(t, object, index, bary)| Hit { t, object, surface: Surface::Triangle { index, bary } })
+        best.hit()
     }
 
     /// One ray at a time (same hits as [`Intersector::intersect`]).
