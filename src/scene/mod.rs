@@ -11,6 +11,7 @@
 pub mod image_texture;
 pub mod mesh;
 pub mod mesh_io;
+pub mod polygon;
 pub mod procedural;
 pub mod texture;
 pub mod usaf;
