@@ -3,4 +3,6 @@
 pub mod config;
 pub mod exr;
 pub mod figure;
+pub mod input;
+pub mod output;
 pub mod png;

@@ -1,0 +1,286 @@
+//! The output folder of a run: owned, written atomically, and described by a manifest.
+//!
+//! A run either finishes with complete files or leaves nothing that looks complete:
+//! - **Owned**: opening a folder takes an exclusive lock on `.inimtrace.lock` inside it (an OS
+//!   file lock, released when the process ends, even by SIGKILL). A second run into the same
+//!   folder fails at once and names the holder (its process id and command line).
+//! - **Atomic**: every file is written under a hidden temporary name in the folder
+//!   (`.inimtrace-tmp-<pid>-<name>`, keeping the extension so that format writers that look at
+//!   it still work) and renamed to its final name only when complete. A killed run leaves at
+//!   most temporary files, which the next run into the folder removes.
+//! - **Manifest**: every file written is recorded with its size and CRC-32; the run's report
+//!   (`results.json`) is written last and lists them, so its presence marks a complete run and
+//!   a reader can verify the set. Opening a folder removes the previous run's report first, then
+//!   the files its manifest listed, so no earlier output stands next to a new report.
+//!
+//! Atomic renames protect against a killed process and a full disk, not against power loss
+//! (files are not fsynced, which would cost seconds per run).
+
+use std::fs::{self, File, TryLockError};
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+
+/// Name of the lock file inside an output folder.
+pub const LOCK_FILE: &str = ".inimtrace.lock";
+/// Prefix of temporary files inside an output folder.
+pub const TEMP_PREFIX: &str = ".inimtrace-tmp-";
+
+/// One complete file of a run, as the manifest lists it.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct OutputFile {
+    /// Name relative to the output folder.
+    pub name: String,
+    pub bytes: u64,
+    /// CRC-32 (IEEE) of the file's bytes, 8 lowercase hex digits.
+    pub crc32: String,
+}
+
+/// An output folder owned by this run (see the module documentation).
+#[derive(Debug)]
+pub struct OutputDir {
+    root: PathBuf,
+    /// Held for the lifetime of the run: the OS lock lives as long as this handle.
+    _lock: File,
+    written: Mutex<Vec<OutputFile>>,
+}
+
+impl OutputDir {
+    /// Creates (if needed) and takes the folder `root`, removes what a previous run left there
+    /// (its report, the files its manifest listed, temporary files), and checks that it can be
+    /// written.
+    pub fn open(root: &Path) -> Result<Self> {
+        fs::create_dir_all(root).map_err(|e| Error::io(root, e))?;
+        if !root.is_dir() {
+            return Err(Error::io(root, std::io::Error::other("is not a directory")));
+        }
+        let lock_path = root.join(LOCK_FILE);
+        let mut lock = fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(false)
+            .open(&lock_path)
+            .map_err(|e| Error::io(&lock_path, e))?;
+        match lock.try_lock() {
+            Ok(()) => {}
+            Err(TryLockError::WouldBlock) => {
+                let mut holder = String::new();
+                let _ = lock.read_to_string(&mut holder);
+                let holder = holder.trim();
+                let holder = if holder.is_empty() { "another process" } else { holder };
+                return Err(Error::io(
+                    root,
+                    std::io::Error::other(format!("output folder is in use by {holder}; choose another --out")),
+                ));
+            }
+            Err(TryLockError::Error(e)) => return Err(Error::io(&lock_path, e)),
+        }
+        let holder = format!(
+            "inimtrace process {} ({})",
+            std::process::id(),
+            std::env::args().collect::<Vec<_>>().join(" ")
+        );
+        lock.set_len(0).and_then(|_| lock.write_all(holder.as_bytes())).map_err(|e| Error::io(&lock_path, e))?;
+        let dir = Self { root: root.to_path_buf(), _lock: lock, written: Mutex::new(Vec::new()) };
+        dir.remove_previous_run()?;
+        Ok(dir)
+    }
+
+    /// The folder.
+    pub fn path(&self) -> &Path {
+        &self.root
+    }
+
+    /// The final path of `name` in the folder.
+    pub fn join(&self, name: &str) -> PathBuf {
+        self.root.join(name)
+    }
+
+    /// Writes `name` atomically: `write` gets a temporary path with the same extension and must
+    /// leave a complete file there; it is then renamed to `name` and recorded in the manifest.
+    /// On error the temporary file is removed and nothing appears under `name`.
+    pub fn write_with(&self, name: &str, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+        let temp = self.root.join(format!("{TEMP_PREFIX}{}-{name}", std::process::id()));
+        let finish = || -> Result<OutputFile> {
+            write(&temp)?;
+            let entry = describe(&temp, name)?;
+            let target = self.root.join(name);
+            fs::rename(&temp, &target).map_err(|e| Error::io(&target, e))?;
+            Ok(entry)
+        };
+        match finish() {
+            Ok(entry) => {
+                let mut written = self.written.lock().unwrap_or_else(|p| p.into_inner());
+                written.retain(|f| f.name != entry.name);
+                written.push(entry);
+                Ok(())
+            }
+            Err(e) => {
+                let _ = fs::remove_file(&temp);
+                Err(e)
+            }
+        }
+    }
+
+    /// Writes `bytes` to `name` atomically.
+    pub fn write_bytes(&self, name: &str, bytes: &[u8]) -> Result<()> {
+        self.write_with(name, |p| fs::write(p, bytes).map_err(|e| Error::io(p, e)))
+    }
+
+    /// Every file written so far, sorted by name.
+    pub fn manifest(&self) -> Vec<OutputFile> {
+        let mut files = self.written.lock().unwrap_or_else(|p| p.into_inner()).clone();
+        files.sort_by(|a, b| a.name.cmp(&b.name));
+        files
+    }
+
+    /// Writes the run's report `name` last, from the manifest of every other file, and
+    /// releases the folder.
+    pub fn finish(self, name: &str, report: impl FnOnce(&[OutputFile]) -> Result<Vec<u8>>) -> Result<()> {
+        let bytes = report(&self.manifest())?;
+        self.write_bytes(name, &bytes)
+    }
+
+    /// Removes the previous run's report (`results.json`) first, so that nothing looks
+    /// complete, then every file its manifest listed, and left-over temporary files.
+    fn remove_previous_run(&self) -> Result<()> {
+        let report = self.root.join("results.json");
+        let listed: Vec<String> = fs::read(&report)
+            .ok()
+            .and_then(|b| serde_json::from_slice::<serde_json::Value>(&b).ok())
+            .and_then(|v| v.get("files").cloned())
+            .and_then(|f| serde_json::from_value::<Vec<OutputFile>>(f).ok())
+            .unwrap_or_default()
+            .into_iter()
+            .map(|f| f.name)
+            .collect();
+        match fs::remove_file(&report) {
+            Ok(()) => {}
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+            Err(e) => return Err(Error::io(&report, e)),
+        }
+        for name in listed {
+            // Only plain names inside the folder: a crafted manifest must not reach outside it.
+            if is_plain_name(&name) {
+                let _ = fs::remove_file(self.root.join(name));
+            }
+        }
+        if let Ok(entries) = fs::read_dir(&self.root) {
+            for entry in entries.flatten() {
+                if entry.file_name().to_string_lossy().starts_with(TEMP_PREFIX) {
+                    let _ = fs::remove_file(entry.path());
+                }
+            }
+        }
+        // The folder can be written (before any long computation).
+        self.write_with(".inimtrace-write-test", |p| fs::write(p, b"").map_err(|e| Error::io(p, e)))?;
+        let _ = fs::remove_file(self.root.join(".inimtrace-write-test"));
+        self.written.lock().unwrap_or_else(|p| p.into_inner()).clear();
+        Ok(())
+    }
+}
+
+/// A file name without directories, `..` or a leading dot: the names a run writes.
+pub fn is_plain_name(name: &str) -> bool {
+    !name.is_empty()
+        && !name.starts_with('.')
+        && name.chars().all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.'))
+}
+
+/// Size and CRC-32 of the file at `path`, listed as `name`.
+fn describe(path: &Path, name: &str) -> Result<OutputFile> {
+    let mut file = File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut hasher = crc32fast::Hasher::new();
+    let mut buf = vec![0u8; 1 << 20];
+    let mut bytes = 0u64;
+    loop {
+        let n = file.read(&mut buf).map_err(|e| Error::io(path, e))?;
+        if n == 0 {
+            break;
+        }
+        hasher.update(&buf[..n]);
+        bytes += n as u64;
+    }
+    Ok(OutputFile { name: name.to_string(), bytes, crc32: format!("{:08x}", hasher.finalize()) })
+}
+
+/// Checks a finished folder against the manifest of its report: every listed file exists with
+/// its size and CRC-32. Returns the first mismatch as an error.
+pub fn verify(root: &Path, files: &[OutputFile]) -> Result<()> {
+    for f in files {
+        let path = root.join(&f.name);
+        let actual = describe(&path, &f.name)?;
+        if actual != *f {
+            return Err(Error::parse(
+                &path,
+                format!("does not match the manifest (expected {} bytes, crc32 {})", f.bytes, f.crc32),
+            ));
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn files_appear_only_when_complete_and_are_listed() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = OutputDir::open(dir.path()).unwrap();
+        out.write_bytes("a.txt", b"hello").unwrap();
+        let err = out.write_with("b.txt", |p| {
+            fs::write(p, b"half").unwrap();
+            Err(Error::Unsupported("disk full".into()))
+        });
+        assert!(err.is_err());
+        assert!(!dir.path().join("b.txt").exists(), "a failed write left a final-named file");
+        let names: Vec<String> = fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+        assert!(names.iter().all(|n| !n.starts_with(TEMP_PREFIX)), "temporary file left: {names:?}");
+        let m = out.manifest();
+        assert_eq!(m.len(), 1);
+        assert_eq!(m[0], OutputFile { name: "a.txt".into(), bytes: 5, crc32: "3610a686".into() });
+        verify(dir.path(), &m).unwrap();
+        fs::write(dir.path().join("a.txt"), b"hellO").unwrap();
+        assert!(verify(dir.path(), &m).is_err());
+    }
+
+    #[test]
+    fn a_second_run_into_the_folder_fails_at_once_naming_the_holder() {
+        let dir = tempfile::tempdir().unwrap();
+        let first = OutputDir::open(dir.path()).unwrap();
+        let e = OutputDir::open(dir.path()).unwrap_err().to_string();
+        assert!(e.contains("in use by inimtrace process") && e.contains(&std::process::id().to_string()), "{e}");
+        drop(first);
+        OutputDir::open(dir.path()).unwrap();
+    }
+
+    #[test]
+    fn a_new_run_removes_the_previous_runs_files_and_report() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = OutputDir::open(dir.path()).unwrap();
+        out.write_bytes("old.exr", b"x").unwrap();
+        out.finish("results.json", |files| Ok(serde_json::to_vec(&serde_json::json!({ "files": files })).unwrap()))
+            .unwrap();
+        fs::write(dir.path().join("users-notes.txt"), b"keep").unwrap();
+        fs::write(dir.path().join(format!("{TEMP_PREFIX}1-x.exr")), b"partial").unwrap();
+        let _again = OutputDir::open(dir.path()).unwrap();
+        assert!(!dir.path().join("results.json").exists());
+        assert!(!dir.path().join("old.exr").exists());
+        assert!(!dir.path().join(format!("{TEMP_PREFIX}1-x.exr")).exists());
+        assert!(dir.path().join("users-notes.txt").exists(), "a file no run wrote was removed");
+    }
+
+    #[test]
+    fn manifests_cannot_reach_outside_the_folder() {
+        assert!(is_plain_name("sim_LC_Near.exr"));
+        for bad in ["../x", "/etc/passwd", "a/b", "", ".hidden", "..", "a\\b"] {
+            assert!(!is_plain_name(bad), "{bad}");
+        }
+    }
+}
