@@ -9,6 +9,7 @@
 
 pub mod accel;
 pub mod bench;
+pub mod budget;
 pub mod error;
 pub mod experiment;
 pub mod io;
