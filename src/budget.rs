@@ -3,8 +3,27 @@
 //! responsible, and long runs are announced before they start.
 
 use std::fmt;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::error::{Error, Result};
+
+/// The process's memory limit in bytes; 0 means "not set" (then [`memory_limit`] uses the
+/// memory available on the machine).
+static MEMORY_LIMIT: AtomicU64 = AtomicU64::new(0);
+
+/// Sets the memory limit every estimate and every file reader checks against (`--max-memory`).
+pub fn set_memory_limit(bytes: u64) {
+    MEMORY_LIMIT.store(bytes, Ordering::Relaxed);
+}
+
+/// The memory limit in bytes: the one set by [`set_memory_limit`], else the memory available
+/// on this machine, else 8 GiB where that is unknown.
+pub fn memory_limit() -> u64 {
+    match MEMORY_LIMIT.load(Ordering::Relaxed) {
+        0 => available_memory().unwrap_or(8 << 30),
+        set => set,
+    }
+}
 
 /// One part of an estimate: what it is for, the setting that sizes it, and its bytes.
 #[derive(Clone, Debug, PartialEq)]

@@ -134,15 +134,48 @@ pub fn write_rgb(path: &Path, img: &RgbImage, depth: Option<&[f32]>, attributes:
 }
 
 fn check_readable_file(path: &Path) -> Result<()> {
-    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
-    if meta.is_dir() {
-        return Err(Error::io(
-            path,
-            std::io::Error::new(std::io::ErrorKind::InvalidInput, "is a directory, not an OpenEXR file"),
-        ));
-    }
-    if meta.len() == 0 {
+    let size = crate::io::input::check_regular(path)?;
+    if size == 0 {
         return Err(Error::parse(path, "file is empty, not an OpenEXR file"));
+    }
+    check_claimed_size(path, size)
+}
+
+/// Reads the headers alone and refuses a file whose data windows would need more memory to
+/// decode than the memory limit ([`crate::budget::memory_limit`]), or whose uncompressed
+/// pixels cannot fit in the file: a few bytes of header must not make the reader allocate.
+fn check_claimed_size(path: &Path, file_size: u64) -> Result<()> {
+    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| exr_error(path, e))?;
+    let limit = crate::budget::memory_limit();
+    for header in &meta.headers {
+        let (w, h) = (header.layer_size.0 as u64, header.layer_size.1 as u64);
+        let pixels = w.saturating_mul(h);
+        let channels = header.channels.list.len() as u64;
+        // Decoded samples are f32 (4 bytes each); our image and depth add 16 bytes per pixel.
+        let decoded = pixels.saturating_mul(channels.saturating_mul(4).saturating_add(16));
+        if decoded > limit {
+            return Err(Error::parse(
+                path,
+                format!(
+                    "header claims a {w} x {h} pixel data window with {channels} channel(s), which would need {} to \
+                     decode, more than the memory limit of {} (--max-memory)",
+                    crate::budget::Bytes(decoded),
+                    crate::budget::Bytes(limit)
+                ),
+            ));
+        }
+        let stored: u64 = header.channels.list.iter().map(|c| c.sample_type.bytes_per_sample() as u64).sum();
+        if header.compression == Compression::Uncompressed && pixels.saturating_mul(stored) > file_size {
+            return Err(Error::parse(
+                path,
+                format!(
+                    "header claims {w} x {h} uncompressed pixels ({} of samples) but the file has only {} \
+                     (truncated file?)",
+                    crate::budget::Bytes(pixels.saturating_mul(stored)),
+                    crate::budget::Bytes(file_size)
+                ),
+            ));
+        }
     }
     Ok(())
 }

@@ -1,0 +1,116 @@
+//! Hostile inputs (issue: never crash, never hang, never eat the machine): small crafted files
+//! that claim huge sizes, FIFOs, closed pipes. Each must end with one clear line naming the file,
+//! within a small memory cap, never a panic or an abort.
+
+use std::path::Path;
+use std::process::{Command, Output, Stdio};
+
+fn inimtrace() -> &'static str {
+    env!("CARGO_BIN_EXE_inimtrace")
+}
+
+/// Runs `inimtrace args` with its address space capped at `cap_mb` MB (`ulimit -v`), so that an
+/// allocation the estimate should have refused aborts the child instead of passing unnoticed.
+fn run_capped(cap_mb: u64, args: &[&str]) -> Output {
+    let mut cmd = String::from("ulimit -v ");
+    cmd.push_str(&(cap_mb * 1024).to_string());
+    cmd.push_str("; exec \"$0\" \"$@\"");
+    Command::new("bash").arg("-c").arg(cmd).arg(inimtrace()).args(args).output().expect("run inimtrace")
+}
+
+/// A few hundred bytes: an OpenEXR header (R, G, B float channels, no compression) whose data
+/// window claims `w` x `h` pixels, and no pixel data.
+pub fn exr_header_bomb(w: i32, h: i32) -> Vec<u8> {
+    fn attr(out: &mut Vec<u8>, name: &str, ty: &str, value: &[u8]) {
+        out.extend_from_slice(name.as_bytes());
+        out.push(0);
+        out.extend_from_slice(ty.as_bytes());
+        out.push(0);
+        out.extend_from_slice(&(value.len() as i32).to_le_bytes());
+        out.extend_from_slice(value);
+    }
+    let mut b = vec![0x76, 0x2f, 0x31, 0x01, 2, 0, 0, 0];
+    let mut channels = Vec::new();
+    for name in ["B", "G", "R"] {
+        channels.extend_from_slice(name.as_bytes());
+        channels.push(0);
+        channels.extend_from_slice(&2i32.to_le_bytes()); // FLOAT
+        channels.extend_from_slice(&[0, 0, 0, 0]); // pLinear + reserved
+        channels.extend_from_slice(&1i32.to_le_bytes());
+        channels.extend_from_slice(&1i32.to_le_bytes());
+    }
+    channels.push(0);
+    attr(&mut b, "channels", "chlist", &channels);
+    attr(&mut b, "compression", "compression", &[0]);
+    let window: Vec<u8> = [0, 0, w - 1, h - 1].iter().flat_map(|v: &i32| v.to_le_bytes()).collect();
+    attr(&mut b, "dataWindow", "box2i", &window);
+    attr(&mut b, "displayWindow", "box2i", &window);
+    attr(&mut b, "lineOrder", "lineOrder", &[0]);
+    attr(&mut b, "pixelAspectRatio", "float", &1f32.to_le_bytes());
+    attr(&mut b, "screenWindowCenter", "v2f", &[0; 8]);
+    attr(&mut b, "screenWindowWidth", "float", &1f32.to_le_bytes());
+    b.push(0);
+    b
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn assert_clean_failure(o: &Output, must_name: &str) {
+    let e = stderr(o);
+    assert_eq!(o.status.code(), Some(1), "expected a clean error exit, got {:?}: {e}", o.status);
+    assert!(!e.contains("panicked") && !e.contains("memory allocation"), "{e}");
+    assert!(e.contains(must_name), "error does not name {must_name}: {e}");
+}
+
+#[test]
+fn an_exr_header_claiming_a_huge_image_is_refused_before_allocating() {
+    let dir = tempfile::tempdir().unwrap();
+    let bomb = dir.path().join("bomb.exr");
+    std::fs::write(&bomb, exr_header_bomb(1_000_000_000, 1_000_000_000)).unwrap();
+    assert!(std::fs::metadata(&bomb).unwrap().len() < 1000);
+    let p = bomb.to_str().unwrap();
+    let o = run_capped(1024, &["compare", p, p]);
+    assert_clean_failure(&o, "bomb.exr");
+    assert!(stderr(&o).contains("memory limit"), "{}", stderr(&o));
+    // A plausible size whose pixels are simply not in the file: truncated, not allocated.
+    let small = dir.path().join("claims.exr");
+    std::fs::write(&small, exr_header_bomb(4000, 4000)).unwrap();
+    let s = small.to_str().unwrap();
+    let o = run_capped(1024, &["simulate", s, "--pinhole", "--out", dir.path().join("x.exr").to_str().unwrap()]);
+    assert_clean_failure(&o, "claims.exr");
+}
+
+#[test]
+fn a_fifo_as_input_is_an_error_not_a_hang() {
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("display.exr");
+    if !Command::new("mkfifo").arg(&fifo).status().map(|s| s.success()).unwrap_or(false) {
+        eprintln!("skipped: mkfifo is not available on this machine");
+        return;
+    }
+    let p = fifo.to_str().unwrap();
+    let o = Command::new("timeout").args(["20", inimtrace(), "compare", p, p]).output().unwrap();
+    assert_ne!(o.status.code(), Some(124), "inimtrace hung on a FIFO");
+    assert_clean_failure(&o, "display.exr");
+}
+
+#[test]
+fn a_closed_stdout_ends_quietly() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = dir.path().join("a.exr");
+    let img = inimtrace::raster::RgbImage::filled(16, 16, [0.5, 0.25, 1.0]);
+    inimtrace::io::exr::write_rgb(&a, &img, None, &[]).unwrap();
+    let p = a.to_str().unwrap();
+    // `inimtrace info --print paper-scene | true`: the reader is gone before the writer writes.
+    for args in [vec!["compare", p, p], vec!["info", "--print", "paper-experiment"]] {
+        let mut child = Command::new(inimtrace()).args(&args).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().unwrap();
+        drop(child.stdout.take());
+        let o = child.wait_with_output().unwrap();
+        let code = o.status.code();
+        assert!(code == Some(0) || code == Some(141), "{args:?}: exit {:?}: {}", o.status, stderr(&o));
+        assert!(!stderr(&o).contains("panicked"), "{}", stderr(&o));
+    }
+    let _ = Path::new(p);
+}
