@@ -26,7 +26,7 @@ use common::Rng;
 /// The bunny, 60 mm tall, centred 300 mm in front of the eye.
 fn bunny() -> Option<Mesh> {
     let path = std::path::Path::new("/usr/share/glmark2/models/bunny.obj");
-    let mut mesh = inimtrace::scene::mesh_io::load_mesh(path).ok()?.mesh;
+    let mut mesh = inimtrace::io::load_mesh(path).ok()?.mesh;
     let (lo, hi) = mesh.bounds();
     let size = (hi - lo).max_element();
     let mid = (lo + hi) * 0.5;
@@ -93,7 +93,7 @@ fn trace_all(backend: &dyn Intersector, rays: &[Ray]) -> usize {
 /// rows (the ray sets of benches/embree.rs), one ray at a time on one thread.
 fn bench_pipeline_rays(c: &mut Criterion) {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/bunny.toml");
-    let Ok(scene) = inimtrace::io::config::load_scene(&path.to_string_lossy(), std::path::Path::new("")) else {
+    let Ok(scene) = inimtrace::io::load_scene(&path.to_string_lossy(), std::path::Path::new("")) else {
         eprintln!("scenes/bunny.toml could not be loaded (glmark2-data missing?): skipping the pipeline rays");
         return;
     };

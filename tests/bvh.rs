@@ -285,7 +285,7 @@ fn agrees_with_embree_on_bunny() {
         eprintln!("skipping: {} not found (install glmark2-data)", path.display());
         return;
     }
-    let mut mesh = inimtrace::scene::mesh_io::load_mesh(path).unwrap().mesh;
+    let mut mesh = inimtrace::io::load_mesh(path).unwrap().mesh;
     let (lo, hi) = mesh.bounds();
     let size = (hi - lo).max_element();
     let mid = (lo + hi) * 0.5;

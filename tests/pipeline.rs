@@ -2,7 +2,7 @@
 
 use glam::{DVec2, DVec3};
 use inimtrace::accel::analytic::AnalyticRects;
-use inimtrace::io::config;
+use inimtrace::io;
 use inimtrace::metrics;
 use inimtrace::optics::transfer::{eye_ray, eye_to_lcd, lcd_to_eye};
 use inimtrace::optics::{Display, Eye, Focus, Retina};
@@ -237,8 +237,8 @@ fn focus_cues_and_lc_beats_pc_when_the_eye_focuses() {
 #[test]
 fn framework_yaml_equals_our_toml_and_the_builtin_display() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let yaml = config::load_display("data/lensletdisplay.yaml", root).unwrap();
-    let toml = config::load_display("displays/paper.toml", root).unwrap();
+    let yaml = io::load_display("data/lensletdisplay.yaml", root).unwrap();
+    let toml = io::load_display("displays/paper.toml", root).unwrap();
     let builtin = Display::paper();
     for d in [&yaml, &toml] {
         assert_eq!(d.eye_to_lenslets, builtin.eye_to_lenslets);
@@ -255,7 +255,7 @@ fn framework_yaml_equals_our_toml_and_the_builtin_display() {
 #[test]
 fn shipped_scene_and_experiment_files_match_the_builtins() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let scene = config::load_scene("scenes/paper.toml", root).unwrap();
+    let scene = io::load_scene("scenes/paper.toml", root).unwrap();
     let builtin = Scene::paper();
     assert_eq!(scene.objects.len(), builtin.objects.len());
     for (a, b) in scene.objects.iter().zip(&builtin.objects) {

@@ -21,7 +21,8 @@ use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
-use crate::io::config::{self, read_text};
+use crate::io::text::{base_dir, read_text, toml_error};
+use crate::io::{load_display, load_scene};
 use crate::metrics::SsimConstants;
 use crate::optics::{Aperture, Display, Eye, Focus, Retina};
 use crate::render::{DisplayRenderSettings, Method};
@@ -199,9 +200,9 @@ impl Experiment {
     /// Resolves a spec; `source` names its file (for errors), `base` resolves relative paths.
     pub fn from_spec(spec: ExperimentSpec, source: &str, base: &Path) -> Result<Self> {
         // Name the experiment file and its field as well as the file that failed.
-        let display = config::load_display(&spec.display, base)
+        let display = load_display(&spec.display, base)
             .map_err(|e| Error::invalid(source, "display", format!("cannot load `{}`: {e}", spec.display)))?;
-        let scene = config::load_scene(&spec.scene, base)
+        let scene = load_scene(&spec.scene, base)
             .map_err(|e| Error::invalid(source, "scene", format!("cannot load `{}`: {e}", spec.scene)))?;
         let dr = &spec.display_render;
         let mut methods = Vec::new();
@@ -312,8 +313,8 @@ impl Experiment {
     /// Loads an experiment file.
     pub fn load(path: &Path) -> Result<Self> {
         let text = read_text(path)?;
-        let spec: ExperimentSpec = toml::from_str(&text).map_err(|e| config::toml_error(path, &text, &e))?;
-        Self::from_spec(spec, &path.display().to_string(), &config::base_dir(path))
+        let spec: ExperimentSpec = toml::from_str(&text).map_err(|e| toml_error(path, &text, &e))?;
+        Self::from_spec(spec, &path.display().to_string(), &base_dir(path))
     }
 
     /// The paper's experiment, built in.
