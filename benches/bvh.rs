@@ -17,11 +17,8 @@ use criterion::{criterion_group, criterion_main, BatchSize, Criterion, Throughpu
 use glam::DVec3;
 use inimtrace::accel::bvh::{BvhIntersector, BvhLayout};
 use inimtrace::accel::{Intersector, Ray};
+use inimtrace::fixtures::{self, Rng};
 use inimtrace::scene::mesh::Mesh;
-
-#[path = "../tests/common/mod.rs"]
-mod common;
-use common::Rng;
 
 /// The bunny, 60 mm tall, centred 300 mm in front of the eye.
 fn bunny() -> Option<Mesh> {
@@ -100,7 +97,7 @@ fn bench_pipeline_rays(c: &mut Criterion) {
     let meshes = inimtrace::render::backend::scene_meshes(&scene);
     let refs: Vec<(u32, &Mesh)> = meshes.iter().map(|(i, m)| (*i, m.as_ref())).collect();
     let backends = backends(&refs, &[("bvh-bvh4", BvhLayout::Bvh4), ("bvh-cwbvh", BvhLayout::Cwbvh)]);
-    for (set, rays) in [("display", common::bunny_display_rays(32)), ("eye", common::bunny_eye_rays(2))] {
+    for (set, rays) in [("display", fixtures::bunny_display_rays(32)), ("eye", fixtures::bunny_eye_rays(2))] {
         let mut group = c.benchmark_group(format!("bunny_scene_{set}"));
         group.throughput(Throughput::Elements(rays.len() as u64));
         group.sample_size(30);

@@ -8,10 +8,8 @@ use glam::{DVec2, DVec3};
 use inimtrace::accel::brute::BruteForce;
 use inimtrace::accel::bvh::{BvhIntersector, BvhLayout};
 use inimtrace::accel::{Hit, Intersector, Ray, Surface};
+use inimtrace::fixtures::Rng;
 use inimtrace::scene::mesh::Mesh;
-
-mod common;
-use common::Rng;
 
 const LAYOUTS: [BvhLayout; 3] = [BvhLayout::Bvh4, BvhLayout::Cwbvh, BvhLayout::Bvh2];
 

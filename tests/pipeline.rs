@@ -2,6 +2,7 @@
 
 use glam::{DVec2, DVec3};
 use inimtrace::accel::analytic::AnalyticRects;
+use inimtrace::fixtures::{self, Lcg};
 use inimtrace::io;
 use inimtrace::metrics;
 use inimtrace::optics::transfer::{eye_ray, eye_to_lcd, lcd_to_eye};
@@ -12,10 +13,6 @@ use inimtrace::render::retina::{simulate, FastTransfer};
 use inimtrace::render::{ground_truth, render_display_image, DisplayRenderSettings, FacingPlanes, Method, SceneTracer};
 use inimtrace::scene::{Material, Object, Rect, Scene, Shape};
 use std::path::Path;
-
-mod common;
-
-use common::Lcg;
 
 fn small_display(res: usize) -> Display {
     let mut d = Display::paper();
@@ -131,7 +128,7 @@ fn fused_kernel_and_generic_backend_render_the_same_images() {
 #[test]
 fn uniform_white_scene_looks_white_wherever_rays_land_on_the_lcd() {
     let display = small_display(432);
-    let scene = common::white_wall();
+    let scene = fixtures::white_wall();
     let backend = AnalyticRects::new(&scene).unwrap();
     let field = SceneTracer { scene: &scene, backend: &backend };
     let s = DisplayRenderSettings::default();
