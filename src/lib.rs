@@ -11,6 +11,8 @@ pub mod accel;
 pub mod bench;
 pub mod error;
 pub mod experiment;
+#[doc(hidden)]
+pub mod fixtures;
 pub mod io;
 pub mod metrics;
 pub mod optics;
