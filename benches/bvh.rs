@@ -17,16 +17,13 @@ use criterion::{criterion_group, criterion_main, BatchSize, Criterion, Throughpu
 use glam::DVec3;
 use inimtrace::accel::bvh::{BvhIntersector, BvhLayout};
 use inimtrace::accel::{Intersector, Ray};
+use inimtrace::fixtures::{self, Rng};
 use inimtrace::scene::mesh::Mesh;
-
-#[path = "../tests/common/mod.rs"]
-mod common;
-use common::Rng;
 
 /// The bunny, 60 mm tall, centred 300 mm in front of the eye.
 fn bunny() -> Option<Mesh> {
     let path = std::path::Path::new("/usr/share/glmark2/models/bunny.obj");
-    let mut mesh = inimtrace::scene::mesh_io::load_mesh(path).ok()?.mesh;
+    let mut mesh = inimtrace::io::load_mesh(path).ok()?.mesh;
     let (lo, hi) = mesh.bounds();
     let size = (hi - lo).max_element();
     let mid = (lo + hi) * 0.5;
@@ -93,14 +90,14 @@ fn trace_all(backend: &dyn Intersector, rays: &[Ray]) -> usize {
 /// rows (the ray sets of benches/embree.rs), one ray at a time on one thread.
 fn bench_pipeline_rays(c: &mut Criterion) {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/bunny.toml");
-    let Ok(scene) = inimtrace::io::config::load_scene(&path.to_string_lossy(), std::path::Path::new("")) else {
+    let Ok(scene) = inimtrace::io::load_scene(&path.to_string_lossy(), std::path::Path::new("")) else {
         eprintln!("scenes/bunny.toml could not be loaded (glmark2-data missing?): skipping the pipeline rays");
         return;
     };
     let meshes = inimtrace::render::backend::scene_meshes(&scene);
     let refs: Vec<(u32, &Mesh)> = meshes.iter().map(|(i, m)| (*i, m.as_ref())).collect();
     let backends = backends(&refs, &[("bvh-bvh4", BvhLayout::Bvh4), ("bvh-cwbvh", BvhLayout::Cwbvh)]);
-    for (set, rays) in [("display", common::bunny_display_rays(32)), ("eye", common::bunny_eye_rays(2))] {
+    for (set, rays) in [("display", fixtures::bunny_display_rays(32)), ("eye", fixtures::bunny_eye_rays(2))] {
         let mut group = c.benchmark_group(format!("bunny_scene_{set}"));
         group.throughput(Throughput::Elements(rays.len() as u64));
         group.sample_size(30);

@@ -20,19 +20,16 @@ use criterion::{criterion_group, criterion_main, BatchSize, Criterion, Throughpu
 use glam::DVec3;
 use inimtrace::accel::embree::{BuildQuality, EmbreeIntersector, RawRay};
 use inimtrace::accel::{Intersector, Ray};
-use inimtrace::io::config;
+use inimtrace::fixtures::{bunny_display_rays as display_rays, bunny_eye_rays as eye_rays};
+use inimtrace::io;
 use inimtrace::render::backend::scene_meshes;
 use inimtrace::render::{RadianceField, Sample, SceneTracer};
 use inimtrace::scene::{Mesh, Scene};
 use rayon::prelude::*;
 
-#[path = "../tests/common/mod.rs"]
-mod common;
-use common::{bunny_display_rays as display_rays, bunny_eye_rays as eye_rays};
-
 fn bunny() -> Scene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/bunny.toml");
-    let mut scene = config::load_scene(&path.to_string_lossy(), Path::new("")).expect("scenes/bunny.toml");
+    let mut scene = io::load_scene(&path.to_string_lossy(), Path::new("")).expect("scenes/bunny.toml");
     scene.light = None;
     scene
 }

@@ -1,15 +1,16 @@
 #!/usr/bin/env bash
-# Regenerates the README's "Speed and accuracy" section in one command: builds the release
+# Regenerates the speed-and-accuracy report docs/SPEED.md in one command: builds the release
 # binary, runs the full `inimtrace bench` (the paper's scene and display at the paper's sizes;
-# about 6.5 minutes on the 2 shared cores, 2.5 on idle ones), copies its reports and plots to
-# docs/bench/, and replaces the README block between the `speed-accuracy:begin` and
-# `speed-accuracy:end` markers with docs/bench/summary.md. Commit first: the reports name the
-# git revision they measured (`-dirty` when the tree had uncommitted changes).
+# several minutes), copies its reports and plots to docs/bench/, and replaces the block of
+# docs/SPEED.md between the `speed-accuracy:begin` and `speed-accuracy:end` markers with
+# docs/bench/summary.md. Commit first: the reports name the git revision they measured (`-dirty`
+# when the tree had uncommitted changes).
 # Usage: scripts/speed-accuracy.sh [extra `inimtrace bench` arguments, e.g. --threads 2]
 set -euo pipefail
 cd "$(dirname "$0")/.."
+page=docs/SPEED.md
 for m in begin end; do
-    grep -q "<!-- speed-accuracy:$m" README.md || { echo "README.md lacks the speed-accuracy:$m marker" >&2; exit 1; }
+    grep -q "<!-- speed-accuracy:$m" "$page" || { echo "$page lacks the speed-accuracy:$m marker" >&2; exit 1; }
 done
 cargo build --release --quiet
 out=out/bench
@@ -29,6 +30,6 @@ done
 awk -v f="$docs/summary.md" '
     /<!-- speed-accuracy:begin/ { print; while ((getline line < f) > 0) print line; skip = 1; next }
     /<!-- speed-accuracy:end/ { skip = 0 }
-    !skip { print }' README.md > README.md.new
-mv README.md.new README.md
-echo "wrote $docs/ and the README's Speed and accuracy tables" >&2
+    !skip { print }' "$page" > "$page.new"
+mv "$page.new" "$page"
+echo "wrote $docs/ and the generated block of $page" >&2

@@ -12,6 +12,8 @@ pub mod bench;
 pub mod budget;
 pub mod error;
 pub mod experiment;
+#[doc(hidden)]
+pub mod fixtures;
 pub mod io;
 pub mod metrics;
 pub mod optics;

@@ -8,7 +8,9 @@ use clap::{Args, Parser, Subcommand};
 use glam::DVec3;
 
 use inimtrace::experiment::{self, Experiment, ExperimentSpec, RunOptions};
-use inimtrace::io::config;
+use inimtrace::io::display_file::DisplaySpec;
+use inimtrace::io::scene_file::SceneSpec;
+use inimtrace::io::{load_display, load_scene};
 use inimtrace::metrics::{self, SsimConstants};
 use inimtrace::optics::{Aperture, Display, Eye, Focus, Retina};
 use inimtrace::progress::Progress;
@@ -221,11 +223,11 @@ impl EyeArgs {
 
 fn load_setup(setup: &Setup) -> Result<(Scene, Display)> {
     let scene = match &setup.scene {
-        Some(p) => config::load_scene(&p.to_string_lossy(), Path::new(""))?,
+        Some(p) => load_scene(&p.to_string_lossy(), Path::new(""))?,
         None => Scene::paper(),
     };
     let display = match &setup.display {
-        Some(p) => config::load_display(&p.to_string_lossy(), Path::new(""))?,
+        Some(p) => load_display(&p.to_string_lossy(), Path::new(""))?,
         None => Display::paper(),
     };
     Ok((scene, display))
@@ -280,7 +282,7 @@ fn run() -> Result<()> {
                 None => Experiment::paper(),
             };
             if let Some(p) = &scene {
-                exp.scene = config::load_scene(&p.to_string_lossy(), Path::new(""))?;
+                exp.scene = load_scene(&p.to_string_lossy(), Path::new(""))?;
                 exp.spec.scene = p.display().to_string();
             }
             announce(&exp.scene, backend, quiet);
@@ -396,7 +398,7 @@ fn run() -> Result<()> {
         }
         Command::Bench { quick, scene, out } => {
             let (scene, label) = match &scene {
-                Some(p) => (config::load_scene(&p.to_string_lossy(), Path::new(""))?, p.display().to_string()),
+                Some(p) => (load_scene(&p.to_string_lossy(), Path::new(""))?, p.display().to_string()),
                 None => (Scene::paper(), "builtin:paper".to_string()),
             };
             for w in &scene.warnings {
@@ -456,15 +458,15 @@ fn run() -> Result<()> {
                 let text = match what.as_str() {
                     "paper-experiment" => ExperimentSpec::paper().to_toml(),
                     "framework-2020-experiment" => ExperimentSpec::framework_2020().to_toml(),
-                    "paper-scene" => toml::to_string_pretty(&config::SceneSpec::paper())?,
-                    "paper-display" => toml::to_string_pretty(&config::DisplaySpec::from_display(&Display::paper()))?,
+                    "paper-scene" => toml::to_string_pretty(&SceneSpec::paper())?,
+                    "paper-display" => toml::to_string_pretty(&DisplaySpec::from_display(&Display::paper()))?,
                     other => bail!("unknown --print `{other}`: paper-experiment, framework-2020-experiment, paper-scene or paper-display"),
                 };
                 print!("{text}");
                 return Ok(());
             }
             let d = match display {
-                Some(p) => config::load_display(&p.to_string_lossy(), Path::new(""))?,
+                Some(p) => load_display(&p.to_string_lossy(), Path::new(""))?,
                 None => Display::paper(),
             };
             println!("{}", d.summary());

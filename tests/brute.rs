@@ -5,10 +5,8 @@
 use glam::{DVec2, DVec3};
 use inimtrace::accel::brute::{BruteForce, WatertightRay};
 use inimtrace::accel::{Hit, Intersector, Ray, Surface};
+use inimtrace::fixtures::Rng;
 use inimtrace::scene::mesh::Mesh;
-
-mod common;
-use common::Rng;
 
 fn ray(origin: DVec3, dir: DVec3) -> Ray {
     Ray { origin, dir }

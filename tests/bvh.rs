@@ -8,10 +8,8 @@ use glam::{DVec2, DVec3};
 use inimtrace::accel::brute::BruteForce;
 use inimtrace::accel::bvh::{BvhIntersector, BvhLayout};
 use inimtrace::accel::{Hit, Intersector, Ray, Surface};
+use inimtrace::fixtures::Rng;
 use inimtrace::scene::mesh::Mesh;
-
-mod common;
-use common::Rng;
 
 const LAYOUTS: [BvhLayout; 3] = [BvhLayout::Bvh4, BvhLayout::Cwbvh, BvhLayout::Bvh2];
 
@@ -285,7 +283,7 @@ fn agrees_with_embree_on_bunny() {
         eprintln!("skipping: {} not found (install glmark2-data)", path.display());
         return;
     }
-    let mut mesh = inimtrace::scene::mesh_io::load_mesh(path).unwrap().mesh;
+    let mut mesh = inimtrace::io::load_mesh(path).unwrap().mesh;
     let (lo, hi) = mesh.bounds();
     let size = (hi - lo).max_element();
     let mid = (lo + hi) * 0.5;

@@ -13,12 +13,10 @@ use inimtrace::accel::embree::{
     embree_error, live_objects, BuildQuality, Device, EmbreeIntersector, RawRay, SceneBuilder, TriangleGeometry,
 };
 use inimtrace::accel::{Hit, Intersector, Ray, Surface};
+use inimtrace::fixtures::Rng;
 use inimtrace::scene::mesh::Mesh;
 use inimtrace::Error;
 use rayon::prelude::*;
-
-mod common;
-use common::Rng;
 
 /// `live_objects()` is process-wide and tests run in parallel: ordinary tests hold this lock
 /// shared while they own Embree objects; the leak test holds it exclusively.

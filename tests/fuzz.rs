@@ -122,13 +122,13 @@ fn experiment(p: &Path) -> Result<(), String> {
     inimtrace::experiment::Experiment::load(p).map(|_| ()).map_err(|e| e.to_string())
 }
 fn display(p: &Path) -> Result<(), String> {
-    inimtrace::io::config::load_display(&p.to_string_lossy(), Path::new("")).map(|_| ()).map_err(|e| e.to_string())
+    inimtrace::io::load_display(&p.to_string_lossy(), Path::new("")).map(|_| ()).map_err(|e| e.to_string())
 }
 fn scene(p: &Path) -> Result<(), String> {
-    inimtrace::io::config::load_scene(&p.to_string_lossy(), Path::new("")).map(|_| ()).map_err(|e| e.to_string())
+    inimtrace::io::load_scene(&p.to_string_lossy(), Path::new("")).map(|_| ()).map_err(|e| e.to_string())
 }
 fn mesh(p: &Path) -> Result<(), String> {
-    inimtrace::scene::mesh_io::load_mesh(p).map(|_| ()).map_err(|e| e.to_string())
+    inimtrace::io::load_mesh(p).map(|_| ()).map_err(|e| e.to_string())
 }
 fn exr(p: &Path) -> Result<(), String> {
     inimtrace::io::exr::read_rgb(p).map(|_| ()).map_err(|e| e.to_string())

@@ -4,6 +4,7 @@
 
 use glam::{DMat2, DVec2, DVec3};
 use inimtrace::accel::analytic::AnalyticRects;
+use inimtrace::fixtures::{self, Lcg};
 use inimtrace::metrics;
 use inimtrace::optics::transfer::eye_to_lcd;
 use inimtrace::optics::{Display, Eye, Focus, Lattice, Retina};
@@ -13,10 +14,6 @@ use inimtrace::render::display_image::{camera_ray, check_pupil_center, pupil_cen
 use inimtrace::render::retina::{simulate, FastTransfer};
 use inimtrace::render::{ground_truth, render_display_image, DisplayRenderSettings, FacingPlanes, Method, SceneTracer};
 use inimtrace::scene::{Material, Object, Rect, Scene, Shape};
-
-mod common;
-
-use common::Lcg;
 
 fn hidden() -> Progress {
     Progress::hidden()
@@ -221,7 +218,7 @@ fn tilted_display() -> Display {
 /// off-axis eye near the edge of the eye box with PupilCenter.
 #[test]
 fn hexagonal_tilted_partial_and_off_axis() {
-    let white = common::white_wall();
+    let white = fixtures::white_wall();
     let mut partial = small(540);
     // EIs only cover the central half of the LCD: pixels outside still belong to the nearest EI
     // (ownership is a nearest-centre rule, it never fails), lenslets beyond the array's nominal

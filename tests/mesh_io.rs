@@ -5,8 +5,9 @@ use std::path::{Path, PathBuf};
 use glam::{DVec2, DVec3};
 use inimtrace::accel::brute::BruteForce;
 use inimtrace::accel::{Intersector, Ray, Surface};
+use inimtrace::io::{load_mesh, MeshLoad};
 use inimtrace::scene::mesh::{tessellate_rect, Mesh};
-use inimtrace::scene::mesh_io::{load_mesh, MeshLoad, Transform};
+use inimtrace::scene::Transform;
 
 fn data(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(rel)

@@ -2,7 +2,8 @@
 
 use glam::{DVec2, DVec3};
 use inimtrace::accel::analytic::AnalyticRects;
-use inimtrace::io::config;
+use inimtrace::fixtures::{self, Lcg};
+use inimtrace::io;
 use inimtrace::metrics;
 use inimtrace::optics::transfer::{eye_ray, eye_to_lcd, lcd_to_eye};
 use inimtrace::optics::{Display, Eye, Focus, Retina};
@@ -12,10 +13,6 @@ use inimtrace::render::retina::{simulate, FastTransfer};
 use inimtrace::render::{ground_truth, render_display_image, DisplayRenderSettings, FacingPlanes, Method, SceneTracer};
 use inimtrace::scene::{Material, Object, Rect, Scene, Shape};
 use std::path::Path;
-
-mod common;
-
-use common::Lcg;
 
 fn small_display(res: usize) -> Display {
     let mut d = Display::paper();
@@ -131,7 +128,7 @@ fn fused_kernel_and_generic_backend_render_the_same_images() {
 #[test]
 fn uniform_white_scene_looks_white_wherever_rays_land_on_the_lcd() {
     let display = small_display(432);
-    let scene = common::white_wall();
+    let scene = fixtures::white_wall();
     let backend = AnalyticRects::new(&scene).unwrap();
     let field = SceneTracer { scene: &scene, backend: &backend };
     let s = DisplayRenderSettings::default();
@@ -237,8 +234,8 @@ fn focus_cues_and_lc_beats_pc_when_the_eye_focuses() {
 #[test]
 fn framework_yaml_equals_our_toml_and_the_builtin_display() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let yaml = config::load_display("data/lensletdisplay.yaml", root).unwrap();
-    let toml = config::load_display("displays/paper.toml", root).unwrap();
+    let yaml = io::load_display("data/lensletdisplay.yaml", root).unwrap();
+    let toml = io::load_display("displays/paper.toml", root).unwrap();
     let builtin = Display::paper();
     for d in [&yaml, &toml] {
         assert_eq!(d.eye_to_lenslets, builtin.eye_to_lenslets);
@@ -255,7 +252,7 @@ fn framework_yaml_equals_our_toml_and_the_builtin_display() {
 #[test]
 fn shipped_scene_and_experiment_files_match_the_builtins() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let scene = config::load_scene("scenes/paper.toml", root).unwrap();
+    let scene = io::load_scene("scenes/paper.toml", root).unwrap();
     let builtin = Scene::paper();
     assert_eq!(scene.objects.len(), builtin.objects.len());
     for (a, b) in scene.objects.iter().zip(&builtin.objects) {

@@ -8,7 +8,7 @@ use glam::DVec3;
 use inimtrace::accel::analytic::AnalyticRects;
 use inimtrace::accel::brute::BruteForce;
 use inimtrace::accel::{Intersector, Ray};
-use inimtrace::io::config;
+use inimtrace::io;
 use inimtrace::metrics;
 use inimtrace::optics::{Display, Eye, Focus, Retina};
 use inimtrace::progress::Progress;
@@ -34,7 +34,7 @@ fn small_display(res: usize) -> Display {
 fn load(text: &str, dir: &Path) -> inimtrace::Result<Scene> {
     let path = dir.join("scene.toml");
     std::fs::write(&path, text).unwrap();
-    config::load_scene(&path.to_string_lossy(), Path::new(""))
+    io::load_scene(&path.to_string_lossy(), Path::new(""))
 }
 
 /// Number of pixels whose channels differ by more than 1e-6.
@@ -262,7 +262,7 @@ fn bunny_scene_renders_without_nan_and_shows_the_bunny() {
         eprintln!("skipped: install glmark2-data for the bunny");
         return;
     }
-    let scene = config::load_scene(&path.to_string_lossy(), Path::new("")).unwrap();
+    let scene = io::load_scene(&path.to_string_lossy(), Path::new("")).unwrap();
     assert_eq!(scene.objects[0].name, "bunny");
     assert_eq!(scene.triangle_count(), 69_666 + 4);
     let display = small_display(270);
@@ -322,7 +322,7 @@ fn mesh_objects_load_with_transform_and_materials() {
         dir.path(),
     )
     .unwrap();
-    let raw = inimtrace::scene::mesh_io::load_mesh(&ply).unwrap().mesh;
+    let raw = io::load_mesh(&ply).unwrap().mesh;
     let inimtrace::scene::Shape::Mesh(m) = &scene.objects[0].shape else { panic!() };
     assert_eq!(m.triangles.len(), raw.triangles.len());
     assert_eq!(m.positions[0], raw.positions[0] * 2.0 + DVec3::new(0.0, 0.0, 100.0));

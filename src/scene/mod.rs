@@ -10,10 +10,10 @@
 
 pub mod image_texture;
 pub mod mesh;
-pub mod mesh_io;
 pub mod polygon;
 pub mod procedural;
 pub mod texture;
+pub mod transform;
 pub mod usaf;
 
 use std::sync::Arc;
@@ -24,6 +24,7 @@ use crate::accel::{Hit, Intersector, Ray, Surface};
 pub use image_texture::ImageTexture;
 pub use mesh::Mesh;
 pub use texture::{Bar, BarChart};
+pub use transform::Transform;
 
 /// A planar rectangle `center + s half_u + t half_v`, `s, t` in `[-1, 1]`.
 #[derive(Clone, Copy, Debug, PartialEq)]

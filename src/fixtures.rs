@@ -1,6 +1,6 @@
-//! Helpers shared by the integration tests and benches (`mod common;`, or
-//! `#[path = "../tests/common/mod.rs"] mod common;` from a bench). Not every user needs every item.
-#![allow(dead_code)]
+//! Test and bench fixtures, not part of the API: deterministic random numbers, a white-wall
+//! scene, and the display and eye rays of the paper's set-up (Sec. 4.1) that the BVH and Embree
+//! benches trace. Shared by `tests/` and `benches/`; hidden from the documentation.
 
 use glam::DVec3;
 
@@ -9,6 +9,8 @@ use glam::DVec3;
 pub struct Rng(pub u64);
 
 impl Rng {
+    /// The next number (a sampler that never ends, not an iterator).
+    #[allow(clippy::should_implement_trait)]
     pub fn next(&mut self) -> f64 {
         self.0 ^= self.0 >> 12;
         self.0 ^= self.0 << 25;
@@ -37,6 +39,8 @@ impl Rng {
 pub struct Lcg(pub u64);
 
 impl Lcg {
+    /// The next number (a sampler that never ends, not an iterator).
+    #[allow(clippy::should_implement_trait)]
     pub fn next(&mut self) -> f64 {
         self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
         (self.0 >> 11) as f64 / (1u64 << 53) as f64
@@ -47,8 +51,8 @@ impl Lcg {
 }
 
 /// A white wall at z = 500 mm, 100 m wide: every camera and eye ray of a test sees radiance 1.
-pub fn white_wall() -> inimtrace::scene::Scene {
-    use inimtrace::scene::{Material, Object, Rect, Scene, Shape};
+pub fn white_wall() -> crate::scene::Scene {
+    use crate::scene::{Material, Object, Rect, Scene, Shape};
     Scene {
         name: "white".into(),
         objects: vec![Object {
@@ -62,16 +66,17 @@ pub fn white_wall() -> inimtrace::scene::Scene {
     }
 }
 
-/// The pipeline's rays, as the benches trace them on scenes/bunny.toml: LC camera rays of `rows` LCD rows through the middle of the paper display, row-major.
-pub fn bunny_display_rays(rows: usize) -> Vec<inimtrace::accel::Ray> {
-    let d = inimtrace::optics::Display::paper();
+/// The pipeline's rays, as the benches trace them on scenes/bunny.toml: LC camera rays of
+/// `rows` LCD rows through the middle of the paper display, row-major.
+pub fn bunny_display_rays(rows: usize) -> Vec<crate::accel::Ray> {
+    let d = crate::optics::Display::paper();
     let r0 = d.lcd.rows() / 2 - rows / 2;
     let mut rays = Vec::with_capacity(rows * d.lcd.columns());
     for row in r0..r0 + rows {
         for col in 0..d.lcd.columns() {
             let x3 = d.lcd.pixel_center(row, col);
             let c = d.lenslets.center(d.elemental_image_of(x3));
-            rays.push(inimtrace::render::display_image::camera_ray(&d, x3, c, c, 0.0));
+            rays.push(crate::render::display_image::camera_ray(&d, x3, c, c, 0.0));
         }
     }
     rays
@@ -79,16 +84,16 @@ pub fn bunny_display_rays(rows: usize) -> Vec<inimtrace::accel::Ray> {
 
 /// Ground-truth eye rays (5 mm pupil, 8 x 8 grid, focus 386 mm) of `rows` retina rows
 /// (512 px, +-0.3) through the middle, each row laid out [pupil sample][column].
-pub fn bunny_eye_rays(rows: usize) -> Vec<inimtrace::accel::Ray> {
-    let eye = inimtrace::optics::Eye::thin_lens(5.0, inimtrace::optics::Focus::Millimetres(386.0), 8);
-    let retina = inimtrace::optics::Retina::default();
+pub fn bunny_eye_rays(rows: usize) -> Vec<crate::accel::Ray> {
+    let eye = crate::optics::Eye::thin_lens(5.0, crate::optics::Focus::Millimetres(386.0), 8);
+    let retina = crate::optics::Retina::default();
     let pupil = eye.pupil_samples();
     let r0 = retina.resolution / 2 - rows / 2;
     let mut rays = Vec::new();
     for row in r0..r0 + rows {
         for s in &pupil {
             for col in 0..retina.resolution {
-                rays.push(inimtrace::render::retina::eye_scene_ray(
+                rays.push(crate::render::retina::eye_scene_ray(
                     &eye,
                     retina.tangent(row, col, glam::DVec2::splat(0.5)),
                     *s,

@@ -1,0 +1,334 @@
+//! Experiments: the paper's assessment (Sec. 4, Table 1, Fig. 3) as data. This file holds the
+//! experiment file's spec types and their resolution into an [`Experiment`]; the `assess`
+//! pipeline that runs one lives beside it, one concept per file: `stages.rs` (render the display
+//! image of every method, simulate what each eye case perceives, render the ground truth, score
+//! with PSNR and SSIM), `assess.rs` (the run and its image outputs) and `report.rs` (Table 1 and
+//! the CSV/JSON reports). Everything public is re-exported here.
+
+mod assess;
+mod report;
+mod stages;
+
+pub use assess::{assess, prepare_output_dir, RunOptions, Z_CHANNEL_NOTE};
+pub use report::{table_markdown, AssessReport, Score, StageTime};
+pub use stages::{
+    ground_truth_image, pack_display_images, perceived_images, render_display_images, table1_scores, DisplayImages,
+};
+
+use std::path::Path;
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use crate::io::text::{base_dir, read_text, toml_error};
+use crate::io::{load_display, load_scene};
+use crate::metrics::SsimConstants;
+use crate::optics::{Aperture, Display, Eye, Focus, Retina};
+use crate::render::{DisplayRenderSettings, Method};
+use crate::scene::Scene;
+
+fn builtin() -> String {
+    "builtin:paper".into()
+}
+fn default_methods() -> Vec<String> {
+    vec!["LC".into(), "PC".into(), "LA".into()]
+}
+
+/// `[display_render]`: how display images are rendered.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct DisplayRenderSpec {
+    /// LensletAverage grid k (k x k samples over the lenslet's pitch cell).
+    pub la_grid: usize,
+    /// k x k stratified samples per display pixel.
+    pub samples_per_pixel: usize,
+    /// z of the plane camera rays start on.
+    pub reference_plane_z: f64,
+    /// Pupil centre PupilCenter aims at (default: the simulated eye's position).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub eye_position: Option<[f64; 3]>,
+}
+
+impl Default for DisplayRenderSpec {
+    fn default() -> Self {
+        Self { la_grid: 5, samples_per_pixel: 1, reference_plane_z: 0.0, eye_position: None }
+    }
+}
+
+/// `[eye]`: the eye shared by all eye cases.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct EyeSpec {
+    /// v0, mm.
+    pub retina_distance: f64,
+    /// Pupil diameter, mm.
+    pub pupil_diameter: f64,
+    /// n: n x n grid over the pupil's bounding square, kept inside the circle.
+    pub pupil_grid: usize,
+    /// Retina pixels per side.
+    pub retina_resolution: usize,
+    /// T: the retina covers tangents -T..T.
+    pub retina_half_tangent: f64,
+    /// k: k x k stratified samples per retina pixel.
+    pub retina_samples: usize,
+    /// Pupil centre, mm.
+    pub position: [f64; 3],
+}
+
+impl Default for EyeSpec {
+    fn default() -> Self {
+        Self {
+            retina_distance: 17.0,
+            pupil_diameter: 5.0,
+            pupil_grid: 8,
+            retina_resolution: 512,
+            retina_half_tangent: 0.3,
+            retina_samples: 1,
+            position: [0.0; 3],
+        }
+    }
+}
+
+/// `[[eye_cases]]`: one row of Table 1.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct EyeCaseSpec {
+    /// Used in file names (`gt_<name>.exr`) and as the table's row label.
+    pub name: String,
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub pinhole: bool,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub focus_mm: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub focus_diopters: Option<f64>,
+}
+
+/// An experiment file.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ExperimentSpec {
+    pub name: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub description: Option<String>,
+    /// `builtin:paper` or a scene TOML path (relative to this file).
+    #[serde(default = "builtin")]
+    pub scene: String,
+    /// `builtin:paper` or a display TOML / OpenCV YAML path (relative to this file).
+    #[serde(default = "builtin")]
+    pub display: String,
+    /// "LC", "PC", "LA" (grid from `display_render.la_grid`), or "LA<k>".
+    #[serde(default = "default_methods")]
+    pub methods: Vec<String>,
+    /// "wang2004" (default) or "framework-8bit".
+    #[serde(default)]
+    pub ssim: SsimConstants,
+    #[serde(default)]
+    pub display_render: DisplayRenderSpec,
+    #[serde(default)]
+    pub eye: EyeSpec,
+    pub eye_cases: Vec<EyeCaseSpec>,
+}
+
+impl ExperimentSpec {
+    fn paper_cases() -> Vec<EyeCaseSpec> {
+        let case = |name: &str, focus: Option<f64>| EyeCaseSpec {
+            name: name.into(),
+            pinhole: focus.is_none(),
+            focus_mm: focus,
+            focus_diopters: None,
+        };
+        vec![case("Pin", None), case("Near", Some(300.0)), case("Cen", Some(400.0)), case("Far", Some(600.0))]
+    }
+
+    /// The paper's experiment as its text states it (Sec. 4.1).
+    pub fn paper() -> Self {
+        Self {
+            name: "paper".into(),
+            description: Some("The paper's experiment as its text states it (Sec. 4.1): 5 mm pupil, 8 x 8 pupil grid (52 samples), LA 5 x 5, one sample per pixel.".into()),
+            scene: builtin(),
+            display: builtin(),
+            methods: default_methods(),
+            ssim: SsimConstants::Wang2004,
+            display_render: DisplayRenderSpec::default(),
+            eye: EyeSpec::default(),
+            eye_cases: Self::paper_cases(),
+        }
+    }
+
+    /// What the paper's published code actually ran: `ApertureRadius` kept its 1 mm default (a
+    /// 2 mm pupil), a 5 x 5 pupil grid (21 samples in the circle), one sample per pixel, and
+    /// SSIM with 8-bit constants on [0, 1] data.
+    pub fn framework_2020() -> Self {
+        Self {
+            name: "framework-2020".into(),
+            description: Some("What the published framework (2020) actually ran: 2 mm pupil (ApertureRadius default 1 mm), 5 x 5 pupil grid (21 samples), one sample per pixel, SSIM with 8-bit constants.".into()),
+            ssim: SsimConstants::Framework8Bit,
+            eye: EyeSpec { pupil_diameter: 2.0, pupil_grid: 5, ..EyeSpec::default() },
+            ..Self::paper()
+        }
+    }
+
+    pub fn to_toml(&self) -> String {
+        toml::to_string_pretty(self).unwrap_or_default()
+    }
+}
+
+/// An eye case, resolved.
+#[derive(Clone, Debug)]
+pub struct EyeCase {
+    pub name: String,
+    pub eye: Eye,
+}
+
+/// A resolved experiment: everything needed to run it.
+#[derive(Clone, Debug)]
+pub struct Experiment {
+    pub name: String,
+    pub source: String,
+    pub scene: Scene,
+    pub display: Display,
+    pub methods: Vec<Method>,
+    pub render: DisplayRenderSettings,
+    pub retina: Retina,
+    pub cases: Vec<EyeCase>,
+    pub ssim: SsimConstants,
+    pub spec: ExperimentSpec,
+}
+
+impl Experiment {
+    /// Resolves a spec; `source` names its file (for errors), `base` resolves relative paths.
+    pub fn from_spec(spec: ExperimentSpec, source: &str, base: &Path) -> Result<Self> {
+        // Name the experiment file and its field as well as the file that failed.
+        let display = load_display(&spec.display, base)
+            .map_err(|e| Error::invalid(source, "display", format!("cannot load `{}`: {e}", spec.display)))?;
+        let scene = load_scene(&spec.scene, base)
+            .map_err(|e| Error::invalid(source, "scene", format!("cannot load `{}`: {e}", spec.scene)))?;
+        let dr = &spec.display_render;
+        let mut methods = Vec::new();
+        for (i, m) in spec.methods.iter().enumerate() {
+            let method: Method = m.parse().map_err(|e: String| Error::invalid(source, format!("methods[{i}]"), e))?;
+            let method = match (method, m.trim().eq_ignore_ascii_case("LA")) {
+                (Method::LensletAverage { .. }, true) => Method::LensletAverage { grid: dr.la_grid },
+                (other, _) => other,
+            };
+            if methods.iter().any(|x: &Method| x.short_name() == method.short_name()) {
+                return Err(Error::invalid(
+                    source,
+                    format!("methods[{i}]"),
+                    format!("{} appears twice (output file names would collide)", method.short_name()),
+                ));
+            }
+            methods.push(method);
+        }
+        if methods.is_empty() {
+            return Err(Error::invalid(source, "methods", "list at least one of LC, PC, LA"));
+        }
+        if dr.la_grid == 0 || dr.la_grid > 64 {
+            return Err(Error::invalid(
+                source,
+                "display_render.la_grid",
+                format!("must be between 1 and 64, got {}", dr.la_grid),
+            ));
+        }
+        if dr.samples_per_pixel == 0 || dr.samples_per_pixel > 64 {
+            return Err(Error::invalid(
+                source,
+                "display_render.samples_per_pixel",
+                format!("must be between 1 and 64, got {}", dr.samples_per_pixel),
+            ));
+        }
+        if !dr.reference_plane_z.is_finite() {
+            return Err(Error::invalid(source, "display_render.reference_plane_z", "must be finite"));
+        }
+        let e = &spec.eye;
+        let position = DVec3::from_array(e.position);
+        let render = DisplayRenderSettings {
+            samples_per_pixel: dr.samples_per_pixel,
+            reference_plane_z: dr.reference_plane_z,
+            eye_position: dr.eye_position.map(DVec3::from_array).unwrap_or(position),
+        };
+        if !render.eye_position.is_finite() {
+            return Err(Error::invalid(source, "display_render.eye_position", "must be finite"));
+        }
+        let retina = Retina {
+            resolution: e.retina_resolution,
+            half_tangent: e.retina_half_tangent,
+            samples_per_pixel: e.retina_samples,
+        };
+        retina.validate(source).map_err(|err| prefix_field(err, "eye."))?;
+        if spec.eye_cases.is_empty() {
+            return Err(Error::invalid(source, "eye_cases", "list at least one eye case"));
+        }
+        let mut cases = Vec::new();
+        for (i, c) in spec.eye_cases.iter().enumerate() {
+            let field = format!("eye_cases[{i}]");
+            if c.name.is_empty() || !c.name.chars().all(|ch| ch.is_ascii_alphanumeric() || ch == '-' || ch == '_') {
+                return Err(Error::invalid(
+                    source,
+                    format!("{field}.name"),
+                    format!("`{}` must be non-empty and use only letters, digits, - and _ (it names files)", c.name),
+                ));
+            }
+            if cases.iter().any(|x: &EyeCase| x.name == c.name) {
+                return Err(Error::invalid(source, format!("{field}.name"), format!("`{}` appears twice", c.name)));
+            }
+            let aperture = match (c.pinhole, c.focus_mm, c.focus_diopters) {
+                (true, None, None) => Aperture::Pinhole,
+                (false, Some(mm), None) => {
+                    Aperture::ThinLens { pupil_diameter: e.pupil_diameter, focus: Focus::Millimetres(mm) }
+                }
+                (false, None, Some(d)) => {
+                    Aperture::ThinLens { pupil_diameter: e.pupil_diameter, focus: Focus::Diopters(d) }
+                }
+                _ => {
+                    return Err(Error::invalid(
+                        source,
+                        field,
+                        "give exactly one of `pinhole = true`, `focus_mm` or `focus_diopters`",
+                    ))
+                }
+            };
+            let eye = Eye { retina_distance: e.retina_distance, aperture, pupil_grid: e.pupil_grid, position };
+            eye.validate(source).map_err(|err| prefix_field(err, &format!("{field} / eye.")))?;
+            cases.push(EyeCase { name: c.name.clone(), eye });
+        }
+        if methods.contains(&Method::PupilCenter) {
+            crate::render::display_image::check_pupil_center(&display, render.eye_position)?;
+        }
+        Ok(Self {
+            name: spec.name.clone(),
+            source: source.into(),
+            scene,
+            display,
+            methods,
+            render,
+            retina,
+            cases,
+            ssim: spec.ssim,
+            spec,
+        })
+    }
+
+    /// Loads an experiment file.
+    pub fn load(path: &Path) -> Result<Self> {
+        let text = read_text(path)?;
+        let spec: ExperimentSpec = toml::from_str(&text).map_err(|e| toml_error(path, &text, &e))?;
+        Self::from_spec(spec, &path.display().to_string(), &base_dir(path))
+    }
+
+    /// The paper's experiment, built in.
+    pub fn paper() -> Self {
+        Self::from_spec(ExperimentSpec::paper(), "built-in paper experiment", Path::new("."))
+            .expect("built-in experiment is valid")
+    }
+}
+
+fn prefix_field(err: Error, prefix: &str) -> Error {
+    match err {
+        Error::Invalid { source_name, field, message } => {
+            Error::Invalid { source_name, field: format!("{prefix}{field}"), message }
+        }
+        other => other,
+    }
+}

@@ -1,0 +1,139 @@
+//! The outputs of an assessment as data and text: the scores of Table 1 (Sec. 4.2), the stage
+//! timings, and their Markdown table, CSV and JSON reports.
+
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+
+use super::{Experiment, ExperimentSpec};
+use crate::error::{Error, Result};
+use crate::metrics::{self, Psnr, Ssim, SsimConstants};
+
+/// One score: a method under an eye case.
+#[derive(Clone, Debug, Serialize)]
+pub struct Score {
+    pub method: String,
+    pub eye_case: String,
+    pub psnr: Psnr,
+    pub ssim: Ssim,
+}
+
+/// Wall time of one stage.
+#[derive(Clone, Debug, Serialize)]
+pub struct StageTime {
+    pub stage: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub method: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub eye_case: Option<String>,
+    pub seconds: f64,
+}
+
+/// What `assess` produced.
+#[derive(Clone, Debug, Serialize)]
+pub struct AssessReport {
+    pub experiment: String,
+    pub ssim_constants: String,
+    pub backend: String,
+    pub threads: usize,
+    pub display: String,
+    pub central_depth_plane_mm: Option<f64>,
+    pub scores: Vec<Score>,
+    pub stages: Vec<StageTime>,
+    pub total_seconds: f64,
+    pub settings: ExperimentSpec,
+}
+
+/// Table 1 as Markdown: rows are eye cases, columns PSNR per method | SSIM per method.
+pub fn table_markdown(report: &AssessReport, exp: &Experiment) -> String {
+    let methods: Vec<&str> = exp.methods.iter().map(|m| m.short_name()).collect();
+    let mut s = format!(
+        "# {}: PSNR (dB) and SSIM ({}) of the perceived retinal image against the ground truth\n\n",
+        report.experiment, report.ssim_constants
+    );
+    s.push_str("| Eye |");
+    for m in &methods {
+        s.push_str(&format!(" PSNR {m} |"));
+    }
+    for m in &methods {
+        s.push_str(&format!(" SSIM {m} |"));
+    }
+    s.push_str("\n|---|");
+    s.push_str(&"---:|".repeat(2 * methods.len()));
+    s.push('\n');
+    for case in &exp.cases {
+        s.push_str(&format!("| {} |", case.name));
+        let find = |m: &str| report.scores.iter().find(|x| x.method == m && x.eye_case == case.name);
+        for m in &methods {
+            let v = find(m).map(|x| metrics::format_db(x.psnr.mean, 2)).unwrap_or_default();
+            s.push_str(&format!(" {v} |"));
+        }
+        // The framework's 8-bit constants pin SSIM near 1: show enough digits to tell methods apart.
+        let digits = if exp.ssim == SsimConstants::Framework8Bit { 5 } else { 3 };
+        for m in &methods {
+            let v = find(m).map(|x| format!("{:.digits$}", x.ssim.mean)).unwrap_or_default();
+            s.push_str(&format!(" {v} |"));
+        }
+        s.push('\n');
+    }
+    s.push_str(&format!(
+        "\nPSNR: mean of the R, G, B channel PSNRs (linear values, peak 1). SSIM: Wang et al. 2004 window (11 x 11 Gaussian, sigma 1.5), constants `{}`, mean of channels.\n",
+        report.ssim_constants
+    ));
+    s
+}
+
+pub(super) fn write_reports(report: &AssessReport, exp: &Experiment, out: &Path) -> Result<()> {
+    let write = |name: &str, text: String| -> Result<()> {
+        let path: PathBuf = out.join(name);
+        std::fs::write(&path, text).map_err(|e| Error::io(&path, e))
+    };
+    write("table.md", table_markdown(report, exp))?;
+    let mut csv = String::from("record,experiment,method,eye_case,channel,psnr_db,ssim,stage,seconds\n");
+    for s in &report.scores {
+        for (c, name) in ["R", "G", "B"].iter().enumerate() {
+            csv.push_str(&format!(
+                "score,{},{},{},{},{},{},,\n",
+                report.experiment,
+                s.method,
+                s.eye_case,
+                name,
+                csv_db(s.psnr.channels[c]),
+                s.ssim.channels[c]
+            ));
+        }
+        csv.push_str(&format!(
+            "score,{},{},{},mean,{},{},,\n",
+            report.experiment,
+            s.method,
+            s.eye_case,
+            csv_db(s.psnr.mean),
+            s.ssim.mean
+        ));
+    }
+    for st in &report.stages {
+        csv.push_str(&format!(
+            "stage,{},{},{},,,,{},{}\n",
+            report.experiment,
+            st.method.as_deref().unwrap_or(""),
+            st.eye_case.as_deref().unwrap_or(""),
+            st.stage,
+            st.seconds
+        ));
+    }
+    csv.push_str(&format!("stage,{},,,,,,total,{}\n", report.experiment, report.total_seconds));
+    write("results.csv", csv)?;
+    let json = serde_json::to_string_pretty(report)
+        .map_err(|e| Error::Unsupported(format!("cannot serialise the report: {e}")))?;
+    // Last: its presence marks a complete run.
+    write("results.json", json)
+}
+
+/// PSNR for CSV: identical images give "inf".
+fn csv_db(db: f64) -> String {
+    if db.is_finite() {
+        format!("{db}")
+    } else {
+        "inf".into()
+    }
+}

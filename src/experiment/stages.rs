@@ -1,0 +1,138 @@
+//! The stages of an assessment (Sec. 4, Fig. 2): the display image of every method (Sec. 3),
+//! the packed display stack, the ground-truth and perceived retinal images of each eye case, and
+//! the Table-1 scores, each timed. `assess` and `inimtrace bench` both run these functions.
+
+use std::borrow::Borrow;
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use super::{Experiment, EyeCase, Score, StageTime};
+use crate::error::{Error, Result};
+use crate::metrics;
+use crate::progress::Progress;
+use crate::raster::RgbImage;
+use crate::render::retina::{simulate_stack, DisplayStack};
+use crate::render::{ground_truth, render_display_image_with_depth, RadianceField};
+
+pub(super) fn stage_time(
+    stages: &mut Vec<StageTime>,
+    stage: &str,
+    method: Option<&str>,
+    case: Option<&str>,
+    t: Instant,
+) {
+    stages.push(StageTime {
+        stage: stage.into(),
+        method: method.map(String::from),
+        eye_case: case.map(String::from),
+        seconds: t.elapsed().as_secs_f64(),
+    });
+}
+
+/// Display images, one per method, and their depth planes (`None` where the field knows no
+/// depths).
+pub type DisplayImages = (Vec<RgbImage>, Vec<Option<Vec<f32>>>);
+
+/// Stage 1 of [`assess`](super::assess()): the display image of every method of `exp` and its depth plane (when
+/// `with_depth` knows depths), each timed as a `render_display` stage.
+pub fn render_display_images<D: RadianceField + ?Sized>(
+    exp: &Experiment,
+    with_depth: &D,
+    quiet: bool,
+    stages: &mut Vec<StageTime>,
+) -> Result<DisplayImages> {
+    let display = &exp.display;
+    let mut displays = Vec::new();
+    let mut depths = Vec::new();
+    for m in &exp.methods {
+        let t = Instant::now();
+        let p = Progress::new(display.lcd.rows() as u64, &format!("display image {}", m.short_name()), quiet);
+        let (img, depth) = render_display_image_with_depth(display, *m, &exp.render, with_depth, &p)?;
+        p.finish();
+        stage_time(stages, "render_display", Some(m.short_name()), None, t);
+        displays.push(img);
+        depths.push(depth);
+    }
+    Ok((displays, depths))
+}
+
+/// The display images interleaved for the simulation (`pack_display_images` stage).
+pub fn pack_display_images(
+    exp: &Experiment,
+    displays: &[&RgbImage],
+    stages: &mut Vec<StageTime>,
+) -> Result<DisplayStack> {
+    let t = Instant::now();
+    let stack = DisplayStack::new(&exp.display, displays)?;
+    stage_time(stages, "pack_display_images", None, None, t);
+    Ok(stack)
+}
+
+/// Stage 2a of [`assess`](super::assess()): the ground-truth retinal image of one eye case (`ground_truth` stage).
+pub fn ground_truth_image<S: RadianceField + ?Sized>(
+    exp: &Experiment,
+    case: &EyeCase,
+    shade: &S,
+    quiet: bool,
+    stages: &mut Vec<StageTime>,
+) -> RgbImage {
+    let t = Instant::now();
+    let p = Progress::new(exp.retina.resolution as u64, &format!("ground truth {}", case.name), quiet);
+    let gt = ground_truth(&case.eye, &exp.retina, shade, &p);
+    p.finish();
+    stage_time(stages, "ground_truth", None, Some(&case.name), t);
+    gt
+}
+
+/// Stage 2b of [`assess`](super::assess()): what the eye of one eye case perceives of every display image in
+/// `stack`, all traced at once (`simulate_all_methods` stage).
+pub fn perceived_images(
+    exp: &Experiment,
+    case: &EyeCase,
+    stack: &DisplayStack,
+    quiet: bool,
+    stages: &mut Vec<StageTime>,
+) -> Result<Vec<RgbImage>> {
+    let t = Instant::now();
+    let p = Progress::new(exp.retina.resolution as u64, &format!("simulate {}", case.name), quiet);
+    let sims = simulate_stack(&exp.display, &case.eye, &exp.retina, stack, &p)?;
+    p.finish();
+    stage_time(stages, "simulate_all_methods", None, Some(&case.name), t);
+    Ok(sims)
+}
+
+/// Stage 3 of [`assess`](super::assess()), Table 1: PSNR and SSIM of `sims[case][method]` against `gts[case]`,
+/// for every eye case and method of `exp` (`metrics` stage). Scores are ordered by eye case,
+/// then method.
+pub fn table1_scores<G: Borrow<RgbImage> + Sync>(
+    exp: &Experiment,
+    gts: &[G],
+    sims: &[Vec<RgbImage>],
+    stages: &mut Vec<StageTime>,
+) -> Result<Vec<Score>> {
+    let t = Instant::now();
+    if gts.len() != exp.cases.len()
+        || sims.len() != exp.cases.len()
+        || sims.iter().any(|s| s.len() != exp.methods.len())
+    {
+        return Err(Error::Unsupported(
+            "table1_scores: one ground truth per eye case and one perceived image per method and eye case".into(),
+        ));
+    }
+    let pairs: Vec<(usize, usize)> =
+        (0..exp.cases.len()).flat_map(|c| (0..exp.methods.len()).map(move |m| (c, m))).collect();
+    let scores: Vec<Score> = pairs
+        .par_iter()
+        .map(|&(c, m)| -> Result<Score> {
+            Ok(Score {
+                method: exp.methods[m].short_name().into(),
+                eye_case: exp.cases[c].name.clone(),
+                psnr: metrics::psnr(&sims[c][m], gts[c].borrow())?,
+                ssim: metrics::ssim(&sims[c][m], gts[c].borrow(), exp.ssim)?,
+            })
+        })
+        .collect::<Result<_>>()?;
+    stage_time(stages, "metrics", None, None, t);
+    Ok(scores)
+}

@@ -1,0 +1,279 @@
+//! Display files (the display model of Sec. 2 and Table 1's parameters): our TOML format and
+//! the paper framework's OpenCV FileStorage YAML, both read into an [`optics::Display`]. Every
+//! error names the file and the field or key. `builtin:paper` names the paper's display (Sec.
+//! 4.1) without a file.
+//!
+//! [`optics::Display`]: crate::optics::Display
+
+use std::path::Path;
+
+use glam::{DMat2, DVec2};
+use serde::{Deserialize, Serialize};
+
+use super::text::{read_text, toml_error};
+use crate::error::{Error, Result};
+use crate::optics::{Display, Lattice, Lcd};
+
+/// A lattice's pitch: a number (square), a pair (rectangular) or a row-major 2x2 matrix.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(untagged)]
+pub enum PitchSpec {
+    Square(f64),
+    Rectangular([f64; 2]),
+    Matrix([[f64; 2]; 2]),
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct LatticeSpec {
+    #[serde(default)]
+    pub shift: [f64; 2],
+    pub pitch: PitchSpec,
+}
+
+impl LatticeSpec {
+    fn to_lattice(&self, source: &str, field: &str) -> Result<Lattice> {
+        let m = match &self.pitch {
+            PitchSpec::Square(p) => DMat2::from_diagonal(DVec2::splat(*p)),
+            PitchSpec::Rectangular([px, py]) => DMat2::from_diagonal(DVec2::new(*px, *py)),
+            PitchSpec::Matrix([[a, b], [c, d]]) => DMat2::from_cols(DVec2::new(*a, *c), DVec2::new(*b, *d)),
+        };
+        let det = m.determinant();
+        if let PitchSpec::Square(p) | PitchSpec::Rectangular([p, _]) = &self.pitch {
+            if !(p.is_finite() && *p > 0.0) {
+                return Err(Error::invalid(
+                    source,
+                    format!("{field}.pitch"),
+                    format!("must be positive and finite, got {p}"),
+                ));
+            }
+        }
+        if let PitchSpec::Rectangular([_, p]) = &self.pitch {
+            if !(p.is_finite() && *p > 0.0) {
+                return Err(Error::invalid(
+                    source,
+                    format!("{field}.pitch[1]"),
+                    format!("must be positive and finite, got {p}"),
+                ));
+            }
+        }
+        Lattice::new(DVec2::from_array(self.shift), m).ok_or_else(|| {
+            Error::invalid(
+                source,
+                format!("{field}.pitch"),
+                format!("pitch matrix is singular or not finite (determinant {det}) or shift is not finite"),
+            )
+        })
+    }
+
+    fn from_lattice(l: &Lattice) -> Self {
+        let [a, b, c, d] = l.row_major();
+        let pitch = if b == 0.0 && c == 0.0 {
+            if a == d {
+                PitchSpec::Square(a)
+            } else {
+                PitchSpec::Rectangular([a, d])
+            }
+        } else {
+            PitchSpec::Matrix([[a, b], [c, d]])
+        };
+        Self { shift: l.shift.to_array(), pitch }
+    }
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct LensletSpec {
+    pub focal_length: f64,
+    #[serde(default)]
+    pub shift: [f64; 2],
+    pub pitch: PitchSpec,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct LcdSpec {
+    /// Width and height, mm.
+    pub size: [f64; 2],
+    /// Columns and rows.
+    pub resolution: [usize; 2],
+}
+
+/// Our display file (TOML).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct DisplaySpec {
+    #[serde(default)]
+    pub name: Option<String>,
+    /// v1: pupil plane to lenslet plane, mm.
+    pub eye_to_lenslets: f64,
+    /// v2: lenslet plane to LCD, mm.
+    pub lenslets_to_lcd: f64,
+    pub lenslets: LensletSpec,
+    pub elemental_images: LatticeSpec,
+    pub lcd: LcdSpec,
+}
+
+impl DisplaySpec {
+    pub fn to_display(&self, source: &str) -> Result<Display> {
+        let lenslets = LatticeSpec { shift: self.lenslets.shift, pitch: self.lenslets.pitch.clone() }
+            .to_lattice(source, "lenslets")?;
+        let elemental_images = self.elemental_images.to_lattice(source, "elemental_images")?;
+        let d = Display {
+            name: self.name.clone().unwrap_or_else(|| source.to_string()),
+            eye_to_lenslets: self.eye_to_lenslets,
+            lenslets_to_lcd: self.lenslets_to_lcd,
+            focal_length: self.lenslets.focal_length,
+            lenslets,
+            elemental_images,
+            lcd: Lcd { size: DVec2::from_array(self.lcd.size), resolution: self.lcd.resolution },
+        };
+        d.validate(source)?;
+        Ok(d)
+    }
+
+    pub fn from_display(d: &Display) -> Self {
+        let l = LatticeSpec::from_lattice(&d.lenslets);
+        Self {
+            name: Some(d.name.clone()),
+            eye_to_lenslets: d.eye_to_lenslets,
+            lenslets_to_lcd: d.lenslets_to_lcd,
+            lenslets: LensletSpec { focal_length: d.focal_length, shift: l.shift, pitch: l.pitch },
+            elemental_images: LatticeSpec::from_lattice(&d.elemental_images),
+            lcd: LcdSpec { size: d.lcd.size.to_array(), resolution: d.lcd.resolution },
+        }
+    }
+}
+
+/// Loads a display: `builtin:paper`, an OpenCV FileStorage YAML file (first line `%YAML:1.0`
+/// or extension .yaml/.yml), or our TOML.
+pub fn load_display(spec: &str, base: &Path) -> Result<Display> {
+    if spec == "builtin:paper" {
+        return Ok(Display::paper());
+    }
+    let path = base.join(spec);
+    let text = read_text(&path)?;
+    let is_yaml = text.trim_start().starts_with("%YAML")
+        || matches!(path.extension().and_then(|e| e.to_str()), Some("yaml" | "yml"));
+    if is_yaml {
+        parse_opencv_display(&text, &path)
+    } else {
+        let spec: DisplaySpec = toml::from_str(&text).map_err(|e| toml_error(&path, &text, &e))?;
+        spec.to_display(&path.display().to_string())
+    }
+}
+
+/// Parses the paper framework's display file (OpenCV FileStorage YAML; keys `lenslettolcd`,
+/// `lenslettoorigin`, `sizelcd`, `resolutionlcd`, `islensletvertical`, `lensletshift`,
+/// `lensletorientation` (row-major 2x2), `lensletfocallength`, `eishift`, `eiorientation`).
+pub fn parse_opencv_display(text: &str, path: &Path) -> Result<Display> {
+    use serde_yaml_ng::Value;
+    // OpenCV writes a YAML 1.0 directive (`%YAML:1.0`) that YAML 1.2 parsers reject.
+    let body: String = text
+        .lines()
+        .skip_while(|l| l.trim().is_empty())
+        .enumerate()
+        .map(|(i, l)| if i == 0 && l.trim_start().starts_with("%YAML") { "" } else { l })
+        .collect::<Vec<_>>()
+        .join("\n");
+    let doc: Value = serde_yaml_ng::from_str(&body).map_err(|e| Error::parse(path, format!("malformed YAML: {e}")))?;
+    let Value::Mapping(map) = doc else {
+        return Err(Error::parse(path, "expected a mapping of display keys at the top level"));
+    };
+    let src = path.display().to_string();
+    for key in map.keys() {
+        let k = key.as_str().unwrap_or("?");
+        const KNOWN: [&str; 10] = [
+            "lenslettolcd",
+            "lenslettoorigin",
+            "sizelcd",
+            "resolutionlcd",
+            "islensletvertical",
+            "lensletshift",
+            "lensletorientation",
+            "lensletfocallength",
+            "eishift",
+            "eiorientation",
+        ];
+        if !KNOWN.contains(&k) {
+            return Err(Error::invalid(&src, k, format!("unknown key; expected one of {}", KNOWN.join(", "))));
+        }
+    }
+    let numbers = |key: &str, n: usize| -> Result<Vec<f64>> {
+        let v = map.get(key).ok_or_else(|| Error::invalid(&src, key, "missing"))?;
+        // OpenCV matrices may be written as `!!opencv-matrix {rows, cols, dt, data: [...]}`.
+        let v = match v {
+            Value::Tagged(t) => &t.value,
+            other => other,
+        };
+        let v = match v {
+            Value::Mapping(m) => m.get("data").ok_or_else(|| Error::invalid(&src, key, "matrix without `data`"))?,
+            other => other,
+        };
+        let list: Vec<&Value> = match v {
+            Value::Sequence(s) => s.iter().collect(),
+            other => vec![other],
+        };
+        if list.len() != n {
+            return Err(Error::invalid(&src, key, format!("expected {n} number(s), got {}", list.len())));
+        }
+        list.iter()
+            .map(|x| match x {
+                Value::Number(num) => num.as_f64().ok_or_else(|| Error::invalid(&src, key, "not a number")),
+                other => Err(Error::invalid(&src, key, format!("expected a number, got {other:?}"))),
+            })
+            .collect()
+    };
+    let vertical = map.get("islensletvertical").map(|_| numbers("islensletvertical", 1)).transpose()?;
+    if let Some(v) = vertical {
+        if v[0] != 0.0 {
+            return Err(Error::invalid(
+                &src,
+                "islensletvertical",
+                "cylindrical (vertical lenticular) lenslets are not supported; only spherical lenslet arrays (0)",
+            ));
+        }
+    }
+    let res = numbers("resolutionlcd", 2)?;
+    for (i, r) in res.iter().enumerate() {
+        if !(r.fract() == 0.0 && *r >= 0.0 && *r <= 65536.0) {
+            return Err(Error::invalid(
+                &src,
+                format!("resolutionlcd[{i}]"),
+                format!("must be a whole number of pixels, got {r}"),
+            ));
+        }
+    }
+    let shift = |k: &str| -> Result<DVec2> { numbers(k, 2).map(|v| DVec2::new(v[0], v[1])) };
+    let lattice = |shift_key: &str, key: &str| -> Result<Lattice> {
+        let m = numbers(key, 4)?;
+        Lattice::from_row_major(shift(shift_key)?, [m[0], m[1], m[2], m[3]])
+            .ok_or_else(|| Error::invalid(&src, key, format!("pitch matrix {m:?} is singular or not finite")))
+    };
+    let size = numbers("sizelcd", 2)?;
+    let d = Display {
+        name: path.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default(),
+        eye_to_lenslets: numbers("lenslettoorigin", 1)?[0],
+        lenslets_to_lcd: numbers("lenslettolcd", 1)?[0],
+        focal_length: numbers("lensletfocallength", 1)?[0],
+        lenslets: lattice("lensletshift", "lensletorientation")?,
+        elemental_images: lattice("eishift", "eiorientation")?,
+        lcd: Lcd { size: DVec2::new(size[0], size[1]), resolution: [res[0] as usize, res[1] as usize] },
+    };
+    // Name the framework's keys in validation errors.
+    d.validate(&src).map_err(|e| match e {
+        Error::Invalid { source_name, field, message } => {
+            let key = match field.split(' ').next().unwrap_or("") {
+                "eye_to_lenslets" => "lenslettoorigin",
+                "lenslets_to_lcd" => "lenslettolcd",
+                "focal_length" => "lensletfocallength",
+                f if f.starts_with("lcd.size") => "sizelcd",
+                f if f.starts_with("lcd.resolution") => "resolutionlcd",
+                _ => "",
+            };
+            Error::Invalid { source_name, field: if key.is_empty() { field } else { key.to_string() }, message }
+        }
+        other => other,
+    })?;
+    Ok(d)
+}
