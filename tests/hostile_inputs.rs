@@ -114,3 +114,86 @@ fn a_closed_stdout_ends_quietly() {
     }
     let _ = Path::new(p);
 }
+
+/// The ring of assimp's test models in spirit: one concave polygon (a "C": an outer arc out and
+/// an inner arc back) facing the eye at 100 mm, written as OBJ and PLY.
+fn ring_polygon() -> Vec<[f64; 2]> {
+    let (gap, n) = (0.4, 24);
+    let arc = |r: f64, i: usize| {
+        let phi = gap + (std::f64::consts::TAU - 2.0 * gap) * i as f64 / n as f64;
+        [r * phi.cos(), r * phi.sin()]
+    };
+    let mut p: Vec<[f64; 2]> = (0..=n).map(|i| arc(25.0, i)).collect();
+    p.extend((0..=n).rev().map(|i| arc(12.0, i)));
+    p
+}
+
+/// Even-odd point-in-polygon: the exact reference of which pixel centres see the ring.
+fn inside(poly: &[[f64; 2]], x: f64, y: f64) -> bool {
+    let mut odd = false;
+    for i in 0..poly.len() {
+        let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+        if (a[1] > y) != (b[1] > y) && x < a[0] + (y - a[1]) / (b[1] - a[1]) * (b[0] - a[0]) {
+            odd = !odd;
+        }
+    }
+    odd
+}
+
+#[test]
+fn a_concave_polygon_renders_as_itself_not_as_its_fan() {
+    use inimtrace::optics::{Eye, Retina};
+    use inimtrace::progress::Progress;
+    use inimtrace::render::{ground_truth, with_fields, BackendChoice};
+    let dir = tempfile::tempdir().unwrap();
+    let poly = ring_polygon();
+    let n = poly.len();
+    let mut obj = String::new();
+    for p in &poly {
+        obj.push_str(&format!("v {} {} 100\n", p[0], p[1]));
+    }
+    obj.push('f');
+    for i in 1..=n {
+        obj.push_str(&format!(" {i}"));
+    }
+    obj.push('\n');
+    std::fs::write(dir.path().join("ring.obj"), obj).unwrap();
+    let mut ply = format!("ply\nformat ascii 1.0\nelement vertex {n}\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n");
+    for p in &poly {
+        ply.push_str(&format!("{} {} 100\n", p[0], p[1]));
+    }
+    ply.push_str(&format!("{n}"));
+    for i in 0..n {
+        ply.push_str(&format!(" {i}"));
+    }
+    ply.push('\n');
+    std::fs::write(dir.path().join("ring.ply"), ply).unwrap();
+
+    let retina = Retina { resolution: 64, half_tangent: 0.3, samples_per_pixel: 1 };
+    let eye = Eye::pinhole();
+    let mut exact = inimtrace::raster::RgbImage::new(64, 64);
+    for r in 0..64 {
+        for c in 0..64 {
+            let t = retina.tangent(r, c, glam::DVec2::splat(0.5));
+            if inside(&poly, 100.0 * t.x, 100.0 * t.y) {
+                exact.set(r, c, [1.0, 1.0, 1.0]);
+            }
+        }
+    }
+    for file in ["ring.obj", "ring.ply"] {
+        let scene_path = dir.path().join("scene.toml");
+        std::fs::write(
+            &scene_path,
+            format!("name = \"ring\"\n[[objects]]\ntype = \"mesh\"\nfile = \"{file}\"\nmaterial = {{ albedo = [1, 1, 1] }}\n"),
+        )
+        .unwrap();
+        let scene = inimtrace::io::load_scene(&scene_path.to_string_lossy(), Path::new("")).unwrap();
+        let img = with_fields(&scene, BackendChoice::Bvh, |f| Ok(ground_truth(&eye, &retina, f.shade, &Progress::hidden())))
+            .unwrap();
+        let differing = img.pixels.iter().zip(&exact.pixels).filter(|(a, b)| (a[0] - b[0]).abs() > 1e-6).count();
+        // Pixel centres exactly on an edge may go either way; a filled fan differs by hundreds.
+        assert!(differing <= 2, "{file}: {differing} of 4096 pixels differ from the exact ring");
+        let hole = img.get(32, 32);
+        assert_eq!(hole, [0.0, 0.0, 0.0], "{file}: the ring's hole is filled");
+    }
+}

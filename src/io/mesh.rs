@@ -50,7 +50,7 @@ pub fn load_mesh(path: &Path) -> Result<MeshLoad> {
         return Err(Error::io(path, std::io::Error::other("is a directory, expected a mesh file (.obj or .ply)")));
     }
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = crate::io::input::read_regular(path)?;
     let (mut mesh, texture) = match ext.as_deref() {
         Some("obj") => load_obj(path, &bytes)?,
         Some("ply") => (load_ply(path, &bytes)?, None),

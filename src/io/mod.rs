@@ -5,14 +5,11 @@
 pub mod display_file;
 pub mod exr;
 pub mod figure;
-<<<<<<< HEAD
 pub mod input;
-pub mod output;
-=======
 pub mod mesh;
 mod obj;
+pub mod output;
 mod ply;
->>>>>>> main
 pub mod png;
 pub mod scene_file;
 pub mod text;

@@ -1,4 +1,5 @@
-//! Wavefront OBJ meshes, read through the `tobj` crate (triangulated, single index). A validation
+//! Wavefront OBJ meshes, read through the `tobj` crate (single index; polygons triangulated by
+//! [`crate::scene::polygon::triangulate`]: convex faces as a fan, concave ones by ear clipping). A validation
 //! pass of our own runs first so that bad numbers, out-of-range indices and non-finite vertices
 //! are reported with their line number (tobj's errors carry none). Multi-object files are merged
 //! into one [`Mesh`]. The diffuse texture (`map_Kd`) of the first material that has one is
@@ -30,7 +31,7 @@ pub(super) fn load_obj(path: &Path, bytes: &[u8]) -> Result<(Mesh, Option<PathBu
     #[allow(clippy::needless_update)]
     let options = tobj::LoadOptions {
         single_index: true,
-        triangulate: true,
+        triangulate: false,
         ignore_points: true,
         ignore_lines: true,
         ..Default::default()
@@ -52,8 +53,21 @@ pub(super) fn load_obj(path: &Path, bytes: &[u8]) -> Result<(Mesh, Option<PathBu
         let offset_u32 =
             u32::try_from(offset).map_err(|_| Error::parse(path, "more than 2^32 vertices are not supported"))?;
         mesh.positions.extend(m.positions.chunks_exact(3).map(|c| DVec3::new(tf(c[0]), tf(c[1]), tf(c[2]))));
-        mesh.triangles
-            .extend(m.indices.chunks_exact(3).map(|c| [c[0] + offset_u32, c[1] + offset_u32, c[2] + offset_u32]));
+        // tobj keeps polygons whole (`triangulate: false`): convex faces become the fan that
+        // tobj would have made, concave ones are cut into ears.
+        let mut start = 0;
+        let arities: Box<dyn Iterator<Item = usize>> = if m.face_arities.is_empty() {
+            Box::new(std::iter::repeat_n(3, m.indices.len() / 3))
+        } else {
+            Box::new(m.face_arities.iter().map(|&a| a as usize))
+        };
+        let mut corners = Vec::new();
+        for arity in arities {
+            corners.clear();
+            corners.extend(m.indices[start..start + arity].iter().map(|&i| i + offset_u32));
+            start += arity;
+            crate::scene::polygon::triangulate(&mesh.positions, &corners, &mut mesh.triangles);
+        }
         if m.normals.len() == 3 * nv {
             if let Some(n) = &mut normals {
                 n.extend(m.normals.chunks_exact(3).map(|c| DVec3::new(tf(c[0]), tf(c[1]), tf(c[2]))));

@@ -3,7 +3,7 @@
 //! release 2020, old `peg`), and its maintained fork `ply-rs-bw` 4 needs Rust 1.87 (this crate:
 //! 1.80) and reports a truncated binary body as a bare end-of-file I/O error without the element
 //! index. We only need vertices and faces, which the reader below covers in a few hundred lines
-//! with precise error locations. Polygons are fan-triangulated `(0, i, i + 1)`, like tobj does
+//! with precise error locations. Polygons are triangulated by [`crate::scene::polygon::triangulate`] (convex: the fan `(0, i, i + 1)`; concave: ear clipping)
 //! for OBJ. Shared conventions (colours, degenerate triangles): [`super::mesh`].
 
 use std::path::Path;
@@ -524,10 +524,9 @@ fn read_ply_body(
                 ));
             }
         }
-        // Fan triangulation (0, i, i + 1).
-        for i in 1..idx.len() - 1 {
-            mesh.triangles.push([idx[0] as u32, idx[i] as u32, idx[i + 1] as u32]);
-        }
+        // Convex faces: the fan (0, i, i + 1); concave ones: ear clipping.
+        let corners: Vec<u32> = idx.iter().map(|&v| v as u32).collect();
+        crate::scene::polygon::triangulate(&mesh.positions, &corners, &mut mesh.triangles);
     }
     if layout.normal.is_some() {
         mesh.normals = Some(normals);

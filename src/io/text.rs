@@ -11,7 +11,7 @@ pub fn read_text(path: &Path) -> Result<String> {
     if path.is_dir() {
         return Err(Error::io(path, std::io::Error::other("is a directory, expected a file")));
     }
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = crate::io::input::read_regular(path)?;
     String::from_utf8(bytes)
         .map_err(|e| Error::parse(path, format!("not UTF-8 text (byte {})", e.utf8_error().valid_up_to())))
 }

@@ -74,7 +74,7 @@ impl ImageTexture {
 
     /// Loads a PNG (sRGB-encoded). Errors name the file.
     pub fn load(path: &Path, filter: Filter, wrap: Wrap) -> Result<Self> {
-        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        let bytes = crate::io::input::read_regular(path)?;
         let img = image::load_from_memory_with_format(&bytes, image::ImageFormat::Png)
             .map_err(|e| Error::parse(path, format!("not a readable PNG texture: {e}")))?;
         let rgb = img.to_rgb32f();
