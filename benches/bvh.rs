@@ -16,7 +16,7 @@ use std::hint::black_box;
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion, Throughput};
 use glam::DVec3;
 use inimtrace::accel::bvh::{BvhIntersector, BvhLayout};
-use inimtrace::accel::{Intersector, Ray};
+use inimtrace::ray::{Intersector, Ray};
 use inimtrace::scene::mesh::Mesh;
 
 #[path = "../tests/common/mod.rs"]

@@ -3,8 +3,9 @@
 //! independent Möller–Trumbore test away from edges, deterministic tie-breaking.
 
 use glam::{DVec2, DVec3};
-use inimtrace::accel::brute::{BruteForce, WatertightRay};
-use inimtrace::accel::{Hit, Intersector, Ray, Surface};
+use inimtrace::accel::brute::BruteForce;
+use inimtrace::accel::triangle::WatertightRay;
+use inimtrace::ray::{Hit, Intersector, Ray, Surface};
 use inimtrace::scene::mesh::Mesh;
 
 mod common;

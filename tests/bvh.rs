@@ -7,7 +7,7 @@
 use glam::{DVec2, DVec3};
 use inimtrace::accel::brute::BruteForce;
 use inimtrace::accel::bvh::{BvhIntersector, BvhLayout};
-use inimtrace::accel::{Hit, Intersector, Ray, Surface};
+use inimtrace::ray::{Hit, Intersector, Ray, Surface};
 use inimtrace::scene::mesh::Mesh;
 
 mod common;

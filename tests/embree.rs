@@ -12,7 +12,7 @@ use glam::{DVec2, DVec3};
 use inimtrace::accel::embree::{
     embree_error, live_objects, BuildQuality, Device, EmbreeIntersector, RawRay, SceneBuilder, TriangleGeometry,
 };
-use inimtrace::accel::{Hit, Intersector, Ray, Surface};
+use inimtrace::ray::{Hit, Intersector, Ray, Surface};
 use inimtrace::scene::mesh::Mesh;
 use inimtrace::Error;
 use rayon::prelude::*;

@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{DVec2, DVec3};
 use inimtrace::accel::brute::BruteForce;
-use inimtrace::accel::{Intersector, Ray, Surface};
+use inimtrace::ray::{Intersector, Ray, Surface};
 use inimtrace::scene::mesh::{tessellate_rect, Mesh};
 use inimtrace::scene::mesh_io::{load_mesh, MeshLoad, Transform};
 
