@@ -10,6 +10,7 @@
 //! Run: `cargo bench --bench bvh` (bunny from /usr/share/glmark2/models/bunny.obj; the ray
 //! groups are skipped when it is absent). Single-thread numbers: rays are traced in a plain loop
 //! on the bench thread; the builds use all cores (both libraries build in parallel).
+#![deny(unsafe_code)]
 
 use std::hint::black_box;
 

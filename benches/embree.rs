@@ -13,6 +13,7 @@
 //!
 //! Needs glmark2-data (`/usr/share/glmark2/models/bunny.obj`); the light is removed so that
 //! every path traces exactly one ray per sample.
+#![deny(unsafe_code)]
 
 use std::path::Path;
 

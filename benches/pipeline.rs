@@ -3,6 +3,7 @@
 //! display images, simulation and ground truth, SSIM, USAF chart and image-texture lookups, and
 //! eq. (1) lenslet refraction. Ray-scene intersection per backend: `benches/bvh.rs`,
 //! `benches/embree.rs`.
+#![deny(unsafe_code)]
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use glam::{DVec2, DVec3};

@@ -1,6 +1,7 @@
 //! The brute-force backend and its watertight ray/triangle test: exact analytic answers,
 //! no ray falling through closed meshes at shared edges and vertices, agreement with an
 //! independent Möller–Trumbore test away from edges, deterministic tie-breaking.
+#![deny(unsafe_code)]
 
 use glam::{DVec2, DVec3};
 use inimtrace::accel::brute::BruteForce;

@@ -3,6 +3,7 @@
 //! through shared edges and vertices, misses for parallel and receding rays, `occluded` and
 //! `intersect_many` consistent with `intersect`, and >= 99.99% hit/miss agreement with Embree on
 //! a million rays over the Stanford bunny.
+#![deny(unsafe_code)]
 
 use glam::{DVec2, DVec3};
 use inimtrace::accel::brute::BruteForce;

@@ -4,6 +4,7 @@
 //! `Error::Embree`, invalid meshes rejected with the element named.
 
 #![cfg(feature = "embree")]
+#![deny(unsafe_code)]
 
 use std::collections::HashMap;
 use std::sync::{RwLock, RwLockReadGuard, RwLockWriteGuard};

@@ -1,6 +1,7 @@
 //! Numerical hard cases of the optics and rendering (docs/NUMERICS.md has the table: case, what
 //! could go wrong, what inimtrace does, how this file checks it). Across all of them no NaN or
 //! infinity may reach an output image.
+#![deny(unsafe_code)]
 
 use glam::{DMat2, DVec2, DVec3};
 use inimtrace::accel::analytic::AnalyticRects;

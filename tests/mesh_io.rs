@@ -1,4 +1,5 @@
 //! Mesh loading (OBJ, PLY), transforms, validation errors and `tessellate_rect`.
+#![deny(unsafe_code)]
 
 use std::path::{Path, PathBuf};
 

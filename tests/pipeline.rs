@@ -1,4 +1,5 @@
 //! The physics of the assessment pipeline (issue: "What must be true").
+#![deny(unsafe_code)]
 
 use glam::{DVec2, DVec3};
 use inimtrace::accel::analytic::AnalyticRects;

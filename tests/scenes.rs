@@ -1,6 +1,7 @@
 //! Scenes beyond the paper's: mesh objects from files, the backend choice, lights and the
 //! display image's depth (issue "Embree backend ... and complex triangle-mesh scenes").
 #![cfg(feature = "embree")]
+#![deny(unsafe_code)]
 
 use std::path::{Path, PathBuf};
 
