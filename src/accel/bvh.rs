@@ -17,9 +17,9 @@
 //!   To keep the `f32` origin near the scene (so that its rounding stays ~`2^-24 S`), a ray whose
 //!   origin is farther than `2 S` from the coordinate origin (or, for the obvhs layouts, every
 //!   ray) is culled from where it enters the padded scene box instead.
-//! * Every triangle test is the shared watertight test
-//!   [`WatertightRay`](crate::accel::triangle::WatertightRay) in `f64` on the original `f64`
-//!   vertices and ray, and the nearest-hit bookkeeping is done in `f64`.
+//! * Every triangle test is the shared watertight test [`WatertightRay`] in `f64` on the
+//!   original `f64` vertices and ray, and the nearest-hit bookkeeping ([`NearestHit`]) is done
+//!   in `f64`.
 
 use std::time::Instant;
 

@@ -9,7 +9,7 @@ pub mod analytic;
 pub mod brute;
 pub mod bvh;
 pub mod bvh4;
-/// The crate's only `unsafe` code: the safe wrapper over Embree's C API.
+// The crate's only `unsafe` code: the safe wrapper over Embree's C API.
 #[cfg(feature = "embree")]
 #[allow(unsafe_code)]
 pub mod embree;
