@@ -10,6 +10,7 @@
 //! Where Embree is looked for: `$EMBREE_DIR/include/embree{4,3}` with libraries in
 //! `$EMBREE_DIR/lib` (or `lib64`) when `EMBREE_DIR` is set; otherwise the system include
 //! directories. Embree 4 is preferred when both versions are installed.
+#![deny(unsafe_code)]
 
 fn main() {
     // Declared unconditionally so that `cfg(embree4)` never trips the `unexpected_cfgs` lint.

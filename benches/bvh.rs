@@ -10,14 +10,15 @@
 //! Run: `cargo bench --bench bvh` (bunny from /usr/share/glmark2/models/bunny.obj; the ray
 //! groups are skipped when it is absent). Single-thread numbers: rays are traced in a plain loop
 //! on the bench thread; the builds use all cores (both libraries build in parallel).
+#![deny(unsafe_code)]
 
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion, Throughput};
 use glam::DVec3;
 use inimtrace::accel::bvh::{BvhIntersector, BvhLayout};
-use inimtrace::accel::{Intersector, Ray};
 use inimtrace::fixtures::{self, Rng};
+use inimtrace::ray::{Intersector, Ray};
 use inimtrace::scene::mesh::Mesh;
 
 /// The bunny, 60 mm tall, centred 300 mm in front of the eye.

@@ -13,15 +13,16 @@
 //!
 //! Needs glmark2-data (`/usr/share/glmark2/models/bunny.obj`); the light is removed so that
 //! every path traces exactly one ray per sample.
+#![deny(unsafe_code)]
 
 use std::path::Path;
 
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion, Throughput};
 use glam::DVec3;
 use inimtrace::accel::embree::{BuildQuality, EmbreeIntersector, RawRay};
-use inimtrace::accel::{Intersector, Ray};
 use inimtrace::fixtures::{bunny_display_rays as display_rays, bunny_eye_rays as eye_rays};
 use inimtrace::io;
+use inimtrace::ray::{Intersector, Ray};
 use inimtrace::render::backend::scene_meshes;
 use inimtrace::render::{RadianceField, Sample, SceneTracer};
 use inimtrace::scene::{Mesh, Scene};

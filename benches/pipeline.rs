@@ -3,6 +3,7 @@
 //! display images, simulation and ground truth, SSIM, USAF chart and image-texture lookups, and
 //! eq. (1) lenslet refraction. Ray-scene intersection per backend: `benches/bvh.rs`,
 //! `benches/embree.rs`.
+#![deny(unsafe_code)]
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use glam::{DVec2, DVec3};
@@ -11,10 +12,11 @@ use std::hint::black_box;
 use inimtrace::accel::analytic::AnalyticRects;
 use inimtrace::metrics::{ssim, SsimConstants};
 use inimtrace::optics::transfer::eye_to_lcd;
+use inimtrace::optics::transfer::FastTransfer;
 use inimtrace::optics::{Display, Eye, Focus, Retina};
 use inimtrace::progress::Progress;
 use inimtrace::raster::RgbImage;
-use inimtrace::render::retina::{simulate_stack, DisplayStack, FastTransfer};
+use inimtrace::render::retina::{simulate_stack, DisplayStack};
 use inimtrace::render::{ground_truth, render_display_image, DisplayRenderSettings, FacingPlanes, Method, SceneTracer};
 use inimtrace::scene::image_texture::{Filter, Wrap};
 use inimtrace::scene::{usaf, ImageTexture, Scene};

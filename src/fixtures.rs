@@ -66,9 +66,8 @@ pub fn white_wall() -> crate::scene::Scene {
     }
 }
 
-/// The pipeline's rays, as the benches trace them on scenes/bunny.toml: LC camera rays of
-/// `rows` LCD rows through the middle of the paper display, row-major.
-pub fn bunny_display_rays(rows: usize) -> Vec<crate::accel::Ray> {
+/// The pipeline's rays, as the benches trace them on scenes/bunny.toml: LC camera rays of `rows` LCD rows through the middle of the paper display, row-major.
+pub fn bunny_display_rays(rows: usize) -> Vec<crate::ray::Ray> {
     let d = crate::optics::Display::paper();
     let r0 = d.lcd.rows() / 2 - rows / 2;
     let mut rays = Vec::with_capacity(rows * d.lcd.columns());
@@ -76,7 +75,7 @@ pub fn bunny_display_rays(rows: usize) -> Vec<crate::accel::Ray> {
         for col in 0..d.lcd.columns() {
             let x3 = d.lcd.pixel_center(row, col);
             let c = d.lenslets.center(d.elemental_image_of(x3));
-            rays.push(crate::render::display_image::camera_ray(&d, x3, c, c, 0.0));
+            rays.push(crate::optics::transfer::camera_ray(&d, x3, c, c, 0.0));
         }
     }
     rays
@@ -84,7 +83,7 @@ pub fn bunny_display_rays(rows: usize) -> Vec<crate::accel::Ray> {
 
 /// Ground-truth eye rays (5 mm pupil, 8 x 8 grid, focus 386 mm) of `rows` retina rows
 /// (512 px, +-0.3) through the middle, each row laid out [pupil sample][column].
-pub fn bunny_eye_rays(rows: usize) -> Vec<crate::accel::Ray> {
+pub fn bunny_eye_rays(rows: usize) -> Vec<crate::ray::Ray> {
     let eye = crate::optics::Eye::thin_lens(5.0, crate::optics::Focus::Millimetres(386.0), 8);
     let retina = crate::optics::Retina::default();
     let pupil = eye.pupil_samples();
@@ -93,7 +92,7 @@ pub fn bunny_eye_rays(rows: usize) -> Vec<crate::accel::Ray> {
     for row in r0..r0 + rows {
         for s in &pupil {
             for col in 0..retina.resolution {
-                rays.push(crate::render::retina::eye_scene_ray(
+                rays.push(crate::optics::transfer::eye_scene_ray(
                     &eye,
                     retina.tangent(row, col, glam::DVec2::splat(0.5)),
                     *s,

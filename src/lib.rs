@@ -6,6 +6,15 @@
 //! Conventions (see README): millimetres; the eye's pupil centre is the origin; +z points from
 //! the eye toward the display and the scene, +x right, +y up; images are stored with row 0 at
 //! the top. Optics is computed in `f64`.
+//!
+//! Layers, bottom up (a module imports only from layers below it): `error`, `raster`, `progress`
+//! and `ray` (rays, hits, the intersector interface); `optics` (eq. (1)) and `scene`; `accel`
+//! (intersection backends over the scene's data), `metrics` and `io` (file formats); `render`;
+//! `experiment` and `bench`.
+//!
+//! `unsafe` code is denied everywhere except in the Embree wrapper (`accel::embree`).
+
+#![deny(unsafe_code)]
 
 pub mod accel;
 pub mod bench;
@@ -19,6 +28,7 @@ pub mod metrics;
 pub mod optics;
 pub mod progress;
 pub mod raster;
+pub mod ray;
 pub mod render;
 pub mod scene;
 

@@ -1,4 +1,5 @@
 //! The `inimtrace` command line: runs the paper's assessment (`assess`) or one stage of it.
+#![deny(unsafe_code)]
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;

@@ -1,6 +1,7 @@
 //! `inimtrace::bench` at tiny sizes on a scene with a triangle mesh: only the mesh backends can
 //! render it, each reports its build, and they agree. (`tests/cli.rs` runs `bench --quick` on the
 //! paper's scene.)
+#![deny(unsafe_code)]
 
 use std::sync::Arc;
 

@@ -1,11 +1,13 @@
 //! The brute-force backend and its watertight ray/triangle test: exact analytic answers,
 //! no ray falling through closed meshes at shared edges and vertices, agreement with an
 //! independent Möller–Trumbore test away from edges, deterministic tie-breaking.
+#![deny(unsafe_code)]
 
 use glam::{DVec2, DVec3};
-use inimtrace::accel::brute::{BruteForce, WatertightRay};
-use inimtrace::accel::{Hit, Intersector, Ray, Surface};
+use inimtrace::accel::brute::BruteForce;
+use inimtrace::accel::triangle::WatertightRay;
 use inimtrace::fixtures::Rng;
+use inimtrace::ray::{Hit, Intersector, Ray, Surface};
 use inimtrace::scene::mesh::Mesh;
 
 fn ray(origin: DVec3, dir: DVec3) -> Ray {

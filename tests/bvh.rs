@@ -3,12 +3,13 @@
 //! through shared edges and vertices, misses for parallel and receding rays, `occluded` and
 //! `intersect_many` consistent with `intersect`, and >= 99.99% hit/miss agreement with Embree on
 //! a million rays over the Stanford bunny.
+#![deny(unsafe_code)]
 
 use glam::{DVec2, DVec3};
 use inimtrace::accel::brute::BruteForce;
 use inimtrace::accel::bvh::{BvhIntersector, BvhLayout};
-use inimtrace::accel::{Hit, Intersector, Ray, Surface};
 use inimtrace::fixtures::Rng;
+use inimtrace::ray::{Hit, Intersector, Ray, Surface};
 use inimtrace::scene::mesh::Mesh;
 
 const LAYOUTS: [BvhLayout; 3] = [BvhLayout::Bvh4, BvhLayout::Cwbvh, BvhLayout::Bvh2];

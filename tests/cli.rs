@@ -1,5 +1,6 @@
 //! The command line as a user meets it: a small experiment end to end, and bad input that must
 //! fail with a clear message naming the file and the field, never a panic.
+#![deny(unsafe_code)]
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

@@ -4,6 +4,7 @@
 //! `Error::Embree`, invalid meshes rejected with the element named.
 
 #![cfg(feature = "embree")]
+#![deny(unsafe_code)]
 
 use std::collections::HashMap;
 use std::sync::{RwLock, RwLockReadGuard, RwLockWriteGuard};
@@ -12,8 +13,8 @@ use glam::{DVec2, DVec3};
 use inimtrace::accel::embree::{
     embree_error, live_objects, BuildQuality, Device, EmbreeIntersector, RawRay, SceneBuilder, TriangleGeometry,
 };
-use inimtrace::accel::{Hit, Intersector, Ray, Surface};
 use inimtrace::fixtures::Rng;
+use inimtrace::ray::{Hit, Intersector, Ray, Surface};
 use inimtrace::scene::mesh::Mesh;
 use inimtrace::Error;
 use rayon::prelude::*;

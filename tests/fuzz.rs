@@ -3,6 +3,7 @@
 //! truncation), must load or fail with an error naming the file — never panic. The ordinary test
 //! run tries a few hundred cases per reader; `scripts/fuzz.sh` runs many more for a bounded time
 //! (set `PROPTEST_CASES`). Every crash found is kept below as a regression test.
+#![deny(unsafe_code)]
 
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};

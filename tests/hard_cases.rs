@@ -1,17 +1,19 @@
 //! Numerical hard cases of the optics and rendering (docs/NUMERICS.md has the table: case, what
 //! could go wrong, what inimtrace does, how this file checks it). Across all of them no NaN or
 //! infinity may reach an output image.
+#![deny(unsafe_code)]
 
 use glam::{DMat2, DVec2, DVec3};
 use inimtrace::accel::analytic::AnalyticRects;
 use inimtrace::fixtures::{self, Lcg};
 use inimtrace::metrics;
 use inimtrace::optics::transfer::eye_to_lcd;
+use inimtrace::optics::transfer::FastTransfer;
+use inimtrace::optics::transfer::{camera_ray, check_pupil_center, pupil_center_point};
 use inimtrace::optics::{Display, Eye, Focus, Lattice, Retina};
 use inimtrace::progress::Progress;
 use inimtrace::raster::RgbImage;
-use inimtrace::render::display_image::{camera_ray, check_pupil_center, pupil_center_point};
-use inimtrace::render::retina::{simulate, FastTransfer};
+use inimtrace::render::retina::simulate;
 use inimtrace::render::{ground_truth, render_display_image, DisplayRenderSettings, FacingPlanes, Method, SceneTracer};
 use inimtrace::scene::{Material, Object, Rect, Scene, Shape};
 

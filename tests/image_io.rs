@@ -1,6 +1,7 @@
 //! Tests of image file I/O (src/io/exr.rs, src/io/png.rs, src/io/figure.rs): bit-exact EXR
 //! round trips with attributes and depth, row 0 at the top, the input policy for malformed
 //! files and bad samples, exact sRGB codes, and montage geometry and colours.
+#![deny(unsafe_code)]
 
 use std::path::Path;
 

@@ -1,11 +1,12 @@
 //! Mesh loading (OBJ, PLY), transforms, validation errors and `tessellate_rect`.
+#![deny(unsafe_code)]
 
 use std::path::{Path, PathBuf};
 
 use glam::{DVec2, DVec3};
 use inimtrace::accel::brute::BruteForce;
-use inimtrace::accel::{Intersector, Ray, Surface};
 use inimtrace::io::{load_mesh, MeshLoad};
+use inimtrace::ray::{Intersector, Ray, Surface};
 use inimtrace::scene::mesh::{tessellate_rect, Mesh};
 use inimtrace::scene::Transform;
 

@@ -1,6 +1,7 @@
 //! Tests of the Table 1 metrics (src/metrics.rs): PSNR against analytic MSEs, SSIM against
 //! analytic constant-image values, against scikit-image reference numbers, and fast (separable)
 //! against the slow direct twin.
+#![deny(unsafe_code)]
 
 use inimtrace::metrics::{finite_db, format_db, psnr, psnr_channel, ssim, ssim_direct, SsimConstants, SSIM_WINDOW};
 use inimtrace::raster::RgbImage;

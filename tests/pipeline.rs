@@ -1,15 +1,17 @@
 //! The physics of the assessment pipeline (issue: "What must be true").
+#![deny(unsafe_code)]
 
 use glam::{DVec2, DVec3};
 use inimtrace::accel::analytic::AnalyticRects;
 use inimtrace::fixtures::{self, Lcg};
 use inimtrace::io;
 use inimtrace::metrics;
+use inimtrace::optics::transfer::FastTransfer;
 use inimtrace::optics::transfer::{eye_ray, eye_to_lcd, lcd_to_eye};
 use inimtrace::optics::{Display, Eye, Focus, Retina};
 use inimtrace::progress::Progress;
 use inimtrace::raster::RgbImage;
-use inimtrace::render::retina::{simulate, FastTransfer};
+use inimtrace::render::retina::simulate;
 use inimtrace::render::{ground_truth, render_display_image, DisplayRenderSettings, FacingPlanes, Method, SceneTracer};
 use inimtrace::scene::{Material, Object, Rect, Scene, Shape};
 use std::path::Path;
@@ -289,7 +291,7 @@ fn shipped_scene_and_experiment_files_match_the_builtins() {
 
 #[test]
 fn pupil_center_rays_pass_through_the_pupil_centre_and_singularity_is_refused() {
-    use inimtrace::render::display_image::{camera_ray, check_pupil_center, pupil_center_point};
+    use inimtrace::optics::transfer::{camera_ray, check_pupil_center, pupil_center_point};
     let display = Display::paper();
     let lcd = display.lcd;
     let mut rng = Lcg(11);
@@ -322,7 +324,7 @@ fn pupil_center_rays_pass_through_the_pupil_centre_and_singularity_is_refused() 
 
 #[test]
 fn the_reference_plane_moves_ray_starts_along_the_same_lines() {
-    use inimtrace::render::display_image::camera_ray;
+    use inimtrace::optics::transfer::camera_ray;
     let display = Display::paper();
     let mut rng = Lcg(12);
     for _ in 0..1000 {

@@ -1,5 +1,6 @@
 //! Property tests over random displays, eyes and rays (proptest): ray transfer is reversible,
 //! lenslet ownership is consistent, outputs are finite, a uniform scene looks uniform.
+#![deny(unsafe_code)]
 
 use glam::{DMat2, DVec2, DVec3};
 use proptest::prelude::*;

@@ -1,18 +1,19 @@
 //! Scenes beyond the paper's: mesh objects from files, the backend choice, lights and the
 //! display image's depth (issue "Embree backend ... and complex triangle-mesh scenes").
 #![cfg(feature = "embree")]
+#![deny(unsafe_code)]
 
 use std::path::{Path, PathBuf};
 
 use glam::DVec3;
 use inimtrace::accel::analytic::AnalyticRects;
 use inimtrace::accel::brute::BruteForce;
-use inimtrace::accel::{Intersector, Ray};
 use inimtrace::io;
 use inimtrace::metrics;
 use inimtrace::optics::{Display, Eye, Focus, Retina};
 use inimtrace::progress::Progress;
 use inimtrace::raster::RgbImage;
+use inimtrace::ray::{Intersector, Ray};
 use inimtrace::render::backend::scene_meshes;
 use inimtrace::render::retina::simulate;
 use inimtrace::render::{
@@ -144,7 +145,7 @@ fn lc_depth_is_the_distance_to_the_hit_plane() {
         let (row, col) = (7, 93);
         let center = display.lcd.pixel_center(row, col);
         let c = display.lenslets.center(display.elemental_image_of(center));
-        let ray = inimtrace::render::display_image::camera_ray(&display, center, c, c, 0.0);
+        let ray = inimtrace::optics::transfer::camera_ray(&display, center, c, c, 0.0);
         let expected = 500.0 * ray.dir.length();
         assert!((z[row * 108 + col] as f64 - expected).abs() < 1e-3, "{choice}: {} vs {expected}", z[row * 108 + col]);
         assert!(z.iter().all(|v| *v >= 500.0 && v.is_finite()));
@@ -231,7 +232,9 @@ fn batched_tracing_gives_the_same_image_as_one_ray_at_a_time() {
 fn lights_shade_lambertian_and_cast_shadows() {
     let mut scene = Scene::paper();
     let backend = AnalyticRects::new(&scene).unwrap();
-    let shade = |scene: &Scene, ray: Ray| scene.shade(&ray, backend.intersect(&ray, f64::INFINITY).as_ref(), &backend);
+    let shade = |scene: &Scene, ray: Ray| {
+        inimtrace::render::shade(scene, &ray, backend.intersect(&ray, f64::INFINITY).as_ref(), &backend)
+    };
     // A point on the background square (z = 1302, albedo (0.2, 0.7, 0.8)) seen from the eye.
     let bg = Ray { origin: DVec3::ZERO, dir: DVec3::new(150.0, -300.0, 1302.0) / 1302.0 };
     // Unlit: albedo.

@@ -10,8 +10,8 @@
 
 use glam::{DVec2, DVec3};
 
-use super::{Hit, Intersector, Ray, Surface};
 use crate::error::{Error, Result};
+use crate::ray::{Hit, Intersector, Ray, Surface};
 use crate::scene::{Scene, Shape};
 
 #[derive(Clone, Copy, Debug)]

@@ -17,9 +17,9 @@
 //!   To keep the `f32` origin near the scene (so that its rounding stays ~`2^-24 S`), a ray whose
 //!   origin is farther than `2 S` from the coordinate origin (or, for the obvhs layouts, every
 //!   ray) is culled from where it enters the padded scene box instead.
-//! * Every triangle test is the shared watertight test
-//!   [`WatertightRay`](crate::accel::brute::WatertightRay) in `f64` on the original `f64`
-//!   vertices and ray, and the nearest-hit bookkeeping is done in `f64`.
+//! * Every triangle test is the shared watertight test [`WatertightRay`] in `f64` on the
+//!   original `f64` vertices and ray, and the nearest-hit bookkeeping ([`NearestHit`]) is done
+//!   in `f64`.
 
 use std::time::Instant;
 
@@ -33,10 +33,10 @@ use obvhs::ploc::{PlocBuilder, PlocSearchDistance, SortPrecision};
 use obvhs::ray::{Ray as CullRay, RayHit};
 use rayon::prelude::*;
 
-use crate::accel::brute::{NearestHit, WatertightRay};
 use crate::accel::bvh4::{self, Bvh4};
-use crate::accel::{Hit, Intersector, Ray};
+use crate::accel::triangle::{NearestHit, WatertightRay};
 use crate::error::{Error, Result};
+use crate::ray::{Hit, Intersector, Ray};
 use crate::scene::mesh::Mesh;
 
 /// Padding of every triangle's `f32` box, relative to the scene scale `S` (2^-16 ~ 1.5e-5).

@@ -1,69 +1,16 @@
-//! Scene intersection backends behind one trait (paper Sec. 3.1: "each ray is traversed until it
-//! hits an object"). The analytic backend intersects the paper's planar rectangles exactly in
-//! `f64`; mesh backends (Embree, pure-Rust BVH) intersect triangle meshes.
+//! Scene intersection backends behind one trait, [`crate::ray::Intersector`] (paper Sec. 3.1:
+//! "each ray is traversed until it hits an object"). The analytic backend intersects the paper's
+//! planar rectangles exactly in `f64`; the mesh backends (brute force, the pure-Rust BVH,
+//! Embree) intersect triangle meshes with one watertight triangle test and one nearest-hit rule
+//! ([`triangle`]; Embree has its own robust test in `f32`). Backends read the scene's data
+//! (`crate::scene`) and nothing above it.
 
 pub mod analytic;
 pub mod brute;
 pub mod bvh;
 pub mod bvh4;
+// The crate's only `unsafe` code: the safe wrapper over Embree's C API.
 #[cfg(feature = "embree")]
+#[allow(unsafe_code)]
 pub mod embree;
-
-use glam::{DVec2, DVec3};
-
-/// A ray `origin + t * dir`, `t > 0`. `dir` need not be unit length; `t` is in units of `dir`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Ray {
-    pub origin: DVec3,
-    pub dir: DVec3,
-}
-
-/// Where on a surface a ray hit.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Surface {
-    /// An analytic primitive: `uv` are its own surface coordinates (for a rectangle, local
-    /// coordinates in [-1, 1]^2 along its two half-edge vectors).
-    Analytic { uv: DVec2 },
-    /// Triangle `index` of a mesh, with Embree-convention barycentrics `bary = (u, v)`:
-    /// point = (1 - u - v) p0 + u p1 + v p2.
-    Triangle { index: u32, bary: DVec2 },
-}
-
-/// The nearest intersection of a ray with the scene.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Hit {
-    /// Ray parameter of the hit (world distance = t * |dir|).
-    pub t: f64,
-    /// Index of the scene object that was hit (`Scene::objects`).
-    pub object: u32,
-    pub surface: Surface,
-}
-
-/// A scene intersection backend. Implementations are immutable after construction and shared
-/// across rayon threads.
-pub trait Intersector: Send + Sync {
-    /// Short name for reports ("analytic", "embree", "bvh").
-    fn name(&self) -> &'static str;
-
-    /// Nearest hit with `0 < t < t_max`, or `None`.
-    fn intersect(&self, ray: &Ray, t_max: f64) -> Option<Hit>;
-
-    /// Nearest hits for many rays (`hits.len() == rays.len()`), unbounded `t_max`.
-    /// Backends override this to use packets or streams on coherent rays.
-    fn intersect_many(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
-        for (ray, hit) in rays.iter().zip(hits.iter_mut()) {
-            *hit = self.intersect(ray, f64::INFINITY);
-        }
-    }
-
-    /// Whether [`Intersector::intersect_many`] is faster on long runs of neighbouring rays than
-    /// one ray at a time (packets or streams). Renderers batch rays only for such backends.
-    fn prefers_batches(&self) -> bool {
-        false
-    }
-
-    /// True when anything blocks the ray with `0 < t < t_max` (shadow rays).
-    fn occluded(&self, ray: &Ray, t_max: f64) -> bool {
-        self.intersect(ray, t_max).is_some()
-    }
-}
+pub mod triangle;

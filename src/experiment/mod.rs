@@ -294,7 +294,7 @@ impl Experiment {
             cases.push(EyeCase { name: c.name.clone(), eye });
         }
         if methods.contains(&Method::PupilCenter) {
-            crate::render::display_image::check_pupil_center(&display, render.eye_position)?;
+            crate::optics::transfer::check_pupil_center(&display, render.eye_position)?;
         }
         Ok(Self {
             name: spec.name.clone(),

@@ -12,11 +12,23 @@
 //! trace that crosses the lenslet plane. Positions of the eye-side segments are measured from
 //! the eye's optical axis (through its pupil centre); positions on the display planes are world
 //! x, y.
+//!
+//! Every trace of eq. (1) the program runs lives here, each fast path next to its slow twin
+//! (the slow twin spells the equation out step by step; unit tests below hold them together):
+//!
+//! - eye -> LCD: [`eye_to_lcd`] (slow) and [`FastTransfer`] (per-eye constants folded in), which
+//!   the perceived-image simulation runs for every retina and pupil sample;
+//! - eye -> scene: [`eye_scene_ray`], the ground truth's ray leaving the eye lens;
+//! - LCD -> eye: [`lcd_to_eye`] (slow) and [`camera_ray`], the display-image renderer's ray of
+//!   a display pixel, plus [`pupil_center_point`], eq. (1) solved for the lenslet-plane point
+//!   whose ray passes through the pupil centre (the PupilCenter method).
 
-use glam::{DVec2, IVec2};
+use glam::{DVec2, DVec3, IVec2};
 
-use super::display::Display;
+use super::display::{Display, PixelIndexer};
 use super::eye::Eye;
+use crate::error::{Error, Result};
+use crate::ray::Ray;
 
 /// A ray crossing a plane: transverse position and slope (dx/dz, dy/dz), travelling toward +z.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -83,6 +95,61 @@ pub fn eye_to_lcd(display: &Display, eye: &Eye, tangent: DVec2, pupil_offset: DV
     EyeTrace { retina: -eye.retina_distance * tangent, pupil, lenslet, lenslet_index, lcd }
 }
 
+/// The eye -> LCD trace of [`eye_to_lcd`] with the per-eye constants folded in, for the hot
+/// loop of the perceived-image simulation. Tests check it against `eye_to_lcd` (the slow twin).
+pub struct FastTransfer<'a> {
+    display: &'a Display,
+    /// Per pupil sample: world position at the pupil plane, and the slope offset
+    /// `s/v0 - s d1` so that `w1 = tangent + offset`.
+    samples: Vec<(DVec2, DVec2)>,
+    /// Distance from the pupil plane to the lenslets.
+    to_lenslets: f64,
+    lenslet_power: f64,
+    v2: f64,
+    indexer: PixelIndexer,
+}
+
+impl<'a> FastTransfer<'a> {
+    pub fn new(display: &'a Display, eye: &Eye, pupil: &[DVec2]) -> Self {
+        let v0 = eye.retina_distance;
+        let d1 = eye.power();
+        let samples = pupil.iter().map(|&s| (s + eye.position.truncate(), s / v0 - s * d1)).collect();
+        Self {
+            display,
+            samples,
+            to_lenslets: display.lenslet_z() - eye.position.z,
+            lenslet_power: display.lenslet_power(),
+            v2: display.lenslets_to_lcd,
+            indexer: PixelIndexer::new(&display.lcd),
+        }
+    }
+
+    /// Where the ray for retina direction `tangent` through pupil sample `k` meets the LCD.
+    #[inline(always)]
+    pub fn lcd_point(&self, tangent: DVec2, k: usize) -> DVec2 {
+        let (x1, offset) = self.samples[k];
+        let w1 = tangent + offset;
+        let x2 = x1 + w1 * self.to_lenslets;
+        let c = self.display.lenslets.center(self.display.lenslets.nearest(x2));
+        let w2 = w1 - (x2 - c) * self.lenslet_power;
+        x2 + w2 * self.v2
+    }
+
+    /// The LCD pixel that ray hits, if any ([`crate::optics::Lcd::pixel_index`]).
+    #[inline(always)]
+    pub fn pixel_index(&self, tangent: DVec2, k: usize) -> Option<usize> {
+        self.indexer.index(self.lcd_point(tangent, k))
+    }
+}
+
+/// The ray into the scene that leaves the eye lens for retina direction `tangent` through pupil
+/// offset `pupil_offset`.
+#[inline]
+pub fn eye_scene_ray(eye: &Eye, tangent: DVec2, pupil_offset: DVec2) -> Ray {
+    let r = eye_ray(eye, tangent, pupil_offset);
+    Ray { origin: (r.position + eye.position.truncate()).extend(eye.position.z), dir: r.slope.extend(1.0) }
+}
+
 /// The reverse trace: light leaving LCD point `lcd` through lenslet-plane point `lenslet_point`,
 /// refracted by the lenslet nearest to that point, back through the eye lens to the retina.
 /// Returns (pupil-plane ray after the eye lens, travelling toward +z, world x, y; retina point
@@ -98,10 +165,186 @@ pub fn lcd_to_eye(display: &Display, eye: &Eye, lcd: DVec2, lenslet_point: DVec2
     (at_pupil, x0)
 }
 
+/// The eye-side camera ray for light leaving LCD point `lcd_point` through lenslet-plane point
+/// `lenslet_point`, refracted by the lenslet centred at `lenslet_center`; it starts on the plane
+/// `z = reference_z` and has unit z component.
+#[inline]
+pub fn camera_ray(
+    display: &Display,
+    lcd_point: DVec2,
+    lenslet_center: DVec2,
+    lenslet_point: DVec2,
+    reference_z: f64,
+) -> Ray {
+    let w2 = (lcd_point - lenslet_point) / display.lenslets_to_lcd;
+    let w1 = w2 + (lenslet_point - lenslet_center) * display.lenslet_power();
+    let start = lenslet_point - w1 * (display.lenslet_z() - reference_z);
+    Ray { origin: start.extend(reference_z), dir: w1.extend(1.0) }
+}
+
+/// PupilCenter's lenslet-plane point, in closed form. With `L = v1 - e_z` the distance from the
+/// eye to the lenslets, the refracted ray through `p` reaches the eye plane at
+/// `p - L ((x3 - p)/v2 + (p - xc)/f)`; setting that to the pupil centre `e` gives
+/// `p (1/L + 1/v2 - 1/f) = e/L + x3/v2 - xc/f`.
+#[inline]
+pub fn pupil_center_point(display: &Display, lcd_point: DVec2, lenslet_center: DVec2, eye: DVec3) -> DVec2 {
+    let l = display.lenslet_z() - eye.z;
+    let denom = pupil_center_denominator(display, eye);
+    (eye.truncate() / l + lcd_point / display.lenslets_to_lcd - lenslet_center * display.lenslet_power()) / denom
+}
+
+/// `1/L + 1/v2 - 1/f`: zero when the lenslet images the pupil centre onto the LCD.
+pub fn pupil_center_denominator(display: &Display, eye: DVec3) -> f64 {
+    1.0 / (display.lenslet_z() - eye.z) + 1.0 / display.lenslets_to_lcd - display.lenslet_power()
+}
+
+/// Relative size of `1/L + 1/v2 - 1/f` below which PupilCenter is refused as singular. The
+/// solution `p` scales with the inverse of this quantity; at 1e-9 of the terms' magnitude the
+/// cancellation has already lost nine of sixteen significant digits.
+pub const PUPIL_CENTER_SINGULAR_TOLERANCE: f64 = 1e-9;
+
+/// Errors when PupilCenter has no answer for this display and eye position.
+pub fn check_pupil_center(display: &Display, eye: DVec3) -> Result<()> {
+    let l = display.lenslet_z() - eye.z;
+    if l <= 0.0 || l.is_nan() {
+        return Err(Error::Singular(format!(
+            "PupilCenter needs the eye in front of the lenslets, but the eye is at z = {} and the lenslets at z = {}",
+            eye.z,
+            display.lenslet_z()
+        )));
+    }
+    let scale = 1.0 / l + 1.0 / display.lenslets_to_lcd + display.lenslet_power();
+    let denom = pupil_center_denominator(display, eye);
+    if denom.abs() <= PUPIL_CENTER_SINGULAR_TOLERANCE * scale {
+        return Err(Error::Singular(format!(
+            "PupilCenter is undefined: the lenslets image the pupil centre onto the LCD \
+             (1/L + 1/v2 - 1/f = {denom:.3e} with L = {l} mm, v2 = {} mm, f = {} mm), so every ray \
+             through the pupil centre meets the LCD at one point per lenslet",
+            display.lenslets_to_lcd, display.focal_length
+        )));
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
+    use glam::DMat2;
+
     use super::*;
     use crate::optics::eye::Focus;
+    use crate::optics::lattice::Lattice;
+
+    /// Deterministic uniform inputs (64-bit LCG, top 53 bits).
+    struct Inputs(u64);
+
+    impl Inputs {
+        fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+            self.0 = self.0.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+            lo + (hi - lo) * ((self.0 >> 11) as f64 / (1u64 << 53) as f64)
+        }
+        fn point(&mut self, half: f64) -> DVec2 {
+            DVec2::new(self.uniform(-half, half), self.uniform(-half, half))
+        }
+    }
+
+    /// The paper's display and one with a tilted, shifted lenslet lattice (so that the nearest
+    /// lenslet is not a per-axis rounding).
+    fn displays() -> [Display; 2] {
+        let mut tilted = Display::paper();
+        let m = DMat2::from_cols(DVec2::new(1.1, 0.2), DVec2::new(-0.3, 1.25));
+        tilted.lenslets = Lattice::new(DVec2::new(0.17, -0.05), m).expect("valid lattice");
+        [Display::paper(), tilted]
+    }
+
+    /// Eyes with the pupil centre off the axis and off the z = 0 plane, in and out of focus.
+    fn eyes() -> Vec<Eye> {
+        let mut eyes = vec![
+            Eye::pinhole(),
+            Eye::thin_lens(5.0, Focus::Millimetres(300.0), 6),
+            Eye::thin_lens(3.0, Focus::Diopters(0.0), 4),
+        ];
+        eyes[1].position = DVec3::new(1.3, -0.8, 0.0);
+        eyes[2].position = DVec3::new(-2.1, 0.6, 4.5);
+        eyes
+    }
+
+    #[test]
+    fn fast_transfer_lands_where_eye_to_lcd_does() {
+        let mut rng = Inputs(0x5eed);
+        for display in displays() {
+            for eye in eyes() {
+                let pupil = eye.pupil_samples();
+                let fast = FastTransfer::new(&display, &eye, &pupil);
+                let mut inside = 0;
+                for _ in 0..3_000 {
+                    let tangent = rng.point(0.3);
+                    for (k, s) in pupil.iter().enumerate() {
+                        let slow = eye_to_lcd(&display, &eye, tangent, *s).lcd;
+                        let got = fast.lcd_point(tangent, k);
+                        assert!((got - slow).length() < 1e-12, "fast {got:?} vs slow {slow:?}");
+                        // The pixel read is the pixel of the fast point, with the LCD's own rule.
+                        let pixel = fast.pixel_index(tangent, k);
+                        assert_eq!(pixel, display.lcd.pixel_index(got));
+                        inside += usize::from(pixel.is_some());
+                    }
+                }
+                assert!(inside > 0, "some rays must land on the LCD");
+            }
+        }
+    }
+
+    #[test]
+    fn camera_ray_is_the_eye_side_of_lcd_to_eye_and_traces_back_to_its_pixel() {
+        let mut rng = Inputs(0xca11);
+        for display in displays() {
+            for eye in eyes() {
+                for _ in 0..3_000 {
+                    let lcd = rng.point(10.0);
+                    let p = lcd + rng.point(1.5);
+                    let center = display.lenslets.center(display.lenslets.nearest(p));
+                    let ray = camera_ray(&display, lcd, center, p, eye.position.z);
+                    let (pupil, retina) = lcd_to_eye(&display, &eye, lcd, p);
+                    // The same line: it starts on the pupil plane where the slow trace crosses it,
+                    // with the slow trace's slope and a unit z step.
+                    assert_eq!(ray.origin.z, eye.position.z);
+                    assert_eq!(ray.dir.z, 1.0);
+                    assert!((ray.origin.truncate() - pupil.position).length() < 1e-12);
+                    assert!((ray.dir.truncate() - pupil.slope).length() < 1e-14);
+                    // Reversed through the eye, that light comes back to the LCD point it left.
+                    let tangent = -retina / eye.retina_distance;
+                    let offset = pupil.position - eye.position.truncate();
+                    let back = eye_to_lcd(&display, &eye, tangent, offset);
+                    assert_eq!(display.lenslets.center(back.lenslet_index), center);
+                    assert!((back.lcd - lcd).length() < 1e-9, "{:?} vs {lcd:?}", back.lcd);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn pupil_center_point_sends_the_reverse_trace_through_the_pupil_centre() {
+        let mut rng = Inputs(0xbc);
+        for display in displays() {
+            for eye in eyes() {
+                check_pupil_center(&display, eye.position).expect("these displays are not singular");
+                for _ in 0..2_000 {
+                    let lcd = rng.point(10.0);
+                    // The lenslet of the point's elemental image, as the renderer pairs them.
+                    let center = display.lenslets.center(display.elemental_image_of(lcd));
+                    let p = pupil_center_point(&display, lcd, center, eye.position);
+                    // Eq. (1) run backwards step by step (as in `lcd_to_eye`, but refracted by
+                    // `center`: the point usually lies outside that lenslet's cell).
+                    let w2 = (lcd - p) / display.lenslets_to_lcd;
+                    let before = PlaneRay { position: p, slope: w2 }.unrefract(center, display.lenslet_power());
+                    let at_pupil = before.propagate(-(display.lenslet_z() - eye.position.z));
+                    assert!((at_pupil.position - eye.position.truncate()).length() < 1e-9, "{at_pupil:?}");
+                    // And the camera ray from the pupil plane starts at the pupil centre.
+                    let ray = camera_ray(&display, lcd, center, p, eye.position.z);
+                    assert!((ray.origin - eye.position).length() < 1e-9, "{ray:?}");
+                }
+            }
+        }
+    }
 
     #[test]
     fn refraction_undoes_itself() {

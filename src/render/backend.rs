@@ -8,8 +8,9 @@ use std::borrow::Cow;
 use std::fmt;
 use std::str::FromStr;
 
-use super::display_image::{RadianceField, SceneTracer};
+use super::field::RadianceField;
 use super::planar::FacingPlanes;
+use super::tracer::SceneTracer;
 use crate::accel::analytic::AnalyticRects;
 use crate::accel::brute::BruteForce;
 use crate::error::{Error, Result};

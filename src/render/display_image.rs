@@ -9,10 +9,13 @@
 //!
 //! - LensletCenter (LC): `p` is the lenslet centre (a pinhole array);
 //! - PupilCenter (PC): `p` is chosen so that the refracted ray passes through the eye's pupil
-//!   centre; closed form below; the point may lie outside the lenslet's aperture (the lens is
+//!   centre, in closed form ([`pupil_center_point`]); the point may lie outside the lenslet's aperture (the lens is
 //!   treated as extended), exactly as the closed form implies;
 //! - LensletAverage (LA): `p` on a k x k grid of cell centres over the lenslet's pitch cell
 //!   (paper: 5 x 5), averaged. With k = 1 this is exactly LC.
+//!
+//! The camera ray itself is eq. (1) and lives with it ([`camera_ray`]); the scene is read
+//! through a [`RadianceField`].
 
 use std::fmt;
 use std::str::FromStr;
@@ -20,13 +23,14 @@ use std::str::FromStr;
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 
-use crate::accel::{Intersector, Ray};
+use super::field::{BundleSum, RadianceField, RayBundle, Sample};
 use crate::error::{Error, Result};
 use crate::optics::eye::stratified;
+use crate::optics::transfer::{camera_ray, check_pupil_center, pupil_center_point};
 use crate::optics::Display;
 use crate::progress::Progress;
 use crate::raster::RgbImage;
-use crate::scene::Scene;
+use crate::ray::Ray;
 
 /// A display-image rendering method.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -102,257 +106,6 @@ impl Default for DisplayRenderSettings {
     fn default() -> Self {
         Self { samples_per_pixel: 1, reference_plane_z: 0.0, eye_position: DVec3::ZERO }
     }
-}
-
-/// A scene and the backend that intersects it. Generic so that hot loops inline a concrete
-/// backend; `SceneTracer<'_, dyn Intersector>` works for any backend chosen at run time.
-pub struct SceneTracer<'a, I: Intersector + ?Sized = dyn Intersector> {
-    pub scene: &'a Scene,
-    pub backend: &'a I,
-}
-
-impl<I: Intersector + ?Sized> Clone for SceneTracer<'_, I> {
-    fn clone(&self) -> Self {
-        *self
-    }
-}
-impl<I: Intersector + ?Sized> Copy for SceneTracer<'_, I> {}
-
-/// What one ray sees: its radiance and the distance to what it hit.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Sample {
-    pub radiance: DVec3,
-    /// World distance (mm) from the ray's origin to its hit along the ray; `+inf` for a miss;
-    /// NaN when the field does not know (fields that only implement `radiance`).
-    pub depth: f64,
-}
-
-impl Default for Sample {
-    fn default() -> Self {
-        Sample { radiance: DVec3::ZERO, depth: f64::NAN }
-    }
-}
-
-/// Anything that tells the radiance seen along a ray: a scene with an intersection backend, or
-/// a fused fast kernel for a special kind of scene.
-///
-/// Renderers hand rays over in batches ([`RadianceField::sample_many`]) laid out so that
-/// consecutive rays are neighbours (adjacent pixels, same sub-sample), which lets mesh backends
-/// trace them as packets. The defaults fall back to one ray at a time.
-pub trait RadianceField: Sync {
-    fn radiance(&self, ray: &Ray) -> DVec3;
-
-    /// Radiance and hit distance. Default: the depth is unknown (NaN).
-    fn sample(&self, ray: &Ray) -> Sample {
-        Sample { radiance: self.radiance(ray), depth: f64::NAN }
-    }
-
-    /// Whether [`RadianceField::sample_many`] gains from long batches of neighbouring rays
-    /// (packets). Renderers then trace blocks of pixels at once; otherwise pixel by pixel,
-    /// which is cheaper for fields whose per-ray cost is tiny. Same results either way.
-    fn prefers_batches(&self) -> bool {
-        false
-    }
-
-    /// [`RadianceField::sample`] of every ray (`out.len() == rays.len()`).
-    fn sample_many(&self, rays: &[Ray], out: &mut [Sample]) {
-        for (ray, o) in rays.iter().zip(out.iter_mut()) {
-            *o = self.sample(ray);
-        }
-    }
-
-    /// Sums over the rays of `bundle` around `base`: radiance, hit distance of the rays that
-    /// hit, their count, and whether every depth was known. Fields may override this with a
-    /// faster path that must return exactly the same sums.
-    fn sample_sum(&self, base: &Ray, bundle: &RayBundle) -> BundleSum {
-        let mut acc = BundleSum::default();
-        for k in 0..bundle.shifts.len() {
-            acc.add(self.sample(&bundle.ray(base, k)));
-        }
-        acc
-    }
-}
-
-/// Sums over a bundle of rays ([`RadianceField::sample_sum`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct BundleSum {
-    pub radiance: DVec3,
-    /// Sum of the finite hit distances.
-    pub depth: f64,
-    /// Number of rays that hit something.
-    pub hits: usize,
-    /// False when some ray's depth was unknown (NaN).
-    pub depth_known: bool,
-}
-
-impl Default for BundleSum {
-    fn default() -> Self {
-        Self { radiance: DVec3::ZERO, depth: 0.0, hits: 0, depth_known: true }
-    }
-}
-
-impl BundleSum {
-    /// Adds another bundle's sums (renderers sum each pixel sample's bundle, then the bundles).
-    #[inline(always)]
-    pub fn merge(&mut self, other: BundleSum) {
-        self.radiance += other.radiance;
-        self.depth += other.depth;
-        self.hits += other.hits;
-        self.depth_known &= other.depth_known;
-    }
-
-    #[inline(always)]
-    pub fn add(&mut self, s: Sample) {
-        self.radiance += s.radiance;
-        if s.depth.is_finite() {
-            self.depth += s.depth;
-            self.hits += 1;
-        } else if s.depth.is_nan() {
-            self.depth_known = false;
-        }
-    }
-}
-
-/// Rays that differ from a base ray by constant shifts of their start (x, y) and slope
-/// (x, y): LensletAverage's samples of one pixel (eq. (1b) is affine in the lenslet point).
-#[derive(Clone, Debug, PartialEq)]
-pub struct RayBundle {
-    /// (start shift, slope shift) per ray.
-    pub shifts: Vec<(DVec2, DVec2)>,
-    /// Component-wise bounds of the start and slope shifts.
-    pub start_min: DVec2,
-    pub start_max: DVec2,
-    pub slope_min: DVec2,
-    pub slope_max: DVec2,
-}
-
-impl RayBundle {
-    pub fn new(shifts: Vec<(DVec2, DVec2)>) -> Self {
-        let inf = DVec2::splat(f64::INFINITY);
-        let (mut a, mut b, mut c, mut d) = (inf, -inf, inf, -inf);
-        for (ds, dw) in &shifts {
-            a = a.min(*ds);
-            b = b.max(*ds);
-            c = c.min(*dw);
-            d = d.max(*dw);
-        }
-        Self { shifts, start_min: a, start_max: b, slope_min: c, slope_max: d }
-    }
-
-    /// Ray `k` of the bundle around `base` (only x and y are shifted).
-    #[inline(always)]
-    pub fn ray(&self, base: &Ray, k: usize) -> Ray {
-        let (ds, dw) = self.shifts[k];
-        Ray {
-            origin: DVec3::new(base.origin.x + ds.x, base.origin.y + ds.y, base.origin.z),
-            dir: DVec3::new(base.dir.x + dw.x, base.dir.y + dw.y, base.dir.z),
-        }
-    }
-}
-
-/// World distance of a hit at ray parameter `t` (`+inf` for a miss).
-#[inline]
-fn hit_distance(ray: &Ray, t: Option<f64>) -> f64 {
-    t.map_or(f64::INFINITY, |t| t * ray.dir.length())
-}
-
-impl<I: Intersector + ?Sized> RadianceField for SceneTracer<'_, I> {
-    #[inline]
-    fn radiance(&self, ray: &Ray) -> DVec3 {
-        self.scene.shade(ray, self.backend.intersect(ray, f64::INFINITY).as_ref(), self.backend)
-    }
-
-    #[inline]
-    fn sample(&self, ray: &Ray) -> Sample {
-        let hit = self.backend.intersect(ray, f64::INFINITY);
-        Sample {
-            radiance: self.scene.shade(ray, hit.as_ref(), self.backend),
-            depth: hit_distance(ray, hit.map(|h| h.t)),
-        }
-    }
-
-    fn prefers_batches(&self) -> bool {
-        self.backend.prefers_batches()
-    }
-
-    /// Intersects the whole batch with [`Intersector::intersect_many`] (packets on coherent
-    /// runs for backends that have them), then shades.
-    fn sample_many(&self, rays: &[Ray], out: &mut [Sample]) {
-        // Chunks of 256 (a multiple of the 16-ray packet) with the hits on the stack.
-        const CHUNK: usize = 256;
-        let mut hits = [None; CHUNK];
-        for (rays, out) in rays.chunks(CHUNK).zip(out.chunks_mut(CHUNK)) {
-            let hits = &mut hits[..rays.len()];
-            self.backend.intersect_many(rays, hits);
-            for ((ray, hit), o) in rays.iter().zip(hits.iter()).zip(out.iter_mut()) {
-                *o = Sample {
-                    radiance: self.scene.shade(ray, hit.as_ref(), self.backend),
-                    depth: hit_distance(ray, hit.map(|h| h.t)),
-                };
-            }
-        }
-    }
-}
-
-/// The eye-side camera ray for light leaving LCD point `lcd_point` through lenslet-plane point
-/// `lenslet_point`, refracted by the lenslet centred at `lenslet_center`; it starts on the plane
-/// `z = reference_z` and has unit z component.
-#[inline]
-pub fn camera_ray(
-    display: &Display,
-    lcd_point: DVec2,
-    lenslet_center: DVec2,
-    lenslet_point: DVec2,
-    reference_z: f64,
-) -> Ray {
-    let w2 = (lcd_point - lenslet_point) / display.lenslets_to_lcd;
-    let w1 = w2 + (lenslet_point - lenslet_center) * display.lenslet_power();
-    let start = lenslet_point - w1 * (display.lenslet_z() - reference_z);
-    Ray { origin: start.extend(reference_z), dir: w1.extend(1.0) }
-}
-
-/// PupilCenter's lenslet-plane point, in closed form. With `L = v1 - e_z` the distance from the
-/// eye to the lenslets, the refracted ray through `p` reaches the eye plane at
-/// `p - L ((x3 - p)/v2 + (p - xc)/f)`; setting that to the pupil centre `e` gives
-/// `p (1/L + 1/v2 - 1/f) = e/L + x3/v2 - xc/f`.
-#[inline]
-pub fn pupil_center_point(display: &Display, lcd_point: DVec2, lenslet_center: DVec2, eye: DVec3) -> DVec2 {
-    let l = display.lenslet_z() - eye.z;
-    let denom = pupil_center_denominator(display, eye);
-    (eye.truncate() / l + lcd_point / display.lenslets_to_lcd - lenslet_center * display.lenslet_power()) / denom
-}
-
-/// `1/L + 1/v2 - 1/f`: zero when the lenslet images the pupil centre onto the LCD.
-pub fn pupil_center_denominator(display: &Display, eye: DVec3) -> f64 {
-    1.0 / (display.lenslet_z() - eye.z) + 1.0 / display.lenslets_to_lcd - display.lenslet_power()
-}
-
-/// Relative size of `1/L + 1/v2 - 1/f` below which PupilCenter is refused as singular. The
-/// solution `p` scales with the inverse of this quantity; at 1e-9 of the terms' magnitude the
-/// cancellation has already lost nine of sixteen significant digits.
-pub const PUPIL_CENTER_SINGULAR_TOLERANCE: f64 = 1e-9;
-
-/// Errors when PupilCenter has no answer for this display and eye position.
-pub fn check_pupil_center(display: &Display, eye: DVec3) -> Result<()> {
-    let l = display.lenslet_z() - eye.z;
-    if l <= 0.0 || l.is_nan() {
-        return Err(Error::Singular(format!(
-            "PupilCenter needs the eye in front of the lenslets, but the eye is at z = {} and the lenslets at z = {}",
-            eye.z,
-            display.lenslet_z()
-        )));
-    }
-    let scale = 1.0 / l + 1.0 / display.lenslets_to_lcd + display.lenslet_power();
-    let denom = pupil_center_denominator(display, eye);
-    if denom.abs() <= PUPIL_CENTER_SINGULAR_TOLERANCE * scale {
-        return Err(Error::Singular(format!(
-            "PupilCenter is undefined: the lenslets image the pupil centre onto the LCD \
-             (1/L + 1/v2 - 1/f = {denom:.3e} with L = {l} mm, v2 = {} mm, f = {} mm), so every ray \
-             through the pupil centre meets the LCD at one point per lenslet",
-            display.lenslets_to_lcd, display.focal_length
-        )));
-    }
-    Ok(())
 }
 
 /// Pixels of one display row traced as one batch (for fields that prefer batches): enough for

@@ -1,14 +1,16 @@
-//! Rendering: display images (paper Sec. 3) and retinal images (paper Sec. 2.3, 4).
+//! Rendering: display images (paper Sec. 3) and retinal images (paper Sec. 2.3, 4), reading the
+//! scene through the radiance-field interface ([`field`]).
 
 pub mod backend;
 pub mod display_image;
+pub mod field;
 pub mod planar;
 pub mod retina;
+pub mod tracer;
 
 pub use backend::{with_fields, BackendChoice, Fields};
-pub use display_image::{
-    render_display_image, render_display_image_with_depth, DisplayRenderSettings, Method, RadianceField, Sample,
-    SceneTracer,
-};
+pub use display_image::{render_display_image, render_display_image_with_depth, DisplayRenderSettings, Method};
+pub use field::{BundleSum, RadianceField, RayBundle, Sample};
 pub use planar::FacingPlanes;
 pub use retina::{ground_truth, simulate};
+pub use tracer::{shade, SceneTracer};

@@ -8,9 +8,10 @@ use std::sync::Arc;
 
 use glam::{DVec2, DVec3};
 
-use super::display_image::{BundleSum, RadianceField, RayBundle, Sample, SceneTracer};
+use super::field::{BundleSum, RadianceField, RayBundle, Sample};
+use super::tracer::SceneTracer;
 use crate::accel::analytic::AnalyticRects;
-use crate::accel::Ray;
+use crate::ray::Ray;
 use crate::scene::{BarChart, Material, Scene, Shape};
 
 #[derive(Clone, Debug)]

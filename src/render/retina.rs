@@ -1,24 +1,20 @@
 //! Retinal images (paper Sec. 2.3 and 4.1).
 //!
 //! - Perceived image ([`simulate`]): for each retina sample and pupil sample, trace retina ->
-//!   pupil (thin lens) -> lenslet plane -> refraction at the nearest lenslet -> LCD (eq. (1)),
-//!   and read the display image there (box pixels). A ray that misses the LCD carries black and
-//!   still counts in the pixel's average, so no pixel is ever 0/0.
+//!   pupil (thin lens) -> lenslet plane -> refraction at the nearest lenslet -> LCD (eq. (1),
+//!   [`FastTransfer`]), and read the display image there (box pixels). A ray that misses the
+//!   LCD carries black and still counts in the pixel's average, so no pixel is ever 0/0.
 //! - Ground truth ([`ground_truth`]): the same eye rays, leaving the eye lens, straight into the
-//!   scene.
+//!   scene ([`eye_scene_ray`]).
 //!
 //! The paper's pinhole eye is the one-sample limit: the chief ray through the pupil centre.
 
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 
-use super::display_image::{RadianceField, Sample};
-use crate::accel::Ray;
+use super::field::{RadianceField, Sample};
 use crate::error::{Error, Result};
-use crate::optics::display::PixelIndexer;
-use crate::optics::transfer::eye_ray;
-#[cfg(doc)]
-use crate::optics::transfer::eye_to_lcd;
+use crate::optics::transfer::{eye_scene_ray, FastTransfer};
 use crate::optics::{Display, Eye, Retina};
 use crate::progress::Progress;
 use crate::raster::RgbImage;
@@ -173,61 +169,6 @@ fn add_f32(dst: &mut [f64], src: &[f32]) {
         9 => fixed::<9>(dst, src),
         _ => dst.iter_mut().zip(src).for_each(|(a, v)| *a += *v as f64),
     }
-}
-
-/// The eye -> LCD trace of [`eye_to_lcd`] with the per-eye constants folded in, for the hot
-/// loop of [`simulate`]. Tests check it against `eye_to_lcd` (the slow twin).
-pub struct FastTransfer<'a> {
-    display: &'a Display,
-    /// Per pupil sample: world position at the pupil plane, and the slope offset
-    /// `s/v0 - s d1` so that `w1 = tangent + offset`.
-    samples: Vec<(DVec2, DVec2)>,
-    /// Distance from the pupil plane to the lenslets.
-    to_lenslets: f64,
-    lenslet_power: f64,
-    v2: f64,
-    indexer: PixelIndexer,
-}
-
-impl<'a> FastTransfer<'a> {
-    pub fn new(display: &'a Display, eye: &Eye, pupil: &[DVec2]) -> Self {
-        let v0 = eye.retina_distance;
-        let d1 = eye.power();
-        let samples = pupil.iter().map(|&s| (s + eye.position.truncate(), s / v0 - s * d1)).collect();
-        Self {
-            display,
-            samples,
-            to_lenslets: display.lenslet_z() - eye.position.z,
-            lenslet_power: display.lenslet_power(),
-            v2: display.lenslets_to_lcd,
-            indexer: PixelIndexer::new(&display.lcd),
-        }
-    }
-
-    /// Where the ray for retina direction `tangent` through pupil sample `k` meets the LCD.
-    #[inline(always)]
-    pub fn lcd_point(&self, tangent: DVec2, k: usize) -> DVec2 {
-        let (x1, offset) = self.samples[k];
-        let w1 = tangent + offset;
-        let x2 = x1 + w1 * self.to_lenslets;
-        let c = self.display.lenslets.center(self.display.lenslets.nearest(x2));
-        let w2 = w1 - (x2 - c) * self.lenslet_power;
-        x2 + w2 * self.v2
-    }
-
-    /// The LCD pixel that ray hits, if any ([`crate::optics::Lcd::pixel_index`]).
-    #[inline(always)]
-    pub fn pixel_index(&self, tangent: DVec2, k: usize) -> Option<usize> {
-        self.indexer.index(self.lcd_point(tangent, k))
-    }
-}
-
-/// The ray into the scene that leaves the eye lens for retina direction `tangent` through pupil
-/// offset `pupil_offset`.
-#[inline]
-pub fn eye_scene_ray(eye: &Eye, tangent: DVec2, pupil_offset: DVec2) -> Ray {
-    let r = eye_ray(eye, tangent, pupil_offset);
-    Ray { origin: (r.position + eye.position.truncate()).extend(eye.position.z), dir: r.slope.extend(1.0) }
 }
 
 /// The ground-truth retinal image: the eye looking straight at the scene.

@@ -1,11 +1,11 @@
 //! Scene description (paper Sec. 4.1, Fig. 3): objects with a shape and a material. Without a
 //! light, radiance equals albedo (the paper's scene needs nothing more: matte front-facing
 //! planes lit from behind the eye). With an optional distant [`Light`] (as the published
-//! framework lit the paper's scene) surfaces are Lambertian and shadow rays are traced; see
-//! [`Scene::shade`]. Rays that hit nothing see `background`.
+//! framework lit the paper's scene) surfaces are Lambertian and the renderer traces shadow rays
+//! (`render::tracer::shade`). Rays that hit nothing see `background`.
 //!
 //! Shapes are analytic rectangles (intersected exactly in `f64` by
-//! [`crate::accel::analytic::AnalyticRects`]) or triangle meshes. Every rectangle can be
+//! `accel::analytic::AnalyticRects`) or triangle meshes. Every rectangle can be
 //! tessellated ([`Rect::to_mesh`]) so that every scene renders with every mesh backend.
 
 pub mod image_texture;
@@ -20,7 +20,7 @@ use std::sync::Arc;
 
 use glam::{DVec2, DVec3};
 
-use crate::accel::{Hit, Intersector, Ray, Surface};
+use crate::ray::{Hit, Ray, Surface};
 pub use image_texture::ImageTexture;
 pub use mesh::Mesh;
 pub use texture::{Bar, BarChart};
@@ -194,31 +194,6 @@ impl Scene {
         } else {
             n
         }
-    }
-
-    /// Radiance leaving the hit of `ray` toward the ray's origin. Without a light it is the
-    /// albedo ([`Scene::radiance`]), exactly. With a distant light it is
-    /// `albedo * light.radiance * max(0, dot(n, -light.direction))` with `n` the normal facing
-    /// the ray ([`Scene::normal`]), or zero when a shadow ray toward the light (through
-    /// `backend.occluded`) is blocked. The shadow ray starts a small distance off the surface
-    /// along `n` (1e-4 of the hit point's largest coordinate, at least 1e-4 mm) so that
-    /// rounding of the hit point (f32 in Embree) does not shadow the surface itself.
-    pub fn shade<I: Intersector + ?Sized>(&self, ray: &Ray, hit: Option<&Hit>, backend: &I) -> DVec3 {
-        let albedo = self.radiance(hit);
-        let (Some(light), Some(hit)) = (self.light, hit) else { return albedo };
-        let n = self.normal(ray, hit);
-        let to_light = -light.direction;
-        let cos = n.dot(to_light);
-        if cos.is_nan() || cos <= 0.0 {
-            return DVec3::ZERO;
-        }
-        let p = ray.origin + hit.t * ray.dir;
-        let eps = 1e-4 * p.abs().max_element().max(1.0);
-        let shadow = Ray { origin: p + eps * n, dir: to_light };
-        if backend.occluded(&shadow, f64::INFINITY) {
-            return DVec3::ZERO;
-        }
-        albedo * light.radiance * cos
     }
 
     /// Albedo at the hit: the radiance leaving it toward the ray's origin when the scene has no

@@ -7,9 +7,12 @@ use std::time::Instant;
 
 use glam::{DVec2, DVec3};
 
-use super::{BuildQuality, Device, RawHit, RawRay, Scene, SceneBuilder, TriangleGeometry};
-use crate::accel::{Hit, Intersector, Ray, Surface};
+use super::device::Device;
+use super::geometry::TriangleGeometry;
+use super::ray::{RawHit, RawRay};
+use super::scene::{BuildQuality, Scene, SceneBuilder};
 use crate::error::Result;
+use crate::ray::{Hit, Intersector, Ray, Surface};
 use crate::scene::mesh::Mesh;
 
 /// Rays per packet in [`Intersector::intersect_many`].

@@ -1,0 +1,142 @@
+//! The radiance-field interface every renderer reads the scene through (paper Sec. 3.1: the
+//! colour a camera ray brings back from the 3-D scene; Sec. 4.1: the same for the ground truth's
+//! eye rays): [`RadianceField`], what one ray sees ([`Sample`]), and the bundles of rays that
+//! LensletAverage traces per display pixel ([`RayBundle`], [`BundleSum`]). Implementations are
+//! the generic [`super::tracer::SceneTracer`] and fused kernels such as
+//! [`super::planar::FacingPlanes`].
+
+use glam::{DVec2, DVec3};
+
+use crate::ray::Ray;
+
+/// What one ray sees: its radiance and the distance to what it hit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample {
+    pub radiance: DVec3,
+    /// World distance (mm) from the ray's origin to its hit along the ray; `+inf` for a miss;
+    /// NaN when the field does not know (fields that only implement `radiance`).
+    pub depth: f64,
+}
+
+impl Default for Sample {
+    fn default() -> Self {
+        Sample { radiance: DVec3::ZERO, depth: f64::NAN }
+    }
+}
+
+/// Anything that tells the radiance seen along a ray: a scene with an intersection backend, or
+/// a fused fast kernel for a special kind of scene.
+///
+/// Renderers hand rays over in batches ([`RadianceField::sample_many`]) laid out so that
+/// consecutive rays are neighbours (adjacent pixels, same sub-sample), which lets mesh backends
+/// trace them as packets. The defaults fall back to one ray at a time.
+pub trait RadianceField: Sync {
+    fn radiance(&self, ray: &Ray) -> DVec3;
+
+    /// Radiance and hit distance. Default: the depth is unknown (NaN).
+    fn sample(&self, ray: &Ray) -> Sample {
+        Sample { radiance: self.radiance(ray), depth: f64::NAN }
+    }
+
+    /// Whether [`RadianceField::sample_many`] gains from long batches of neighbouring rays
+    /// (packets). Renderers then trace blocks of pixels at once; otherwise pixel by pixel,
+    /// which is cheaper for fields whose per-ray cost is tiny. Same results either way.
+    fn prefers_batches(&self) -> bool {
+        false
+    }
+
+    /// [`RadianceField::sample`] of every ray (`out.len() == rays.len()`).
+    fn sample_many(&self, rays: &[Ray], out: &mut [Sample]) {
+        for (ray, o) in rays.iter().zip(out.iter_mut()) {
+            *o = self.sample(ray);
+        }
+    }
+
+    /// Sums over the rays of `bundle` around `base`: radiance, hit distance of the rays that
+    /// hit, their count, and whether every depth was known. Fields may override this with a
+    /// faster path that must return exactly the same sums.
+    fn sample_sum(&self, base: &Ray, bundle: &RayBundle) -> BundleSum {
+        let mut acc = BundleSum::default();
+        for k in 0..bundle.shifts.len() {
+            acc.add(self.sample(&bundle.ray(base, k)));
+        }
+        acc
+    }
+}
+
+/// Sums over a bundle of rays ([`RadianceField::sample_sum`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BundleSum {
+    pub radiance: DVec3,
+    /// Sum of the finite hit distances.
+    pub depth: f64,
+    /// Number of rays that hit something.
+    pub hits: usize,
+    /// False when some ray's depth was unknown (NaN).
+    pub depth_known: bool,
+}
+
+impl Default for BundleSum {
+    fn default() -> Self {
+        Self { radiance: DVec3::ZERO, depth: 0.0, hits: 0, depth_known: true }
+    }
+}
+
+impl BundleSum {
+    /// Adds another bundle's sums (renderers sum each pixel sample's bundle, then the bundles).
+    #[inline(always)]
+    pub fn merge(&mut self, other: BundleSum) {
+        self.radiance += other.radiance;
+        self.depth += other.depth;
+        self.hits += other.hits;
+        self.depth_known &= other.depth_known;
+    }
+
+    #[inline(always)]
+    pub fn add(&mut self, s: Sample) {
+        self.radiance += s.radiance;
+        if s.depth.is_finite() {
+            self.depth += s.depth;
+            self.hits += 1;
+        } else if s.depth.is_nan() {
+            self.depth_known = false;
+        }
+    }
+}
+
+/// Rays that differ from a base ray by constant shifts of their start (x, y) and slope
+/// (x, y): LensletAverage's samples of one pixel (eq. (1b) is affine in the lenslet point).
+#[derive(Clone, Debug, PartialEq)]
+pub struct RayBundle {
+    /// (start shift, slope shift) per ray.
+    pub shifts: Vec<(DVec2, DVec2)>,
+    /// Component-wise bounds of the start and slope shifts.
+    pub start_min: DVec2,
+    pub start_max: DVec2,
+    pub slope_min: DVec2,
+    pub slope_max: DVec2,
+}
+
+impl RayBundle {
+    pub fn new(shifts: Vec<(DVec2, DVec2)>) -> Self {
+        let inf = DVec2::splat(f64::INFINITY);
+        let (mut a, mut b, mut c, mut d) = (inf, -inf, inf, -inf);
+        for (ds, dw) in &shifts {
+            a = a.min(*ds);
+            b = b.max(*ds);
+            c = c.min(*dw);
+            d = d.max(*dw);
+        }
+        Self { shifts, start_min: a, start_max: b, slope_min: c, slope_max: d }
+    }
+
+    /// Ray `k` of the bundle around `base` (only x and y are shifted).
+    #[inline(always)]
+    pub fn ray(&self, base: &Ray, k: usize) -> Ray {
+        let (ds, dw) = self.shifts[k];
+        Ray {
+            origin: DVec3::new(base.origin.x + ds.x, base.origin.y + ds.y, base.origin.z),
+            dir: DVec3::new(base.dir.x + dw.x, base.dir.y + dw.y, base.dir.z),
+        }
+    }
+}
