@@ -21,6 +21,25 @@ use inimtrace::render::{
 };
 use inimtrace::scene::Scene;
 
+/// `print!` that returns write errors (a closed pipe) instead of panicking.
+macro_rules! out {
+    ($($t:tt)*) => {{
+        use std::io::Write as _;
+        write!(std::io::stdout().lock(), $($t)*)?
+    }};
+}
+
+/// `println!` that returns write errors (a closed pipe) instead of panicking.
+macro_rules! outln {
+    ($($t:tt)*) => {{
+        use std::io::Write as _;
+        writeln!(std::io::stdout().lock(), $($t)*)?
+    }};
+}
+
+/// The most worker threads `--threads` accepts.
+const MAX_THREADS: usize = 1024;
+
 #[derive(Parser)]
 #[command(
     name = "inimtrace",
@@ -39,6 +58,10 @@ struct Cli {
     /// Print the wall time of every stage.
     #[arg(long, global = true)]
     timings: bool,
+    /// Memory limit (e.g. 4G, 512M): settings or input files that would need more are refused
+    /// before anything is allocated (default: the memory available on this machine).
+    #[arg(long, global = true, value_parser = inimtrace::budget::parse_bytes)]
+    max_memory: Option<u64>,
 }
 
 #[derive(Subcommand)]
@@ -70,7 +93,7 @@ enum Command {
         #[arg(long, default_value_t = 0.0)]
         reference_plane: f64,
         /// Output EXR with R, G, B and Z (hit distance, mm) channels; a PNG preview is written beside it.
-        #[arg(long, short)]
+        #[arg(long, short, value_parser = exr_path)]
         out: PathBuf,
         #[command(flatten)]
         backend: BackendArg,
@@ -83,7 +106,7 @@ enum Command {
         setup: Setup,
         #[command(flatten)]
         eye: EyeArgs,
-        #[arg(long, short)]
+        #[arg(long, short, value_parser = exr_path)]
         out: PathBuf,
     },
     /// Render the ground-truth retinal image of the scene.
@@ -92,7 +115,7 @@ enum Command {
         setup: Setup,
         #[command(flatten)]
         eye: EyeArgs,
-        #[arg(long, short)]
+        #[arg(long, short, value_parser = exr_path)]
         out: PathBuf,
         #[command(flatten)]
         backend: BackendArg,
@@ -131,6 +154,16 @@ enum Command {
         #[arg(long)]
         print: Option<String>,
     },
+}
+
+/// An output image path: it must end in `.exr` (the PNG preview goes beside it), so that the
+/// preview can never overwrite the EXR.
+fn exr_path(text: &str) -> std::result::Result<PathBuf, String> {
+    let path = PathBuf::from(text);
+    match path.extension().and_then(|e| e.to_str()) {
+        Some(e) if e.eq_ignore_ascii_case("exr") => Ok(path),
+        _ => Err(format!("`{text}` must name an .exr file (a PNG preview is written beside it)")),
+    }
 }
 
 /// Scene intersection backend.
@@ -250,16 +283,22 @@ fn write_image(
     depth: Option<&[f32]>,
     attrs: &[(&str, String)],
 ) -> Result<()> {
+    use inimtrace::io::output::write_atomic;
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     }
-    inimtrace::io::exr::write_rgb(path, img, depth, attrs)?;
-    inimtrace::io::png::write_preview(&path.with_extension("png"), img)?;
+    write_atomic(path, |tmp| inimtrace::io::exr::write_rgb(tmp, img, depth, attrs))?;
+    write_atomic(&path.with_extension("png"), |tmp| inimtrace::io::png::write_preview(tmp, img))?;
     Ok(())
 }
 
 fn main() {
     if let Err(e) = run() {
+        // A reader that went away (`inimtrace compare a b | head -1`) ends the program quietly,
+        // with the exit status of a process killed by SIGPIPE.
+        if e.chain().any(|c| c.downcast_ref::<std::io::Error>().is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)) {
+            std::process::exit(141);
+        }
         eprintln!("error: {e:#}");
         std::process::exit(1);
     }
@@ -268,10 +307,13 @@ fn main() {
 fn run() -> Result<()> {
     let cli = Cli::parse();
     if let Some(n) = cli.threads {
-        if n == 0 {
-            bail!("--threads must be at least 1");
+        if n == 0 || n > MAX_THREADS {
+            bail!("--threads must be between 1 and {MAX_THREADS}, got {n}");
         }
         rayon::ThreadPoolBuilder::new().num_threads(n).build_global().context("cannot start the thread pool")?;
+    }
+    if let Some(bytes) = cli.max_memory {
+        inimtrace::budget::set_memory_limit(bytes);
     }
     let quiet = cli.quiet;
     let start = Instant::now();
@@ -292,7 +334,7 @@ fn run() -> Result<()> {
                 eprintln!("{}", exp.display.summary());
             }
             let report = experiment::assess(&exp, &out, RunOptions { quiet, backend })?;
-            print!("{}", experiment::table_markdown(&report, &exp));
+            out!("{}", experiment::table_markdown(&report, &exp));
             if cli.timings {
                 for s in &report.stages {
                     let what = [s.method.as_deref(), s.eye_case.as_deref()]
@@ -385,14 +427,14 @@ fn run() -> Result<()> {
                 metrics::psnr(&ia, &ib).with_context(|| format!("comparing {} and {}", a.display(), b.display()))?;
             let s = metrics::ssim(&ia, &ib, constants)
                 .with_context(|| format!("comparing {} and {}", a.display(), b.display()))?;
-            println!(
+            outln!(
                 "PSNR  {} dB  (R {}, G {}, B {})",
                 metrics::format_db(p.mean, 3),
                 metrics::format_db(p.channels[0], 3),
                 metrics::format_db(p.channels[1], 3),
                 metrics::format_db(p.channels[2], 3)
             );
-            println!(
+            outln!(
                 "SSIM  {:.5}  (R {:.5}, G {:.5}, B {:.5}; constants {})",
                 s.mean, s.channels[0], s.channels[1], s.channels[2], constants
             );
@@ -408,10 +450,10 @@ fn run() -> Result<()> {
             let out = out.unwrap_or_else(|| PathBuf::from(if quick { "out/bench-quick" } else { "out/bench" }));
             let opts = inimtrace::bench::BenchOptions::new(quick, out.clone(), quiet);
             let report = inimtrace::bench::run(&opts, &scene, &label)?;
-            println!("| series | image | backend | method | parameter | seconds | Mrays/s | PSNR (dB) | SSIM |");
-            println!("|---|---|---|---|---:|---:|---:|---:|---:|");
+            outln!("| series | image | backend | method | parameter | seconds | Mrays/s | PSNR (dB) | SSIM |");
+            outln!("|---|---|---|---|---:|---:|---:|---:|---:|");
             for r in &report.rows {
-                println!(
+                outln!(
                     "| {} | {} {} | {} | {} | {} | {:.3} | {:.1} | {:.2} | {:.4} |",
                     r.series,
                     r.quantity,
@@ -426,7 +468,7 @@ fn run() -> Result<()> {
                 );
             }
             for c in &report.convergence {
-                println!(
+                outln!(
                     "{}: error ~ samples^{}",
                     c.series,
                     c.rate.map(|p| format!("{p:.2}")).unwrap_or_else(|| "?".into())
@@ -436,7 +478,7 @@ fn run() -> Result<()> {
                 let within = |w: &inimtrace::bench::Table1Within| format!("{} ({:.2} s)", w.parameter, w.seconds);
                 let per: Vec<String> = t.per_method.iter().map(|w| format!("{} {}", w.methods, within(w))).collect();
                 let tol = inimtrace::bench::CONVERGED_TOLERANCE_DB;
-                println!(
+                outln!(
                     "table1 {}: converged = {} (last step {} dB{}); within {tol} dB for every method and eye case at {}; \
                      per method: {}",
                     t.sweep,
@@ -463,18 +505,19 @@ fn run() -> Result<()> {
                     "paper-display" => toml::to_string_pretty(&DisplaySpec::from_display(&Display::paper()))?,
                     other => bail!("unknown --print `{other}`: paper-experiment, framework-2020-experiment, paper-scene or paper-display"),
                 };
-                print!("{text}");
+                out!("{text}");
                 return Ok(());
             }
             let d = match display {
                 Some(p) => load_display(&p.to_string_lossy(), Path::new(""))?,
                 None => Display::paper(),
             };
-            println!("{}", d.summary());
+            outln!("{}", d.summary());
         }
     }
     if cli.timings {
         eprintln!("total {:.3} s", start.elapsed().as_secs_f64());
     }
+    std::io::Write::flush(&mut std::io::stdout())?;
     Ok(())
 }

@@ -105,26 +105,17 @@ impl OutputDir {
     /// leave a complete file there; it is then renamed to `name` and recorded in the manifest.
     /// On error the temporary file is removed and nothing appears under `name`.
     pub fn write_with(&self, name: &str, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
-        let temp = self.root.join(format!("{TEMP_PREFIX}{}-{name}", std::process::id()));
-        let finish = || -> Result<OutputFile> {
-            write(&temp)?;
-            let entry = describe(&temp, name)?;
-            let target = self.root.join(name);
-            fs::rename(&temp, &target).map_err(|e| Error::io(&target, e))?;
-            Ok(entry)
-        };
-        match finish() {
-            Ok(entry) => {
-                let mut written = self.written.lock().unwrap_or_else(|p| p.into_inner());
-                written.retain(|f| f.name != entry.name);
-                written.push(entry);
-                Ok(())
-            }
-            Err(e) => {
-                let _ = fs::remove_file(&temp);
-                Err(e)
-            }
-        }
+        let mut entry = None;
+        write_atomic(&self.root.join(name), |temp| {
+            write(temp)?;
+            entry = Some(describe(temp, name)?);
+            Ok(())
+        })?;
+        let entry = entry.expect("described before the rename");
+        let mut written = self.written.lock().unwrap_or_else(|p| p.into_inner());
+        written.retain(|f| f.name != entry.name);
+        written.push(entry);
+        Ok(())
     }
 
     /// Writes `bytes` to `name` atomically.
@@ -183,6 +174,19 @@ impl OutputDir {
         self.written.lock().unwrap_or_else(|p| p.into_inner()).clear();
         Ok(())
     }
+}
+
+/// Writes the single file `path` atomically: `write` gets a hidden temporary path beside it
+/// (same folder, same extension) and must leave a complete file there, which is then renamed to
+/// `path`. On error nothing appears under `path` and the temporary file is removed.
+pub fn write_atomic(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let temp = path.with_file_name(format!("{TEMP_PREFIX}{}-{name}", std::process::id()));
+    let result = write(&temp).and_then(|_| fs::rename(&temp, path).map_err(|e| Error::io(path, e)));
+    if result.is_err() {
+        let _ = fs::remove_file(&temp);
+    }
+    result
 }
 
 /// A file name without directories, `..` or a leading dot: the names a run writes.
