@@ -34,6 +34,12 @@
 //! backend), `bench.json` (all of it, plus the observed convergence rates and checks),
 //! `bench.md` (the report), `summary.md` (its tables, for the README) and plots as PNG and SVG
 //! (plotters): `speed_psnr`, `speed_ssim`, `la_grid`, `pupil_grid`, `retina_samples`, `table1`.
+//!
+//! Every image, references included, is made by the stage functions `assess` runs, on copies of
+//! the paper's experiment with one sampling setting changed (`pipeline`). The parts: `options`
+//! (sizes and the typed rows), `runs` (backends, builds, the method and convergence series),
+//! `table1` (Table 1 convergence), `summary` (rates and settings within tolerance), `report`
+//! (CSV, JSON, the console table), `markdown` and `plots`.
 
 mod markdown;
 mod options;
@@ -48,14 +54,11 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-pub use options::{
-    la_grid_of, Backend, BenchOptions, BenchRow, BuildRecord, MethodLabel, Parameter, Quantity, RowContext, Series,
-    Sizes,
-};
+pub use options::{Backend, BenchOptions, BenchRow, BuildRecord, MethodLabel, Parameter, Quantity, Series, Sizes};
 pub use report::{console_table, rows_csv};
 pub use summary::{
-    capped_psnr, cheapest_within, convergence_rate, first_within, max_abs_diff, ConvergenceSummary, MethodSet,
-    Table1Sweep, Table1Within, WithinTolerance, CONVERGED_TOLERANCE_DB, IDENTICAL_PSNR_DB,
+    cheapest_within, convergence_rate, first_within, max_abs_diff, ConvergenceSummary, MethodSet, Table1Sweep,
+    Table1Within, WithinTolerance, CONVERGED_TOLERANCE_DB, IDENTICAL_PSNR_DB,
 };
 pub use table1::TABLE1_SWEEPS;
 
@@ -145,7 +148,7 @@ pub fn run(opts: &BenchOptions, scene: &Scene, scene_label: &str) -> Result<Benc
     std::fs::create_dir_all(&opts.out).map_err(|e| Error::io(&opts.out, e))?;
     let sz = &opts.sizes;
     let base = pipeline::base_experiment(sz, scene)?;
-    let ctx = RowContext {
+    let ctx = options::RowContext {
         scene: scene_label.into(),
         lcd_resolution: sz.lcd_resolution,
         retina_resolution: sz.retina_resolution,

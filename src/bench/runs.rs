@@ -122,6 +122,16 @@ fn score(a: &RgbImage, reference: &RgbImage) -> Result<(f64, f64)> {
     Ok((capped_psnr(p), s))
 }
 
+/// What the points of one method in the `method` series are scored against.
+struct MethodReference<'r> {
+    /// How the references were made (the rows' `reference`).
+    name: String,
+    /// The reference display image...
+    display: &'r RgbImage,
+    /// ... and what each focused eye case perceives of it.
+    perceived: Vec<&'r RgbImage>,
+}
+
 /// The runs of one bench: their rows, and the time of the steps that are not measured points.
 pub struct Runs<'a> {
     /// The paper's experiment at the bench's sizes (every eye case).
@@ -201,18 +211,21 @@ impl<'a> Runs<'a> {
         for b in backends {
             for (mi, &method) in focused.methods.iter().enumerate() {
                 let ref_m = reference.methods[mi];
-                let ref_name = format!(
-                    "{} ({}x{} per display pixel, {} best backend {})",
-                    ref_m,
-                    sz.reference_display_samples,
-                    sz.reference_display_samples,
-                    if ref_m == method { "same method," } else { "finer lenslet grid," },
-                    best.backend
-                );
+                let against = MethodReference {
+                    name: format!(
+                        "{} ({}x{} per display pixel, {} best backend {})",
+                        ref_m,
+                        sz.reference_display_samples,
+                        sz.reference_display_samples,
+                        if ref_m == method { "same method," } else { "finer lenslet grid," },
+                        best.backend
+                    ),
+                    display: &ref_displays[mi],
+                    perceived: ref_perceived.iter().map(|p| &p[mi]).collect(),
+                };
                 for &k in &sz.display_samples {
                     let exp = with_methods(&self.paper.with(Parameter::DisplaySamples, k).apply(&focused), &[method]);
-                    let refs = (&ref_displays[mi], ref_perceived.iter().map(|p| &p[mi]).collect::<Vec<_>>());
-                    self.method_point(b, &exp, &ref_name, refs)?;
+                    self.method_point(b, &exp, &against)?;
                 }
             }
             self.progress.inc(1);
@@ -222,13 +235,7 @@ impl<'a> Runs<'a> {
 
     /// One point of the `method` series: the display image of `exp`'s one method, and what each
     /// of its eye cases perceives of it, each against its reference.
-    fn method_point(
-        &mut self,
-        b: &Field<'_>,
-        exp: &Experiment,
-        ref_name: &str,
-        (ref_display, ref_perceived): (&RgbImage, Vec<&RgbImage>),
-    ) -> Result<()> {
+    fn method_point(&mut self, b: &Field<'_>, exp: &Experiment, against: &MethodReference<'_>) -> Result<()> {
         let method = exp.methods[0];
         let k = exp.render.samples_per_pixel;
         let (img, t_display) = display_images(exp, b.field)?;
@@ -240,8 +247,8 @@ impl<'a> Runs<'a> {
             la_grid: la_grid_of(method),
             ..self.ctx.row(Series::Method, Parameter::DisplaySamples, Quantity::Display, b.backend, method.into())
         };
-        let q = self.score(&img[0], ref_display)?;
-        let row = BenchRow { reference: ref_name.into(), ..base.clone() };
+        let q = self.score(&img[0], against.display)?;
+        let row = BenchRow { reference: against.name.clone(), ..base.clone() };
         self.rows.push(row.measured(t_display, display_rays, q));
         let sims = perceived_images(exp, &[&img[0]])?;
         let sz = self.sizes;
@@ -256,12 +263,12 @@ impl<'a> Runs<'a> {
                 pupil_samples,
                 retina_samples: exp.retina.samples_per_pixel,
                 reference: format!(
-                    "{ref_name}, seen with pupil grid {} and {}x{} per retina pixel",
-                    sz.reference_pupil_grid, sz.reference_retina_samples, sz.reference_retina_samples
+                    "{}, seen with pupil grid {} and {}x{} per retina pixel",
+                    against.name, sz.reference_pupil_grid, sz.reference_retina_samples, sz.reference_retina_samples
                 ),
                 ..base.clone()
             };
-            let q = self.score(&sims.images[ci][0], ref_perceived[ci])?;
+            let q = self.score(&sims.images[ci][0], against.perceived[ci])?;
             self.rows.push(row.measured(t_display + sims.seconds(ci), display_rays + eye_rays, q));
         }
         Ok(())
