@@ -450,45 +450,7 @@ fn run() -> Result<()> {
             let out = out.unwrap_or_else(|| PathBuf::from(if quick { "out/bench-quick" } else { "out/bench" }));
             let opts = inimtrace::bench::BenchOptions::new(quick, out.clone(), quiet);
             let report = inimtrace::bench::run(&opts, &scene, &label)?;
-            outln!("| series | image | backend | method | parameter | seconds | Mrays/s | PSNR (dB) | SSIM |");
-            outln!("|---|---|---|---|---:|---:|---:|---:|---:|");
-            for r in &report.rows {
-                outln!(
-                    "| {} | {} {} | {} | {} | {} | {:.3} | {:.1} | {:.2} | {:.4} |",
-                    r.series,
-                    r.quantity,
-                    r.eye_case,
-                    r.backend,
-                    r.method,
-                    r.parameter,
-                    r.seconds,
-                    r.rays_per_second / 1e6,
-                    r.psnr_db,
-                    r.ssim
-                );
-            }
-            for c in &report.convergence {
-                outln!(
-                    "{}: error ~ samples^{}",
-                    c.series,
-                    c.rate.map(|p| format!("{p:.2}")).unwrap_or_else(|| "?".into())
-                );
-            }
-            for t in &report.table1 {
-                let within = |w: &inimtrace::bench::Table1Within| format!("{} ({:.2} s)", w.parameter, w.seconds);
-                let per: Vec<String> = t.per_method.iter().map(|w| format!("{} {}", w.methods, within(w))).collect();
-                let tol = inimtrace::bench::CONVERGED_TOLERANCE_DB;
-                outln!(
-                    "table1 {}: converged = {} (last step {} dB{}); within {tol} dB for every method and eye case at {}; \
-                     per method: {}",
-                    t.sweep,
-                    t.converged_parameter,
-                    t.last_step_db.map(|d| format!("{d:.2}")).unwrap_or_else(|| "?".into()),
-                    if t.last_step_db.is_some_and(|d| d > tol) { ", not levelled off" } else { "" },
-                    t.all_methods.as_ref().map(within).unwrap_or_else(|| "-".into()),
-                    per.join(", ")
-                );
-            }
+            out!("{}", inimtrace::bench::console_table(&report));
             if cli.timings {
                 eprintln!("{:>8.3} s  bench ({} run)", report.total_seconds, report.mode);
             }

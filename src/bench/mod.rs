@@ -1,0 +1,218 @@
+//! `inimtrace bench`: every rendering method on every backend that can render the scene,
+//! reported as speed against error, and the convergence of each sampling parameter (LA's k x k
+//! lenslet grid, the eye's n x n pupil grid, samples per retina pixel), so that a user can pick
+//! the cheapest setting that is accurate enough.
+//!
+//! Every score is PSNR and SSIM (Wang 2004) against a high-sample reference of the same
+//! quantity (not against the ground truth: that is `assess`'s Table 1):
+//!
+//! - **speed against error** (`series = "method"`): for every backend and method (LC, PC, LA at
+//!   the paper's k = 5), at each of [`Sizes::display_samples`] samples per display pixel (the
+//!   paper's one by default), the display image against the same method with 4 x 4 samples per
+//!   pixel (LA: also an 8 x 8 lenslet grid), and the perceived image of every focused eye case
+//!   of the paper's experiment (pupil grid 8, one sample per retina pixel) against the
+//!   reference display image seen by a finer eye (pupil grid 12, 4 x 4 samples per retina
+//!   pixel). Perceived rows time the display render plus the simulation, which is the cost of
+//!   getting that image from scratch. References are rendered once, on the first (fastest)
+//!   backend;
+//! - **convergence** (`la_grid`, `pupil_grid`, `retina_samples`), on the fastest backend: the
+//!   LA display image for k = 1..8 against k = 16; the LC perceived image at the first focused
+//!   eye case for n = 2..16 against n = 32; the ground truth at that eye case for 1, 2 x 2,
+//!   3 x 3, 4 x 4 samples per retina pixel against 8 x 8 (until the Table 1 series existed: 1,
+//!   2 x 2, 4 x 4, 8 x 8 against 16 x 16, a minute more of the full run for the same rate);
+//! - **Table 1 convergence** (`series = "table1"`, the swept parameter in `sweep`), on the
+//!   fastest backend: the quantity users report, the paper's Table 1 (PSNR and SSIM of the
+//!   perceived image against the ground-truth retinal image, per method and eye case, computed
+//!   by the stage functions of [`crate::experiment`] that `assess` runs), with one sampling
+//!   parameter swept and the others at the paper's settings: samples per retina pixel, samples
+//!   per display pixel, the eye's pupil grid n and LA's k. The value at a sweep's highest setting
+//!   is taken as converged; [`Table1Sweep`] reports the cheapest setting within
+//!   [`CONVERGED_TOLERANCE_DB`] of it, for every method and eye case at once and per method.
+//!
+//! Writes `bench.csv` (one row per measured point, with the core count, git revision and every
+//! setting), `builds.csv` (acceleration-structure build time and triangle count per mesh
+//! backend), `bench.json` (all of it, plus the observed convergence rates and checks),
+//! `bench.md` (the report), `summary.md` (its tables, for the README) and plots as PNG and SVG
+//! (plotters): `speed_psnr`, `speed_ssim`, `la_grid`, `pupil_grid`, `retina_samples`, `table1`.
+//!
+//! Every image, references included, is made by the stage functions `assess` runs, on copies of
+//! the paper's experiment with one sampling setting changed (`pipeline`). The parts: `options`
+//! (sizes and the typed rows), `runs` (backends, builds, the method and convergence series),
+//! `table1` (Table 1 convergence), `summary` (rates and settings within tolerance), `report`
+//! (CSV, JSON, the console table), `markdown` and `plots`.
+
+mod markdown;
+mod options;
+mod pipeline;
+mod plots;
+mod report;
+mod runs;
+mod summary;
+mod table1;
+
+use std::time::Instant;
+
+use serde::Serialize;
+
+pub use options::{Backend, BenchOptions, BenchRow, BuildRecord, MethodLabel, Parameter, Quantity, Series, Sizes};
+pub use report::{console_table, rows_csv};
+pub use summary::{
+    cheapest_within, convergence_rate, first_within, max_abs_diff, ConvergenceSummary, MethodSet, Table1Sweep,
+    Table1Within, WithinTolerance, CONVERGED_TOLERANCE_DB, IDENTICAL_PSNR_DB,
+};
+pub use table1::TABLE1_SWEEPS;
+
+use crate::error::{Error, Result};
+use crate::progress::Progress;
+use crate::scene::Scene;
+
+/// Consistency checks the run makes on its own images.
+#[derive(Clone, Debug, Serialize)]
+pub struct Checks {
+    /// LA with k = 1 rendered bit for bit the same display image as LC (same rays).
+    pub la_k1_equals_lc: bool,
+}
+
+/// Wall time of a step that is not a measured point (references, scoring, writing).
+#[derive(Clone, Debug, Serialize)]
+pub struct StageTime {
+    pub stage: String,
+    pub seconds: f64,
+}
+
+impl StageTime {
+    fn since(stage: &str, t: Instant) -> Self {
+        Self { stage: stage.into(), seconds: t.elapsed().as_secs_f64() }
+    }
+}
+
+/// Everything a run measured (`bench.json`).
+#[derive(Clone, Debug, Serialize)]
+pub struct BenchReport {
+    pub mode: String,
+    pub scene: String,
+    pub triangles_when_tessellated: usize,
+    pub git_revision: String,
+    pub threads: usize,
+    pub cores: usize,
+    pub sizes: Sizes,
+    /// The paper experiment's settings the `method` series measures at.
+    pub la_grid: usize,
+    pub pupil_diameter_mm: f64,
+    pub pupil_grid: usize,
+    pub retina_samples: usize,
+    pub eye_cases: Vec<(String, f64)>,
+    /// Backends measured, in order; the first renders every reference and the convergence series.
+    pub backends: Vec<Backend>,
+    pub builds: Vec<BuildRecord>,
+    pub convergence: Vec<ConvergenceSummary>,
+    /// Table 1 convergence, one entry per sweep.
+    pub table1: Vec<Table1Sweep>,
+    pub checks: Checks,
+    /// Where the rest of the time went.
+    pub stages: Vec<StageTime>,
+    /// 1-minute load average (`/proc/loadavg`) at the start and the end of the run: above the
+    /// thread count, another job shared the cores and the timings are pessimistic.
+    pub load_average: [Option<f64>; 2],
+    pub total_seconds: f64,
+    pub rows: Vec<BenchRow>,
+}
+
+impl BenchReport {
+    /// The rows of the Table 1 sweep of `sweep`.
+    pub fn table1_rows(&self, sweep: Parameter) -> impl Iterator<Item = &BenchRow> + '_ {
+        self.rows.iter().filter(move |r| r.series == Series::Table1 && r.sweep == sweep)
+    }
+}
+
+fn load_average() -> Option<f64> {
+    std::fs::read_to_string("/proc/loadavg").ok()?.split_whitespace().next()?.parse().ok()
+}
+
+fn git_revision() -> String {
+    std::process::Command::new("git")
+        .args(["describe", "--always", "--dirty", "--abbrev=7", "--exclude=*"])
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+        .filter(|s| !s.is_empty())
+        .unwrap_or_else(|| "unknown".into())
+}
+
+/// Runs the benchmark on `scene` (named `scene_label` in the outputs) and the paper's display,
+/// and writes every report into `opts.out`.
+pub fn run(opts: &BenchOptions, scene: &Scene, scene_label: &str) -> Result<BenchReport> {
+    let start = Instant::now();
+    let load_at_start = load_average();
+    std::fs::create_dir_all(&opts.out).map_err(|e| Error::io(&opts.out, e))?;
+    let sz = &opts.sizes;
+    let base = pipeline::base_experiment(sz, scene)?;
+    let ctx = options::RowContext {
+        scene: scene_label.into(),
+        lcd_resolution: sz.lcd_resolution,
+        retina_resolution: sz.retina_resolution,
+        threads: rayon::current_num_threads(),
+        cores: std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1),
+        git_revision: git_revision(),
+    };
+
+    let t = Instant::now();
+    let built = runs::Backends::build(scene, &ctx)?;
+    let fields = built.fields(scene);
+    let backends = fields.list();
+    let best = backends[0];
+    let set_up = StageTime::since("set up backends (including the builds)", t);
+
+    let progress = Progress::new(backends.len() as u64 + 4 + TABLE1_SWEEPS.len() as u64, "bench", opts.quiet);
+    let mut runs = runs::Runs::new(&base, sz, &ctx, &progress);
+    runs.method_series(&backends)?;
+    let (lc, la_k1_equals_lc) = runs.la_grid_series(&best)?;
+    runs.pupil_grid_series(&best, &lc)?;
+    drop(lc);
+    runs.retina_samples_series(&best)?;
+    let t = Instant::now();
+    table1::table1_series(&base, sz, &best, &ctx, &progress, &mut runs.rows)?;
+    progress.finish();
+
+    let mut stages = vec![set_up];
+    stages.append(&mut runs.stages);
+    stages.push(StageTime::since("Table 1 convergence (wall time of every sweep, scoring included)", t));
+    stages.push(StageTime { stage: "scoring (PSNR and SSIM)".into(), seconds: runs.score_seconds });
+    let rows = runs.rows;
+    let paper = pipeline::Sampling::of(&base);
+    let mut report = BenchReport {
+        mode: opts.mode.clone(),
+        scene: scene_label.into(),
+        triangles_when_tessellated: built.triangles,
+        git_revision: ctx.git_revision.clone(),
+        threads: ctx.threads,
+        cores: ctx.cores,
+        sizes: sz.clone(),
+        la_grid: paper.la,
+        pupil_diameter_mm: base.spec.eye.pupil_diameter,
+        pupil_grid: paper.pupil,
+        retina_samples: paper.retina,
+        eye_cases: pipeline::focused_cases(&base)?
+            .cases
+            .iter()
+            .filter_map(|c| Some((c.name.clone(), pipeline::focus_mm(c)?)))
+            .collect(),
+        backends: backends.iter().map(|b| b.backend).collect(),
+        builds: built.builds.clone(),
+        convergence: Series::CONVERGENCE.iter().filter_map(|s| summary::summarize(*s, &rows)).collect(),
+        table1: TABLE1_SWEEPS.iter().filter_map(|s| summary::summarize_table1(*s, paper.get(*s), &rows)).collect(),
+        checks: Checks { la_k1_equals_lc },
+        stages,
+        load_average: [load_at_start, load_average()],
+        total_seconds: start.elapsed().as_secs_f64(),
+        rows,
+    };
+    let t = Instant::now();
+    report::write_reports(&report, &opts.out)?;
+    // The JSON is written last and carries the time of writing everything else.
+    report.stages.push(StageTime::since("writing reports and plots", t));
+    report.total_seconds = start.elapsed().as_secs_f64();
+    report::write_json(&report, &opts.out)?;
+    Ok(report)
+}

@@ -1,0 +1,404 @@
+//! The bench's plots, as PNG and SVG (plotters): speed against error (`speed_psnr`,
+//! `speed_ssim`: PSNR or SSIM against wall time per method and backend), the convergence of
+//! each series (`la_grid`, `pupil_grid`, `retina_samples`) with its fitted power law, and Table 1
+//! convergence (`table1`).
+
+use std::path::Path;
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+
+use super::markdown::{secs, series_setting, sweep_name};
+use super::options::{BenchRow, MethodLabel, Parameter, Series};
+use super::summary::{ConvergenceSummary, CONVERGED_TOLERANCE_DB};
+use super::BenchReport;
+use crate::error::{Error, Result};
+
+/// Draws `$body` (with the drawing area bound to `$area`) into `$out/$name.png` and `.svg`.
+macro_rules! draw_plot {
+    ($out:expr, $name:expr, $size:expr, |$area:ident| $body:expr) => {{
+        for ext in ["png", "svg"] {
+            let path = $out.join(format!("{}.{ext}", $name));
+            let res: PlotResult = if ext == "png" {
+                let $area = BitMapBackend::new(&path, $size).into_drawing_area();
+                $body
+            } else {
+                let $area = SVGBackend::new(&path, $size).into_drawing_area();
+                $body
+            };
+            res.map_err(|e| Error::Unsupported(format!("{}: cannot draw plot: {e}", path.display())))?;
+        }
+    }};
+}
+
+/// Every plot of `report` into `out`.
+pub fn write_plots(report: &BenchReport, out: &Path) -> Result<()> {
+    for (name, metric) in [("speed_psnr", Metric::Psnr), ("speed_ssim", Metric::Ssim)] {
+        draw_plot!(out, name, (1400, 1000), |area| plot_speed(area, report, metric));
+    }
+    for s in &report.convergence {
+        draw_plot!(out, s.series, (900, 560), |area| plot_convergence(area, report, s));
+    }
+    if !report.table1.is_empty() {
+        draw_plot!(out, "table1", (1400, 1100), |area| plot_table1(area, report));
+    }
+    Ok(())
+}
+
+#[derive(Clone, Copy, PartialEq)]
+enum Metric {
+    Psnr,
+    Ssim,
+}
+
+type PlotResult = std::result::Result<(), String>;
+
+/// Two significant digits, without trailing zeros: axis labels of log scales.
+fn significant(v: f64) -> String {
+    if !(v.is_finite() && v > 0.0) {
+        return format!("{v}");
+    }
+    let decimals = (1 - v.log10().floor() as i32).max(0) as usize;
+    let t = format!("{v:.decimals$}");
+    if t.contains('.') {
+        t.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        t
+    }
+}
+
+fn e2s<E: std::fmt::Display>(e: E) -> String {
+    e.to_string()
+}
+
+fn method_color(method: MethodLabel) -> RGBColor {
+    match method {
+        MethodLabel::Lc => RGBColor(31, 119, 180),
+        MethodLabel::Pc => RGBColor(214, 39, 40),
+        MethodLabel::La => RGBColor(44, 160, 44),
+        MethodLabel::Gt => RGBColor(80, 80, 80),
+    }
+}
+
+fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    values.filter(|v| v.is_finite()).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)))
+}
+
+/// Speed against error: one panel per image (display, then each eye case), x = wall time
+/// (log), y = PSNR or SSIM; one series per method (colour) and backend (marker), its points
+/// being 1 and 2 x 2 samples per display pixel.
+fn plot_speed<DB: DrawingBackend>(area: DrawingArea<DB, Shift>, rep: &BenchReport, metric: Metric) -> PlotResult
+where
+    DB::ErrorType: 'static,
+{
+    area.fill(&WHITE).map_err(e2s)?;
+    let title = match metric {
+        Metric::Psnr => "Speed against error: PSNR vs high-sample reference",
+        Metric::Ssim => "Speed against error: SSIM vs high-sample reference",
+    };
+    let area = area.titled(title, ("sans-serif", 24)).map_err(e2s)?;
+    let mut panels: Vec<(String, String)> = vec![(String::new(), "display image".into())];
+    for (c, mm) in &rep.eye_cases {
+        panels.push((c.clone(), format!("perceived, {c} ({mm:.0} mm)")));
+    }
+    let cols = 2;
+    let nrows = panels.len().div_ceil(cols);
+    let cells = area.split_evenly((nrows, cols));
+    let value = |r: &BenchRow| match metric {
+        Metric::Psnr => r.psnr_db,
+        Metric::Ssim => r.ssim,
+    };
+    for (i, ((eye, label), cell)) in panels.iter().zip(cells.iter()).enumerate() {
+        let pts: Vec<&BenchRow> =
+            rep.rows.iter().filter(|r| r.series == Series::Method && &r.eye_case == eye).collect();
+        if pts.is_empty() {
+            continue;
+        }
+        let (t0, t1) = range(pts.iter().map(|r| r.seconds));
+        let (v0, v1) = range(pts.iter().map(|r| value(r)));
+        let pad = ((v1 - v0) * 0.08).max(match metric {
+            Metric::Psnr => 0.5,
+            Metric::Ssim => 0.002,
+        });
+        let mut chart = ChartBuilder::on(cell)
+            .caption(label, ("sans-serif", 18))
+            .margin(10)
+            .x_label_area_size(40)
+            .y_label_area_size(60)
+            .build_cartesian_2d((t0 * 0.7..t1 * 1.4).log_scale(), (v0 - pad)..(v1 + pad))
+            .map_err(e2s)?;
+        chart
+            .configure_mesh()
+            .max_light_lines(2)
+            .x_labels(8)
+            .x_label_formatter(&|v| significant(*v))
+            .x_desc("wall time (s, log)")
+            .y_desc(match metric {
+                Metric::Psnr => "PSNR (dB)",
+                Metric::Ssim => "SSIM",
+            })
+            .y_label_formatter(&|v| match metric {
+                Metric::Psnr => format!("{v:.1}"),
+                Metric::Ssim => format!("{v:.3}"),
+            })
+            .draw()
+            .map_err(e2s)?;
+        for m in MethodLabel::METHODS {
+            for (bi, b) in rep.backends.iter().enumerate() {
+                let mut line: Vec<(f64, f64)> =
+                    pts.iter().filter(|r| r.method == m && r.backend == *b).map(|r| (r.seconds, value(r))).collect();
+                line.sort_by(|a, b| a.0.total_cmp(&b.0));
+                if line.is_empty() {
+                    continue;
+                }
+                let color = method_color(m);
+                let style = color.stroke_width(2);
+                let anno = chart.draw_series(LineSeries::new(line.clone(), style)).map_err(e2s)?;
+                if i == 0 {
+                    anno.label(format!("{m} {b}")).legend(move |(x, y)| {
+                        EmptyElement::at((x, y))
+                            + PathElement::new(vec![(-8, 0), (8, 0)], style)
+                            + marker_element(bi, color)
+                    });
+                }
+                chart
+                    .draw_series(line.iter().map(|p| EmptyElement::at(*p) + marker_element(bi, color)))
+                    .map_err(e2s)?;
+            }
+        }
+        if i == 0 {
+            chart
+                .configure_series_labels()
+                .position(SeriesLabelPosition::LowerRight)
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .label_font(("sans-serif", 13))
+                .draw()
+                .map_err(e2s)?;
+        }
+    }
+    area.present().map_err(e2s)
+}
+
+/// A marker per backend: circle, triangle, square, cross.
+fn marker_element<DB: DrawingBackend>(backend: usize, color: RGBColor) -> DynElement<'static, DB, (i32, i32)> {
+    let filled = color.filled();
+    match backend % 4 {
+        0 => Circle::new((0, 0), 5, filled).into_dyn(),
+        1 => TriangleMarker::new((0, 0), 6, filled).into_dyn(),
+        2 => Rectangle::new([(-4, -4), (4, 4)], filled).into_dyn(),
+        _ => Cross::new((0, 0), 5, color.stroke_width(2)).into_dyn(),
+    }
+}
+
+/// Convergence of one series: x = samples per pixel (log), y = PSNR against the reference,
+/// the wall time beside each point, and the fitted power law.
+fn plot_convergence<DB: DrawingBackend>(
+    area: DrawingArea<DB, Shift>,
+    rep: &BenchReport,
+    c: &ConvergenceSummary,
+) -> PlotResult
+where
+    DB::ErrorType: 'static,
+{
+    area.fill(&WHITE).map_err(e2s)?;
+    let pts: Vec<&BenchRow> = rep.rows.iter().filter(|r| r.series == c.series).collect();
+    let (n0, n1) = range(pts.iter().map(|r| r.samples as f64));
+    let (p0, p1) = range(pts.iter().map(|r| r.psnr_db.min(120.0)));
+    let title = format!("{} vs {}", c.quantity, c.reference);
+    let mut chart = ChartBuilder::on(&area)
+        .caption(title, ("sans-serif", 18))
+        .margin(14)
+        .x_label_area_size(40)
+        .y_label_area_size(56)
+        .build_cartesian_2d((n0 * 0.7..n1 * 3.0).log_scale(), (p0 - 2.0)..(p1 + 2.5))
+        .map_err(e2s)?;
+    chart
+        .configure_mesh()
+        .max_light_lines(2)
+        .x_label_formatter(&|v| significant(*v))
+        .x_desc(match c.series {
+            Series::LaGrid => "lenslet samples per display pixel, k x k (log)",
+            Series::PupilGrid => "pupil samples: n x n grid, kept inside the circle (log)",
+            Series::Method | Series::RetinaSamples | Series::Table1 => "samples per retina pixel, k x k (log)",
+        })
+        .y_desc("PSNR (dB)")
+        .draw()
+        .map_err(e2s)?;
+    let color = RGBColor(31, 119, 180);
+    let line: Vec<(f64, f64)> = pts.iter().map(|r| (r.samples as f64, r.psnr_db.min(120.0))).collect();
+    chart
+        .draw_series(LineSeries::new(line.clone(), color.stroke_width(2)))
+        .map_err(e2s)?
+        .label(format!("{} ({} backend)", c.series, c.backend))
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
+    chart.draw_series(line.iter().map(|p| Circle::new(*p, 4, color.filled()))).map_err(e2s)?;
+    // The wall time beside each point, alternately above-left and below-right of it so that
+    // neighbours do not overlap.
+    for (i, r) in pts.iter().enumerate() {
+        let (dx, dy) = if i % 2 == 0 { (0.8, 0.9) } else { (1.08, -0.5) };
+        chart
+            .draw_series(std::iter::once(Text::new(
+                format!("{}: {} s", series_setting(c.series, r.parameter, r.samples), secs(r.seconds)),
+                (r.samples as f64 * dx, r.psnr_db.min(120.0) + dy),
+                ("sans-serif", 12),
+            )))
+            .map_err(e2s)?;
+    }
+    if let Some(p) = c.rate {
+        // ln(err) = a + p ln(N), fitted through the mean point; PSNR = -20 log10(err).
+        let xy: Vec<(f64, f64)> = line
+            .iter()
+            .filter(|(_, v)| *v < 120.0)
+            .map(|(n, v)| (n.ln(), -v / 20.0 * std::f64::consts::LN_10))
+            .collect();
+        let m = xy.len() as f64;
+        let a = xy.iter().map(|v| v.1).sum::<f64>() / m - p * xy.iter().map(|v| v.0).sum::<f64>() / m;
+        let fit = |n: f64| -20.0 * (a + p * n.ln()) / std::f64::consts::LN_10;
+        let gray = RGBColor(120, 120, 120);
+        chart
+            .draw_series(LineSeries::new(
+                (0..=40).map(|i| {
+                    let n = n0 * (n1 / n0).powf(i as f64 / 40.0);
+                    (n, fit(n))
+                }),
+                gray.stroke_width(1),
+            ))
+            .map_err(e2s)?
+            .label(format!("fit: error ~ N^{p:.2}"))
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], gray.stroke_width(1)));
+    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::LowerRight)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()
+        .map_err(e2s)?;
+    area.present().map_err(e2s)
+}
+
+/// Table 1 convergence: one panel per sweep, x = the swept setting, y = Table 1's PSNR, one line
+/// per method (colour) and eye case (marker); the seconds of each setting along the top, the
+/// paper's setting and the cheapest setting within the tolerance for every method and eye case
+/// as vertical lines; the legend in a strip along the bottom.
+fn plot_table1<DB: DrawingBackend>(area: DrawingArea<DB, Shift>, rep: &BenchReport) -> PlotResult
+where
+    DB::ErrorType: 'static,
+{
+    area.fill(&WHITE).map_err(e2s)?;
+    let area = area
+        .titled(
+            "Table 1 PSNR (perceived image vs ground truth) against each sampling setting; labels: seconds for the \
+             whole Table 1",
+            ("sans-serif", 22),
+        )
+        .map_err(e2s)?;
+    let (_, h) = area.dim_in_pixel();
+    let (panels, strip) = area.split_vertically(h.saturating_sub(44));
+    let gray = RGBColor(150, 150, 150);
+    let gold = RGBColor(230, 150, 0);
+    let centred =
+        |size: u32| ("sans-serif", size).into_font().into_text_style(&panels).pos(Pos::new(HPos::Center, VPos::Center));
+    let mut cases: Vec<String> = Vec::new();
+    for r in rep.rows.iter().filter(|r| r.series == Series::Table1) {
+        if !cases.contains(&r.eye_case) {
+            cases.push(r.eye_case.clone());
+        }
+    }
+    let cells = panels.split_evenly((rep.table1.len().div_ceil(2).max(1), 2));
+    for (t, cell) in rep.table1.iter().zip(cells.iter()) {
+        let rows: Vec<&BenchRow> = rep.table1_rows(t.sweep).collect();
+        if rows.is_empty() {
+            continue;
+        }
+        let (x0, x1) = range(t.parameters.iter().map(|p| *p as f64));
+        let (v0, v1) = range(rows.iter().map(|r| r.psnr_db.min(120.0)));
+        let pad = ((v1 - v0) * 0.08).max(0.3);
+        let top = v1 + 3.0 * pad;
+        let xpad = ((x1 - x0) * 0.06).max(0.3);
+        let mut chart = ChartBuilder::on(cell)
+            .caption(
+                format!("{} (others at the paper's; {} backend)", sweep_name(t.sweep), t.backend),
+                ("sans-serif", 17),
+            )
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(56)
+            .build_cartesian_2d((x0 - xpad)..(x1 + xpad), (v0 - pad)..top)
+            .map_err(e2s)?;
+        chart
+            .configure_mesh()
+            .max_light_lines(1)
+            .x_labels(t.parameters.len().max(2))
+            .x_label_formatter(&|v| format!("{v:.0}"))
+            .x_desc(match t.sweep {
+                Parameter::PupilGrid => "n (pupil grid n x n)",
+                Parameter::LaGrid => "k (LA lenslet grid k x k)",
+                Parameter::RetinaSamples | Parameter::DisplaySamples => "k (k x k samples per pixel)",
+            })
+            .y_desc("Table 1 PSNR (dB)")
+            .y_label_formatter(&|v| format!("{v:.1}"))
+            .draw()
+            .map_err(e2s)?;
+        // Vertical lines: the paper's setting, and the cheapest setting within the tolerance.
+        let paper = t.paper_parameter as f64;
+        chart.draw_series(LineSeries::new([(paper, v0 - pad), (paper, top)], gray.stroke_width(2))).map_err(e2s)?;
+        if let Some(w) = &t.all_methods {
+            let x = w.parameter as f64;
+            chart.draw_series(LineSeries::new([(x, v0 - pad), (x, top)], gold.stroke_width(3))).map_err(e2s)?;
+        }
+        for m in MethodLabel::METHODS {
+            let color = method_color(m);
+            for (ci, c) in cases.iter().enumerate() {
+                let line: Vec<(f64, f64)> = rows
+                    .iter()
+                    .filter(|r| r.method == m && &r.eye_case == c)
+                    .map(|r| (r.parameter as f64, r.psnr_db.min(120.0)))
+                    .collect();
+                if line.is_empty() {
+                    continue;
+                }
+                chart.draw_series(LineSeries::new(line.clone(), color.stroke_width(2))).map_err(e2s)?;
+                chart
+                    .draw_series(line.iter().map(|p| EmptyElement::at(*p) + marker_element(ci, color)))
+                    .map_err(e2s)?;
+            }
+        }
+        // Seconds of each setting along the top, on two alternating rows.
+        for (k, (p, sec)) in t.parameters.iter().zip(&t.seconds).enumerate() {
+            let y = if k % 2 == 0 { top - 0.8 * pad } else { top - 1.9 * pad };
+            chart
+                .draw_series(std::iter::once(Text::new(format!("{} s", secs(*sec)), (*p as f64, y), centred(12))))
+                .map_err(e2s)?;
+        }
+    }
+    // The legend strip.
+    let label = ("sans-serif", 14).into_font().into_text_style(&strip).pos(Pos::new(HPos::Left, VPos::Center));
+    let y = 22;
+    let mut x = 30;
+    for m in MethodLabel::METHODS {
+        strip.draw(&PathElement::new(vec![(x, y), (x + 24, y)], method_color(m).stroke_width(2))).map_err(e2s)?;
+        strip.draw(&Text::new(m.to_string(), (x + 30, y), label.clone())).map_err(e2s)?;
+        x += 80;
+    }
+    for (ci, c) in cases.iter().enumerate() {
+        strip.draw(&(EmptyElement::at((x + 8, y)) + marker_element(ci, RGBColor(60, 60, 60)))).map_err(e2s)?;
+        strip.draw(&Text::new(c.clone(), (x + 20, y), label.clone())).map_err(e2s)?;
+        x += 90;
+    }
+    for (color, width, text) in [
+        (gray, 2, "paper's setting".to_string()),
+        (
+            gold,
+            3,
+            format!("cheapest setting within {CONVERGED_TOLERANCE_DB} dB of converged, every method and eye case"),
+        ),
+    ] {
+        strip.draw(&PathElement::new(vec![(x, y - 10), (x, y + 10)], color.stroke_width(width))).map_err(e2s)?;
+        strip.draw(&Text::new(text.clone(), (x + 10, y), label.clone())).map_err(e2s)?;
+        x += 40 + 7 * text.len() as i32;
+    }
+    area.present().map_err(e2s)
+}

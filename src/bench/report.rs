@@ -1,0 +1,164 @@
+//! Writing a bench run: `bench.csv` (one line per measured point), `builds.csv`, the Markdown
+//! reports and plots, `bench.json` (everything, written last), and the table `inimtrace bench`
+//! prints on stdout.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use super::markdown::markdown;
+use super::options::{BenchRow, BuildRecord};
+use super::plots::write_plots;
+use super::summary::{Table1Within, CONVERGED_TOLERANCE_DB};
+use super::BenchReport;
+use crate::error::{Error, Result};
+
+fn csv_field(s: &str) -> String {
+    if s.contains([',', '"', '\n']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}
+
+/// `bench.csv`: one line per row, the columns of [`BenchRow`] in order.
+pub fn rows_csv(rows: &[BenchRow]) -> String {
+    let mut csv = String::from(
+        "series,sweep,quantity,eye_case,focus_mm,backend,method,parameter,samples,seconds,rays,rays_per_second,psnr_db,ssim,\
+         scene,lcd_resolution,retina_resolution,display_samples,la_grid,pupil_grid,pupil_samples,retina_samples,\
+         reference,threads,cores,git_revision\n",
+    );
+    for r in rows {
+        let fields = [
+            csv_field(r.series.as_str()),
+            csv_field(r.sweep.as_str()),
+            csv_field(r.quantity.as_str()),
+            csv_field(&r.eye_case),
+            r.focus_mm.map(|f| f.to_string()).unwrap_or_default(),
+            csv_field(r.backend.as_str()),
+            csv_field(r.method.as_str()),
+            r.parameter.to_string(),
+            r.samples.to_string(),
+            r.seconds.to_string(),
+            r.rays.to_string(),
+            r.rays_per_second.to_string(),
+            r.psnr_db.to_string(),
+            r.ssim.to_string(),
+            csv_field(&r.scene),
+            r.lcd_resolution.to_string(),
+            r.retina_resolution.to_string(),
+            r.display_samples.to_string(),
+            r.la_grid.to_string(),
+            r.pupil_grid.to_string(),
+            r.pupil_samples.to_string(),
+            r.retina_samples.to_string(),
+            csv_field(&r.reference),
+            r.threads.to_string(),
+            r.cores.to_string(),
+            csv_field(&r.git_revision),
+        ];
+        csv.push_str(&fields.join(","));
+        csv.push('\n');
+    }
+    csv
+}
+
+/// `builds.csv`: one line per mesh backend.
+fn builds_csv(builds: &[BuildRecord]) -> String {
+    let mut csv = String::from("backend,triangles,build_seconds,constructor_seconds,threads,cores,git_revision\n");
+    for b in builds {
+        let _ = writeln!(
+            csv,
+            "{},{},{},{},{},{},{}",
+            csv_field(b.backend.as_str()),
+            b.triangles,
+            b.build_seconds,
+            b.constructor_seconds,
+            b.threads,
+            b.cores,
+            csv_field(&b.git_revision)
+        );
+    }
+    csv
+}
+
+/// Every report but `bench.json`: the CSVs, `summary.md`, `bench.md` and the plots.
+pub fn write_reports(report: &BenchReport, out: &Path) -> Result<()> {
+    let write = |name: &str, text: String| -> Result<()> {
+        let p = out.join(name);
+        std::fs::write(&p, text).map_err(|e| Error::io(&p, e))
+    };
+    write("bench.csv", rows_csv(&report.rows))?;
+    write("builds.csv", builds_csv(&report.builds))?;
+    let (summary, full) = markdown(report);
+    write("summary.md", summary)?;
+    write("bench.md", full)?;
+    write_plots(report, out)
+}
+
+/// `bench.json`, written last: its presence marks a complete run.
+pub fn write_json(report: &BenchReport, out: &Path) -> Result<()> {
+    let p = out.join("bench.json");
+    let text = serde_json::to_string_pretty(report).map_err(|e| Error::Unsupported(e.to_string()))?;
+    std::fs::write(&p, text).map_err(|e| Error::io(&p, e))
+}
+
+/// What `inimtrace bench` prints on stdout: every row as a Markdown table, the rate of each
+/// convergence series, and the converged and cheapest settings of each Table 1 sweep.
+pub fn console_table(report: &BenchReport) -> String {
+    let mut s = String::new();
+    s.push_str("| series | image | backend | method | parameter | seconds | Mrays/s | PSNR (dB) | SSIM |\n");
+    s.push_str("|---|---|---|---|---:|---:|---:|---:|---:|\n");
+    for r in &report.rows {
+        let _ = writeln!(
+            s,
+            "| {} | {} {} | {} | {} | {} | {:.3} | {:.1} | {:.2} | {:.4} |",
+            r.series,
+            r.quantity,
+            r.eye_case,
+            r.backend,
+            r.method,
+            r.parameter,
+            r.seconds,
+            r.rays_per_second / 1e6,
+            r.psnr_db,
+            r.ssim
+        );
+    }
+    for c in &report.convergence {
+        let _ = writeln!(
+            s,
+            "{}: error ~ samples^{}",
+            c.series,
+            c.rate.map(|p| format!("{p:.2}")).unwrap_or_else(|| "?".into())
+        );
+    }
+    let within = |w: &Table1Within| format!("{} ({:.2} s)", w.parameter, w.seconds);
+    let tol = CONVERGED_TOLERANCE_DB;
+    for t in &report.table1 {
+        let per: Vec<String> = t.per_method.iter().map(|w| format!("{} {}", w.methods, within(w))).collect();
+        let _ = writeln!(
+            s,
+            "table1 {}: converged = {} (last step {} dB{}); within {tol} dB for every method and eye case at {}; \
+             per method: {}",
+            t.sweep,
+            t.converged_parameter,
+            t.last_step_db.map(|d| format!("{d:.2}")).unwrap_or_else(|| "?".into()),
+            if t.last_step_db.is_some_and(|d| d > tol) { ", not levelled off" } else { "" },
+            t.all_methods.as_ref().map(within).unwrap_or_else(|| "-".into()),
+            per.join(", ")
+        );
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn csv_fields_with_commas_are_quoted() {
+        assert_eq!(csv_field("a,b"), "\"a,b\"");
+        assert_eq!(csv_field("say \"x\", y"), "\"say \"\"x\"\", y\"");
+        assert_eq!(csv_field("plain"), "plain");
+    }
+}
