@@ -296,7 +296,9 @@ fn main() {
     if let Err(e) = run() {
         // A reader that went away (`inimtrace compare a b | head -1`) ends the program quietly,
         // with the exit status of a process killed by SIGPIPE.
-        if e.chain().any(|c| c.downcast_ref::<std::io::Error>().is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)) {
+        if e.chain()
+            .any(|c| c.downcast_ref::<std::io::Error>().is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe))
+        {
             std::process::exit(141);
         }
         eprintln!("error: {e:#}");
@@ -358,6 +360,7 @@ fn run() -> Result<()> {
             let (scene, display) = load_setup(&setup)?;
             announce(&scene, backend, quiet);
             let method: Method = method.parse().map_err(anyhow::Error::msg)?;
+            inimtrace::optics::limits::REFERENCE_PLANE_Z.check("command line", "--reference-plane", reference_plane)?;
             let settings = DisplayRenderSettings {
                 samples_per_pixel,
                 reference_plane_z: reference_plane,
@@ -436,7 +439,11 @@ fn run() -> Result<()> {
             );
             outln!(
                 "SSIM  {:.5}  (R {:.5}, G {:.5}, B {:.5}; constants {})",
-                s.mean, s.channels[0], s.channels[1], s.channels[2], constants
+                s.mean,
+                s.channels[0],
+                s.channels[1],
+                s.channels[2],
+                constants
             );
         }
         Command::Bench { quick, scene, out } => {

@@ -105,7 +105,8 @@ fn a_closed_stdout_ends_quietly() {
     let p = a.to_str().unwrap();
     // `inimtrace info --print paper-scene | true`: the reader is gone before the writer writes.
     for args in [vec!["compare", p, p], vec!["info", "--print", "paper-experiment"]] {
-        let mut child = Command::new(inimtrace()).args(&args).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().unwrap();
+        let mut child =
+            Command::new(inimtrace()).args(&args).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().unwrap();
         drop(child.stdout.take());
         let o = child.wait_with_output().unwrap();
         let code = o.status.code();
@@ -188,12 +189,82 @@ fn a_concave_polygon_renders_as_itself_not_as_its_fan() {
         )
         .unwrap();
         let scene = inimtrace::io::load_scene(&scene_path.to_string_lossy(), Path::new("")).unwrap();
-        let img = with_fields(&scene, BackendChoice::Bvh, |f| Ok(ground_truth(&eye, &retina, f.shade, &Progress::hidden())))
-            .unwrap();
+        let img =
+            with_fields(&scene, BackendChoice::Bvh, |f| Ok(ground_truth(&eye, &retina, f.shade, &Progress::hidden())))
+                .unwrap();
         let differing = img.pixels.iter().zip(&exact.pixels).filter(|(a, b)| (a[0] - b[0]).abs() > 1e-6).count();
         // Pixel centres exactly on an edge may go either way; a filled fan differs by hundreds.
         assert!(differing <= 2, "{file}: {differing} of 4096 pixels differ from the exact ring");
         let hole = img.get(32, 32);
         assert_eq!(hole, [0.0, 0.0, 0.0], "{file}: the ring's hole is filled");
     }
+}
+
+fn write_experiment(dir: &Path, name: &str, extra: &str) -> std::path::PathBuf {
+    let p = dir.join("exp.toml");
+    std::fs::write(
+        &p,
+        format!(
+            "name = \"{name}\"\nscene = \"builtin:paper\"\ndisplay = \"builtin:paper\"\nmethods = [\"LC\"]\n\
+             [eye]\nretina_resolution = 16\n{extra}\n[[eye_cases]]\nname = \"Pin\"\npinhole = true\n"
+        ),
+    )
+    .unwrap();
+    p
+}
+
+#[test]
+fn names_cannot_write_outside_the_output_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["../escape", "/tmp/abs", "a/b", "..", ""] {
+        let exp = write_experiment(dir.path(), name, "");
+        let o = Command::new(inimtrace())
+            .current_dir(dir.path())
+            .args(["--quiet", "assess", exp.to_str().unwrap()])
+            .output()
+            .unwrap();
+        assert_clean_failure(&o, "name");
+    }
+    assert!(!dir.path().join("escape").exists() && !dir.path().parent().unwrap().join("escape").exists());
+}
+
+#[test]
+fn settings_outside_the_valid_ranges_are_errors_naming_the_field() {
+    let dir = tempfile::tempdir().unwrap();
+    // A focus of 1e-310 mm made every image black and scored PSNR inf; a retina distance of
+    // 1e-12 mm or a reference plane at -1e12 mm silently changed images.
+    for (extra, field) in [
+        ("retina_distance = 1e-12", "retina_distance"),
+        ("[display_render]\nreference_plane_z = -1e12", "reference_plane_z"),
+    ] {
+        let exp = write_experiment(dir.path(), "r", extra);
+        let o = Command::new(inimtrace())
+            .current_dir(dir.path())
+            .args(["--quiet", "assess", exp.to_str().unwrap()])
+            .output()
+            .unwrap();
+        assert_clean_failure(&o, field);
+    }
+    let o = Command::new(inimtrace())
+        .current_dir(dir.path())
+        .args(["--quiet", "ground-truth", "--focus-mm", "1e-310", "--retina", "16", "--out", "gt.exr"])
+        .output()
+        .unwrap();
+    assert_clean_failure(&o, "focus_mm");
+    assert!(!dir.path().join("gt.exr").exists());
+}
+
+#[test]
+fn absurd_thread_counts_and_misnamed_outputs_are_refused_before_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = Command::new(inimtrace()).args(["--threads", "100000", "info"]).output().unwrap();
+    assert_clean_failure(&o, "--threads");
+    let png = dir.path().join("x.png");
+    let o = Command::new(inimtrace())
+        .args(["--quiet", "render-display", "--method", "LC", "--out", png.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains(".exr"), "{}", stderr(&o));
+    assert!(!png.exists(), "the PNG preview path was written");
 }

@@ -199,6 +199,19 @@ pub struct Experiment {
 impl Experiment {
     /// Resolves a spec; `source` names its file (for errors), `base` resolves relative paths.
     pub fn from_spec(spec: ExperimentSpec, source: &str, base: &Path) -> Result<Self> {
+        // The name becomes the default output folder `out/<name>`: letters, digits, -, _ and .
+        // only, so it can never point outside `out/`.
+        if !crate::io::output::is_plain_name(&spec.name) || spec.name.contains("..") {
+            return Err(Error::invalid(
+                source,
+                "name",
+                format!(
+                    "`{}` must be non-empty, start with a letter or digit and use only letters, digits, -, _ and . \
+                     (it names the output folder)",
+                    spec.name
+                ),
+            ));
+        }
         // Name the experiment file and its field as well as the file that failed.
         let display = load_display(&spec.display, base)
             .map_err(|e| Error::invalid(source, "display", format!("cannot load `{}`: {e}", spec.display)))?;
@@ -241,6 +254,11 @@ impl Experiment {
         if !dr.reference_plane_z.is_finite() {
             return Err(Error::invalid(source, "display_render.reference_plane_z", "must be finite"));
         }
+        crate::optics::limits::REFERENCE_PLANE_Z.check(
+            source,
+            "display_render.reference_plane_z",
+            dr.reference_plane_z,
+        )?;
         let e = &spec.eye;
         let position = DVec3::from_array(e.position);
         let render = DisplayRenderSettings {

@@ -80,11 +80,8 @@ impl OutputDir {
             }
             Err(TryLockError::Error(e)) => return Err(Error::io(&lock_path, e)),
         }
-        let holder = format!(
-            "inimtrace process {} ({})",
-            std::process::id(),
-            std::env::args().collect::<Vec<_>>().join(" ")
-        );
+        let holder =
+            format!("inimtrace process {} ({})", std::process::id(), std::env::args().collect::<Vec<_>>().join(" "));
         lock.set_len(0).and_then(|_| lock.write_all(holder.as_bytes())).map_err(|e| Error::io(&lock_path, e))?;
         let dir = Self { root: root.to_path_buf(), _lock: lock, written: Mutex::new(Vec::new()) };
         dir.remove_previous_run()?;
@@ -244,7 +241,8 @@ mod tests {
         });
         assert!(err.is_err());
         assert!(!dir.path().join("b.txt").exists(), "a failed write left a final-named file");
-        let names: Vec<String> = fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+        let names: Vec<String> =
+            fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
         assert!(names.iter().all(|n| !n.starts_with(TEMP_PREFIX)), "temporary file left: {names:?}");
         let m = out.manifest();
         assert_eq!(m.len(), 1);

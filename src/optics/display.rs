@@ -9,6 +9,7 @@
 use glam::{DVec2, IVec2};
 
 use super::lattice::Lattice;
+use super::limits;
 use crate::error::{Error, Result};
 
 /// The LCD panel: physical size and resolution, box pixels.
@@ -170,6 +171,11 @@ impl Display {
         positive("focal_length (f)", self.focal_length)?;
         positive("lcd.size[0] (width)", self.lcd.size.x)?;
         positive("lcd.size[1] (height)", self.lcd.size.y)?;
+        limits::EYE_TO_LENSLETS.check(source, "eye_to_lenslets (v1)", self.eye_to_lenslets)?;
+        limits::LENSLETS_TO_LCD.check(source, "lenslets_to_lcd (v2)", self.lenslets_to_lcd)?;
+        limits::FOCAL_LENGTH.check(source, "focal_length (f)", self.focal_length)?;
+        limits::LCD_SIZE.check(source, "lcd.size[0] (width)", self.lcd.size.x)?;
+        limits::LCD_SIZE.check(source, "lcd.size[1] (height)", self.lcd.size.y)?;
         for (i, n) in self.lcd.resolution.iter().enumerate() {
             if *n == 0 {
                 return Err(Error::invalid(source, format!("lcd.resolution[{i}]"), "must be at least 1 pixel"));

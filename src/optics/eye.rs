@@ -10,6 +10,7 @@
 use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
+use super::limits;
 use crate::error::{Error, Result};
 
 /// Where the eye is focused.
@@ -107,6 +108,10 @@ impl Eye {
         if !self.position.is_finite() {
             return Err(Error::invalid(source, "eye_position", "must be finite"));
         }
+        limits::RETINA_DISTANCE.check(source, "retina_distance", self.retina_distance)?;
+        for (axis, v) in ["x", "y", "z"].iter().zip(self.position.to_array()) {
+            limits::EYE_POSITION.check(source, &format!("eye_position.{axis}"), v)?;
+        }
         if let Aperture::ThinLens { pupil_diameter, focus } = self.aperture {
             if !(pupil_diameter.is_finite() && pupil_diameter > 0.0) {
                 return Err(Error::invalid(
@@ -130,6 +135,12 @@ impl Eye {
                         format!("must be finite and >= 0 (0 D is infinity), got {d}"),
                     ))
                 }
+                _ => {}
+            }
+            limits::PUPIL_DIAMETER.check(source, "pupil_diameter", pupil_diameter)?;
+            match focus {
+                Focus::Millimetres(z) if z.is_finite() => limits::FOCUS_MM.check(source, "focus_mm", z)?,
+                Focus::Diopters(d) => limits::FOCUS_DIOPTERS.check(source, "focus_diopters", d)?,
                 _ => {}
             }
             if self.pupil_grid == 0 || self.pupil_grid > 1024 {
@@ -203,6 +214,7 @@ impl Retina {
                 format!("must be a positive finite number, got {}", self.half_tangent),
             ));
         }
+        limits::RETINA_HALF_TANGENT.check(source, "retina_half_tangent", self.half_tangent)?;
         if self.samples_per_pixel == 0 || self.samples_per_pixel > 64 {
             return Err(Error::invalid(
                 source,

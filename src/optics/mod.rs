@@ -3,6 +3,7 @@
 pub mod display;
 pub mod eye;
 pub mod lattice;
+pub mod limits;
 pub mod transfer;
 
 pub use display::{Display, Lcd};

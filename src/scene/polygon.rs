@@ -165,7 +165,8 @@ mod tests {
 
     #[test]
     fn convex_faces_keep_the_fan() {
-        let positions = [DVec3::new(0.0, 0.0, 0.0), DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y, DVec3::new(-0.5, 0.5, 0.0)];
+        let positions =
+            [DVec3::new(0.0, 0.0, 0.0), DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y, DVec3::new(-0.5, 0.5, 0.0)];
         let mut tris = Vec::new();
         triangulate(&positions, &[0, 1, 2, 3, 4], &mut tris);
         assert_eq!(tris, vec![[0, 1, 2], [0, 2, 3], [0, 3, 4]]);
@@ -231,7 +232,8 @@ mod tests {
         let ev = (ev - eu * eu.dot(ev)).normalize();
         let normal = eu.cross(ev);
         for reverse in [false, true] {
-            let mut positions: Vec<DVec3> = l.iter().map(|&(u, v)| DVec3::new(3.0, -1.0, 5.0) + u * eu + v * ev).collect();
+            let mut positions: Vec<DVec3> =
+                l.iter().map(|&(u, v)| DVec3::new(3.0, -1.0, 5.0) + u * eu + v * ev).collect();
             if reverse {
                 positions.reverse();
             }
