@@ -43,3 +43,12 @@ impl RgbImage {
         self.pixels.iter().all(|p| p.iter().all(|v| v.is_finite()))
     }
 }
+
+/// Decodes an sRGB-encoded component in `[0, 1]` to linear (IEC 61966-2-1).
+pub fn srgb_to_linear(c: f64) -> f64 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}

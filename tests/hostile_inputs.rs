@@ -268,3 +268,61 @@ fn absurd_thread_counts_and_misnamed_outputs_are_refused_before_work() {
     assert!(stderr(&o).contains(".exr"), "{}", stderr(&o));
     assert!(!png.exists(), "the PNG preview path was written");
 }
+
+/// A 57-byte PNG whose header claims `w` x `h` RGB pixels (and whose one data chunk is empty).
+fn png_header_bomb(w: u32, h: u32) -> Vec<u8> {
+    fn chunk(out: &mut Vec<u8>, kind: &[u8; 4], data: &[u8]) {
+        out.extend_from_slice(&(data.len() as u32).to_be_bytes());
+        let mut crc = crc32fast::Hasher::new();
+        crc.update(kind);
+        crc.update(data);
+        out.extend_from_slice(kind);
+        out.extend_from_slice(data);
+        out.extend_from_slice(&crc.finalize().to_be_bytes());
+    }
+    let mut b = vec![0x89, b'P', b'N', b'G', 0x0d, 0x0a, 0x1a, 0x0a];
+    let mut ihdr = Vec::new();
+    ihdr.extend_from_slice(&w.to_be_bytes());
+    ihdr.extend_from_slice(&h.to_be_bytes());
+    ihdr.extend_from_slice(&[8, 2, 0, 0, 0]); // 8-bit RGB, deflate, no filter, no interlace
+    chunk(&mut b, b"IHDR", &ihdr);
+    chunk(&mut b, b"IDAT", &[]);
+    chunk(&mut b, b"IEND", &[]);
+    b
+}
+
+#[test]
+fn a_png_texture_claiming_a_huge_image_is_refused_before_decoding() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("bomb.png"), png_header_bomb(200_000, 200_000)).unwrap();
+    std::fs::write(
+        dir.path().join("quad.obj"),
+        "v -50 -50 400\nv 50 -50 400\nv 50 50 400\nv -50 50 400\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nf 1/1 2/2 3/3 4/4\n",
+    )
+    .unwrap();
+    let scene = dir.path().join("scene.toml");
+    std::fs::write(
+        &scene,
+        "name = \"bomb\"\n[[objects]]\ntype = \"mesh\"\nfile = \"quad.obj\"\nmaterial = { texture = \"bomb.png\" }\n",
+    )
+    .unwrap();
+    let out = dir.path().join("gt.exr");
+    let o = run_capped(
+        1024,
+        &[
+            "--quiet",
+            "--max-memory",
+            "8G",
+            "ground-truth",
+            "--pinhole",
+            "--retina",
+            "16",
+            "--scene",
+            scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ],
+    );
+    assert_clean_failure(&o, "bomb.png");
+    assert!(stderr(&o).contains("memory limit"), "{}", stderr(&o));
+}

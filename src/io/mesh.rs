@@ -75,11 +75,4 @@ pub fn load_mesh(path: &Path) -> Result<MeshLoad> {
     Ok(MeshLoad { mesh, dropped_degenerate, texture })
 }
 
-/// Decodes an sRGB-encoded component in `[0, 1]` to linear.
-pub(super) fn srgb_to_linear(c: f64) -> f64 {
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
-}
+pub(super) use crate::raster::srgb_to_linear;

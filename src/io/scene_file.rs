@@ -13,7 +13,7 @@ use serde::{Deserialize, Serialize};
 use super::mesh::load_mesh;
 use super::text::{read_text, toml_error};
 use crate::error::{Error, Result};
-use crate::scene::image_texture::{Filter, ImageTexture, Wrap};
+use crate::scene::image_texture::{Filter, Wrap};
 use crate::scene::usaf::{self, ChartScale};
 use crate::scene::{procedural, BarChart, Light, Material, Object, Rect, Scene, Shape, Transform};
 
@@ -451,7 +451,7 @@ impl ObjectInput<'_> {
                 "the mesh file has no texture coordinates (vt / u v) to look the texture up with",
             ));
         }
-        let tex = ImageTexture::load(&path, m.filter.unwrap_or_default(), m.wrap.unwrap_or_default())
+        let tex = crate::io::png::load_texture(&path, m.filter.unwrap_or_default(), m.wrap.unwrap_or_default())
             .map_err(|e| Error::invalid(src, &field, e.to_string()))?;
         Ok(Material::Texture(Arc::new(tex)))
     }

@@ -16,12 +16,8 @@
 //! * PNG files (8 or 16 bit, grey or colour, with or without alpha; alpha is ignored) are taken
 //!   to be sRGB-encoded and are linearised with the sRGB transfer function on load.
 
-use std::path::Path;
-
 use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
-
-use crate::error::{Error, Result};
 
 /// Texture filtering.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -54,14 +50,6 @@ pub struct ImageTexture {
     pub mean: DVec3,
 }
 
-fn srgb_to_linear(c: f64) -> f64 {
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
-}
-
 impl ImageTexture {
     /// A texture from linear texels (row 0 at top). `None` when the size does not match or is 0.
     pub fn new(width: usize, height: usize, texels: Vec<DVec3>, filter: Filter, wrap: Wrap) -> Option<Self> {
@@ -70,20 +58,6 @@ impl ImageTexture {
         }
         let mean = texels.iter().copied().sum::<DVec3>() / texels.len() as f64;
         Some(Self { width, height, texels, filter, wrap, mean })
-    }
-
-    /// Loads a PNG (sRGB-encoded). Errors name the file.
-    pub fn load(path: &Path, filter: Filter, wrap: Wrap) -> Result<Self> {
-        let bytes = crate::io::input::read_regular(path)?;
-        let img = image::load_from_memory_with_format(&bytes, image::ImageFormat::Png)
-            .map_err(|e| Error::parse(path, format!("not a readable PNG texture: {e}")))?;
-        let rgb = img.to_rgb32f();
-        let (w, h) = (rgb.width() as usize, rgb.height() as usize);
-        let texels = rgb
-            .pixels()
-            .map(|p| DVec3::new(srgb_to_linear(p[0] as f64), srgb_to_linear(p[1] as f64), srgb_to_linear(p[2] as f64)))
-            .collect();
-        Self::new(w, h, texels, filter, wrap).ok_or_else(|| Error::parse(path, "texture image is empty"))
     }
 
     fn texel(&self, i: i64, j: i64) -> DVec3 {
