@@ -133,12 +133,13 @@ pub fn write_rgb(path: &Path, img: &RgbImage, depth: Option<&[f32]>, attributes:
     Image::from_layer(layer).write().to_file(path).map_err(|e| exr_error(path, e))
 }
 
-fn check_readable_file(path: &Path) -> Result<()> {
+/// A regular, non-empty file; returns its size.
+fn check_readable_file(path: &Path) -> Result<u64> {
     let size = crate::io::input::check_regular(path)?;
     if size == 0 {
         return Err(Error::parse(path, "file is empty, not an OpenEXR file"));
     }
-    check_claimed_size(path, size)
+    Ok(size)
 }
 
 /// Reads the headers alone and refuses a file whose data windows would need more memory to
@@ -190,7 +191,8 @@ pub fn read_rgb(path: &Path) -> Result<RgbImage> {
 /// one value per pixel, as written by [`write_rgb`]). `Z` samples may be `+inf` (no hit) but
 /// not `NaN` or negative; such a sample is an error naming the file, pixel and channel.
 pub fn read_rgb_depth(path: &Path) -> Result<(RgbImage, Option<Vec<f32>>)> {
-    check_readable_file(path)?;
+    let size = check_readable_file(path)?;
+    check_claimed_size(path, size)?;
     let image = read()
         .no_deep_data()
         .largest_resolution_level()
