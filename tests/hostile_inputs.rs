@@ -326,3 +326,52 @@ fn a_png_texture_claiming_a_huge_image_is_refused_before_decoding() {
     assert_clean_failure(&o, "bomb.png");
     assert!(stderr(&o).contains("memory limit"), "{}", stderr(&o));
 }
+
+#[test]
+fn generated_and_mesh_geometry_cannot_overflow_or_loop() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("scene.toml");
+    // 2^32 x 2^32 spheres wraps to 0 in unchecked 64-bit arithmetic.
+    std::fs::write(
+        &scene,
+        "name = \"s\"\n[[objects]]\ntype = \"sphere-grid\"\ncenter = [0, 0, 400]\ncount = [4294967296, 4294967296]\n\
+         spacing = 1.0\nradius = 0.4\nmaterial = { albedo = [1, 1, 1] }\n",
+    )
+    .unwrap();
+    let out = dir.path().join("gt.exr");
+    let args = [
+        "--quiet",
+        "ground-truth",
+        "--pinhole",
+        "--retina",
+        "16",
+        "--scene",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    let o = run_capped(1024, &args);
+    assert_clean_failure(&o, "count");
+    // Within the triangle cap but over a small memory limit: refused, naming the setting.
+    std::fs::write(
+        &scene,
+        "name = \"s\"\n[[objects]]\ntype = \"sphere-grid\"\ncenter = [0, 0, 400]\ncount = [1000, 1000]\n\
+         spacing = 1.0\nradius = 0.4\nsegments = 8\nmaterial = { albedo = [1, 1, 1] }\n",
+    )
+    .unwrap();
+    let mut limited = vec!["--max-memory", "200M"];
+    limited.extend_from_slice(&args);
+    let o = run_capped(1024, &limited);
+    assert_clean_failure(&o, "count");
+    assert!(stderr(&o).contains("memory"), "{}", stderr(&o));
+    // A PLY header claiming 10^12 vertices (or an element with no properties) in a tiny file.
+    for header in [
+        "ply\nformat binary_little_endian 1.0\nelement vertex 1000000000000\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n",
+        "ply\nformat binary_little_endian 1.0\nelement junk 1000000000000\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n",
+    ] {
+        let ply = dir.path().join("bomb.ply");
+        std::fs::write(&ply, header).unwrap();
+        let e = inimtrace::io::load_mesh(&ply).unwrap_err().to_string();
+        assert!(e.contains("bomb.ply") && (e.contains("truncated") || e.contains("no properties")), "{e}");
+    }
+}

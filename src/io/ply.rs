@@ -404,6 +404,7 @@ pub(super) fn load_ply(path: &Path, bytes: &[u8]) -> Result<Mesh> {
     };
 
     let body = &bytes[header.body_start..];
+    check_claimed_counts(path, &header, body.len())?;
     match header.format {
         PlyFormat::Ascii => {
             let text = std::str::from_utf8(body).map_err(|_| Error::parse(path, "ASCII PLY body is not valid text"))?;
@@ -420,6 +421,46 @@ pub(super) fn load_ply(path: &Path, bytes: &[u8]) -> Result<Mesh> {
             read_ply_body(path, &header.elements, &layout, face_prop, &mut reader)
         }
     }
+}
+
+/// Refuses a header whose element counts cannot fit in the body: every element instance takes
+/// at least its fixed-size properties (binary) or one character per property plus a separator
+/// (ASCII), and an element without properties is refused outright. A few bytes of header must
+/// not make the reader loop or allocate for billions of elements.
+fn check_claimed_counts(path: &Path, header: &PlyHeader, body_bytes: usize) -> Result<()> {
+    let mut need: u64 = 0;
+    for element in &header.elements {
+        if element.count > 0 && element.props.is_empty() {
+            return Err(Error::parse(
+                path,
+                format!(
+                    "bad PLY header: element '{}' claims {} instances but has no properties",
+                    element.name, element.count
+                ),
+            ));
+        }
+        let each: u64 = element
+            .props
+            .iter()
+            .map(|p| match (header.format, &p.kind) {
+                (PlyFormat::Ascii, _) => 2,
+                (_, PropKind::Scalar(s)) => s.size() as u64,
+                (_, PropKind::List { count, .. }) => count.size() as u64,
+            })
+            .sum();
+        need = need.saturating_add((element.count as u64).saturating_mul(each));
+    }
+    if need > body_bytes as u64 + 1 {
+        let counts: Vec<String> = header.elements.iter().map(|e| format!("{} {}", e.count, e.name)).collect();
+        return Err(Error::parse(
+            path,
+            format!(
+                "header claims {} but the body has only {body_bytes} bytes, fewer than the {need} those need (truncated file?)",
+                counts.join(", ")
+            ),
+        ));
+    }
+    Ok(())
 }
 
 fn read_ply_body(

@@ -372,7 +372,7 @@ impl ObjectInput<'_> {
         self.only(&["center", "count", "spacing", "radius", "segments"])?;
         let center = finite3(src, &f("center"), o.center.ok_or_else(|| Error::invalid(src, f("center"), "missing"))?)?;
         let count = o.count.ok_or_else(|| Error::invalid(src, f("count"), "missing ([nx, ny])"))?;
-        if count[0] == 0 || count[1] == 0 || count[0] * count[1] > 1_000_000 {
+        if count[0] == 0 || count[1] == 0 || count[0].checked_mul(count[1]).is_none_or(|n| n > 1_000_000) {
             return Err(Error::invalid(src, f("count"), format!("need 1..=1e6 spheres, got {count:?}")));
         }
         let positive = |name: &str, v: Option<f64>| -> Result<f64> {
@@ -388,10 +388,16 @@ impl ObjectInput<'_> {
         if !(4..=4096).contains(&segments) {
             return Err(Error::invalid(src, f("segments"), format!("must be 4..=4096, got {segments}")));
         }
-        let tris = count[0] * count[1] * 2 * segments * (segments / 2 - 1);
+        // At most 1e6 spheres of at most 4096 segments: no overflow in u64.
+        let tris = (count[0] * count[1]) as u64 * 2 * segments as u64 * (segments / 2 - 1) as u64;
         if tris > 100_000_000 {
             return Err(Error::invalid(src, f("count"), format!("{tris} triangles is over 1e8")));
         }
+        // The mesh (indices, positions, normals, uvs) and an acceleration structure over it take
+        // about 100 bytes per triangle.
+        let mut estimate = crate::budget::Estimate::default();
+        estimate.add("the sphere grid's triangles and their acceleration structure", f("count"), tris, 100);
+        estimate.check_memory(crate::budget::memory_limit(), src)?;
         Ok(Shape::Mesh(Arc::new(procedural::sphere_grid(center, count, spacing, radius, segments))))
     }
 
