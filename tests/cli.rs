@@ -134,6 +134,7 @@ fn bad_input_gives_one_clear_error_and_never_panics() {
     };
     let good_display = std::fs::read_to_string(root().join("displays/paper.toml")).unwrap();
     let out = d.join("o").display().to_string();
+    let out_exr = d.join("o.exr").display().to_string();
 
     expect_error(&["assess", "does-not-exist.toml"], &["does-not-exist.toml"]);
     expect_error(&["assess", d.to_str().unwrap()], &["directory"]);
@@ -187,7 +188,7 @@ fn bad_input_gives_one_clear_error_and_never_panics() {
     let p = w("bad.exr", "this is not an EXR file");
     expect_error(&["compare", &p, &p], &["bad.exr"]);
     let p = w("empty.exr", "");
-    expect_error(&["simulate", &p, "--pinhole", "--out", &out], &["empty.exr"]);
+    expect_error(&["simulate", &p, "--pinhole", "--out", &out_exr], &["empty.exr"]);
 
     // An EXR display image holding NaN: refused with the pixel and channel named.
     {
@@ -202,7 +203,7 @@ fn bad_input_gives_one_clear_error_and_never_panics() {
         let p = d.join("nan.exr");
         Image::from_channels((4, 4), channels).write().to_file(&p).unwrap();
         expect_error(
-            &["simulate", p.to_str().unwrap(), "--pinhole", "--out", &out],
+            &["simulate", p.to_str().unwrap(), "--pinhole", "--out", &out_exr],
             &["nan.exr", "row 1", "col 1", "channel G"],
         );
     }
