@@ -300,7 +300,7 @@ fn agrees_with_embree_on_bunny() {
     let make_ray = |i: usize| -> Ray {
         let mut rng = Rng(0x9e37_79b9_7f4a_7c15 ^ (i as u64).wrapping_mul(0x2545_F491_4F6C_DD1D));
         rng.next();
-        if i % 2 == 0 {
+        if i.is_multiple_of(2) {
             // Camera-like: from within a 4 mm pupil towards a 70 mm square around the bunny.
             let o = DVec3::new(rng.range(-2.0, 2.0), rng.range(-2.0, 2.0), 0.0);
             ray(o, DVec3::new(rng.range(-35.0, 35.0), rng.range(-35.0, 35.0), 300.0) - o)

@@ -21,7 +21,7 @@ fn awkward_image() -> RgbImage {
         for c in 0..w {
             let mut p = [0.0f32; 3];
             for v in &mut p {
-                *v = if k % 3 == 0 {
+                *v = if k.is_multiple_of(3) {
                     special[k / 3 % special.len()]
                 } else {
                     f32::from_bits(0x3e00_0000 + (k as u32).wrapping_mul(2_654_435_761) % 0x0180_0000)

@@ -133,33 +133,6 @@ pub fn write_preview(path: &Path, img: &RgbImage) -> Result<()> {
     write_rgb8(path, img.width, img.height, &to_srgb8(img))
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn table_matches_formula() {
-        let t = table();
-        // Around every threshold, and a sweep over all floats in [0, 1] with a prime stride.
-        for k in 1..256 {
-            let b = t.threshold[k].to_bits();
-            for bits in b - 3..=b + 3 {
-                let v = f32::from_bits(bits);
-                assert_eq!(srgb_encode_fast(t, v), srgb_encode(v), "v = {v:e}");
-            }
-        }
-        let mut bits = 0u32;
-        while bits <= 1.0f32.to_bits() {
-            let v = f32::from_bits(bits);
-            assert_eq!(srgb_encode_fast(t, v), srgb_encode(v), "v = {v:e}");
-            bits += 1009;
-        }
-        for v in [f32::NAN, -1.0, -0.0, 0.0, 1.0, 1.5, f32::INFINITY, f32::NEG_INFINITY, f32::MIN_POSITIVE] {
-            assert_eq!(srgb_encode_fast(t, v), srgb_encode(v), "v = {v:e}");
-        }
-    }
-}
-
 /// Loads a PNG texture (sRGB-encoded) as linear texels. The size in the PNG header is checked
 /// against the memory limit ([`crate::budget::memory_limit`]) before anything is decoded: a small
 /// file claiming a huge image is an error naming the file, not an allocation. Errors name the file.
@@ -194,4 +167,31 @@ pub fn load_texture(path: &Path, filter: Filter, wrap: Wrap) -> Result<ImageText
         .map(|p| DVec3::new(srgb_to_linear(p[0] as f64), srgb_to_linear(p[1] as f64), srgb_to_linear(p[2] as f64)))
         .collect();
     ImageTexture::new(w, h, texels, filter, wrap).ok_or_else(|| Error::parse(path, "texture image is empty"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn table_matches_formula() {
+        let t = table();
+        // Around every threshold, and a sweep over all floats in [0, 1] with a prime stride.
+        for k in 1..256 {
+            let b = t.threshold[k].to_bits();
+            for bits in b - 3..=b + 3 {
+                let v = f32::from_bits(bits);
+                assert_eq!(srgb_encode_fast(t, v), srgb_encode(v), "v = {v:e}");
+            }
+        }
+        let mut bits = 0u32;
+        while bits <= 1.0f32.to_bits() {
+            let v = f32::from_bits(bits);
+            assert_eq!(srgb_encode_fast(t, v), srgb_encode(v), "v = {v:e}");
+            bits += 1009;
+        }
+        for v in [f32::NAN, -1.0, -0.0, 0.0, 1.0, 1.5, f32::INFINITY, f32::NEG_INFINITY, f32::MIN_POSITIVE] {
+            assert_eq!(srgb_encode_fast(t, v), srgb_encode(v), "v = {v:e}");
+        }
+    }
 }
