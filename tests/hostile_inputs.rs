@@ -375,3 +375,60 @@ fn generated_and_mesh_geometry_cannot_overflow_or_loop() {
         assert!(e.contains("bomb.ply") && (e.contains("truncated") || e.contains("no properties")), "{e}");
     }
 }
+
+#[test]
+fn every_error_names_its_file_and_field() {
+    let dir = tempfile::tempdir().unwrap();
+    // A radiance that overflows 32-bit float images: refused where it is set, not reported
+    // later as "a bug in the renderer" at a pixel.
+    let scene = dir.path().join("bright.toml");
+    std::fs::write(
+        &scene,
+        "name = \"b\"\nbackground = [1e308, 1e308, 1e308]\n[[objects]]\ntype = \"rect\"\ncenter = [0, 0, 400]\n\
+         size = [10, 10]\nmaterial = { albedo = [1, 1, 1] }\n",
+    )
+    .unwrap();
+    let out = dir.path().join("gt.exr");
+    let o = Command::new(inimtrace())
+        .args([
+            "--quiet",
+            "ground-truth",
+            "--pinhole",
+            "--retina",
+            "16",
+            "--scene",
+            scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert_clean_failure(&o, "bright.toml");
+    assert!(stderr(&o).contains("background"), "{}", stderr(&o));
+    // PupilCenter exactly singular: the experiment file, the method and the display are named.
+    let display = dir.path().join("singular.toml");
+    let v2 = 1.0 / (1.0 / 6.427 - 1.0 / 20.0);
+    std::fs::write(
+        &display,
+        format!(
+            "name = \"s\"\neye_to_lenslets = 20.0\nlenslets_to_lcd = {v2}\n[lenslets]\nfocal_length = 6.427\nshift = [0.0, 0.0]\n\
+             pitch = 1.2\n[elemental_images]\nshift = [0.0, 0.0]\npitch = 1.58\n[lcd]\nsize = [21.6, 21.6]\nresolution = [64, 64]\n"
+        ),
+    )
+    .unwrap();
+    let exp = dir.path().join("pc.toml");
+    std::fs::write(
+        &exp,
+        "name = \"pc\"\nscene = \"builtin:paper\"\ndisplay = \"singular.toml\"\nmethods = [\"LC\", \"PC\"]\n[eye]\nretina_resolution = 16\n\
+         [[eye_cases]]\nname = \"Pin\"\npinhole = true\n",
+    )
+    .unwrap();
+    let o = Command::new(inimtrace())
+        .current_dir(dir.path())
+        .args(["--quiet", "assess", exp.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_clean_failure(&o, "pc.toml");
+    let e = stderr(&o);
+    assert!(e.contains("methods[1]") && e.contains("singular.toml") && e.contains("PupilCenter"), "{e}");
+}

@@ -312,7 +312,10 @@ impl Experiment {
             cases.push(EyeCase { name: c.name.clone(), eye });
         }
         if methods.contains(&Method::PupilCenter) {
-            crate::optics::transfer::check_pupil_center(&display, render.eye_position)?;
+            crate::optics::transfer::check_pupil_center(&display, render.eye_position).map_err(|e| {
+                let i = methods.iter().position(|m| *m == Method::PupilCenter).unwrap_or(0);
+                Error::invalid(source, format!("methods[{i}]"), format!("{e} (display `{}`)", spec.display))
+            })?;
         }
         Ok(Self {
             name: spec.name.clone(),

@@ -183,7 +183,20 @@ pub fn write_atomic(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Res
     if result.is_err() {
         let _ = fs::remove_file(&temp);
     }
-    result
+    // Errors name the file the user asked for, not the temporary one.
+    result.map_err(|e| rename_in_error(e, &temp, path))
+}
+
+fn rename_in_error(e: Error, temp: &Path, path: &Path) -> Error {
+    let temp_text = temp.display().to_string();
+    match e {
+        Error::Io { path: p, source } if p == temp => Error::Io { path: path.to_path_buf(), source },
+        Error::Parse { path: p, message } if p == temp => Error::Parse { path: path.to_path_buf(), message },
+        Error::Invalid { source_name, field, message } if source_name == temp_text => {
+            Error::Invalid { source_name: path.display().to_string(), field, message }
+        }
+        other => other,
+    }
 }
 
 /// A file name without directories, `..` or a leading dot: the names a run writes.

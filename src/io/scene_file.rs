@@ -158,10 +158,21 @@ fn finite3(src: &str, field: &str, v: [f64; 3]) -> Result<DVec3> {
     }
 }
 
+/// The largest albedo or radiance a scene may hold: images are written as f32, whose largest
+/// value is about 3.4e38, and a lit pixel (albedo times light radiance) must stay far below it.
+pub const MAX_RADIANCE: f64 = 1e15;
+
 fn albedo3(src: &str, field: &str, v: [f64; 3]) -> Result<DVec3> {
     let a = finite3(src, field, v)?;
     if a.min_element() < 0.0 {
         return Err(Error::invalid(src, field, format!("albedo must be >= 0, got {v:?}")));
+    }
+    if a.max_element() > MAX_RADIANCE {
+        return Err(Error::invalid(
+            src,
+            field,
+            format!("must be at most {MAX_RADIANCE:e} (images are 32-bit float), got {v:?}"),
+        ));
     }
     Ok(a)
 }
