@@ -12,6 +12,7 @@ pub mod bench;
 pub mod error;
 pub mod experiment;
 pub mod io;
+pub mod measure;
 pub mod metrics;
 pub mod optics;
 pub mod progress;

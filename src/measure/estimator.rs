@@ -1,0 +1,316 @@
+//! The paired estimator of the converged measurement: the ground-truth and perceived retinal
+//! images of one eye case (paper Sec. 2.3, 4.1) from the same eye rays.
+//!
+//! Every sample of a retina pixel ([`super::sampler`]) is ONE eye ray: a point of the pixel's
+//! square (its tangent) and a point of the pupil. The ray's radiance into the scene is the ground
+//! truth's sample ([`crate::render::retina::eye_scene_ray`] and the radiance field); the same ray
+//! traced retina -> eye lens -> lenslet -> LCD by eq. (1) reads every method's display image at
+//! the LCD pixel it meets (a ray that misses the LCD carries black and still counts). Because
+//! the images share their rays, the noise of their difference is much smaller than the noise of
+//! each.
+//!
+//! [`Replicates`] keeps, for each of R independent replicates (independent scrambles) and each
+//! pixel, the mean of every image over that replicate's samples; sums are taken in `f64` over a
+//! pass and stored as `f32` means. More samples are added by [`Replicates::extend`] (points
+//! `N..2N` of the same sequences), so nothing already traced is traced again.
+
+use glam::DVec2;
+use rayon::prelude::*;
+
+use super::sampler::Sampler;
+use crate::optics::display::PixelIndexer;
+use crate::optics::{Display, Eye, Retina};
+use crate::progress::Progress;
+use crate::raster::RgbImage;
+use crate::render::retina::{eye_scene_ray, DisplayStack};
+use crate::render::{RadianceField, Sample};
+
+/// One eye ray of the measurement: the tangent of a retina point and a pupil point (mm from
+/// the pupil centre).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct EyeSample {
+    pub tangent: DVec2,
+    pub pupil: DVec2,
+}
+
+/// What is measured along each eye ray: the radiance of several images, image 0 being the
+/// reference (the ground truth) and the others the images scored against it.
+pub trait PairedSource: Sync {
+    /// Number of images (at least 2: the reference and one scored image).
+    fn images(&self) -> usize;
+
+    /// The radiance of every image along every ray: `out[i * images + k]` is image `k`'s RGB
+    /// for `samples[i]` (`out.len() == samples.len() * images`).
+    fn eval(&self, samples: &[EyeSample], out: &mut [[f64; 3]]);
+}
+
+/// Eq. (1) from the eye to the LCD for any retina tangent and pupil point, with the per-eye
+/// constants folded in. Same arithmetic as the grid simulation's `FastTransfer`, so at one of
+/// its pupil-grid points both give the same LCD point bit for bit (tested).
+pub struct EyeToLcd<'a> {
+    display: &'a Display,
+    eye_xy: DVec2,
+    v0: f64,
+    d1: f64,
+    to_lenslets: f64,
+    lenslet_power: f64,
+    v2: f64,
+    indexer: PixelIndexer,
+}
+
+impl<'a> EyeToLcd<'a> {
+    pub fn new(display: &'a Display, eye: &Eye) -> Self {
+        Self {
+            display,
+            eye_xy: eye.position.truncate(),
+            v0: eye.retina_distance,
+            d1: eye.power(),
+            to_lenslets: display.lenslet_z() - eye.position.z,
+            lenslet_power: display.lenslet_power(),
+            v2: display.lenslets_to_lcd,
+            indexer: PixelIndexer::new(&display.lcd),
+        }
+    }
+
+    /// Where the eye ray for retina direction `tangent` through pupil point `pupil` meets the
+    /// LCD plane.
+    #[inline(always)]
+    pub fn lcd_point(&self, tangent: DVec2, pupil: DVec2) -> DVec2 {
+        let x1 = pupil + self.eye_xy;
+        let w1 = tangent + (pupil / self.v0 - pupil * self.d1);
+        let x2 = x1 + w1 * self.to_lenslets;
+        let c = self.display.lenslets.center(self.display.lenslets.nearest(x2));
+        let w2 = w1 - (x2 - c) * self.lenslet_power;
+        x2 + w2 * self.v2
+    }
+
+    /// The LCD pixel that ray meets, if any.
+    #[inline(always)]
+    pub fn pixel_index(&self, tangent: DVec2, pupil: DVec2) -> Option<usize> {
+        self.indexer.index(self.lcd_point(tangent, pupil))
+    }
+}
+
+/// The experiment's paired source: image 0 is the ground truth (the eye ray into the scene),
+/// image `1 + m` what the eye perceives of display image `m` of `stack`.
+pub struct DisplaySource<'a, F: RadianceField + ?Sized> {
+    eye: &'a Eye,
+    field: &'a F,
+    transfer: EyeToLcd<'a>,
+    stack: &'a DisplayStack,
+}
+
+impl<'a, F: RadianceField + ?Sized> DisplaySource<'a, F> {
+    pub fn new(display: &'a Display, eye: &'a Eye, field: &'a F, stack: &'a DisplayStack) -> Self {
+        Self { eye, field, transfer: EyeToLcd::new(display, eye), stack }
+    }
+}
+
+impl<F: RadianceField + ?Sized> PairedSource for DisplaySource<'_, F> {
+    fn images(&self) -> usize {
+        1 + self.stack.len()
+    }
+
+    fn eval(&self, samples: &[EyeSample], out: &mut [[f64; 3]]) {
+        let k = self.images();
+        let m = self.stack.len();
+        debug_assert_eq!(out.len(), samples.len() * k);
+        if self.field.prefers_batches() {
+            let rays: Vec<_> = samples.iter().map(|s| eye_scene_ray(self.eye, s.tangent, s.pupil)).collect();
+            let mut hits = vec![Sample::default(); rays.len()];
+            self.field.sample_many(&rays, &mut hits);
+            for (o, h) in out.chunks_exact_mut(k).zip(&hits) {
+                o[0] = h.radiance.to_array();
+            }
+        } else {
+            for (o, s) in out.chunks_exact_mut(k).zip(samples) {
+                o[0] = self.field.radiance(&eye_scene_ray(self.eye, s.tangent, s.pupil)).to_array();
+            }
+        }
+        for (o, s) in out.chunks_exact_mut(k).zip(samples) {
+            match self.transfer.pixel_index(s.tangent, s.pupil) {
+                Some(idx) => {
+                    let px = self.stack.pixel(idx);
+                    for j in 0..m {
+                        o[1 + j] = [f64::from(px[3 * j]), f64::from(px[3 * j + 1]), f64::from(px[3 * j + 2])];
+                    }
+                }
+                None => o[1..].fill([0.0; 3]),
+            }
+        }
+    }
+}
+
+/// Samples handed to a source at once (per worker).
+const BATCH: usize = 2048;
+
+/// Per-replicate, per-pixel means of every image of a [`PairedSource`] on a square retina.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Replicates {
+    resolution: usize,
+    replicates: usize,
+    images: usize,
+    samples: u32,
+    /// `[pixel][replicate][image][channel]`.
+    means: Vec<f32>,
+}
+
+impl Replicates {
+    /// No samples yet: every mean is 0 until [`Replicates::extend`] adds some.
+    pub fn new(resolution: usize, replicates: usize, images: usize) -> Self {
+        Self {
+            resolution,
+            replicates,
+            images,
+            samples: 0,
+            means: vec![0.0; resolution * resolution * replicates * images * 3],
+        }
+    }
+
+    /// Replicates whose means are given: `f(pixel, replicate, image, channel)`, as if from
+    /// `samples` samples per replicate (for tests and for replicates computed elsewhere).
+    pub fn from_fn(
+        resolution: usize,
+        replicates: usize,
+        images: usize,
+        samples: u32,
+        f: impl Fn(usize, usize, usize, usize) -> f32,
+    ) -> Self {
+        let mut reps = Self::new(resolution, replicates, images);
+        reps.samples = samples;
+        let stride = replicates * images * 3;
+        for (i, v) in reps.means.iter_mut().enumerate() {
+            let (p, rest) = (i / stride, i % stride);
+            *v = f(p, rest / (images * 3), (rest / 3) % images, rest % 3);
+        }
+        reps
+    }
+
+    /// Retina pixels per side.
+    pub fn resolution(&self) -> usize {
+        self.resolution
+    }
+    pub fn replicates(&self) -> usize {
+        self.replicates
+    }
+    pub fn images(&self) -> usize {
+        self.images
+    }
+    /// Samples per pixel in each replicate.
+    pub fn samples_per_replicate(&self) -> u32 {
+        self.samples
+    }
+    /// Samples per pixel over all replicates.
+    pub fn samples_per_pixel(&self) -> u64 {
+        u64::from(self.samples) * self.replicates as u64
+    }
+
+    /// The means of every replicate and image at `pixel` (row-major index):
+    /// `[replicate][image][channel]`.
+    #[inline]
+    pub fn pixel(&self, pixel: usize) -> &[f32] {
+        let stride = self.replicates * self.images * 3;
+        &self.means[pixel * stride..(pixel + 1) * stride]
+    }
+
+    /// Mean of image `k`, channel `c` in replicate `r` at `pixel`.
+    #[inline]
+    pub fn value(&self, pixel: usize, r: usize, k: usize, c: usize) -> f32 {
+        self.pixel(pixel)[(r * self.images + k) * 3 + c]
+    }
+
+    /// Image `k` of replicate `r`.
+    pub fn replicate_image(&self, k: usize, r: usize) -> RgbImage {
+        let n = self.resolution;
+        let mut img = RgbImage::new(n, n);
+        for (p, px) in img.pixels.iter_mut().enumerate() {
+            *px = std::array::from_fn(|c| self.value(p, r, k, c));
+        }
+        img
+    }
+
+    /// Image `k` averaged over the replicates (in replicate order, in `f64`).
+    pub fn mean_image(&self, k: usize) -> RgbImage {
+        let n = self.resolution;
+        let mut img = RgbImage::new(n, n);
+        let inv = 1.0 / self.replicates as f64;
+        img.pixels.par_iter_mut().enumerate().for_each(|(p, px)| {
+            *px = std::array::from_fn(|c| {
+                let s: f64 = (0..self.replicates).map(|r| f64::from(self.value(p, r, k, c))).sum();
+                (s * inv) as f32
+            });
+        });
+        img
+    }
+
+    /// Adds samples `N..total` of every replicate's sequences to every pixel (N: the samples
+    /// taken so far), through `source`. Rows run in parallel; each pixel sums its samples in
+    /// index order, so the result does not depend on the thread count.
+    pub fn extend<S: PairedSource + ?Sized>(
+        &mut self,
+        source: &S,
+        sampler: &Sampler,
+        retina: &Retina,
+        total: u32,
+        progress: &Progress,
+    ) {
+        assert_eq!(retina.resolution, self.resolution, "retina and replicate storage differ in size");
+        assert_eq!(source.images(), self.images, "source and replicate storage differ in images");
+        let old = self.samples;
+        if total <= old {
+            return;
+        }
+        let n = self.resolution;
+        let (nr, k) = (self.replicates, self.images);
+        let fresh = (total - old) as usize;
+        let inv_total = 1.0 / f64::from(total);
+        let old_weight = f64::from(old);
+        self.means.par_chunks_mut(n * nr * k * 3).enumerate().for_each(|(row, out)| {
+            let mut samples = Vec::with_capacity(BATCH.min(n * fresh));
+            let mut values = vec![[0.0f64; 3]; BATCH.min(n * fresh) * k];
+            let mut sums = vec![0.0f64; n * k * 3];
+            let mut owners = Vec::with_capacity(BATCH.min(n * fresh));
+            for r in 0..nr {
+                sums.iter_mut().for_each(|s| *s = 0.0);
+                // (column, sample) pairs, column-major, cut into batches anywhere.
+                let mut j = 0;
+                while j < n * fresh {
+                    let end = (j + BATCH).min(n * fresh);
+                    samples.clear();
+                    owners.clear();
+                    let mut col = usize::MAX;
+                    let mut scramble = 0;
+                    for jj in j..end {
+                        let (c, i) = (jj / fresh, jj % fresh);
+                        if c != col {
+                            col = c;
+                            scramble = sampler.scramble((row * n + c) as u64, r as u32);
+                        }
+                        let (frac, pupil) = sampler.point(scramble, old + i as u32);
+                        samples.push(EyeSample { tangent: retina.tangent(row, c, frac), pupil });
+                        owners.push(c);
+                    }
+                    let vals = &mut values[..samples.len() * k];
+                    source.eval(&samples, vals);
+                    for (v, &c) in vals.chunks_exact(k).zip(&owners) {
+                        let dst = &mut sums[c * k * 3..(c + 1) * k * 3];
+                        for (img, rgb) in v.iter().enumerate() {
+                            dst[3 * img] += rgb[0];
+                            dst[3 * img + 1] += rgb[1];
+                            dst[3 * img + 2] += rgb[2];
+                        }
+                    }
+                    j = end;
+                }
+                for c in 0..n {
+                    let dst = &mut out[(c * nr + r) * k * 3..(c * nr + r + 1) * k * 3];
+                    for (d, s) in dst.iter_mut().zip(&sums[c * k * 3..(c + 1) * k * 3]) {
+                        *d = ((f64::from(*d) * old_weight + s) * inv_total) as f32;
+                    }
+                }
+            }
+            progress.inc(1);
+        });
+        self.samples = total;
+    }
+}
