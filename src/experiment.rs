@@ -13,7 +13,9 @@ use serde::{Deserialize, Serialize};
 use crate::accel::analytic::AnalyticRects;
 use crate::error::{Error, Result};
 use crate::io::config::{self, read_text};
-use crate::metrics::{self, Psnr, Ssim, SsimConstants};
+use crate::measure::spec::{EstimatorKind, MeasurementSpec};
+use crate::measure::stats::Estimate;
+use crate::metrics::{self, SsimConstants};
 use crate::optics::{Aperture, Display, Eye, Focus, Retina};
 use crate::progress::Progress;
 use crate::raster::RgbImage;
@@ -120,6 +122,9 @@ pub struct ExperimentSpec {
     /// "wang2004" (default) or "framework-8bit".
     #[serde(default)]
     pub ssim: SsimConstants,
+    /// `[measurement]`: the estimator, its targets and budget (none: the grid estimator).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub measurement: Option<MeasurementSpec>,
     #[serde(default)]
     pub display_render: DisplayRenderSpec,
     #[serde(default)]
@@ -147,6 +152,7 @@ impl ExperimentSpec {
             display: builtin(),
             methods: default_methods(),
             ssim: SsimConstants::Wang2004,
+            measurement: Some(MeasurementSpec::grid()),
             display_render: DisplayRenderSpec::default(),
             eye: EyeSpec::default(),
             eye_cases: Self::paper_cases(),
@@ -162,6 +168,18 @@ impl ExperimentSpec {
             description: Some("What the published framework (2020) actually ran: 2 mm pupil (ApertureRadius default 1 mm), 5 x 5 pupil grid (21 samples), one sample per pixel, SSIM with 8-bit constants.".into()),
             ssim: SsimConstants::Framework8Bit,
             eye: EyeSpec { pupil_diameter: 2.0, pupil_grid: 5, ..EyeSpec::default() },
+            ..Self::paper()
+        }
+    }
+
+    /// The paper's experiment measured converged (`experiments/paper-converged.toml`): the
+    /// paper's scene, display, methods and eyes; each retina pixel averaged over its square and
+    /// the pupil disk, every score to +-0.02 dB and +-0.002 (95%).
+    pub fn paper_converged() -> Self {
+        Self {
+            name: "paper-converged".into(),
+            description: Some("The paper's experiment (Sec. 4.1: 5 mm pupil, LA 5 x 5, one sample per display pixel) measured converged: each retina pixel is the average over its square and the continuous pupil disk, every PSNR within +-0.02 dB and SSIM within +-0.002 at 95%.".into()),
+            measurement: Some(MeasurementSpec::default()),
             ..Self::paper()
         }
     }
@@ -190,6 +208,8 @@ pub struct Experiment {
     pub retina: Retina,
     pub cases: Vec<EyeCase>,
     pub ssim: SsimConstants,
+    /// How Table 1 is measured (`[measurement]`; the grid estimator when absent).
+    pub measurement: MeasurementSpec,
     pub spec: ExperimentSpec,
 }
 
@@ -293,6 +313,9 @@ impl Experiment {
         if methods.contains(&Method::PupilCenter) {
             crate::render::display_image::check_pupil_center(&display, render.eye_position)?;
         }
+        let measurement = spec.measurement.clone().unwrap_or_else(MeasurementSpec::grid);
+        measurement.validate(source)?;
+        measurement.check_grid_only(source, e.pupil_grid, e.retina_samples)?;
         Ok(Self {
             name: spec.name.clone(),
             source: source.into(),
@@ -303,6 +326,7 @@ impl Experiment {
             retina,
             cases,
             ssim: spec.ssim,
+            measurement,
             spec,
         })
     }
@@ -319,6 +343,12 @@ impl Experiment {
         Self::from_spec(ExperimentSpec::paper(), "built-in paper experiment", Path::new("."))
             .expect("built-in experiment is valid")
     }
+
+    /// The paper's experiment measured converged, built in (what `inimtrace assess` runs).
+    pub fn paper_converged() -> Self {
+        Self::from_spec(ExperimentSpec::paper_converged(), "built-in paper-converged experiment", Path::new("."))
+            .expect("built-in experiment is valid")
+    }
 }
 
 fn prefix_field(err: Error, prefix: &str) -> Error {
@@ -330,13 +360,22 @@ fn prefix_field(err: Error, prefix: &str) -> Error {
     }
 }
 
-/// One score: a method under an eye case.
+/// One score: a method under an eye case. The converged estimator adds the 95% half-widths
+/// (`ci95`, `channels_ci95` in `psnr` and `ssim`), its samples and whether the targets were met.
 #[derive(Clone, Debug, Serialize)]
 pub struct Score {
     pub method: String,
     pub eye_case: String,
-    pub psnr: Psnr,
-    pub ssim: Ssim,
+    pub psnr: Estimate,
+    pub ssim: Estimate,
+    /// Samples per retina pixel, over all replicates (converged estimator).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub samples_per_pixel: Option<u64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub replicates: Option<usize>,
+    /// Both 95% half-widths within the experiment's targets.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub target_met: Option<bool>,
 }
 
 /// Wall time of one stage.
@@ -429,14 +468,21 @@ fn assess_with<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
     // method, then the scores: the same stage functions `inimtrace bench` times.
     let (displays, depths) = render_display_images(exp, with_depth, opts.quiet, &mut stages)?;
     let stack = pack_display_images(exp, &displays.iter().collect::<Vec<_>>(), &mut stages)?;
-    let mut gts = Vec::new();
-    let mut sims = Vec::new();
-    for case in &exp.cases {
-        gts.push(ground_truth_image(exp, case, shade, opts.quiet, &mut stages));
-        sims.push(perceived_images(exp, case, &stack, opts.quiet, &mut stages)?);
-    }
+    // The converged estimator (src/measure/) or the grid one.
+    let (gts, sims, scores) = match crate::measure::run::table1(exp, shade, &stack, opts.quiet, &mut stages)? {
+        Some(table) => table,
+        None => {
+            let mut gts = Vec::new();
+            let mut sims = Vec::new();
+            for case in &exp.cases {
+                gts.push(ground_truth_image(exp, case, shade, opts.quiet, &mut stages));
+                sims.push(perceived_images(exp, case, &stack, opts.quiet, &mut stages)?);
+            }
+            let scores = table1_scores(exp, &gts, &sims, &mut stages)?;
+            (gts, sims, scores)
+        }
+    };
     drop(stack);
-    let scores = table1_scores(exp, &gts, &sims, &mut stages)?;
 
     // 4. Images: EXR + PNG preview each, written in parallel.
     let t = Instant::now();
@@ -460,8 +506,13 @@ fn assess_with<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
                 v.push(("inimtrace:pupil_diameter_mm", format!("{pupil_diameter}")));
             }
         }
-        v.push(("inimtrace:pupil_samples", case.eye.pupil_samples().len().to_string()));
-        v.push(("inimtrace:retina_samples_per_pixel", (exp.retina.samples_per_pixel.pow(2)).to_string()));
+        match scores.iter().find(|s| s.eye_case == case.name).and_then(|s| s.samples_per_pixel) {
+            Some(spp) => v.extend(crate::measure::run::exr_attributes(exp, spp)),
+            None => {
+                v.push(("inimtrace:pupil_samples", case.eye.pupil_samples().len().to_string()));
+                v.push(("inimtrace:retina_samples_per_pixel", (exp.retina.samples_per_pixel.pow(2)).to_string()));
+            }
+        }
         v.push(("inimtrace:retina_half_tangent", exp.retina.half_tangent.to_string()));
         v
     };
@@ -639,8 +690,11 @@ pub fn table1_scores<G: Borrow<RgbImage> + Sync>(
             Ok(Score {
                 method: exp.methods[m].short_name().into(),
                 eye_case: exp.cases[c].name.clone(),
-                psnr: metrics::psnr(&sims[c][m], gts[c].borrow())?,
-                ssim: metrics::ssim(&sims[c][m], gts[c].borrow(), exp.ssim)?,
+                psnr: metrics::psnr(&sims[c][m], gts[c].borrow())?.into(),
+                ssim: metrics::ssim(&sims[c][m], gts[c].borrow(), exp.ssim)?.into(),
+                samples_per_pixel: None,
+                replicates: None,
+                target_met: None,
             })
         })
         .collect::<Result<_>>()?;
@@ -669,13 +723,13 @@ pub fn table_markdown(report: &AssessReport, exp: &Experiment) -> String {
         s.push_str(&format!("| {} |", case.name));
         let find = |m: &str| report.scores.iter().find(|x| x.method == m && x.eye_case == case.name);
         for m in &methods {
-            let v = find(m).map(|x| metrics::format_db(x.psnr.mean, 2)).unwrap_or_default();
+            let v = find(m).map(crate::measure::report::psnr_cell).unwrap_or_default();
             s.push_str(&format!(" {v} |"));
         }
         // The framework's 8-bit constants pin SSIM near 1: show enough digits to tell methods apart.
         let digits = if exp.ssim == SsimConstants::Framework8Bit { 5 } else { 3 };
         for m in &methods {
-            let v = find(m).map(|x| format!("{:.digits$}", x.ssim.mean)).unwrap_or_default();
+            let v = find(m).map(|x| crate::measure::report::ssim_cell(x, digits)).unwrap_or_default();
             s.push_str(&format!(" {v} |"));
         }
         s.push('\n');
@@ -684,6 +738,9 @@ pub fn table_markdown(report: &AssessReport, exp: &Experiment) -> String {
         "\nPSNR: mean of the R, G, B channel PSNRs (linear values, peak 1). SSIM: Wang et al. 2004 window (11 x 11 Gaussian, sigma 1.5), constants `{}`, mean of channels.\n",
         report.ssim_constants
     ));
+    if exp.measurement.estimator == EstimatorKind::Converged {
+        s.push_str(&crate::measure::report::table_note(report, exp));
+    }
     s
 }
 
@@ -693,31 +750,38 @@ fn write_reports(report: &AssessReport, exp: &Experiment, out: &Path) -> Result<
         std::fs::write(&path, text).map_err(|e| Error::io(&path, e))
     };
     write("table.md", table_markdown(report, exp))?;
-    let mut csv = String::from("record,experiment,method,eye_case,channel,psnr_db,ssim,stage,seconds\n");
+    // psnr_ci95_db and ssim_ci95 (last, empty for the grid estimator): 95% half-widths.
+    let mut csv =
+        String::from("record,experiment,method,eye_case,channel,psnr_db,ssim,stage,seconds,psnr_ci95_db,ssim_ci95\n");
+    let ci = |h: Option<f64>| h.map(csv_db).unwrap_or_default();
     for s in &report.scores {
         for (c, name) in ["R", "G", "B"].iter().enumerate() {
             csv.push_str(&format!(
-                "score,{},{},{},{},{},{},,\n",
+                "score,{},{},{},{},{},{},,,{},{}\n",
                 report.experiment,
                 s.method,
                 s.eye_case,
                 name,
                 csv_db(s.psnr.channels[c]),
-                s.ssim.channels[c]
+                s.ssim.channels[c],
+                ci(s.psnr.channels_ci95.map(|h| h[c])),
+                ci(s.ssim.channels_ci95.map(|h| h[c])),
             ));
         }
         csv.push_str(&format!(
-            "score,{},{},{},mean,{},{},,\n",
+            "score,{},{},{},mean,{},{},,,{},{}\n",
             report.experiment,
             s.method,
             s.eye_case,
             csv_db(s.psnr.mean),
-            s.ssim.mean
+            s.ssim.mean,
+            ci(s.psnr.ci95),
+            ci(s.ssim.ci95),
         ));
     }
     for st in &report.stages {
         csv.push_str(&format!(
-            "stage,{},{},{},,,,{},{}\n",
+            "stage,{},{},{},,,,{},{},,\n",
             report.experiment,
             st.method.as_deref().unwrap_or(""),
             st.eye_case.as_deref().unwrap_or(""),
@@ -725,7 +789,7 @@ fn write_reports(report: &AssessReport, exp: &Experiment, out: &Path) -> Result<
             st.seconds
         ));
     }
-    csv.push_str(&format!("stage,{},,,,,,total,{}\n", report.experiment, report.total_seconds));
+    csv.push_str(&format!("stage,{},,,,,,total,{},,\n", report.experiment, report.total_seconds));
     write("results.csv", csv)?;
     let json = serde_json::to_string_pretty(report)
         .map_err(|e| Error::Unsupported(format!("cannot serialise the report: {e}")))?;

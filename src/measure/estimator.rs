@@ -127,15 +127,44 @@ impl<F: RadianceField + ?Sized> PairedSource for DisplaySource<'_, F> {
                 o[0] = self.field.radiance(&eye_scene_ray(self.eye, s.tangent, s.pupil)).to_array();
             }
         }
-        for (o, s) in out.chunks_exact_mut(k).zip(samples) {
-            match self.transfer.pixel_index(s.tangent, s.pupil) {
-                Some(idx) => {
-                    let px = self.stack.pixel(idx);
-                    for j in 0..m {
-                        o[1 + j] = [f64::from(px[3 * j]), f64::from(px[3 * j + 1]), f64::from(px[3 * j + 2])];
+        match m {
+            1 => self.read_stack::<1>(samples, out),
+            2 => self.read_stack::<2>(samples, out),
+            3 => self.read_stack::<3>(samples, out),
+            _ => {
+                for (o, s) in out.chunks_exact_mut(k).zip(samples) {
+                    match self.transfer.pixel_index(s.tangent, s.pupil) {
+                        Some(idx) => {
+                            for (dst, v) in o[1..].iter_mut().zip(self.stack.pixel(idx).chunks_exact(3)) {
+                                *dst = [f64::from(v[0]), f64::from(v[1]), f64::from(v[2])];
+                            }
+                        }
+                        None => o[1..].fill([0.0; 3]),
                     }
                 }
-                None => o[1..].fill([0.0; 3]),
+            }
+        }
+    }
+}
+
+impl<F: RadianceField + ?Sized> DisplaySource<'_, F> {
+    /// The perceived images' samples (images 1..=M of `out`) for a stack of `M` display images.
+    #[inline(always)]
+    fn read_stack<const M: usize>(&self, samples: &[EyeSample], out: &mut [[f64; 3]]) {
+        for (o, s) in out.chunks_exact_mut(M + 1).zip(samples) {
+            let o: &mut [[f64; 3]] = &mut o[1..];
+            match self.transfer.pixel_index(s.tangent, s.pupil) {
+                Some(idx) => {
+                    let px: &[f32] = self.stack.pixel(idx);
+                    for j in 0..M {
+                        o[j] = [f64::from(px[3 * j]), f64::from(px[3 * j + 1]), f64::from(px[3 * j + 2])];
+                    }
+                }
+                None => {
+                    for v in o.iter_mut().take(M) {
+                        *v = [0.0; 3];
+                    }
+                }
             }
         }
     }
@@ -143,6 +172,8 @@ impl<F: RadianceField + ?Sized> PairedSource for DisplaySource<'_, F> {
 
 /// Samples handed to a source at once (per worker).
 const BATCH: usize = 2048;
+/// Side of the square tiles of retina pixels traced together.
+const TILE: usize = 16;
 
 /// Per-replicate, per-pixel means of every image of a [`PairedSource`] on a square retina.
 #[derive(Clone, Debug, PartialEq)]
@@ -244,8 +275,8 @@ impl Replicates {
     }
 
     /// Adds samples `N..total` of every replicate's sequences to every pixel (N: the samples
-    /// taken so far), through `source`. Rows run in parallel; each pixel sums its samples in
-    /// index order, so the result does not depend on the thread count.
+    /// taken so far), through `source`. Bands of rows run in parallel; each pixel sums its
+    /// samples in index order, so the result does not depend on the thread count or the tiling.
     pub fn extend<S: PairedSource + ?Sized>(
         &mut self,
         source: &S,
@@ -265,51 +296,75 @@ impl Replicates {
         let fresh = (total - old) as usize;
         let inv_total = 1.0 / f64::from(total);
         let old_weight = f64::from(old);
-        self.means.par_chunks_mut(n * nr * k * 3).enumerate().for_each(|(row, out)| {
-            let mut samples = Vec::with_capacity(BATCH.min(n * fresh));
-            let mut values = vec![[0.0f64; 3]; BATCH.min(n * fresh) * k];
-            let mut sums = vec![0.0f64; n * k * 3];
-            let mut owners = Vec::with_capacity(BATCH.min(n * fresh));
-            for r in 0..nr {
-                sums.iter_mut().for_each(|s| *s = 0.0);
-                // (column, sample) pairs, column-major, cut into batches anywhere.
-                let mut j = 0;
-                while j < n * fresh {
-                    let end = (j + BATCH).min(n * fresh);
-                    samples.clear();
-                    owners.clear();
-                    let mut col = usize::MAX;
-                    let mut scramble = 0;
-                    for jj in j..end {
-                        let (c, i) = (jj / fresh, jj % fresh);
-                        if c != col {
-                            col = c;
-                            scramble = sampler.scramble((row * n + c) as u64, r as u32);
-                        }
-                        let (frac, pupil) = sampler.point(scramble, old + i as u32);
-                        samples.push(EyeSample { tangent: retina.tangent(row, c, frac), pupil });
-                        owners.push(c);
+        let step = 2.0 * retina.half_tangent / n as f64;
+        let batch = BATCH.min(TILE * TILE * fresh);
+        let px_stride = nr * k * 3;
+        // Bands of TILE rows in parallel; inside, TILE x TILE tiles with every replicate and
+        // sample: the rays of one tile meet the LCD in a few small patches (one per lenslet the
+        // pupil covers), which then stay in cache.
+        self.means.par_chunks_mut(TILE * n * px_stride).enumerate().for_each(|(band, out)| {
+            let row0 = band * TILE;
+            let rows = out.len() / (n * px_stride);
+            let mut samples = vec![EyeSample::default(); batch];
+            let mut owners = vec![0u32; batch];
+            let mut values = vec![[0.0f64; 3]; batch * k];
+            let mut sums = vec![0.0f64; TILE * TILE * k * 3];
+            let mut flush = |samples: &[EyeSample], owners: &[u32], sums: &mut [f64]| {
+                let vals = &mut values[..samples.len() * k];
+                source.eval(samples, vals);
+                for (v, &o) in vals.chunks_exact(k).zip(owners) {
+                    let dst = &mut sums[o as usize * k * 3..(o as usize + 1) * k * 3];
+                    for (d, rgb) in dst.chunks_exact_mut(3).zip(v) {
+                        d[0] += rgb[0];
+                        d[1] += rgb[1];
+                        d[2] += rgb[2];
                     }
-                    let vals = &mut values[..samples.len() * k];
-                    source.eval(&samples, vals);
-                    for (v, &c) in vals.chunks_exact(k).zip(&owners) {
-                        let dst = &mut sums[c * k * 3..(c + 1) * k * 3];
-                        for (img, rgb) in v.iter().enumerate() {
-                            dst[3 * img] += rgb[0];
-                            dst[3 * img + 1] += rgb[1];
-                            dst[3 * img + 2] += rgb[2];
-                        }
-                    }
-                    j = end;
                 }
-                for c in 0..n {
-                    let dst = &mut out[(c * nr + r) * k * 3..(c * nr + r + 1) * k * 3];
-                    for (d, s) in dst.iter_mut().zip(&sums[c * k * 3..(c + 1) * k * 3]) {
-                        *d = ((f64::from(*d) * old_weight + s) * inv_total) as f32;
+            };
+            for col0 in (0..n).step_by(TILE) {
+                let cols = TILE.min(n - col0);
+                for r in 0..nr {
+                    sums.iter_mut().for_each(|s| *s = 0.0);
+                    // (pixel, sample) pairs in pixel order, cut into batches anywhere.
+                    let mut filled = 0;
+                    for dr in 0..rows {
+                        let row = row0 + dr;
+                        for dc in 0..cols {
+                            let c = col0 + dc;
+                            let owner = (dr * TILE + dc) as u32;
+                            let mut points = sampler.points((row * n + c) as u64, r as u32, old);
+                            for _ in old..total {
+                                let (frac, pupil) = points.next_point();
+                                // Retina::tangent, with the step hoisted.
+                                let tangent = DVec2::new(
+                                    -retina.half_tangent + (c as f64 + frac.x) * step,
+                                    retina.half_tangent - (row as f64 + frac.y) * step,
+                                );
+                                samples[filled] = EyeSample { tangent, pupil };
+                                owners[filled] = owner;
+                                filled += 1;
+                                if filled == batch {
+                                    flush(&samples, &owners, &mut sums);
+                                    filled = 0;
+                                }
+                            }
+                        }
+                    }
+                    if filled > 0 {
+                        flush(&samples[..filled], &owners[..filled], &mut sums);
+                    }
+                    for dr in 0..rows {
+                        for dc in 0..cols {
+                            let o = (dr * TILE + dc) * k * 3;
+                            let at = ((dr * n + col0 + dc) * nr + r) * k * 3;
+                            for (d, s) in out[at..at + k * 3].iter_mut().zip(&sums[o..o + k * 3]) {
+                                *d = ((f64::from(*d) * old_weight + s) * inv_total) as f32;
+                            }
+                        }
                     }
                 }
             }
-            progress.inc(1);
+            progress.inc(rows as u64);
         });
         self.samples = total;
     }
