@@ -449,10 +449,12 @@ fn replicates_are_nested_and_misses_count_as_black() {
             let v = b.value(p, r, 1, 0);
             // Means of 8 samples of 0 or 1.
             assert!((v * 8.0 - (v * 8.0).round()).abs() < 1e-5, "{v}");
-            match v {
-                v if v == 1.0 => inside += 1,
-                v if v == 0.0 => outside += 1,
-                _ => partial += 1,
+            if v == 1.0 {
+                inside += 1;
+            } else if v == 0.0 {
+                outside += 1;
+            } else {
+                partial += 1;
             }
         }
     }
