@@ -489,3 +489,106 @@ fn the_shipped_converged_experiment_is_the_builtin_and_grid_settings_are_refused
     let e = Experiment::load(&bad).unwrap_err().to_string();
     assert!(e.contains("bad.toml") && e.contains("eye.pupil_grid"), "{e}");
 }
+
+fn inimtrace(args: &[&str]) -> (bool, String, String) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_inimtrace"))
+        .args(args)
+        .arg("--quiet")
+        .output()
+        .expect("binary runs");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn assess_reports_intervals_samples_and_targets_and_is_thread_count_independent() {
+    let dir = tempfile::tempdir().unwrap();
+    let display =
+        std::fs::read_to_string(root().join("displays/paper.toml")).unwrap().replace("[2160, 2160]", "[540, 540]");
+    std::fs::write(dir.path().join("display.toml"), display).unwrap();
+    let exp = std::fs::read_to_string(root().join("experiments/paper-converged.toml"))
+        .unwrap()
+        .replace("../scenes/paper.toml", "builtin:paper")
+        .replace("../displays/paper.toml", "display.toml")
+        .replace("retina_resolution = 512", "retina_resolution = 48")
+        .replace("psnr_ci95_db = 0.02", "psnr_ci95_db = 0.1")
+        .replace("ssim_ci95 = 0.002", "ssim_ci95 = 0.01")
+        .replace("max_samples_per_pixel = 4096", "max_samples_per_pixel = 64")
+        .replace("name = \"paper-converged\"", "name = \"small-converged\"");
+    let path = dir.path().join("small.toml");
+    std::fs::write(&path, exp).unwrap();
+    let (one, two) = (dir.path().join("one"), dir.path().join("two"));
+    let (ok, stdout, stderr) = inimtrace(&["assess", path.to_str().unwrap(), "--out", two.to_str().unwrap()]);
+    assert!(ok, "{stderr}");
+    let (ok, _, stderr) =
+        inimtrace(&["assess", path.to_str().unwrap(), "--out", one.to_str().unwrap(), "--threads", "1"]);
+    assert!(ok, "{stderr}");
+
+    // table.md: value ± half-width in every cell, the estimator, samples and targets.
+    let table = std::fs::read_to_string(two.join("table.md")).unwrap();
+    assert_eq!(table, stdout);
+    for case in ["Pin", "Near", "Cen", "Far"] {
+        let row = table.lines().find(|l| l.starts_with(&format!("| {case} |"))).unwrap();
+        assert_eq!(row.matches('±').count(), 6, "{row}");
+    }
+    for needle in ["Estimator: converged", "Samples per retina pixel (all replicates): Pin ", "Targets (PSNR ± 0.1 dB"]
+    {
+        assert!(table.contains(needle), "table.md lacks `{needle}`:\n{table}");
+    }
+
+    // results.json: intervals, samples, replicates, targets; the settings.
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(two.join("results.json")).unwrap()).unwrap();
+    let scores = json["scores"].as_array().unwrap();
+    assert_eq!(scores.len(), 12);
+    for s in scores {
+        for metric in ["psnr", "ssim"] {
+            let h = s[metric]["ci95"].as_f64().unwrap();
+            assert!(h > 0.0 && h.is_finite(), "{s}");
+            assert_eq!(s[metric]["channels_ci95"].as_array().unwrap().len(), 3);
+        }
+        let spp = s["samples_per_pixel"].as_u64().unwrap();
+        assert!(spp >= 32 && spp <= 64 && spp % 8 == 0, "{s}");
+        assert_eq!(s["replicates"].as_u64(), Some(8));
+        let met = s["target_met"].as_bool().unwrap();
+        assert_eq!(met, s["psnr"]["ci95"].as_f64().unwrap() <= 0.1 && s["ssim"]["ci95"].as_f64().unwrap() <= 0.01);
+    }
+    let m = &json["settings"]["measurement"];
+    assert_eq!(m["estimator"], "converged");
+    assert_eq!(
+        (m["seed"].as_u64(), m["replicates"].as_u64(), m["max_samples_per_pixel"].as_u64()),
+        (Some(1), Some(8), Some(64))
+    );
+    assert_eq!((m["psnr_ci95_db"].as_f64(), m["ssim_ci95"].as_f64()), (Some(0.1), Some(0.01)));
+
+    // results.csv: the two interval columns, filled for every score row.
+    let csv = std::fs::read_to_string(two.join("results.csv")).unwrap();
+    assert!(csv.lines().next().unwrap().ends_with(",psnr_ci95_db,ssim_ci95"));
+    for l in csv.lines().filter(|l| l.starts_with("score,")) {
+        let f: Vec<&str> = l.split(',').collect();
+        assert_eq!(f.len(), 11, "{l}");
+        assert!(f[9].parse::<f64>().unwrap() > 0.0 && f[10].parse::<f64>().unwrap() > 0.0, "{l}");
+    }
+
+    // EXRs: the replicates' mean, with the estimator and samples in their headers.
+    let attrs = inimtrace::io::exr::read_attributes(&two.join("sim_LA_Near.exr")).unwrap();
+    let get = |k: &str| attrs.iter().find(|(a, _)| a == k).map(|(_, v)| v.clone()).unwrap_or_default();
+    assert!(get("inimtrace:estimator").starts_with("converged"));
+    let near = scores.iter().find(|s| s["eye_case"] == "Near").unwrap();
+    assert_eq!(get("inimtrace:retina_samples_per_pixel"), near["samples_per_pixel"].as_u64().unwrap().to_string());
+    assert_eq!(get("inimtrace:replicates"), "8");
+
+    // One thread and two: the same numbers and images, bit for bit.
+    let json1: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(one.join("results.json")).unwrap()).unwrap();
+    assert_eq!(json1["scores"], json["scores"]);
+    assert_eq!((json1["threads"].as_u64(), json["threads"].as_u64().map(|t| t >= 1)), (Some(1), Some(true)));
+    for name in ["gt_Pin", "gt_Far", "sim_LC_Near", "sim_PC_Cen", "sim_LA_Far"] {
+        let a = inimtrace::io::exr::read_rgb(&one.join(format!("{name}.exr"))).unwrap();
+        let b = inimtrace::io::exr::read_rgb(&two.join(format!("{name}.exr"))).unwrap();
+        assert!(a == b, "{name} differs between 1 and 2 threads");
+    }
+}
