@@ -551,7 +551,7 @@ fn assess_reports_intervals_samples_and_targets_and_is_thread_count_independent(
             assert_eq!(s[metric]["channels_ci95"].as_array().unwrap().len(), 3);
         }
         let spp = s["samples_per_pixel"].as_u64().unwrap();
-        assert!(spp >= 32 && spp <= 64 && spp % 8 == 0, "{s}");
+        assert!((32..=64).contains(&spp) && spp % 8 == 0, "{s}");
         assert_eq!(s["replicates"].as_u64(), Some(8));
         let met = s["target_met"].as_bool().unwrap();
         assert_eq!(met, s["psnr"]["ci95"].as_f64().unwrap() <= 0.1 && s["ssim"]["ci95"].as_f64().unwrap() <= 0.01);

@@ -3,10 +3,10 @@
 //!
 //! A round adds samples to every replicate of every pixel ([`Replicates::extend`]), then computes
 //! every cell's (scored image's) PSNR with its 95% half-width, and, once every PSNR meets its
-//! target, every SSIM. When some cell misses its target, the samples per replicate are at least
-//! doubled (see [`next_samples`]), within the sample budget, and only if the round's predicted
-//! time fits the time budget. Sample counts are powers of two up to the budget (Sobol points are
-//! balanced there). The schedule depends only on the numbers, so the same seed gives the same
+//! target, every SSIM. When some cell misses its target, the samples per replicate grow: doubled
+//! after the first round, then to what the measured rate of each cell's half-width predicts
+//! (see [`next_samples`]), within the sample budget, and only if the round's predicted time fits
+//! the time budget. The schedule depends only on the numbers, so the same seed gives the same
 //! result, unless the time budget stops it.
 
 use std::time::{Duration, Instant};
@@ -107,16 +107,24 @@ pub fn measure_case<S: PairedSource + ?Sized>(
     let mut reps = Replicates::new(retina.resolution, nr, source.images());
     let mut n = precision.initial_samples.clamp(1, max_n);
     let mut rounds = Vec::new();
-    // The SSIM half-widths of the last round that computed them.
-    let mut ssim_known: Option<Vec<f64>> = None;
+    // Half-widths of every cell's PSNR mean at each round, and of its SSIM mean when computed.
+    let mut psnr_history: Vec<(u32, Vec<f64>)> = Vec::new();
+    let mut ssim_history: Vec<(u32, Vec<f64>)> = Vec::new();
+    let widths = |e: &[Estimate]| e.iter().map(|x| x.ci95.unwrap_or(f64::INFINITY)).collect::<Vec<_>>();
     loop {
         let t = Instant::now();
         reps.extend(source, sampler, retina, n, progress);
         let sample_seconds = t.elapsed().as_secs_f64();
         let t = Instant::now();
         let psnr = psnr_estimates(&reps);
+        psnr_history.push((n, widths(&psnr)));
         let psnr_met = psnr.iter().all(|p| p.ci95.is_some_and(|h| h <= precision.psnr_ci95_db));
-        let mut next = (n < max_n).then(|| next_samples(n, max_n, &psnr, ssim_known.as_deref(), precision));
+        let plan = |psnr_history: &[(u32, Vec<f64>)], ssim_history: &[(u32, Vec<f64>)]| {
+            let a = next_samples(psnr_history, precision.psnr_ci95_db);
+            let b = next_samples(ssim_history, precision.ssim_ci95);
+            a.max(b).clamp(n + 1, max_n)
+        };
+        let mut next = (n < max_n).then(|| plan(&psnr_history, &ssim_history));
         let mut stats_seconds = t.elapsed().as_secs_f64();
         if let Some(m) = next {
             // Time of the next round: sampling scales with the samples added.
@@ -137,7 +145,7 @@ pub fn measure_case<S: PairedSource + ?Sized>(
             stats_seconds += t.elapsed().as_secs_f64();
             rounds.push(Round { samples_per_pixel: reps.samples_per_pixel(), sample_seconds, stats_seconds });
             let ssim_met = ssim.iter().all(|s| s.ci95.is_some_and(|h| h <= precision.ssim_ci95));
-            let hw: Vec<f64> = ssim.iter().map(|s| s.ci95.unwrap_or(f64::INFINITY)).collect();
+            ssim_history.push((n, widths(&ssim)));
             let cells = cells(psnr, ssim, precision);
             match stopped_by {
                 Some(why) => return CaseMeasurement { replicates: reps, cells, rounds, stopped_by: why },
@@ -145,14 +153,7 @@ pub fn measure_case<S: PairedSource + ?Sized>(
                     return CaseMeasurement { replicates: reps, cells, rounds, stopped_by: "target met" }
                 }
                 None => {
-                    ssim_known = Some(hw);
-                    n = next_samples(
-                        n,
-                        max_n,
-                        &cells.iter().map(|c| c.psnr).collect::<Vec<_>>(),
-                        ssim_known.as_deref(),
-                        precision,
-                    );
+                    n = plan(&psnr_history, &ssim_history);
                     continue;
                 }
             }
@@ -162,20 +163,38 @@ pub fn measure_case<S: PairedSource + ?Sized>(
     }
 }
 
-/// The next samples per replicate: at least twice, at most 16 times the current count, a power
-/// of two within `max_n`, and no fewer than the slowest cell needs if its half-width shrank as
-/// fast as `1/N` (faster than randomized QMC does here, so the schedule never overshoots by
-/// more than a doubling; a round that falls short costs one more PSNR pass).
-fn next_samples(n: u32, max_n: u32, psnr: &[Estimate], ssim: Option<&[f64]>, precision: &Precision) -> u32 {
-    let ratio = |h: Option<f64>, target: f64| match h {
-        Some(h) if h.is_finite() => h / target,
-        _ => 16.0,
-    };
-    let mut worst = psnr.iter().map(|p| ratio(p.ci95, precision.psnr_ci95_db)).fold(1.0, f64::max);
-    if let Some(s) = ssim {
-        worst = s.iter().map(|h| ratio(Some(*h), precision.ssim_ci95)).fold(worst, f64::max);
+/// The samples per replicate the next round should reach, from the half-widths `history[i] =
+/// (samples per replicate, half-width of every cell)` of one score and its `target`; 0 when
+/// every cell meets it.
+///
+/// With one round known, double (that measures the rate). With two, every cell still above the
+/// target gets its own rate `p` (half-width ~ N^-p, from its last two rounds, taken within
+/// [0.5, 1]: between Monte Carlo's rate and the best randomized QMC reaches on edges here); the
+/// next count is what the slowest cell needs at its rate, plus 15%, at least 1.25 and at most 16
+/// times the current count, rounded up to a multiple of 4. The counts stay nested (each round
+/// adds the next points of the same sequences), so a round that falls short loses nothing but
+/// one more PSNR pass.
+fn next_samples(history: &[(u32, Vec<f64>)], target: f64) -> u32 {
+    let Some((n, now)) = history.last() else { return 0 };
+    let n = *n;
+    if now.iter().all(|h| *h <= target) {
+        return 0;
     }
-    let want = (f64::from(n) * worst.min(16.0)).ceil() as u64;
-    let next = want.next_power_of_two().max(2 * u64::from(n));
-    next.min(u64::from(max_n)) as u32
+    let prev = (history.len() >= 2).then(|| &history[history.len() - 2]);
+    let Some((m, before)) = prev else { return 2 * n };
+    let mut want = f64::from(n);
+    for (cell, h) in now.iter().enumerate() {
+        if *h <= target {
+            continue;
+        }
+        if !h.is_finite() {
+            want = want.max(16.0 * f64::from(n));
+            continue;
+        }
+        let rate = (before[cell] / h).ln() / (f64::from(n) / f64::from(*m)).ln();
+        let rate = if rate.is_finite() { rate.clamp(0.5, 1.0) } else { 0.5 };
+        want = want.max(f64::from(n) * (h / target).powf(1.0 / rate) * 1.15);
+    }
+    let want = want.clamp(1.25 * f64::from(n), 16.0 * f64::from(n)).ceil() as u32;
+    want.div_ceil(4) * 4
 }

@@ -182,7 +182,7 @@ pub struct Replicates {
     replicates: usize,
     images: usize,
     samples: u32,
-    /// `[pixel][replicate][image][channel]`.
+    /// Planes `[replicate][image][channel]` of `resolution^2` pixels each, row-major.
     means: Vec<f32>,
 }
 
@@ -209,10 +209,10 @@ impl Replicates {
     ) -> Self {
         let mut reps = Self::new(resolution, replicates, images);
         reps.samples = samples;
-        let stride = replicates * images * 3;
+        let pixels = resolution * resolution;
         for (i, v) in reps.means.iter_mut().enumerate() {
-            let (p, rest) = (i / stride, i % stride);
-            *v = f(p, rest / (images * 3), (rest / 3) % images, rest % 3);
+            let (plane, p) = (i / pixels, i % pixels);
+            *v = f(p, plane / (images * 3), (plane / 3) % images, plane % 3);
         }
         reps
     }
@@ -236,18 +236,18 @@ impl Replicates {
         u64::from(self.samples) * self.replicates as u64
     }
 
-    /// The means of every replicate and image at `pixel` (row-major index):
-    /// `[replicate][image][channel]`.
+    /// Channel `c` of image `k` in replicate `r`: one mean per pixel, row-major.
     #[inline]
-    pub fn pixel(&self, pixel: usize) -> &[f32] {
-        let stride = self.replicates * self.images * 3;
-        &self.means[pixel * stride..(pixel + 1) * stride]
+    pub fn plane(&self, r: usize, k: usize, c: usize) -> &[f32] {
+        let pixels = self.resolution * self.resolution;
+        let i = (r * self.images + k) * 3 + c;
+        &self.means[i * pixels..(i + 1) * pixels]
     }
 
-    /// Mean of image `k`, channel `c` in replicate `r` at `pixel`.
+    /// Mean of image `k`, channel `c` in replicate `r` at `pixel` (row-major index).
     #[inline]
     pub fn value(&self, pixel: usize, r: usize, k: usize, c: usize) -> f32 {
-        self.pixel(pixel)[(r * self.images + k) * 3 + c]
+        self.plane(r, k, c)[pixel]
     }
 
     /// Image `k` of replicate `r`.
@@ -265,9 +265,11 @@ impl Replicates {
         let n = self.resolution;
         let mut img = RgbImage::new(n, n);
         let inv = 1.0 / self.replicates as f64;
+        let planes: Vec<[&[f32]; 3]> =
+            (0..self.replicates).map(|r| std::array::from_fn(|c| self.plane(r, k, c))).collect();
         img.pixels.par_iter_mut().enumerate().for_each(|(p, px)| {
             *px = std::array::from_fn(|c| {
-                let s: f64 = (0..self.replicates).map(|r| f64::from(self.value(p, r, k, c))).sum();
+                let s: f64 = planes.iter().map(|pl| f64::from(pl[c][p])).sum();
                 (s * inv) as f32
             });
         });
@@ -298,13 +300,21 @@ impl Replicates {
         let old_weight = f64::from(old);
         let step = 2.0 * retina.half_tangent / n as f64;
         let batch = BATCH.min(TILE * TILE * fresh);
-        let px_stride = nr * k * 3;
+        // Every plane cut into bands of TILE rows; band b of every plane goes to one task.
+        let band_len = TILE * n;
+        let bands = n.div_ceil(TILE);
+        let mut per_band: Vec<Vec<&mut [f32]>> = (0..bands).map(|_| Vec::with_capacity(nr * k * 3)).collect();
+        for plane in self.means.chunks_mut(n * n) {
+            for (b, chunk) in plane.chunks_mut(band_len).enumerate() {
+                per_band[b].push(chunk);
+            }
+        }
         // Bands of TILE rows in parallel; inside, TILE x TILE tiles with every replicate and
         // sample: the rays of one tile meet the LCD in a few small patches (one per lenslet the
         // pupil covers), which then stay in cache.
-        self.means.par_chunks_mut(TILE * n * px_stride).enumerate().for_each(|(band, out)| {
+        per_band.into_par_iter().enumerate().for_each(|(band, mut planes)| {
             let row0 = band * TILE;
-            let rows = out.len() / (n * px_stride);
+            let rows = planes[0].len() / n;
             let mut samples = vec![EyeSample::default(); batch];
             let mut owners = vec![0u32; batch];
             let mut values = vec![[0.0f64; 3]; batch * k];
@@ -353,11 +363,11 @@ impl Replicates {
                     if filled > 0 {
                         flush(&samples[..filled], &owners[..filled], &mut sums);
                     }
-                    for dr in 0..rows {
-                        for dc in 0..cols {
-                            let o = (dr * TILE + dc) * k * 3;
-                            let at = ((dr * n + col0 + dc) * nr + r) * k * 3;
-                            for (d, s) in out[at..at + k * 3].iter_mut().zip(&sums[o..o + k * 3]) {
+                    for (j, plane) in planes[r * k * 3..(r + 1) * k * 3].iter_mut().enumerate() {
+                        for dr in 0..rows {
+                            for dc in 0..cols {
+                                let d = &mut plane[dr * n + col0 + dc];
+                                let s = sums[(dr * TILE + dc) * k * 3 + j];
                                 *d = ((f64::from(*d) * old_weight + s) * inv_total) as f32;
                             }
                         }

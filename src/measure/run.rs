@@ -46,8 +46,8 @@ pub fn measure<S: PairedSource + ?Sized>(
     measure_case(source, &case_sampler(seed, case_index, eye), retina, constants, precision, &Progress::hidden())
 }
 
-/// The converged Table 1 of `exp` (`None` when it uses the grid estimator): per eye case, a
-/// `measure_converged` stage.
+/// The converged Table 1 of `exp` (`None` when it uses the grid estimator): per eye case, the
+/// stages `converged_sampling` (tracing) and `converged_statistics` (scores and intervals).
 pub fn table1<F: RadianceField + ?Sized>(
     exp: &Experiment,
     field: &F,
@@ -87,12 +87,12 @@ pub fn table1<F: RadianceField + ?Sized>(
         gts.push(gt);
         sims.push(case_sims);
         scores.extend(case_scores);
-        stages.push(StageTime {
-            stage: "measure_converged".into(),
-            method: None,
-            eye_case: Some(case.name.clone()),
-            seconds: t.elapsed().as_secs_f64(),
-        });
+        for (stage, seconds) in [
+            ("converged_sampling", measured.rounds.iter().map(|r| r.sample_seconds).sum::<f64>()),
+            ("converged_statistics", measured.rounds.iter().map(|r| r.stats_seconds).sum::<f64>()),
+        ] {
+            stages.push(StageTime { stage: stage.into(), method: None, eye_case: Some(case.name.clone()), seconds });
+        }
     }
     Ok(Some((gts, sims, scores)))
 }

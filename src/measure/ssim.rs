@@ -58,7 +58,37 @@ fn ssim_value(pairs: f64, a: f64, b: f64, axx: f64, ayy: f64, axy: f64, t: f64, 
     let mxy = (a * b - axy) * inv;
     let ssq = (t * inv - msq).max(0.0);
     let sxy = txy * inv - mxy;
-    ((2.0 * mxy + c1) * (2.0 * sxy + c2)) / (msq.max(0.0) + c1) / (ssq + c2)
+    ((2.0 * mxy + c1) * (2.0 * sxy + c2)) / ((msq.max(0.0) + c1) * (ssq + c2))
+}
+
+/// Independent partial sums (in a fixed order), so that the additions and divisions of
+/// consecutive windows overlap instead of waiting for each other.
+const LANES: usize = 4;
+
+/// The sum of `f(w)` over `0..len`, in `LANES` interleaved partial sums added in a fixed order.
+#[inline(always)]
+fn lane_sum(len: usize, f: impl Fn(usize) -> f64) -> f64 {
+    let mut acc = [0.0; LANES];
+    let whole = len / LANES * LANES;
+    for w0 in (0..whole).step_by(LANES) {
+        for (j, a) in acc.iter_mut().enumerate() {
+            *a += f(w0 + j);
+        }
+    }
+    for (j, w) in (whole..len).enumerate() {
+        acc[j] += f(w);
+    }
+    (acc[0] + acc[1]) + (acc[2] + acc[3])
+}
+
+/// `dst[p] = sum_r f(src[r * len + p])` over the `R` planes of `src`, plane by plane.
+fn sum_planes(src: &[f64], len: usize, f: impl Fn(f64) -> f64, dst: &mut [f64]) {
+    dst.iter_mut().for_each(|d| *d = 0.0);
+    for plane in src.chunks_exact(len) {
+        for (d, v) in dst.iter_mut().zip(plane) {
+            *d += f(*v);
+        }
+    }
 }
 
 /// Sums of the SSIM map over one band's windows, for every scored image: the full set of
@@ -72,10 +102,8 @@ fn band_sums(reps: &Replicates, c: usize, i0: usize, i1: usize, c1: f64, c2: f64
     let (plane, wplane) = (rows * n, hb * wv);
     let mut tmp = Vec::new();
     let load = |k: usize, r: usize, dst: &mut [f64]| {
-        for (y, row) in dst.chunks_exact_mut(n).enumerate() {
-            for (x, v) in row.iter_mut().enumerate() {
-                *v = f64::from(reps.value((i0 + y) * n + x, r, k, c));
-            }
+        for (v, m) in dst.iter_mut().zip(&reps.plane(r, k, c)[i0 * n..]) {
+            *v = f64::from(*m);
         }
     };
     // The reference: its replicates, their windowed means, and S, sum of squares.
@@ -85,85 +113,78 @@ fn band_sums(reps: &Replicates, c: usize, i0: usize, i1: usize, c1: f64, c2: f64
         load(0, r, &mut xs[r * plane..(r + 1) * plane]);
         filter_valid(&xs[r * plane..(r + 1) * plane], n, rows, &g, &mut tmp, &mut mux[r * wplane..(r + 1) * wplane]);
     }
-    let sx: Vec<f64> = (0..plane).map(|p| (0..nr).map(|r| xs[r * plane + p]).sum()).collect();
-    let qx: Vec<f64> = (0..plane).map(|p| (0..nr).map(|r| xs[r * plane + p] * xs[r * plane + p]).sum()).collect();
+    let (mut sx, mut qx) = (vec![0.0; plane], vec![0.0; plane]);
+    sum_planes(&xs, plane, |v| v, &mut sx);
+    sum_planes(&xs, plane, |v| v * v, &mut qx);
+    // Window sums of the reference's windowed means: a = sum mu_x, axx = sum mu_x^2.
+    let (mut a, mut axx) = (vec![0.0; wplane], vec![0.0; wplane]);
+    sum_planes(&mux, wplane, |v| v, &mut a);
+    sum_planes(&mux, wplane, |v| v * v, &mut axx);
 
     let mut ys = vec![0.0; nr * plane];
     let mut muy = vec![0.0; nr * wplane];
-    let mut q = vec![0.0; plane];
+    let (mut sy, mut q, mut q2) = (vec![0.0; plane], vec![0.0; plane], vec![0.0; plane]);
+    let (mut b, mut ayy, mut axy) = (vec![0.0; wplane], vec![0.0; wplane], vec![0.0; wplane]);
     let (mut ft, mut ftxy) = (vec![0.0; wplane], vec![0.0; wplane]);
     let (mut f1, mut f2) = (vec![0.0; wplane], vec![0.0; wplane]);
-    let mut sums = vec![[0.0f64; 5]; wplane];
     let full_pairs = (nr * (nr - 1)) as f64;
     let loo_pairs = ((nr - 1) * (nr - 2)) as f64;
     let mut out = Vec::with_capacity(ni - 1);
     for k in 1..ni {
         for r in 0..nr {
             load(k, r, &mut ys[r * plane..(r + 1) * plane]);
-            filter_valid(
-                &ys[r * plane..(r + 1) * plane],
-                n,
-                rows,
-                &g,
-                &mut tmp,
-                &mut muy[r * wplane..(r + 1) * wplane],
-            );
+            let (src, dst) = (&ys[r * plane..(r + 1) * plane], &mut muy[r * wplane..(r + 1) * wplane]);
+            filter_valid(src, n, rows, &g, &mut tmp, dst);
         }
-        let sy: Vec<f64> = (0..plane).map(|p| (0..nr).map(|r| ys[r * plane + p]).sum()).collect();
+        sum_planes(&ys, plane, |v| v, &mut sy);
+        sum_planes(&muy, wplane, |v| v, &mut b);
+        sum_planes(&muy, wplane, |v| v * v, &mut ayy);
+        axy.iter_mut().for_each(|v| *v = 0.0);
         // Full set: T = (Sx^2 - Qx) + (Sy^2 - Qy), Txy = Sx Sy - Pxy.
-        for (p, v) in q.iter_mut().enumerate() {
-            let qy: f64 = (0..nr).map(|r| ys[r * plane + p] * ys[r * plane + p]).sum();
-            *v = (sx[p] * sx[p] - qx[p]) + (sy[p] * sy[p] - qy);
+        sum_planes(&ys, plane, |v| v * v, &mut q);
+        q2.iter_mut().for_each(|v| *v = 0.0);
+        for r in 0..nr {
+            let (x, y) = (&xs[r * plane..(r + 1) * plane], &ys[r * plane..(r + 1) * plane]);
+            for ((d, u), v) in q2.iter_mut().zip(x).zip(y) {
+                *d += u * v;
+            }
+            let (mx, my) = (&mux[r * wplane..(r + 1) * wplane], &muy[r * wplane..(r + 1) * wplane]);
+            for ((d, u), v) in axy.iter_mut().zip(mx).zip(my) {
+                *d += u * v;
+            }
+        }
+        for p in 0..plane {
+            q[p] = (sx[p] * sx[p] - qx[p]) + (sy[p] * sy[p] - q[p]);
+            q2[p] = sx[p] * sy[p] - q2[p];
         }
         filter_valid(&q, n, rows, &g, &mut tmp, &mut ft);
-        for (p, v) in q.iter_mut().enumerate() {
-            let pxy: f64 = (0..nr).map(|r| xs[r * plane + p] * ys[r * plane + p]).sum();
-            *v = sx[p] * sy[p] - pxy;
-        }
-        filter_valid(&q, n, rows, &g, &mut tmp, &mut ftxy);
-        let mut full = 0.0;
-        for (w, s) in sums.iter_mut().enumerate() {
-            let mut acc = [0.0; 5];
-            for r in 0..nr {
-                let (mx, my) = (mux[r * wplane + w], muy[r * wplane + w]);
-                acc[0] += mx;
-                acc[1] += my;
-                acc[2] += mx * mx;
-                acc[3] += my * my;
-                acc[4] += mx * my;
-            }
-            *s = acc;
-            full += ssim_value(full_pairs, acc[0], acc[1], acc[2], acc[3], acc[4], ft[w], ftxy[w], c1, c2);
-        }
+        filter_valid(&q2, n, rows, &g, &mut tmp, &mut ftxy);
+        let full =
+            lane_sum(wplane, |w| ssim_value(full_pairs, a[w], b[w], axx[w], ayy[w], axy[w], ft[w], ftxy[w], c1, c2));
         let mut loo = Vec::with_capacity(nr);
         for kk in 0..nr {
             let (x, y) = (&xs[kk * plane..(kk + 1) * plane], &ys[kk * plane..(kk + 1) * plane]);
-            for (p, v) in q.iter_mut().enumerate() {
-                *v = x[p] * (sx[p] - x[p]) + y[p] * (sy[p] - y[p]);
+            for p in 0..plane {
+                q[p] = x[p] * (sx[p] - x[p]) + y[p] * (sy[p] - y[p]);
+                q2[p] = x[p] * (sy[p] - y[p]) + y[p] * (sx[p] - x[p]);
             }
             filter_valid(&q, n, rows, &g, &mut tmp, &mut f1);
-            for (p, v) in q.iter_mut().enumerate() {
-                *v = x[p] * (sy[p] - y[p]) + y[p] * (sx[p] - x[p]);
-            }
-            filter_valid(&q, n, rows, &g, &mut tmp, &mut f2);
+            filter_valid(&q2, n, rows, &g, &mut tmp, &mut f2);
             let (mx, my) = (&mux[kk * wplane..(kk + 1) * wplane], &muy[kk * wplane..(kk + 1) * wplane]);
-            let mut sum = 0.0;
-            for w in 0..wplane {
-                let s = &sums[w];
-                sum += ssim_value(
+            loo.push(lane_sum(wplane, |w| {
+                ssim_value(
                     loo_pairs,
-                    s[0] - mx[w],
-                    s[1] - my[w],
-                    s[2] - mx[w] * mx[w],
-                    s[3] - my[w] * my[w],
-                    s[4] - mx[w] * my[w],
+                    a[w] - mx[w],
+                    b[w] - my[w],
+                    axx[w] - mx[w] * mx[w],
+                    ayy[w] - my[w] * my[w],
+                    axy[w] - mx[w] * my[w],
                     ft[w] - 2.0 * f1[w],
                     ftxy[w] - f2[w],
                     c1,
                     c2,
-                );
-            }
-            loo.push(sum);
+                )
+            }));
         }
         out.push((full, loo));
     }

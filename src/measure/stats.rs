@@ -209,18 +209,23 @@ pub fn gram_matrices(reps: &Replicates) -> Vec<Gram> {
         .map(|row| {
             // [image - 1][channel][a * R + b], upper triangle.
             let mut g = vec![0.0f64; (ni - 1) * 3 * nr * nr];
-            let mut d = vec![0.0f64; nr];
-            for p in row * n..(row + 1) * n {
-                let px = reps.pixel(p);
-                for k in 1..ni {
-                    for c in 0..3 {
-                        for (r, dr) in d.iter_mut().enumerate() {
-                            *dr = f64::from(px[(r * ni + k) * 3 + c]) - f64::from(px[r * ni * 3 + c]);
+            let mut d = vec![0.0f64; n * nr];
+            let span = row * n..(row + 1) * n;
+            for k in 1..ni {
+                for c in 0..3 {
+                    // d[pixel][r] for this row.
+                    for r in 0..nr {
+                        let (x, y) = (&reps.plane(r, 0, c)[span.clone()], &reps.plane(r, k, c)[span.clone()]);
+                        for (p, (a, b)) in x.iter().zip(y).enumerate() {
+                            d[p * nr + r] = f64::from(*b) - f64::from(*a);
                         }
-                        let gm = &mut g[((k - 1) * 3 + c) * nr * nr..((k - 1) * 3 + c + 1) * nr * nr];
+                    }
+                    let gm = &mut g[((k - 1) * 3 + c) * nr * nr..((k - 1) * 3 + c + 1) * nr * nr];
+                    for dp in d.chunks_exact(nr) {
                         for a in 0..nr {
-                            for b in a..nr {
-                                gm[a * nr + b] += d[a] * d[b];
+                            let da = dp[a];
+                            for (g, db) in gm[a * nr + a..(a + 1) * nr].iter_mut().zip(&dp[a..]) {
+                                *g += da * db;
                             }
                         }
                     }
