@@ -592,3 +592,55 @@ fn assess_reports_intervals_samples_and_targets_and_is_thread_count_independent(
         assert!(a == b, "{name} differs between 1 and 2 threads");
     }
 }
+
+/// The scene tracer, asking for batches (as mesh backends do): the batched path of
+/// `DisplaySource` must give the same bits as the one-ray path.
+struct Batched<'a>(SceneTracer<'a, AnalyticRects>);
+
+impl RadianceField for Batched<'_> {
+    fn radiance(&self, ray: &inimtrace::accel::Ray) -> DVec3 {
+        self.0.radiance(ray)
+    }
+    fn prefers_batches(&self) -> bool {
+        true
+    }
+}
+
+#[test]
+fn batched_fields_give_the_same_bits_and_budgets_stop_sampling() {
+    let c = corner();
+    let backend = AnalyticRects::new(&c.scene).unwrap();
+    let field = SceneTracer { scene: &c.scene, backend: &backend };
+    let batched = Batched(SceneTracer { scene: &c.scene, backend: &backend });
+    let stack = DisplayStack::new(&c.display, &[&c.lc]).unwrap();
+    let r = retina(20, 0.01);
+    let one = measure(
+        &DisplaySource::new(&c.display, &c.eye, &field, &stack),
+        9,
+        1,
+        &c.eye,
+        &r,
+        SsimConstants::Wang2004,
+        &fixed_samples(4, 8),
+    );
+    let many = measure(
+        &DisplaySource::new(&c.display, &c.eye, &batched, &stack),
+        9,
+        1,
+        &c.eye,
+        &r,
+        SsimConstants::Wang2004,
+        &fixed_samples(4, 8),
+    );
+    assert!(one.replicates == many.replicates);
+    assert_eq!(one.cells, many.cells);
+    // Budgets: out of samples, or out of time, with targets that cannot be met.
+    assert_eq!(one.stopped_by, "sample budget");
+    assert!(!one.cells[0].target_met);
+    let source = DisplaySource::new(&c.display, &c.eye, &field, &stack);
+    let late = Precision { deadline: Some(std::time::Instant::now()), ..to_target(1e-6, 1e-6) };
+    let m = measure(&source, 9, 1, &c.eye, &r, SsimConstants::Wang2004, &late);
+    assert_eq!((m.stopped_by, m.samples_per_pixel(), m.cells[0].target_met), ("time budget", 32, false));
+    let m = measure(&source, 9, 1, &c.eye, &r, SsimConstants::Wang2004, &to_target(1.0, 1.0));
+    assert_eq!((m.stopped_by, m.samples_per_pixel(), m.cells[0].target_met), ("target met", 32, true));
+}
