@@ -127,19 +127,24 @@ impl<F: RadianceField + ?Sized> PairedSource for DisplaySource<'_, F> {
                 o[0] = self.field.radiance(&eye_scene_ray(self.eye, s.tangent, s.pupil)).to_array();
             }
         }
+        // Where every ray meets the LCD first (independent work the CPU overlaps), then the
+        // reads (independent loads).
+        let lcd: Vec<u32> = samples
+            .iter()
+            .map(|s| self.transfer.pixel_index(s.tangent, s.pupil).map_or(u32::MAX, |i| i as u32))
+            .collect();
         match m {
-            1 => self.read_stack::<1>(samples, out),
-            2 => self.read_stack::<2>(samples, out),
-            3 => self.read_stack::<3>(samples, out),
+            1 => self.read_stack::<1>(&lcd, out),
+            2 => self.read_stack::<2>(&lcd, out),
+            3 => self.read_stack::<3>(&lcd, out),
             _ => {
-                for (o, s) in out.chunks_exact_mut(k).zip(samples) {
-                    match self.transfer.pixel_index(s.tangent, s.pupil) {
-                        Some(idx) => {
-                            for (dst, v) in o[1..].iter_mut().zip(self.stack.pixel(idx).chunks_exact(3)) {
-                                *dst = [f64::from(v[0]), f64::from(v[1]), f64::from(v[2])];
-                            }
+                for (o, &idx) in out.chunks_exact_mut(k).zip(&lcd) {
+                    if idx == u32::MAX {
+                        o[1..].fill([0.0; 3]);
+                    } else {
+                        for (dst, v) in o[1..].iter_mut().zip(self.stack.pixel(idx as usize).chunks_exact(3)) {
+                            *dst = [f64::from(v[0]), f64::from(v[1]), f64::from(v[2])];
                         }
-                        None => o[1..].fill([0.0; 3]),
                     }
                 }
             }
@@ -148,22 +153,20 @@ impl<F: RadianceField + ?Sized> PairedSource for DisplaySource<'_, F> {
 }
 
 impl<F: RadianceField + ?Sized> DisplaySource<'_, F> {
-    /// The perceived images' samples (images 1..=M of `out`) for a stack of `M` display images.
+    /// The perceived images' samples (images 1..=M of `out`) for a stack of `M` display images,
+    /// from the LCD pixel of every sample (`u32::MAX`: the ray missed the LCD).
     #[inline(always)]
-    fn read_stack<const M: usize>(&self, samples: &[EyeSample], out: &mut [[f64; 3]]) {
-        for (o, s) in out.chunks_exact_mut(M + 1).zip(samples) {
+    fn read_stack<const M: usize>(&self, lcd: &[u32], out: &mut [[f64; 3]]) {
+        for (o, &idx) in out.chunks_exact_mut(M + 1).zip(lcd) {
             let o: &mut [[f64; 3]] = &mut o[1..];
-            match self.transfer.pixel_index(s.tangent, s.pupil) {
-                Some(idx) => {
-                    let px: &[f32] = self.stack.pixel(idx);
-                    for j in 0..M {
-                        o[j] = [f64::from(px[3 * j]), f64::from(px[3 * j + 1]), f64::from(px[3 * j + 2])];
-                    }
+            if idx == u32::MAX {
+                for v in o.iter_mut().take(M) {
+                    *v = [0.0; 3];
                 }
-                None => {
-                    for v in o.iter_mut().take(M) {
-                        *v = [0.0; 3];
-                    }
+            } else {
+                let px: &[f32] = self.stack.pixel(idx as usize);
+                for j in 0..M {
+                    o[j] = [f64::from(px[3 * j]), f64::from(px[3 * j + 1]), f64::from(px[3 * j + 2])];
                 }
             }
         }
