@@ -83,14 +83,21 @@ fn assess_with<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
     // method, then the scores: the same stage functions `inimtrace bench` times.
     let (displays, depths) = render_display_images(exp, with_depth, opts.quiet, &mut stages)?;
     let stack = pack_display_images(exp, &displays.iter().collect::<Vec<_>>(), &mut stages)?;
-    let mut gts = Vec::new();
-    let mut sims = Vec::new();
-    for case in &exp.cases {
-        gts.push(ground_truth_image(exp, case, shade, opts.quiet, &mut stages));
-        sims.push(perceived_images(exp, case, &stack, opts.quiet, &mut stages)?);
-    }
+    // The converged estimator (src/measure/) or the grid one.
+    let (gts, sims, scores) = match crate::measure::run::table1(exp, shade, &stack, opts.quiet, &mut stages)? {
+        Some(table) => table,
+        None => {
+            let mut gts = Vec::new();
+            let mut sims = Vec::new();
+            for case in &exp.cases {
+                gts.push(ground_truth_image(exp, case, shade, opts.quiet, &mut stages));
+                sims.push(perceived_images(exp, case, &stack, opts.quiet, &mut stages)?);
+            }
+            let scores = table1_scores(exp, &gts, &sims, &mut stages)?;
+            (gts, sims, scores)
+        }
+    };
     drop(stack);
-    let scores = table1_scores(exp, &gts, &sims, &mut stages)?;
 
     // 4. Images: EXR + PNG preview each, written in parallel.
     let t = Instant::now();
@@ -114,8 +121,13 @@ fn assess_with<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
                 v.push(("inimtrace:pupil_diameter_mm", format!("{pupil_diameter}")));
             }
         }
-        v.push(("inimtrace:pupil_samples", case.eye.pupil_samples().len().to_string()));
-        v.push(("inimtrace:retina_samples_per_pixel", (exp.retina.samples_per_pixel.pow(2)).to_string()));
+        match scores.iter().find(|s| s.eye_case == case.name).and_then(|s| s.samples_per_pixel) {
+            Some(spp) => v.extend(crate::measure::run::exr_attributes(exp, spp)),
+            None => {
+                v.push(("inimtrace:pupil_samples", case.eye.pupil_samples().len().to_string()));
+                v.push(("inimtrace:retina_samples_per_pixel", (exp.retina.samples_per_pixel.pow(2)).to_string()));
+            }
+        }
         v.push(("inimtrace:retina_half_tangent", exp.retina.half_tangent.to_string()));
         v
     };

@@ -128,8 +128,11 @@ pub fn table1_scores<G: Borrow<RgbImage> + Sync>(
             Ok(Score {
                 method: exp.methods[m].short_name().into(),
                 eye_case: exp.cases[c].name.clone(),
-                psnr: metrics::psnr(&sims[c][m], gts[c].borrow())?,
-                ssim: metrics::ssim(&sims[c][m], gts[c].borrow(), exp.ssim)?,
+                psnr: metrics::psnr(&sims[c][m], gts[c].borrow())?.into(),
+                ssim: metrics::ssim(&sims[c][m], gts[c].borrow(), exp.ssim)?.into(),
+                samples_per_pixel: None,
+                replicates: None,
+                target_met: None,
             })
         })
         .collect::<Result<_>>()?;
