@@ -14,11 +14,11 @@ use inimtrace::measure::estimator::{DisplaySource, EyeSample, EyeToLcd, PairedSo
 use inimtrace::measure::run::{measure, naive_scores};
 use inimtrace::measure::stats::gram_matrices;
 use inimtrace::metrics::{self, SsimConstants};
+use inimtrace::optics::transfer::eye_scene_ray;
 use inimtrace::optics::transfer::eye_to_lcd;
 use inimtrace::optics::{Display, Eye, Focus, Retina};
 use inimtrace::progress::Progress;
 use inimtrace::raster::RgbImage;
-use inimtrace::optics::transfer::eye_scene_ray;
 use inimtrace::render::retina::{simulate, DisplayStack};
 use inimtrace::render::{
     ground_truth, render_display_image, DisplayRenderSettings, Method, RadianceField, SceneTracer,

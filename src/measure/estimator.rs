@@ -19,10 +19,10 @@ use rayon::prelude::*;
 
 use super::sampler::Sampler;
 use crate::optics::display::PixelIndexer;
+use crate::optics::transfer::eye_scene_ray;
 use crate::optics::{Display, Eye, Retina};
 use crate::progress::Progress;
 use crate::raster::RgbImage;
-use crate::optics::transfer::eye_scene_ray;
 use crate::render::retina::DisplayStack;
 use crate::render::{RadianceField, Sample};
 
