@@ -13,8 +13,9 @@
 //!   [`Wrap::Clamp`] uses the nearest edge texel. A NaN or infinite UV (which finite meshes do
 //!   not produce, but a broken file may) gives the texture's mean colour, so no NaN ever
 //!   reaches an image.
-//! * PNG files (8 or 16 bit, grey or colour, with or without alpha; alpha is ignored) are taken
-//!   to be sRGB-encoded and are linearised with the sRGB transfer function on load.
+//! * PNG files (8 or 16 bit, grey or colour, with or without alpha; alpha is ignored) and JPEG
+//!   files (what glTF files embed) are taken to be sRGB-encoded and are linearised with the sRGB
+//!   transfer function on load. The format is told by the file's content, not its name.
 
 use std::path::Path;
 
@@ -72,11 +73,22 @@ impl ImageTexture {
         Some(Self { width, height, texels, filter, wrap, mean })
     }
 
-    /// Loads a PNG (sRGB-encoded). Errors name the file.
+    /// Loads a PNG or JPEG (sRGB-encoded). Errors name the file.
     pub fn load(path: &Path, filter: Filter, wrap: Wrap) -> Result<Self> {
         let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-        let img = image::load_from_memory_with_format(&bytes, image::ImageFormat::Png)
-            .map_err(|e| Error::parse(path, format!("not a readable PNG texture: {e}")))?;
+        Self::decode(&bytes, &path.display().to_string(), filter, wrap)
+    }
+
+    /// Decodes a PNG or JPEG image held in memory (sRGB-encoded), e.g. one embedded in a glTF
+    /// file. Errors name `source` (the file and the image within it).
+    pub fn decode(bytes: &[u8], source: &str, filter: Filter, wrap: Wrap) -> Result<Self> {
+        let format = image::guess_format(bytes)
+            .ok()
+            .filter(|f| matches!(f, image::ImageFormat::Png | image::ImageFormat::Jpeg))
+            .ok_or_else(|| Error::parse(source, "texture is not a PNG or JPEG image"))?;
+        let img = image::load_from_memory_with_format(bytes, format)
+            .map_err(|e| Error::parse(source, format!("not a readable {format:?} texture: {e}")))?;
+        let path = Path::new(source);
         let rgb = img.to_rgb32f();
         let (w, h) = (rgb.width() as usize, rgb.height() as usize);
         let texels = rgb
@@ -84,6 +96,16 @@ impl ImageTexture {
             .map(|p| DVec3::new(srgb_to_linear(p[0] as f64), srgb_to_linear(p[1] as f64), srgb_to_linear(p[2] as f64)))
             .collect();
         Self::new(w, h, texels, filter, wrap).ok_or_else(|| Error::parse(path, "texture image is empty"))
+    }
+
+    /// The texture with every texel multiplied by `factor` (a glTF `baseColorFactor` or MTL
+    /// `Kd` applied to its texture).
+    pub fn scaled(mut self, factor: DVec3) -> Self {
+        for t in &mut self.texels {
+            *t *= factor;
+        }
+        self.mean *= factor;
+        self
     }
 
     fn texel(&self, i: i64, j: i64) -> DVec3 {
