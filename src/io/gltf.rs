@@ -275,7 +275,7 @@ impl Reader<'_> {
         let (dt, dim, norm) = (accessor.data_type(), accessor.dimensions(), accessor.normalized());
         if !dims.contains(&dim) || !types.contains(&(dt, norm)) {
             let n = if norm { " normalized" } else { "" };
-            return Err(err(format!("is {dim:?} of{n} {dt:?}, expected {want}")));
+            return Err(err(format!("is {} of{n} {}, expected {want}", dims_name(dim), type_name(dt))));
         }
         if accessor.sparse().is_some() {
             return Err(err("sparse accessors are not supported".into()));
@@ -311,6 +311,31 @@ impl Reader<'_> {
             out.push((0..comps).map(|c| component(&e[c * size..(c + 1) * size], dt, norm)).collect());
         }
         Ok(out)
+    }
+}
+
+/// The glTF name of an accessor type.
+fn dims_name(d: Dimensions) -> &'static str {
+    match d {
+        Dimensions::Scalar => "SCALAR",
+        Dimensions::Vec2 => "VEC2",
+        Dimensions::Vec3 => "VEC3",
+        Dimensions::Vec4 => "VEC4",
+        Dimensions::Mat2 => "MAT2",
+        Dimensions::Mat3 => "MAT3",
+        Dimensions::Mat4 => "MAT4",
+    }
+}
+
+/// The glTF name of a component type.
+fn type_name(t: DataType) -> &'static str {
+    match t {
+        DataType::I8 => "BYTE",
+        DataType::U8 => "UNSIGNED_BYTE",
+        DataType::I16 => "SHORT",
+        DataType::U16 => "UNSIGNED_SHORT",
+        DataType::U32 => "UNSIGNED_INT",
+        DataType::F32 => "FLOAT",
     }
 }
 
@@ -358,7 +383,7 @@ impl Builder {
             .get(&gltf::Semantic::Positions)
             .ok_or_else(|| Error::parse(path, format!("{at}: has no POSITION attribute")))?;
         let positions =
-            r.read(&format!("{at}.attributes.POSITION"), &position, &[Dimensions::Vec3], &[FLOAT], "VEC3 of F32")?;
+            r.read(&format!("{at}.attributes.POSITION"), &position, &[Dimensions::Vec3], &[FLOAT], "VEC3 of FLOAT")?;
         let n = positions.len();
         let same_count = |name: &str, len: usize| -> Result<()> {
             if len == n {
@@ -369,7 +394,8 @@ impl Builder {
         };
         let normals = match prim.get(&gltf::Semantic::Normals) {
             Some(a) => {
-                let v = r.read(&format!("{at}.attributes.NORMAL"), &a, &[Dimensions::Vec3], &[FLOAT], "VEC3 of F32")?;
+                let v =
+                    r.read(&format!("{at}.attributes.NORMAL"), &a, &[Dimensions::Vec3], &[FLOAT], "VEC3 of FLOAT")?;
                 same_count("NORMAL", v.len())?;
                 Some(v)
             }
@@ -387,7 +413,7 @@ impl Builder {
                     &a,
                     &[Dimensions::Vec2],
                     &[FLOAT, UNORM8, UNORM16],
-                    "VEC2 of F32 or normalized U8/U16",
+                    "VEC2 of FLOAT or normalized UNSIGNED_BYTE/UNSIGNED_SHORT",
                 )?;
                 same_count(&name, v.len())?;
                 Some(v)
@@ -401,7 +427,7 @@ impl Builder {
                     &a,
                     &[Dimensions::Vec3, Dimensions::Vec4],
                     &[FLOAT, UNORM8, UNORM16],
-                    "VEC3/VEC4 of F32 or normalized U8/U16",
+                    "VEC3/VEC4 of FLOAT or normalized UNSIGNED_BYTE/UNSIGNED_SHORT",
                 )?;
                 same_count("COLOR_0", v.len())?;
                 Some(v)
@@ -416,7 +442,7 @@ impl Builder {
                     &a,
                     &[Dimensions::Scalar],
                     &[(DataType::U8, false), (DataType::U16, false), (DataType::U32, false)],
-                    "SCALAR of U8, U16 or U32",
+                    "SCALAR of UNSIGNED_BYTE, UNSIGNED_SHORT or UNSIGNED_INT",
                 )?;
                 let mut out = Vec::with_capacity(v.len());
                 for (k, x) in v.iter().enumerate() {
