@@ -13,6 +13,7 @@ pub mod error;
 pub mod experiment;
 #[doc(hidden)]
 pub mod fixtures;
+pub mod info;
 pub mod io;
 pub mod metrics;
 pub mod optics;
@@ -20,5 +21,6 @@ pub mod progress;
 pub mod raster;
 pub mod render;
 pub mod scene;
+pub mod version;
 
 pub use error::{Error, Result};

@@ -2,10 +2,12 @@
 //! experiment file's spec types and their resolution into an [`Experiment`]; the `assess`
 //! pipeline that runs one lives beside it, one concept per file: `stages.rs` (render the display
 //! image of every method, simulate what each eye case perceives, render the ground truth, score
-//! with PSNR and SSIM), `assess.rs` (the run and its image outputs) and `report.rs` (Table 1 and
-//! the CSV/JSON reports). Everything public is re-exported here.
+//! with PSNR and SSIM), `assess.rs` (the run and its image outputs), `metadata.rs` (the typed EXR
+//! header of every image) and `report.rs` (Table 1 and the CSV/JSON reports). Everything public
+//! is re-exported here.
 
 mod assess;
+pub mod metadata;
 mod report;
 mod stages;
 

@@ -7,7 +7,9 @@ use serde::Serialize;
 
 use super::{Experiment, ExperimentSpec};
 use crate::error::{Error, Result};
+use crate::info::DisplayParameters;
 use crate::metrics::{self, Psnr, Ssim, SsimConstants};
+use crate::version::Tool;
 
 /// One score: a method under an eye case.
 #[derive(Clone, Debug, Serialize)]
@@ -32,11 +34,14 @@ pub struct StageTime {
 /// What `assess` produced.
 #[derive(Clone, Debug, Serialize)]
 pub struct AssessReport {
+    /// The inimtrace that wrote the report: version and git revision.
+    pub tool: Tool,
     pub experiment: String,
     pub ssim_constants: String,
     pub backend: String,
     pub threads: usize,
-    pub display: String,
+    /// The display's parameters as fields (lengths in mm).
+    pub display: DisplayParameters,
     pub central_depth_plane_mm: Option<f64>,
     pub scores: Vec<Score>,
     pub stages: Vec<StageTime>,

@@ -5,6 +5,7 @@
 
 pub mod display_file;
 pub mod exr;
+mod exr_attributes;
 pub mod figure;
 mod gltf;
 pub mod mesh;
