@@ -72,10 +72,9 @@ enum Command {
         /// z of the reference plane camera rays start on (mm).
         #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
         reference_plane: f64,
-        /// Pupil centre PupilCenter aims at, mm: X,Y,Z.
-        #[arg(long, value_name = "X,Y,Z", value_delimiter = ',', num_args = 3, allow_negative_numbers = true,
-              default_values_t = [0.0, 0.0, 0.0])]
-        eye_position: Vec<f64>,
+        /// Pupil centre PupilCenter aims at, mm.
+        #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true, default_value = "0,0,0")]
+        eye_position: DVec3,
         /// Output EXR with R, G, B and Z (hit distance, mm) channels; a PNG preview is written beside it.
         #[arg(long, short)]
         out: PathBuf,
@@ -159,6 +158,7 @@ enum PrintTarget {
     /// The paper's experiment as its text states it.
     PaperExperiment,
     /// What the published framework ran.
+    #[value(name = "framework-2020-experiment")]
     Framework2020Experiment,
     /// The paper's scene.
     PaperScene,
@@ -238,10 +238,9 @@ struct EyeArgs {
     /// Pupil-to-retina distance v0, mm.
     #[arg(long, default_value_t = 17.0)]
     retina_distance: f64,
-    /// Pupil centre, mm: X,Y,Z.
-    #[arg(long, value_name = "X,Y,Z", value_delimiter = ',', num_args = 3, allow_negative_numbers = true,
-          default_values_t = [0.0, 0.0, 0.0])]
-    eye_position: Vec<f64>,
+    /// Pupil centre, mm.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true, default_value = "0,0,0")]
+    eye_position: DVec3,
 }
 
 impl EyeArgs {
@@ -256,7 +255,7 @@ impl EyeArgs {
             retina_distance: self.retina_distance,
             aperture,
             pupil_grid: self.pupil_grid,
-            position: vec3(&self.eye_position),
+            position: self.eye_position,
         };
         eye.validate("command line")?;
         let retina =
@@ -266,9 +265,16 @@ impl EyeArgs {
     }
 }
 
-/// `X,Y,Z` from the command line (clap checked there are three).
-fn vec3(v: &[f64]) -> DVec3 {
-    DVec3::new(v[0], v[1], v[2])
+/// `X,Y,Z` (mm) on the command line: three finite numbers.
+fn parse_vec3(s: &str) -> std::result::Result<DVec3, String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f64>().map_err(|_| format!("`{x}` is not a number (expected X,Y,Z in mm)")))
+        .collect::<std::result::Result<_, _>>()?;
+    match v.as_slice() {
+        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(DVec3::new(*x, *y, *z)),
+        _ => Err(format!("expected three finite numbers X,Y,Z in mm, got `{s}`")),
+    }
 }
 
 fn load_setup(setup: &Setup) -> Result<(Scene, Display)> {
@@ -385,11 +391,8 @@ fn run() -> Result<()> {
             let backend = backend.choice()?;
             let (scene, display) = load_setup(&setup)?;
             announce(&scene, backend, quiet);
-            let settings = DisplayRenderSettings {
-                samples_per_pixel,
-                reference_plane_z: reference_plane,
-                eye_position: vec3(&eye_position),
-            };
+            let settings =
+                DisplayRenderSettings { samples_per_pixel, reference_plane_z: reference_plane, eye_position };
             let (img, depth, name) = with_field(&scene, backend, |fields| {
                 let p =
                     Progress::new(display.lcd.rows() as u64, &format!("display image {}", method.short_name()), quiet);
