@@ -170,7 +170,7 @@ pub fn display_design(d: &Display, pupil_diameter: f64) -> DisplayDesign {
     let dot = |a: &[f64; 4], b: &[f64; 4]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
     let k = dot(&me, &ml) / dot(&ml, &ml);
     let residual = me.iter().zip(&ml).map(|(e, l)| (e - k * l).powi(2)).sum::<f64>().sqrt() / dot(&me, &me).sqrt();
-    if !(residual <= 1e-3) {
+    if residual.is_nan() || residual > 1e-3 {
         warnings.push(format!(
             "the elemental-image lattice {me:?} is not a scaled copy of the lenslet lattice {ml:?} (e.g. square \
              elemental images under hexagonal lenslets): pixels near elemental-image borders are seen through \

@@ -90,14 +90,16 @@ pub fn cell_origin(row: usize, col: usize) -> (usize, usize) {
     Layout::PLAIN.cell_origin(row, col)
 }
 
+/// One row of a [`Figure`]: its label, and its images with their captions.
+pub type FigureRow<'a> = (String, Vec<(&'a RgbImage, Option<String>)>);
+
 /// A figure: a title, column labels, and rows of images with a label each and an optional
 /// caption per image.
 #[derive(Clone, Debug, Default)]
 pub struct Figure<'a> {
     pub title: Option<String>,
     pub column_labels: Vec<String>,
-    /// `(row label, images with their captions)`.
-    pub rows: Vec<(String, Vec<(&'a RgbImage, Option<String>)>)>,
+    pub rows: Vec<FigureRow<'a>>,
 }
 
 impl Figure<'_> {
