@@ -526,3 +526,25 @@ fn multi_material_files_become_one_object_per_material() {
     // An explicit material keeps the file as one object.
     assert_eq!(scene(dir.path(), "two.obj", "material = { albedo = [1, 1, 1] }").objects.len(), 1);
 }
+
+#[test]
+fn shipped_fixtures_in_every_format_hold_the_same_triangles() {
+    let data = |f: &str| Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/meshes").join(f);
+    let corners = |m: &inimtrace::scene::Mesh| -> Vec<DVec3> {
+        m.triangles.iter().flatten().map(|&i| m.positions[i as usize]).collect()
+    };
+    let ply = load_mesh(&data("pyramid_ascii.ply")).unwrap().mesh;
+    let ply_uvs: Vec<_> = ply.triangles.iter().flatten().map(|&i| ply.uvs.as_ref().unwrap()[i as usize]).collect();
+    for f in ["pyramid.gltf", "pyramid.glb", "pyramid_ascii.stl", "pyramid_binary.stl"] {
+        let l = load_mesh(&data(f)).unwrap_or_else(|e| panic!("{e}"));
+        assert!(l.warnings.is_empty(), "{f}: {:?}", l.warnings);
+        assert_eq!(corners(&l.mesh), corners(&ply), "{f}");
+        if f.contains("gl") {
+            let uvs: Vec<_> =
+                l.mesh.triangles.iter().flatten().map(|&i| l.mesh.uvs.as_ref().unwrap()[i as usize]).collect();
+            assert_eq!(uvs, ply_uvs, "{f}: uvs in the OBJ/PLY convention");
+            let n = l.mesh.normals.as_ref().unwrap();
+            assert!(n.iter().all(|v| (v.length() - 1.0).abs() < 1e-12), "{f}: unit normals");
+        }
+    }
+}

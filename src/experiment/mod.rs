@@ -296,7 +296,9 @@ impl Experiment {
             cases.push(EyeCase { name: c.name.clone(), eye });
         }
         if methods.contains(&Method::PupilCenter) {
-            crate::render::display_image::check_pupil_center(&display, render.eye_position)?;
+            let field = if dr.eye_position.is_some() { "display_render.eye_position" } else { "eye.position" };
+            crate::render::display_image::check_pupil_center(&display, render.eye_position)
+                .map_err(|e| Error::invalid(source, field, e.to_string()))?;
         }
         Ok(Self {
             name: spec.name.clone(),
