@@ -179,7 +179,7 @@ fn figure<'a>(
                 let caption = scores
                     .iter()
                     .find(|s| s.method == m.short_name() && s.eye_case == case.name)
-                    .map(|s| format!("{} dB, SSIM {:.3}", crate::metrics::format_db(s.psnr.mean, 2), s.ssim.mean));
+                    .map(|s| format!("PSNR {} dB, SSIM {:.3}", crate::metrics::format_db(s.psnr.mean, 2), s.ssim.mean));
                 cells.push((&sims[c][k], caption));
             }
             (label, cells)
