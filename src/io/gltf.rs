@@ -40,8 +40,10 @@ use crate::scene::mesh::Mesh;
 const MAX_INSTANCES: usize = 1_000_000;
 
 pub(super) fn load_gltf(path: &Path, bytes: &[u8]) -> Result<Loaded> {
-    let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| Error::parse(path, describe_gltf_error(&e)))?;
+    let gltf = gltf::Gltf::from_slice_without_validation(bytes)
+        .map_err(|e| Error::parse(path, format!("not a readable glTF/GLB file: {e}")))?;
     let doc = &gltf.document;
+    validate(path, doc)?;
     let base = path.parent().unwrap_or(Path::new(""));
     let mut warnings: Vec<String> = doc
         .extensions_used()
@@ -92,21 +94,27 @@ pub(super) fn load_gltf(path: &Path, bytes: &[u8]) -> Result<Loaded> {
     Ok(Loaded { mesh, parts, texture: None, warnings })
 }
 
-/// The first validation problem (with its JSON path), or the parse error, as one line.
-fn describe_gltf_error(e: &gltf::Error) -> String {
-    match e {
-        gltf::Error::Validation(list) => {
-            let more =
-                if list.len() > 1 { format!(" (and {} more problem(s))", list.len() - 1) } else { String::new() };
-            match list.first() {
-                Some((p, gltf::json::validation::Error::Unsupported)) => {
-                    format!("{p}: required extension not supported by inimtrace{more}")
-                }
-                Some((p, err)) => format!("invalid glTF: {p}: {err}{more}"),
-                None => "invalid glTF".into(),
-            }
+/// The `gltf` crate's validation (index ranges, required extensions, ...), less the rule that
+/// `POSITION` accessors declare `min` and `max`, which this reader does not use and exporters
+/// sometimes leave out. The first problem (with its JSON path) is the error, on one line.
+fn validate(path: &Path, doc: &gltf::Document) -> Result<()> {
+    use gltf::json::validation::{Error as V, Validate};
+    let root = doc.as_json();
+    let mut problems = Vec::new();
+    root.validate(root, gltf::json::Path::new, &mut |p, e| {
+        let p = p().to_string();
+        if !(matches!(e, V::Missing) && (p.ends_with(".min") || p.ends_with(".max"))) {
+            problems.push((p, e));
         }
-        other => format!("not a readable glTF/GLB file: {other}"),
+    });
+    let more =
+        if problems.len() > 1 { format!(" (and {} more problem(s))", problems.len() - 1) } else { String::new() };
+    match problems.first() {
+        None => Ok(()),
+        Some((p, V::Unsupported)) => {
+            Err(Error::parse(path, format!("{p}: required extension not supported by inimtrace{more}")))
+        }
+        Some((p, e)) => Err(Error::parse(path, format!("invalid glTF: {p}: {e}{more}"))),
     }
 }
 
