@@ -325,6 +325,11 @@ fn malformed_gltf_names_the_file_and_element() {
     doc["buffers"][0]["uri"] = json!("missing.bin");
     cases.push(("buffer", doc, vec!["buffers[0]", "missing.bin"]));
 
+    // An accessor index that does not exist (gltf-json's own validation would panic on it).
+    let mut doc = base();
+    doc["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = json!(7);
+    cases.push(("accessor_index", doc, vec!["attributes.POSITION", "accessor 7 does not exist"]));
+
     // A buffer index that does not exist.
     let mut doc = base();
     doc["bufferViews"][0]["buffer"] = json!(3);

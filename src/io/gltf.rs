@@ -98,8 +98,25 @@ pub(super) fn load_gltf(path: &Path, bytes: &[u8]) -> Result<Loaded> {
 /// `POSITION` accessors declare `min` and `max`, which this reader does not use and exporters
 /// sometimes leave out. The first problem (with its JSON path) is the error, on one line.
 fn validate(path: &Path, doc: &gltf::Document) -> Result<()> {
-    use gltf::json::validation::{Error as V, Validate};
+    use gltf::json::validation::{Checked, Error as V, Validate};
     let root = doc.as_json();
+    // gltf-json 1.4's own check of POSITION indexes the accessors without a bounds check.
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (k, prim) in mesh.primitives.iter().enumerate() {
+            if let Some(i) = prim.attributes.get(&Checked::Valid(gltf::json::mesh::Semantic::Positions)) {
+                if i.value() >= root.accessors.len() {
+                    return Err(Error::parse(
+                        path,
+                        format!(
+                            "meshes[{m}].primitives[{k}].attributes.POSITION: accessor {} does not exist (the file has {})",
+                            i.value(),
+                            root.accessors.len()
+                        ),
+                    ));
+                }
+            }
+        }
+    }
     let mut problems = Vec::new();
     root.validate(root, gltf::json::Path::new, &mut |p, e| {
         let p = p().to_string();
@@ -262,6 +279,25 @@ fn node_matrix(path: &Path, node: &gltf::Node) -> Result<DMat4> {
     Ok(m)
 }
 
+/// Most elements an accessor without a buffer view (all zeros) may declare.
+const MAX_ZERO_ELEMENTS: usize = 1 << 24;
+
+/// An accessor's elements as `f64` components, `comps` per element.
+struct Elements {
+    comps: usize,
+    data: Vec<f64>,
+}
+
+impl Elements {
+    fn len(&self) -> usize {
+        self.data.len() / self.comps
+    }
+
+    fn iter(&self) -> std::slice::ChunksExact<'_, f64> {
+        self.data.chunks_exact(self.comps)
+    }
+}
+
 /// Typed, bounds-checked reads of accessors.
 struct Reader<'a> {
     path: &'a Path,
@@ -278,7 +314,7 @@ impl Reader<'_> {
         dims: &[Dimensions],
         types: &[(DataType, bool)],
         want: &str,
-    ) -> Result<Vec<Vec<f64>>> {
+    ) -> Result<Elements> {
         let err = |msg: String| Error::parse(self.path, format!("{at}: accessor {}: {msg}", accessor.index()));
         let (dt, dim, norm) = (accessor.data_type(), accessor.dimensions(), accessor.normalized());
         if !dims.contains(&dim) || !types.contains(&(dt, norm)) {
@@ -293,7 +329,11 @@ impl Reader<'_> {
         let size = dt.size();
         let elem = comps * size;
         let Some(view) = accessor.view() else {
-            return Ok(vec![vec![0.0; comps]; count]);
+            // No buffer view: zeros (the specification's initial value of sparse accessors).
+            if count > MAX_ZERO_ELEMENTS {
+                return Err(err(format!("{count} elements without a buffer view (over {MAX_ZERO_ELEMENTS})")));
+            }
+            return Ok(Elements { comps, data: vec![0.0; comps * count] });
         };
         let stride = view.stride().unwrap_or(elem);
         if stride < elem {
@@ -313,12 +353,12 @@ impl Reader<'_> {
             )));
         }
         let start = start as usize;
-        let mut out = Vec::with_capacity(count);
+        let mut data = Vec::with_capacity(count * comps);
         for k in 0..count {
             let e = &buffer[start + k * stride..start + k * stride + elem];
-            out.push((0..comps).map(|c| component(&e[c * size..(c + 1) * size], dt, norm)).collect());
+            data.extend((0..comps).map(|c| component(&e[c * size..(c + 1) * size], dt, norm)));
         }
-        Ok(out)
+        Ok(Elements { comps, data })
     }
 }
 
