@@ -238,3 +238,15 @@ fn regression_pupil_center_check_names_the_experiment_field() {
     let e = inimtrace::experiment::Experiment::load(&p).unwrap_err().to_string();
     assert!(e.contains("exp.toml") && e.contains("eye.position"), "{e}");
 }
+
+/// Regression (found by `fuzz_glb`): a POSITION accessor index past the end made gltf-json's
+/// validation index out of bounds and panic; it is now an error naming the attribute.
+#[test]
+fn regression_gltf_position_accessor_out_of_range() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(root().join("tests/data/meshes/pyramid.gltf")).unwrap();
+    let p = dir.path().join("bad.gltf");
+    std::fs::write(&p, text.replacen("\"POSITION\": 0", "\"POSITION\": 9", 1)).unwrap();
+    let e = inimtrace::io::load_mesh(&p).unwrap_err().to_string();
+    assert!(e.contains("bad.gltf") && e.contains("attributes.POSITION") && e.contains("accessor 9"), "{e}");
+}
