@@ -23,6 +23,7 @@ pub mod error;
 pub mod experiment;
 #[doc(hidden)]
 pub mod fixtures;
+pub mod info;
 pub mod io;
 pub mod measure;
 pub mod metrics;
@@ -32,5 +33,6 @@ pub mod raster;
 pub mod ray;
 pub mod render;
 pub mod scene;
+pub mod version;
 
 pub use error::{Error, Result};
