@@ -130,7 +130,7 @@ pub fn naive_scores(reps: &super::estimator::Replicates, constants: SsimConstant
         .collect()
 }
 
-/// EXR attributes of a retinal image of eye case `case` measured converged with
+/// EXR attributes of a retinal image measured converged with
 /// `samples_per_pixel` samples.
 pub fn exr_attributes(exp: &Experiment, samples_per_pixel: u64) -> Vec<(&'static str, String)> {
     let m = &exp.measurement;
