@@ -409,3 +409,127 @@ fn every_error_names_its_file_and_field() {
     let e = stderr(&o);
     assert!(e.contains("methods[1]") && e.contains("singular.toml") && e.contains("PupilCenter"), "{e}");
 }
+
+fn paper_grid() -> String {
+    format!("{}/experiments/paper.toml", env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Every final-named file in `dir` is complete: EXRs and PNGs decode; and `results.json`, when
+/// present, lists files that match their sizes and checksums.
+fn assert_no_incomplete_files(dir: &Path) {
+    for entry in std::fs::read_dir(dir).unwrap().flatten() {
+        let p = entry.path();
+        let name = entry.file_name().to_string_lossy().into_owned();
+        if name.starts_with('.') {
+            continue;
+        }
+        match p.extension().and_then(|e| e.to_str()) {
+            Some("exr") => {
+                inimtrace::io::exr::read_rgb(&p).unwrap_or_else(|e| panic!("incomplete EXR under its final name: {e}"));
+            }
+            Some("png") => {
+                image::open(&p).unwrap_or_else(|e| panic!("incomplete PNG {name}: {e}"));
+            }
+            _ => {}
+        }
+    }
+    if let Ok(text) = std::fs::read_to_string(dir.join("results.json")) {
+        let v: serde_json::Value = serde_json::from_str(&text).expect("results.json is complete JSON");
+        let files: Vec<inimtrace::io::output::OutputFile> = serde_json::from_value(v["files"].clone()).unwrap();
+        assert!(files.len() > 30, "the manifest lists every file");
+        inimtrace::io::output::verify(dir, &files).unwrap();
+    }
+}
+
+#[test]
+fn a_killed_run_leaves_nothing_that_looks_complete() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let exp = paper_grid();
+    let mut killed_mid_run = 0;
+    for delay_ms in [50u64, 300, 800, 1500, 2200] {
+        let mut child = Command::new(inimtrace())
+            .args(["--quiet", "assess", &exp, "--out", out.to_str().unwrap()])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(delay_ms));
+        let finished = child.try_wait().unwrap().is_some();
+        let _ = child.kill(); // SIGKILL
+        let _ = child.wait();
+        if !finished {
+            killed_mid_run += 1;
+            // A results.json left by an earlier complete run is removed before anything else
+            // is written, so a killed run never stands next to one that does not describe it.
+            if out.join(".inimtrace.lock").exists() && out.join("display_LC.exr").exists() {
+                let report = std::fs::read_to_string(out.join("results.json")).unwrap_or_default();
+                assert!(report.is_empty() || report.contains("\"files\""), "stale report");
+            }
+        }
+        assert_no_incomplete_files(&out);
+    }
+    assert!(killed_mid_run >= 3, "only {killed_mid_run} kills happened while the run was working");
+}
+
+#[test]
+fn a_second_run_into_the_same_folder_fails_at_once_and_the_first_completes() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let exp = paper_grid();
+    let first = Command::new(inimtrace())
+        .args(["--quiet", "assess", &exp, "--out", out.to_str().unwrap()])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Wait until the first run owns the folder.
+    let lock = out.join(".inimtrace.lock");
+    for _ in 0..200 {
+        if std::fs::read_to_string(&lock).map(|t| t.contains("inimtrace process")).unwrap_or(false) {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    let t = std::time::Instant::now();
+    let second =
+        Command::new(inimtrace()).args(["--quiet", "assess", &exp, "--out", out.to_str().unwrap()]).output().unwrap();
+    assert!(t.elapsed().as_secs_f64() < 1.5, "the second run did not fail at once");
+    assert_clean_failure(&second, "in use by inimtrace process");
+    let first = first.wait_with_output().unwrap();
+    assert!(first.status.success(), "{}", stderr(&first));
+    assert!(out.join("results.json").exists());
+    assert_no_incomplete_files(&out);
+}
+
+#[test]
+fn a_full_filesystem_ends_with_an_error_and_no_report() {
+    let dir = tempfile::tempdir().unwrap();
+    let mnt = dir.path().join("small");
+    std::fs::create_dir(&mnt).unwrap();
+    let mounted = Command::new("mount")
+        .args(["-t", "tmpfs", "-o", "size=3m", "tmpfs", mnt.to_str().unwrap()])
+        .stderr(Stdio::null())
+        .status()
+        .map(|s| s.success())
+        .unwrap_or(false);
+    if !mounted {
+        eprintln!("skipped: cannot mount a small tmpfs here (needs root; CI runs as root)");
+        return;
+    }
+    let out = mnt.join("out");
+    let o =
+        Command::new(inimtrace()).args(["--quiet", "assess", &paper_grid(), "--out", out.to_str().unwrap()]).output();
+    let listing: Vec<String> = std::fs::read_dir(&out)
+        .map(|d| d.flatten().map(|e| e.file_name().to_string_lossy().into_owned()).collect())
+        .unwrap_or_default();
+    let complete_check = std::panic::catch_unwind(|| assert_no_incomplete_files(&out));
+    let _ = Command::new("umount").arg(&mnt).status();
+    let o = o.unwrap();
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(e.contains("No space left") && e.contains("out"), "{e}");
+    assert!(!listing.iter().any(|n| n == "results.json"), "a results.json on a full disk: {listing:?}");
+    assert!(!listing.iter().any(|n| n.starts_with(".inimtrace-tmp-")), "temporary files left: {listing:?}");
+    complete_check.expect("a final-named file is incomplete");
+}
