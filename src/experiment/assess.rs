@@ -106,7 +106,7 @@ pub fn estimate(exp: &Experiment) -> Estimate {
     if exp.measurement.estimator == crate::measure::spec::EstimatorKind::Converged {
         let r = exp.measurement.replicates as u64;
         e.add("the converged estimator's replicates", retina_setting, n * n * r * (1 + methods), 12);
-        e.add_rays(n * n * cases * exp.measurement.max_samples_per_pixel.min(256) as u64 * (1 + methods));
+        e.add_rays(n * n * cases * exp.measurement.max_samples_per_pixel.min(256) * (1 + methods));
     } else {
         let per_pixel = (exp.retina.samples_per_pixel as u64).pow(2);
         for case in &exp.cases {
