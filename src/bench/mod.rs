@@ -45,22 +45,24 @@ mod markdown;
 mod options;
 mod pipeline;
 mod plots;
+mod precision;
 mod report;
 mod runs;
 mod summary;
-mod table1;
 
 use std::time::Instant;
 
 use serde::Serialize;
 
-pub use options::{Backend, BenchOptions, BenchRow, BuildRecord, MethodLabel, Parameter, Quantity, Series, Sizes};
+pub use options::{
+    Backend, BenchOptions, BenchRow, BuildRecord, Estimator, MethodLabel, Parameter, Quantity, Series, Sizes,
+};
+pub use precision::{PrecisionPoint, PrecisionReached, PrecisionSummary, PRECISION_TARGETS_DB};
 pub use report::{console_table, rows_csv};
 pub use summary::{
-    cheapest_within, convergence_rate, first_within, max_abs_diff, ConvergenceSummary, MethodSet, Table1Sweep,
-    Table1Within, WithinTolerance, CONVERGED_TOLERANCE_DB, IDENTICAL_PSNR_DB,
+    cheapest_within, convergence_rate, first_within, max_abs_diff, ConvergenceSummary, WithinTolerance,
+    CONVERGED_TOLERANCE_DB, IDENTICAL_PSNR_DB,
 };
-pub use table1::TABLE1_SWEEPS;
 
 use crate::error::{Error, Result};
 use crate::progress::Progress;
@@ -106,8 +108,8 @@ pub struct BenchReport {
     pub backends: Vec<Backend>,
     pub builds: Vec<BuildRecord>,
     pub convergence: Vec<ConvergenceSummary>,
-    /// Table 1 convergence, one entry per sweep.
-    pub table1: Vec<Table1Sweep>,
+    /// The cost of precision: each Table 1 estimator against the converged Table 1.
+    pub precision: PrecisionSummary,
     pub checks: Checks,
     /// Where the rest of the time went.
     pub stages: Vec<StageTime>,
@@ -119,9 +121,9 @@ pub struct BenchReport {
 }
 
 impl BenchReport {
-    /// The rows of the Table 1 sweep of `sweep`.
-    pub fn table1_rows(&self, sweep: Parameter) -> impl Iterator<Item = &BenchRow> + '_ {
-        self.rows.iter().filter(move |r| r.series == Series::Table1 && r.sweep == sweep)
+    /// The rows of the cost-of-precision section of `estimator`.
+    pub fn precision_rows(&self, estimator: Estimator) -> impl Iterator<Item = &BenchRow> + '_ {
+        self.rows.iter().filter(move |r| r.series == Series::Precision && r.estimator == Some(estimator))
     }
 }
 
@@ -159,7 +161,7 @@ pub fn run(opts: &BenchOptions, scene: &Scene, scene_label: &str) -> Result<Benc
     let best = backends[0];
     let set_up = StageTime::since("set up backends (including the builds)", t);
 
-    let progress = Progress::new(backends.len() as u64 + 4 + TABLE1_SWEEPS.len() as u64, "bench", opts.quiet);
+    let progress = Progress::new(backends.len() as u64 + 4 + 3, "bench", opts.quiet);
     let mut runs = runs::Runs::new(&base, sz, &ctx, &progress);
     runs.method_series(&backends)?;
     let (lc, la_k1_equals_lc) = runs.la_grid_series(&best)?;
@@ -167,12 +169,12 @@ pub fn run(opts: &BenchOptions, scene: &Scene, scene_label: &str) -> Result<Benc
     drop(lc);
     runs.retina_samples_series(&best)?;
     let t = Instant::now();
-    table1::table1_series(&base, sz, &best, &ctx, &progress, &mut runs.rows)?;
+    let precision = precision::precision_series(&base, sz, &best, &ctx, &progress, &mut runs.rows)?;
     progress.finish();
 
     let mut stages = vec![set_up];
     stages.append(&mut runs.stages);
-    stages.push(StageTime::since("Table 1 convergence (wall time of every sweep, scoring included)", t));
+    stages.push(StageTime::since("the cost of precision (wall time: reference, every estimator, display images)", t));
     stages.push(StageTime { stage: "scoring (PSNR and SSIM)".into(), seconds: runs.score_seconds });
     let rows = runs.rows;
     let paper = pipeline::Sampling::of(&base);
@@ -196,7 +198,7 @@ pub fn run(opts: &BenchOptions, scene: &Scene, scene_label: &str) -> Result<Benc
         backends: backends.iter().map(|b| b.backend).collect(),
         builds: built.builds.clone(),
         convergence: Series::CONVERGENCE.iter().filter_map(|s| summary::summarize(*s, &rows)).collect(),
-        table1: TABLE1_SWEEPS.iter().filter_map(|s| summary::summarize_table1(*s, paper.get(*s), &rows)).collect(),
+        precision,
         checks: Checks { la_k1_equals_lc },
         stages,
         load_average: [load_at_start, load_average()],
