@@ -86,6 +86,21 @@ pub struct PrecisionSummary {
     pub reached: Vec<PrecisionReached>,
 }
 
+/// One eye case of the random or RQMC sweep at one sample count.
+struct Step {
+    case: usize,
+    /// Index into [`Sizes::precision_samples`].
+    step: usize,
+    samples_per_pixel: u64,
+    /// Sampling seconds up to this count (nested sequences).
+    sampled: f64,
+    /// Naive scores of the replicates' mean images, and their seconds ...
+    naive: Vec<(crate::metrics::Psnr, crate::metrics::Ssim)>,
+    naive_seconds: f64,
+    /// ... and the de-biased ones (RQMC only).
+    debiased: Option<(Vec<adaptive::CellScores>, f64)>,
+}
+
 /// Table 1 as (eye case, method) -> (PSNR, SSIM).
 type Cells = HashMap<(String, MethodLabel), (f64, f64)>;
 
@@ -270,35 +285,35 @@ pub fn precision_series(
                     let cells = adaptive::score(&reps, base.ssim, &loose);
                     Some((cells, t.elapsed().as_secs_f64()))
                 };
-                store.push((i, j, reps.samples_per_pixel(), sampled, naive, naive_seconds, debiased));
+                store.push(Step {
+                    case: i,
+                    step: j,
+                    samples_per_pixel: reps.samples_per_pixel(),
+                    sampled,
+                    naive,
+                    naive_seconds,
+                    debiased,
+                });
             }
         }
     }
     // Per estimator and ladder step: seconds summed over the eye cases, errors over every cell.
-    let mut add_points = |estimator: Estimator,
-                          list: &[(
-        usize,
-        usize,
-        u64,
-        f64,
-        Vec<(crate::metrics::Psnr, crate::metrics::Ssim)>,
-        f64,
-        Option<(Vec<adaptive::CellScores>, f64)>,
-    )]| {
+    let mut add_points = |estimator: Estimator, list: &[Step]| {
         for (j, &n) in sizes.precision_samples.iter().enumerate() {
             let mut cells = Cells::new();
             let mut seconds = 0.0;
             let mut spp = 0;
-            for (i, _, s, sampled, naive, naive_seconds, debiased) in list.iter().filter(|x| x.1 == j) {
-                spp = *s;
-                let scores: Vec<(f64, f64)> = match (estimator, debiased) {
+            for x in list.iter().filter(|x| x.step == j) {
+                let (i, sampled) = (&x.case, x.sampled);
+                spp = x.samples_per_pixel;
+                let scores: Vec<(f64, f64)> = match (estimator, &x.debiased) {
                     (Estimator::Rqmc, Some((c, t))) => {
                         seconds += sampled + t;
                         c.iter().map(|c| (c.psnr.mean, c.ssim.mean)).collect()
                     }
                     _ => {
-                        seconds += sampled + naive_seconds;
-                        naive.iter().map(|(p, s)| (p.mean, s.mean)).collect()
+                        seconds += sampled + x.naive_seconds;
+                        x.naive.iter().map(|(p, s)| (p.mean, s.mean)).collect()
                     }
                 };
                 for (k, sc) in scores.iter().enumerate() {
