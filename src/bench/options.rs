@@ -280,7 +280,7 @@ pub struct BenchRow {
     /// of the point's rows.
     pub seconds: f64,
     /// Rays traced: camera rays of the display render, plus eye rays of the simulation.
-    /// `precision` rows: 0 (not counted).
+    /// `precision` rows: the eye rays of the point (the reference's: of its eye case).
     pub rays: u64,
     pub rays_per_second: f64,
     /// Mean of the R, G, B PSNRs against the reference (peak 1, linear values). `precision`

@@ -15,7 +15,8 @@
 //!   replicates' mean image (biased by the noise left in both images);
 //! - **rqmc**: the same replicates scored by the cross-replicate (de-biased) estimator.
 //!
-//! Seconds count the eye rays and the scoring (the display images, common to all, are rendered
+//! Rays are the eye rays traced (the grid: ground truth and simulation each; the reference: its
+//! eye case). Seconds count the eye rays and the scoring (the display images, common to all, are rendered
 //! once and not counted); the sequences are nested, so a sample count's seconds are all the
 //! sampling up to it plus its own scoring. The error of a point is the largest |PSNR error| over
 //! Table 1's cells; each estimator "reaches" a target from the first point after which every
@@ -154,23 +155,25 @@ pub fn precision_series(
     let refs: Vec<&RgbImage> = displays.iter().collect();
     let stack = experiment::pack_display_images(base, &refs, &mut Vec::new())?;
     let m = &base.measurement;
+    let pixels = (base.retina.resolution * base.retina.resolution) as u64;
     let labels: Vec<MethodLabel> = base.methods.iter().map(|&x| MethodLabel::from(x)).collect();
-    let row = |estimator: Estimator, case: usize, k: usize, spp: u64, seconds: f64, scores: (f64, f64)| {
-        let c = &base.cases[case];
-        BenchRow {
-            estimator: Some(estimator),
-            eye_case: c.name.clone(),
-            focus_mm: focus_mm(c),
-            parameter: spp as usize,
-            samples: spp as usize,
-            la_grid: la_grid_of(base.methods[k]),
-            pupil_samples: c.eye.pupil_samples().len(),
-            retina_samples: 0,
-            reference: "converged reference (same display images)".into(),
-            ..ctx.row(Series::Precision, Parameter::RetinaSamples, Quantity::Perceived, best.backend, labels[k])
-        }
-        .measured(seconds, 0, (capped_psnr(scores.0), scores.1))
-    };
+    let row =
+        |estimator: Estimator, case: usize, k: usize, spp: u64, (seconds, rays): (f64, u64), scores: (f64, f64)| {
+            let c = &base.cases[case];
+            BenchRow {
+                estimator: Some(estimator),
+                eye_case: c.name.clone(),
+                focus_mm: focus_mm(c),
+                parameter: spp as usize,
+                samples: spp as usize,
+                la_grid: la_grid_of(base.methods[k]),
+                pupil_samples: c.eye.pupil_samples().len(),
+                retina_samples: 0,
+                reference: "converged reference (same display images)".into(),
+                ..ctx.row(Series::Precision, Parameter::RetinaSamples, Quantity::Perceived, best.backend, labels[k])
+            }
+            .measured(seconds, rays, (capped_psnr(scores.0), scores.1))
+        };
 
     // The reference: every eye case to the tight target, with its own seed.
     let mut reference = Cells::new();
@@ -201,7 +204,7 @@ pub fn precision_series(
                 i,
                 k,
                 got.samples_per_pixel(),
-                seconds,
+                (seconds, got.samples_per_pixel() * pixels),
                 (cell.psnr.mean, cell.ssim.mean),
             ));
         }
@@ -227,12 +230,16 @@ pub fn precision_series(
         seconds += super::pipeline::stage_seconds(&stages);
         let kept = exp.cases.iter().map(|c| c.eye.pupil_samples().len()).max().unwrap_or(1);
         let spp = (kept * retina * retina) as u64;
+        // The ground truth and the simulation each trace every retina sample through every
+        // pupil sample.
+        let rays: u64 =
+            exp.cases.iter().map(|c| 2 * pixels * (retina * retina * c.eye.pupil_samples().len()) as u64).sum();
         let mut cells = Cells::new();
         for sc in &scores {
             let Some(i) = exp.cases.iter().position(|c| c.name == sc.eye_case) else { continue };
             let Some(k) = exp.methods.iter().position(|x| x.short_name() == sc.method) else { continue };
             cells.insert((sc.eye_case.clone(), labels[k]), (sc.psnr.mean, sc.ssim.mean));
-            let mut r = row(Estimator::Grid, i, k, spp, seconds, (sc.psnr.mean, sc.ssim.mean));
+            let mut r = row(Estimator::Grid, i, k, spp, (seconds, rays), (sc.psnr.mean, sc.ssim.mean));
             (r.pupil_grid, r.retina_samples) = (pupil, retina);
             rows.push(r);
         }
@@ -323,7 +330,7 @@ pub fn precision_series(
             for (i, case) in base.cases.iter().enumerate() {
                 for (k, label) in labels.iter().enumerate() {
                     if let Some(&sc) = cells.get(&(case.name.clone(), *label)) {
-                        rows.push(row(estimator, i, k, spp, seconds, sc));
+                        rows.push(row(estimator, i, k, spp, (seconds, spp * pixels * base.cases.len() as u64), sc));
                     }
                 }
             }
