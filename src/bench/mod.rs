@@ -20,25 +20,24 @@
 //!   eye case for n = 2..16 against n = 32; the ground truth at that eye case for 1, 2 x 2,
 //!   3 x 3, 4 x 4 samples per retina pixel against 8 x 8 (until the Table 1 series existed: 1,
 //!   2 x 2, 4 x 4, 8 x 8 against 16 x 16, a minute more of the full run for the same rate);
-//! - **Table 1 convergence** (`series = "table1"`, the swept parameter in `sweep`), on the
-//!   fastest backend: the quantity users report, the paper's Table 1 (PSNR and SSIM of the
-//!   perceived image against the ground-truth retinal image, per method and eye case, computed
-//!   by the stage functions of [`crate::experiment`] that `assess` runs), with one sampling
-//!   parameter swept and the others at the paper's settings: samples per retina pixel, samples
-//!   per display pixel, the eye's pupil grid n and LA's k. The value at a sweep's highest setting
-//!   is taken as converged; [`Table1Sweep`] reports the cheapest setting within
-//!   [`CONVERGED_TOLERANCE_DB`] of it, for every method and eye case at once and per method.
+//! - **the cost of precision** (`series = "precision"`, the estimator in `estimator`), on the
+//!   fastest backend: the paper's Table 1 (PSNR and SSIM of the perceived image against the
+//!   ground-truth retinal image, per method and eye case) by the grid estimator, plain random
+//!   sampling, and randomized QMC scored naively and de-biased, at increasing sample counts,
+//!   against a converged reference run; the error (largest |PSNR error| over Table 1's cells)
+//!   against seconds, and the seconds each estimator needs to stay within
+//!   [`PRECISION_TARGETS_DB`] (`precision`).
 //!
 //! Writes `bench.csv` (one row per measured point, with the core count, git revision and every
 //! setting), `builds.csv` (acceleration-structure build time and triangle count per mesh
 //! backend), `bench.json` (all of it, plus the observed convergence rates and checks),
 //! `bench.md` (the report), `summary.md` (its tables, for the README) and plots as PNG and SVG
-//! (plotters): `speed_psnr`, `speed_ssim`, `la_grid`, `pupil_grid`, `retina_samples`, `table1`.
+//! (plotters): `speed_psnr`, `speed_ssim`, `la_grid`, `pupil_grid`, `retina_samples`, `precision`.
 //!
 //! Every image, references included, is made by the stage functions `assess` runs, on copies of
 //! the paper's experiment with one sampling setting changed (`pipeline`). The parts: `options`
 //! (sizes and the typed rows), `runs` (backends, builds, the method and convergence series),
-//! `table1` (Table 1 convergence), `summary` (rates and settings within tolerance), `report`
+//! `precision` (the cost of precision), `summary` (rates and settings within tolerance), `report`
 //! (CSV, JSON, the console table), `markdown` and `plots`.
 
 mod markdown;
