@@ -116,6 +116,7 @@ fn mesh_scene_runs_on_the_mesh_backends_only() {
     // per point, each point's error the largest over those 12 cells.
     let p = &report.precision;
     assert!(p.reference_ci95_db <= 0.02 && p.reference_samples_per_pixel > 0, "{p:?}");
+    assert_eq!(p.reference_stopped_by, "target met");
     assert_eq!(report.precision_rows(Estimator::Reference).count(), 12);
     let counts = [(Estimator::Grid, 2), (Estimator::Random, 3), (Estimator::RqmcNaive, 3), (Estimator::Rqmc, 3)];
     for (e, n) in counts {

@@ -466,6 +466,7 @@ fn check_precision_series(report: &serde_json::Value, stdout: &str, out: &Path, 
     let p = &report["precision"];
     // The reference: the tight target met, one row per method and eye case.
     assert!(f(p, "reference_ci95_db") <= f(p, "reference_target_db") && f(p, "reference_target_db") <= 0.01, "{p}");
+    assert_eq!(p["reference_stopped_by"], "target met");
     let reference: Vec<&serde_json::Value> = rows.iter().copied().filter(|r| r["estimator"] == "reference").collect();
     assert_eq!(reference.len(), 12);
     let ref_psnr = |case: &serde_json::Value, method: &serde_json::Value| {

@@ -270,7 +270,7 @@ fn precision_summary(rep: &BenchReport, s: &mut String) {
         "\n**The cost of precision** on the {} backend: Table 1 (PSNR of the perceived image against the ground truth, \
          every method and eye case) by each estimator, against the converged Table 1 (a reference run of the \
          de-biased RQMC estimator with its own seed, to a 95% half-width of {} dB; reached {:.4} dB with {} samples \
-         per pixel in {} s). Error: the largest |PSNR - converged PSNR| over Table 1's cells. Seconds: eye rays and \
+         per pixel in {} s, stopped by: {}). Error: the largest |PSNR - converged PSNR| over Table 1's cells. Seconds: eye rays and \
          scoring of the whole Table 1 (the display images, common to all, not counted); RQMC and random use {} \
          replicates. Seconds to stay within each target from then on to the sweep's top (\"not reached\": the top \
          is not within it):\n",
@@ -279,6 +279,7 @@ fn precision_summary(rep: &BenchReport, s: &mut String) {
         p.reference_ci95_db,
         p.reference_samples_per_pixel,
         secs(p.reference_seconds),
+        p.reference_stopped_by,
         p.replicates,
     );
     let _ = write!(s, "| estimator |");

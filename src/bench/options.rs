@@ -65,7 +65,7 @@ impl Sizes {
             retina_samples_reference: 8,
             precision_reference_db: 0.005,
             precision_reference_max_samples: 1 << 16,
-            precision_reference_seconds: 600.0,
+            precision_reference_seconds: 900.0,
             precision_grids: vec![(4, 1), (8, 1), (8, 2), (12, 2), (16, 3), (24, 4)],
             precision_samples: vec![1, 2, 4, 8, 16, 32, 64, 128],
         }
@@ -79,7 +79,7 @@ impl Sizes {
             retina_resolution: 128,
             precision_reference_db: 0.01,
             precision_reference_max_samples: 1 << 13,
-            precision_reference_seconds: 20.0,
+            precision_reference_seconds: 60.0,
             precision_grids: vec![(4, 1), (8, 1), (8, 2), (16, 3)],
             precision_samples: vec![1, 2, 4, 8, 16, 32],
             ..Self::full()

@@ -80,6 +80,9 @@ pub struct PrecisionSummary {
     /// ... its samples per pixel (largest over the eye cases) and its seconds.
     pub reference_samples_per_pixel: u64,
     pub reference_seconds: f64,
+    /// Why the reference stopped: "target met" for every eye case, else the first budget that
+    /// stopped one ("sample budget", "time budget").
+    pub reference_stopped_by: String,
     pub replicates: usize,
     /// Every point, estimators in [`SWEPT`] order, sample counts increasing.
     pub points: Vec<PrecisionPoint>,
@@ -178,6 +181,7 @@ pub fn precision_series(
     // The reference: every eye case to the tight target, with its own seed.
     let mut reference = Cells::new();
     let (mut ref_ci, mut ref_spp, mut ref_seconds) = (0.0f64, 0u64, 0.0);
+    let mut ref_stopped_by = "target met";
     let ref_precision = Precision {
         psnr_ci95_db: sizes.precision_reference_db,
         ssim_ci95: f64::INFINITY,
@@ -196,6 +200,9 @@ pub fn precision_series(
         let seconds = t.elapsed().as_secs_f64();
         ref_seconds += seconds;
         ref_spp = ref_spp.max(got.samples_per_pixel());
+        if ref_stopped_by == "target met" {
+            ref_stopped_by = got.stopped_by;
+        }
         for (k, cell) in got.cells.iter().enumerate() {
             ref_ci = ref_ci.max(cell.psnr.ci95.unwrap_or(f64::INFINITY));
             reference.insert((case.name.clone(), labels[k]), (cell.psnr.mean, cell.ssim.mean));
@@ -357,6 +364,7 @@ pub fn precision_series(
         reference_ci95_db: ref_ci,
         reference_samples_per_pixel: ref_spp,
         reference_seconds: ref_seconds,
+        reference_stopped_by: ref_stopped_by.into(),
         replicates: nr,
         points,
         reached,
