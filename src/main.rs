@@ -139,7 +139,8 @@ enum Command {
         json: bool,
     },
     /// Speed against error for every method and backend, the convergence of every sampling
-    /// parameter, and which settings bring Table 1 within 0.1 dB of its converged values; writes
+    /// parameter, and the seconds each Table 1 estimator needs to come within 0.1 to 0.01 dB of the
+    /// converged Table 1; writes
     /// bench.csv, builds.csv, bench.json, bench.md and plots (PNG, SVG).
     Bench {
         /// Small sizes (LCD 540 x 540, retina 128 x 128).
