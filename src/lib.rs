@@ -26,10 +26,13 @@ pub mod fixtures;
 pub mod io;
 pub mod metrics;
 pub mod optics;
+pub mod overrides;
 pub mod progress;
 pub mod raster;
 pub mod ray;
 pub mod render;
 pub mod scene;
+pub mod settings;
+pub mod sweep;
 
 pub use error::{Error, Result};

@@ -14,12 +14,14 @@ use inimtrace::io::scene_file::SceneSpec;
 use inimtrace::io::{load_display, load_scene};
 use inimtrace::metrics::{self, SsimConstants};
 use inimtrace::optics::{Aperture, Display, Eye, Focus, Retina};
+use inimtrace::overrides::Override;
 use inimtrace::progress::Progress;
 use inimtrace::render::retina::simulate;
 use inimtrace::render::{
     ground_truth, render_display_image_with_depth, with_fields, BackendChoice, DisplayRenderSettings, Fields, Method,
 };
 use inimtrace::scene::Scene;
+use inimtrace::settings::{display_with, scene_with, Settings};
 
 /// `print!` that returns write errors (a closed pipe) instead of panicking.
 macro_rules! out {
@@ -62,6 +64,11 @@ struct Cli {
     /// before anything is allocated (default: the memory available on this machine).
     #[arg(long, global = true, value_parser = inimtrace::budget::parse_bytes)]
     max_memory: Option<u64>,
+    /// Change one setting of the experiment, scene or display (repeatable): a dotted path into
+    /// the resolved experiment, the value in TOML syntax: eye.pupil_diameter=3,
+    /// eye_cases[1].focus_diopters=2.5, display.lenslets.pitch=1.0, scene.objects[0].center=[0,0,350].
+    #[arg(long = "set", global = true, value_name = "KEY=VALUE")]
+    set: Vec<Override>,
 }
 
 #[derive(Subcommand)]
@@ -143,6 +150,55 @@ enum Command {
         /// Output directory (default: out/bench or out/bench-quick).
         #[arg(long)]
         out: Option<PathBuf>,
+    },
+    /// Run an experiment over the points of a sweep file (axes of --set values) on all cores, or
+    /// as a Slurm job array; resumable. Writes sweep.csv, sweep.json, plots and points/.
+    Sweep {
+        /// Sweep TOML (see sweeps/tiny.toml, sweeps/pupil-focus.toml).
+        sweep: PathBuf,
+        /// Output directory (default: out/<sweep name>).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Run only these points, without collecting: indices and ranges I..J (J excluded), e.g.
+        /// 0..12 or 3,5,8..10. What each Slurm array task runs.
+        #[arg(long, conflicts_with = "slurm")]
+        points: Option<String>,
+        /// Write every point's images and figure too (points/<id>/), as `images = true`.
+        #[arg(long)]
+        images: bool,
+        /// Collect the complete points into sweep.csv, sweep.json and plots, list the missing
+        /// ones; run nothing.
+        #[arg(long, conflicts_with_all = ["slurm", "points"])]
+        collect: bool,
+        /// Submit the missing points to Slurm as a job array instead of running them here.
+        #[arg(long)]
+        slurm: bool,
+        /// Slurm partition.
+        #[arg(long, requires = "slurm")]
+        partition: Option<String>,
+        /// Most array tasks: the missing points are split into at most this many chunks.
+        #[arg(long, requires = "slurm", default_value_t = 100)]
+        array_max: usize,
+        /// Time limit of each array task (Slurm syntax: 30, 2:00:00, 1-0).
+        #[arg(long, requires = "slurm")]
+        time: Option<String>,
+        /// Cores of each array task (it runs that many threads).
+        #[arg(long, requires = "slurm")]
+        cpus_per_task: Option<usize>,
+        /// At most this many array tasks at once.
+        #[arg(long, requires = "slurm")]
+        max_running: Option<usize>,
+        /// Print the sbatch script instead of submitting it.
+        #[arg(long, requires = "slurm")]
+        dry_run: bool,
+        /// Wait for the job array to end, then collect (an error when points are missing).
+        #[arg(long, requires = "slurm")]
+        wait: bool,
+        /// The sweep's id at submission (array tasks refuse to run a changed sweep).
+        #[arg(long, hide = true)]
+        sweep_id: Option<String>,
+        #[command(flatten)]
+        backend: BackendArg,
     },
     /// Describe a display (central depth plane and more) and write the built-in files.
     Info {
@@ -255,7 +311,10 @@ impl EyeArgs {
     }
 }
 
-fn load_setup(setup: &Setup) -> Result<(Scene, Display)> {
+fn load_setup(setup: &Setup, set: &[Override]) -> Result<(Scene, Display)> {
+    if !set.is_empty() {
+        return Ok((scene_with(setup.scene.as_deref(), set)?, display_with(setup.display.as_deref(), set)?));
+    }
     let scene = match &setup.scene {
         Some(p) => load_scene(&p.to_string_lossy(), Path::new(""))?,
         None => Scene::paper(),
@@ -318,15 +377,28 @@ fn run() -> Result<()> {
         inimtrace::budget::set_memory_limit(bytes);
     }
     let quiet = cli.quiet;
+    let set = cli.set;
     let start = Instant::now();
     match cli.command {
         Command::Assess { experiment, out, scene, backend } => {
             let backend = backend.choice()?;
             let mut exp = match &experiment {
+                _ if !set.is_empty() => {
+                    let mut s = match &experiment {
+                        Some(p) => Settings::experiment_file(p)?,
+                        None => {
+                            Settings::builtin(&ExperimentSpec::paper(), "built-in paper experiment", Path::new("."))?
+                        }
+                    };
+                    if let Some(p) = &scene {
+                        s.replace_scene(p)?;
+                    }
+                    s.with_overrides(&set).resolve()?.experiment()?
+                }
                 Some(p) => Experiment::load(p)?,
                 None => Experiment::paper(),
             };
-            if let Some(p) = &scene {
+            if let Some(p) = scene.as_ref().filter(|_| set.is_empty()) {
                 exp.scene = load_scene(&p.to_string_lossy(), Path::new(""))?;
                 exp.spec.scene = p.display().to_string();
             }
@@ -357,7 +429,7 @@ fn run() -> Result<()> {
         }
         Command::RenderDisplay { method, setup, samples_per_pixel, reference_plane, out, backend } => {
             let backend = backend.choice()?;
-            let (scene, display) = load_setup(&setup)?;
+            let (scene, display) = load_setup(&setup, &set)?;
             announce(&scene, backend, quiet);
             let method: Method = method.parse().map_err(anyhow::Error::msg)?;
             inimtrace::optics::limits::REFERENCE_PLANE_Z.check("command line", "--reference-plane", reference_plane)?;
@@ -387,7 +459,7 @@ fn run() -> Result<()> {
             )?;
         }
         Command::Simulate { display_image, setup, eye, out } => {
-            let (_, display) = load_setup(&setup)?;
+            let (_, display) = load_setup(&setup, &set)?;
             let (eye, retina) = eye.eye()?;
             let img = inimtrace::io::exr::read_rgb(&display_image)?;
             let p = Progress::new(retina.resolution as u64, "simulate", quiet);
@@ -406,7 +478,7 @@ fn run() -> Result<()> {
         }
         Command::GroundTruth { setup, eye, out, backend } => {
             let backend = backend.choice()?;
-            let (scene, _) = load_setup(&setup)?;
+            let (scene, _) = load_setup(&setup, &set)?;
             let (eye, retina) = eye.eye()?;
             announce(&scene, backend, quiet);
             let (img, name) = with_field(&scene, backend, |fields| {
@@ -423,6 +495,9 @@ fn run() -> Result<()> {
             )?;
         }
         Command::Compare { a, b, ssim } => {
+            if !set.is_empty() {
+                bail!("--set does not apply to compare (it reads no experiment, scene or display)");
+            }
             let constants: SsimConstants = ssim.parse()?;
             let ia = inimtrace::io::exr::read_rgb(&a)?;
             let ib = inimtrace::io::exr::read_rgb(&b)?;
@@ -448,6 +523,7 @@ fn run() -> Result<()> {
         }
         Command::Bench { quick, scene, out } => {
             let (scene, label) = match &scene {
+                _ if !set.is_empty() => (scene_with(scene.as_deref(), &set)?, "--set".to_string()),
                 Some(p) => (load_scene(&p.to_string_lossy(), Path::new(""))?, p.display().to_string()),
                 None => (Scene::paper(), "builtin:paper".to_string()),
             };
@@ -465,6 +541,48 @@ fn run() -> Result<()> {
                 eprintln!("wrote {}", out.display());
             }
         }
+        Command::Sweep {
+            sweep,
+            out,
+            points,
+            images,
+            collect,
+            slurm,
+            partition,
+            array_max,
+            time,
+            cpus_per_task,
+            max_running,
+            dry_run,
+            wait,
+            sweep_id,
+            backend,
+        } => {
+            let slurm = slurm.then(|| inimtrace::sweep::SlurmOptions {
+                partition,
+                array_max,
+                time,
+                cpus_per_task,
+                max_running,
+                dry_run,
+                ..Default::default()
+            });
+            let cmd = inimtrace::sweep::SweepCommand {
+                sweep,
+                out,
+                overrides: set.clone(),
+                backend: backend.choice()?,
+                quiet,
+                points,
+                images,
+                collect,
+                slurm,
+                wait,
+                sweep_id,
+            };
+            let text = inimtrace::sweep::execute(&cmd, &mut |m| eprintln!("{m}"))?;
+            out!("{text}");
+        }
         Command::Info { display, print } => {
             if let Some(what) = print {
                 let text = match what.as_str() {
@@ -478,6 +596,7 @@ fn run() -> Result<()> {
                 return Ok(());
             }
             let d = match display {
+                _ if !set.is_empty() => display_with(display.as_deref(), &set)?,
                 Some(p) => load_display(&p.to_string_lossy(), Path::new(""))?,
                 None => Display::paper(),
             };

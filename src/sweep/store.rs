@@ -1,0 +1,220 @@
+//! A sweep's output folder and its point records: `points/<id>.json` holds the Table 1
+//! scores (Sec. 4.2) of one point, named by the content hash of its resolved settings. A
+//! record is written under a temporary name and renamed when complete, so a point is either
+//! recorded whole or missing, whatever stops the process (a kill, a Slurm time limit or
+//! `scancel`); many processes (Slurm array tasks) may write into one folder at once. Images,
+//! when asked for, go to `points/<id>/`; their point counts as complete only once its record
+//! exists.
+
+use std::collections::HashSet;
+use std::fs;
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use crate::experiment::Score;
+use crate::io::output::{write_atomic, TEMP_PREFIX};
+
+/// One score row of a point: a method under an eye case. PSNR in dB (`inf` for identical
+/// images); the 95% half-widths are present when the experiment's measurement gives them.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ScoreRow {
+    pub method: String,
+    pub eye_case: String,
+    #[serde(with = "db")]
+    pub psnr_db: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub psnr_ci95_db: Option<f64>,
+    pub ssim: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ssim_ci95: Option<f64>,
+}
+
+impl From<&Score> for ScoreRow {
+    fn from(s: &Score) -> Self {
+        Self {
+            method: s.method.clone(),
+            eye_case: s.eye_case.clone(),
+            psnr_db: s.psnr.mean,
+            psnr_ci95_db: None,
+            ssim: s.ssim.mean,
+            ssim_ci95: None,
+        }
+    }
+}
+
+/// What one point produced.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PointRecord {
+    /// Content hash of the point's resolved settings.
+    pub id: String,
+    /// Index of the point in the sweep when it ran.
+    pub index: usize,
+    /// The swept values, as `KEY=VALUE` in TOML syntax.
+    pub values: Vec<String>,
+    pub scores: Vec<ScoreRow>,
+    /// Wall time of the point: its own stages plus its share of the display images it shared.
+    pub seconds: f64,
+    pub backend: String,
+    pub threads: usize,
+    /// Where and when it ran, and with which inimtrace.
+    pub host: String,
+    pub finished_unix: u64,
+    pub version: String,
+}
+
+/// The folder of a sweep.
+#[derive(Clone, Debug)]
+pub struct Store {
+    root: PathBuf,
+}
+
+impl Store {
+    /// Creates the folder (and `points/`) if needed and checks that it can be written. Never
+    /// removes anything: other processes may be writing points into it.
+    pub fn open(root: &Path) -> Result<Self> {
+        let points = root.join("points");
+        fs::create_dir_all(&points).map_err(|e| Error::io(&points, e))?;
+        let probe = points.join(format!("{TEMP_PREFIX}{}-probe", std::process::id()));
+        fs::write(&probe, b"").map_err(|e| Error::io(&points, e))?;
+        let _ = fs::remove_file(&probe);
+        Ok(Self { root: root.to_path_buf() })
+    }
+
+    pub fn root(&self) -> &Path {
+        &self.root
+    }
+
+    fn record_path(&self, id: &str) -> PathBuf {
+        self.root.join("points").join(format!("{id}.json"))
+    }
+
+    /// The folder of a point's images.
+    pub fn images_dir(&self, id: &str) -> PathBuf {
+        self.root.join("points").join(id)
+    }
+
+    /// The record of point `id`, if it is complete. A record that cannot be read or does not
+    /// belong to `id` counts as missing (the point runs again and replaces it).
+    pub fn read(&self, id: &str) -> Option<PointRecord> {
+        let bytes = fs::read(self.record_path(id)).ok()?;
+        serde_json::from_slice::<PointRecord>(&bytes).ok().filter(|r| r.id == id)
+    }
+
+    /// The ids among `ids` whose points are complete.
+    pub fn complete<'a>(&self, ids: impl IntoIterator<Item = &'a String>) -> HashSet<String> {
+        ids.into_iter().filter(|id| self.read(id).is_some()).cloned().collect()
+    }
+
+    /// Records a point, atomically.
+    pub fn write(&self, record: &PointRecord) -> Result<()> {
+        let json = serde_json::to_vec_pretty(record)
+            .map_err(|e| Error::Unsupported(format!("cannot serialise point {}: {e}", record.id)))?;
+        let path = self.record_path(&record.id);
+        write_atomic(&path, |tmp| fs::write(tmp, &json).map_err(|e| Error::io(tmp, e)))
+    }
+}
+
+/// This machine's name (Slurm runs points on many).
+pub fn host_name() -> String {
+    fs::read_to_string("/proc/sys/kernel/hostname")
+        .map(|s| s.trim().to_string())
+        .ok()
+        .filter(|s| !s.is_empty())
+        .or_else(|| std::env::var("HOSTNAME").ok())
+        .unwrap_or_else(|| "unknown".into())
+}
+
+/// Seconds since 1970.
+pub fn unix_now() -> u64 {
+    std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.as_secs()).unwrap_or(0)
+}
+
+/// PSNR in JSON: a number, or the string "inf" for identical images (JSON has no infinity).
+mod db {
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(v: &f64, s: S) -> Result<S::Ok, S::Error> {
+        if v.is_finite() {
+            s.serialize_f64(*v)
+        } else {
+            s.serialize_str(if *v > 0.0 {
+                "inf"
+            } else if *v < 0.0 {
+                "-inf"
+            } else {
+                "nan"
+            })
+        }
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+        #[derive(Deserialize)]
+        #[serde(untagged)]
+        enum Db {
+            Number(f64),
+            Text(String),
+        }
+        Ok(match Db::deserialize(d)? {
+            Db::Number(v) => v,
+            Db::Text(t) if t == "inf" => f64::INFINITY,
+            Db::Text(t) if t == "-inf" => f64::NEG_INFINITY,
+            Db::Text(_) => f64::NAN,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn record(id: &str) -> PointRecord {
+        PointRecord {
+            id: id.into(),
+            index: 3,
+            values: vec!["eye.pupil_diameter=2".into()],
+            scores: vec![ScoreRow {
+                method: "LC".into(),
+                eye_case: "Eye".into(),
+                psnr_db: f64::INFINITY,
+                psnr_ci95_db: Some(0.01),
+                ssim: 0.9,
+                ssim_ci95: None,
+            }],
+            seconds: 1.5,
+            backend: "analytic".into(),
+            threads: 2,
+            host: host_name(),
+            finished_unix: unix_now(),
+            version: "0".into(),
+        }
+    }
+
+    #[test]
+    fn records_round_trip_and_only_complete_ones_count() {
+        let dir = tempfile::tempdir().unwrap();
+        let store = Store::open(dir.path()).unwrap();
+        let r = record("00000000000000aa");
+        store.write(&r).unwrap();
+        assert_eq!(store.read(&r.id), Some(r.clone()));
+        // A half-written record (never under the final name in practice) and one that names
+        // another point both count as missing.
+        fs::write(store.record_path("00000000000000bb"), b"{\"id\": \"000").unwrap();
+        let mut other = record("00000000000000cc");
+        other.id = "elsewhere".into();
+        fs::write(store.record_path("00000000000000cc"), serde_json::to_vec(&other).unwrap()).unwrap();
+        let ids: Vec<String> = ["00000000000000aa", "00000000000000bb", "00000000000000cc", "00000000000000dd"]
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+        let done = store.complete(&ids);
+        assert_eq!(done.len(), 1);
+        assert!(done.contains("00000000000000aa"));
+        let names: Vec<String> = fs::read_dir(dir.path().join("points"))
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .collect();
+        assert!(names.iter().all(|n| !n.starts_with(TEMP_PREFIX)), "{names:?}");
+    }
+}
