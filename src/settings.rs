@@ -33,6 +33,8 @@ struct Origin {
     reference: String,
     label: String,
     base: PathBuf,
+    /// Overrides changed it (its errors then name the key in the experiment: `scene.objects[1].size`).
+    changed: bool,
 }
 
 /// The origins of the parts a document holds.
@@ -264,8 +266,16 @@ impl Settings {
             scene_key,
             source: self.label(None, ""),
             origins: Origins {
-                scene: Some(Origin { label: self.label(Some(&scene_origin), "scene"), ..scene_origin }),
-                display: Some(Origin { label: self.label(Some(&display_origin), "display"), ..display_origin }),
+                scene: Some(Origin {
+                    label: self.label(Some(&scene_origin), "scene"),
+                    changed: self.overrides.iter().any(|o| o.top() == "scene"),
+                    ..scene_origin
+                }),
+                display: Some(Origin {
+                    label: self.label(Some(&display_origin), "display"),
+                    changed: self.overrides.iter().any(|o| o.top() == "display"),
+                    ..display_origin
+                }),
             },
         })
     }
@@ -289,18 +299,24 @@ impl Resolved {
     /// Builds the scene (meshes and textures loaded from their files).
     pub fn build_scene(&self) -> Result<Scene> {
         let o = self.origins.scene.as_ref().expect("resolved with a scene");
-        self.scene
-            .to_scene(&o.label, &o.base)
-            .map_err(|e| Error::invalid(&self.source, "scene", format!("cannot load `{}`: {e}", o.reference)))
+        self.scene.to_scene(&o.label, &o.base).map_err(|e| self.part_error(e, o, "scene"))
+    }
+
+    /// An error of a part: in a part that overrides changed, the key in the experiment
+    /// (`scene.objects[1].size`); otherwise the part's file inside the experiment's field.
+    fn part_error(&self, e: Error, o: &Origin, part: &str) -> Error {
+        match e {
+            Error::Invalid { field, message, .. } if o.changed => {
+                Error::invalid(&self.source, format!("{part}.{field}"), message)
+            }
+            e => Error::invalid(&self.source, part, format!("cannot load `{}`: {e}", o.reference)),
+        }
     }
 
     /// Builds the experiment around an already built scene (points sharing a scene).
     pub fn experiment_with(&self, scene: Scene) -> Result<Experiment> {
         let o = self.origins.display.as_ref().expect("resolved with a display");
-        let display = self
-            .display
-            .to_display(&o.label)
-            .map_err(|e| Error::invalid(&self.source, "display", format!("cannot load `{}`: {e}", o.reference)))?;
+        let display = self.display.to_display(&o.label).map_err(|e| self.part_error(e, o, "display"))?;
         Experiment::from_parts(self.experiment.clone(), scene, display, &self.source)
     }
 
@@ -359,7 +375,8 @@ fn to_value<T: Serialize>(v: &T) -> Result<toml::Value> {
 /// A scene reference (`builtin:paper` or a TOML path relative to `base`) as a TOML table.
 fn inline_scene(reference: &str, base: &Path) -> Result<(toml::Value, Origin)> {
     if reference == BUILTIN {
-        let origin = Origin { reference: reference.into(), label: "built-in paper scene".into(), base: ".".into() };
+        let origin =
+            Origin { reference: reference.into(), label: "built-in paper scene".into(), base: ".".into(), changed: false };
         return Ok((to_value(&SceneSpec::paper())?, origin));
     }
     let path = base.join(reference);
@@ -367,7 +384,8 @@ fn inline_scene(reference: &str, base: &Path) -> Result<(toml::Value, Origin)> {
     let _: SceneSpec = toml::from_str(&text).map_err(|e| toml_error(&path, &text, &e))?;
     let table: toml::Table = toml::from_str(&text).map_err(|e| toml_error(&path, &text, &e))?;
     let scene_base = path.parent().unwrap_or(Path::new(".")).to_path_buf();
-    let origin = Origin { reference: reference.into(), label: path.display().to_string(), base: scene_base };
+    let origin =
+        Origin { reference: reference.into(), label: path.display().to_string(), base: scene_base, changed: false };
     Ok((toml::Value::Table(table), origin))
 }
 
@@ -377,7 +395,7 @@ fn inline_display(reference: &str, base: &Path) -> Result<(toml::Value, Origin)>
     let builtin = reference == BUILTIN;
     let path = base.join(reference);
     let label = if builtin { "built-in paper display".to_string() } else { path.display().to_string() };
-    let origin = Origin { reference: reference.into(), label, base: base_dir(&path) };
+    let origin = Origin { reference: reference.into(), label, base: base_dir(&path), changed: false };
     if builtin {
         return Ok((to_value(&DisplaySpec::from_display(&Display::paper()))?, origin));
     }

@@ -216,29 +216,20 @@ fn script(sweep: &Sweep, chunks: &[String], id: &str, out: &Path, opts: &SlurmOp
     s.push_str(
         "THREADS=()\nif [ -n \"${SLURM_CPUS_PER_TASK:-}\" ]; then THREADS=(--threads \"$SLURM_CPUS_PER_TASK\"); fi\n",
     );
-    let mut cmd = vec![
-        quote(&exe.display().to_string()),
-        "--quiet".into(),
-        "\"${THREADS[@]}\"".into(),
-        "sweep".into(),
-        quote(&sweep_file.display().to_string()),
-        "--out".into(),
-        quote(&out.display().to_string()),
-        "--points".into(),
-        "\"${POINTS[$SLURM_ARRAY_TASK_ID]}\"".into(),
-        "--sweep-id".into(),
-        id.into(),
-        "--backend".into(),
-        opts.backend.to_string(),
+    let mut lines = vec![
+        format!(
+            "exec {} --quiet \"${{THREADS[@]}}\" sweep {}",
+            quote(&exe.display().to_string()),
+            quote(&sweep_file.display().to_string())
+        ),
+        format!("--out {} --points \"${{POINTS[$SLURM_ARRAY_TASK_ID]}}\"", quote(&out.display().to_string())),
+        format!("--sweep-id {id} --backend {}{}", opts.backend, if opts.images { " --images" } else { "" }),
     ];
-    if opts.images {
-        cmd.push("--images".into());
-    }
     for o in &sweep.overrides {
-        cmd.push("--set".into());
-        cmd.push(quote(&o.to_arg()));
+        lines.push(format!("--set {}", quote(&o.to_arg())));
     }
-    s.push_str(&format!("exec {}\n", cmd.join(" \\\n  ")));
+    s.push_str(&lines.join(" \\\n  "));
+    s.push('\n');
     Ok(s)
 }
 
