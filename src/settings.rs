@@ -375,8 +375,12 @@ fn to_value<T: Serialize>(v: &T) -> Result<toml::Value> {
 /// A scene reference (`builtin:paper` or a TOML path relative to `base`) as a TOML table.
 fn inline_scene(reference: &str, base: &Path) -> Result<(toml::Value, Origin)> {
     if reference == BUILTIN {
-        let origin =
-            Origin { reference: reference.into(), label: "built-in paper scene".into(), base: ".".into(), changed: false };
+        let origin = Origin {
+            reference: reference.into(),
+            label: "built-in paper scene".into(),
+            base: ".".into(),
+            changed: false,
+        };
         return Ok((to_value(&SceneSpec::paper())?, origin));
     }
     let path = base.join(reference);

@@ -144,9 +144,10 @@ fn a_job_array_of_four_tasks_gives_the_local_table() {
     assert!(e.contains("4 array task(s) for the 12 missing of 12 points"), "{e}");
     assert!(stdout.contains("12 of 12 points complete"), "{stdout}");
     assert_eq!(csv_without_seconds(&remote), csv_without_seconds(&local), "Slurm and local tables differ");
-    let logs = std::fs::read_dir(remote.join("slurm")).unwrap().flatten().filter(|e| {
-        e.file_name().to_string_lossy().ends_with(".out")
-    });
+    let logs = std::fs::read_dir(remote.join("slurm"))
+        .unwrap()
+        .flatten()
+        .filter(|e| e.file_name().to_string_lossy().ends_with(".out"));
     assert_eq!(logs.count(), 4, "one log per task");
     // Everything is complete: submitting again submits nothing.
     let (ok, _, e) = inimtrace(&["sweep", &tiny(), "--out", remote.to_str().unwrap(), "--slurm", "--wait"]);
@@ -197,8 +198,7 @@ fn a_cancelled_task_leaves_no_partial_point_and_a_resubmission_runs_only_its_poi
     }
 
     let before = records(&out);
-    let missing: BTreeSet<usize> =
-        (0..12).filter(|&i| !before.contains_key(&format!("{}.json", ids[i]))).collect();
+    let missing: BTreeSet<usize> = (0..12).filter(|&i| !before.contains_key(&format!("{}.json", ids[i]))).collect();
     assert!(!missing.is_empty() && missing.iter().all(|i| (3..6).contains(i)), "missing {missing:?}");
     // No partial point: every record there is complete and names its point.
     for (name, bytes) in &before {

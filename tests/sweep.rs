@@ -77,7 +77,8 @@ fn tiny() -> String {
 
 /// The small display the tiny sweep uses, as a file.
 fn small_display(dir: &Path) -> String {
-    let text = std::fs::read_to_string(root().join("displays/paper.toml")).unwrap().replace("[2160, 2160]", "[540, 540]");
+    let text =
+        std::fs::read_to_string(root().join("displays/paper.toml")).unwrap().replace("[2160, 2160]", "[540, 540]");
     let p = dir.join("display.toml");
     std::fs::write(&p, text).unwrap();
     p.display().to_string()
@@ -131,7 +132,8 @@ fn set_changes_numbers_arrays_nested_and_indexed_keys_on_every_command() {
         serde_json::from_str(&std::fs::read_to_string(Path::new(out).join("results.json")).unwrap()).unwrap()
     };
     let a = run(&[], d.join("a").to_str().unwrap());
-    let b = run(&["--set", "eye_cases[1].focus_mm=600", "--set", "eye.pupil_diameter=3"], d.join("b").to_str().unwrap());
+    let b =
+        run(&["--set", "eye_cases[1].focus_mm=600", "--set", "eye.pupil_diameter=3"], d.join("b").to_str().unwrap());
     assert_eq!(a["settings"]["eye"]["retina_resolution"], 48);
     assert_eq!(b["settings"]["eye_cases"][1]["focus_mm"], 600.0);
     assert_eq!(b["settings"]["eye"]["pupil_diameter"], 3.0);
@@ -225,7 +227,8 @@ fn a_local_sweep_is_a_product_of_zipped_axes_and_each_point_scores_as_assess_by_
         assert!(out.join("plots").join(format!("{name}.svg")).is_file(), "{name}");
     }
     assert!(!out.join("plots/psnr_vs_eye.position.png").exists());
-    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("sweep.json")).unwrap()).unwrap();
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("sweep.json")).unwrap()).unwrap();
     assert_eq!(json["base"]["eye"]["retina_resolution"], 64);
     assert_eq!(json["base"]["display"]["lcd"]["resolution"][0], 540, "the display inlined in the resolved base");
     assert_eq!(json["axes"][1].as_array().unwrap().len(), 2, "two zipped keys in one axis");

@@ -159,6 +159,13 @@ fn image_key(exp: &Experiment, method: Method) -> String {
     hash_json(&settings).unwrap_or_else(|_| format!("{settings:?}"))
 }
 
+/// Bytes of the images one point holds while it runs: per eye case the ground truth and one
+/// perceived image per method, f32 RGB.
+fn point_bytes(exp: &Experiment) -> u64 {
+    let pixels = (exp.retina.resolution as u64).pow(2);
+    pixels * 12 * (1 + exp.methods.len() as u64) * exp.cases.len() as u64
+}
+
 /// The points of one scene, run on shared display images.
 struct SharedDisplays<'a> {
     jobs: &'a [Job],
@@ -206,14 +213,19 @@ impl FieldUser for SharedDisplays<'_> {
             let images: Vec<&RgbImage> = keys.iter().map(|k| &cache[k]).collect();
             let stack = DisplayStack::new(&first.display, &images)?;
             let shared = t.elapsed() / members.len() as u32;
-            members.par_iter().try_for_each(|job| -> Result<()> {
-                let t = Instant::now();
-                let mut stages = Vec::new();
-                let (_, _, scores) = experiment::table1(&job.exp, shade, &stack, true, &mut stages)?;
-                self.store.write(&record(job, &scores, shared + t.elapsed(), name))?;
-                self.progress.inc(1);
-                Ok(())
-            })?;
+            // As many points at once as threads, and as the memory limit allows for their images.
+            let at_once = (crate::budget::memory_limit() / (2 * point_bytes(first)).max(1))
+                .clamp(1, rayon::current_num_threads() as u64) as usize;
+            for batch in members.chunks(at_once) {
+                batch.par_iter().try_for_each(|job| -> Result<()> {
+                    let t = Instant::now();
+                    let mut stages = Vec::new();
+                    let (_, _, scores) = experiment::table1(&job.exp, shade, &stack, true, &mut stages)?;
+                    self.store.write(&record(job, &scores, shared + t.elapsed(), name))?;
+                    self.progress.inc(1);
+                    Ok(())
+                })?;
+            }
             drop(stack);
             // Keep only the images a later group still needs.
             let later: HashSet<&String> = groups[g + 1..].iter().flat_map(|(k, _)| k).collect();
