@@ -25,6 +25,7 @@ pub mod experiment;
 #[doc(hidden)]
 pub mod fixtures;
 pub mod io;
+pub mod measure;
 pub mod metrics;
 pub mod optics;
 pub mod overrides;

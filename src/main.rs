@@ -73,9 +73,9 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Run an experiment (default: the paper's) and write every image, the table and the figure.
+    /// Run an experiment (default: the paper's, measured converged) and write every image, the table and the figure.
     Assess {
-        /// Experiment TOML (default: the paper's experiment as its text states it).
+        /// Experiment TOML (default: the paper's experiment measured converged, experiments/paper-converged.toml).
         experiment: Option<PathBuf>,
         /// Output directory (default: out/<experiment name>).
         #[arg(long)]
@@ -205,7 +205,8 @@ enum Command {
         /// Display TOML or OpenCV YAML (default: the paper's).
         #[arg(long)]
         display: Option<PathBuf>,
-        /// Print the built-in experiment, scene or display as a file: paper-experiment,
+        /// Print the built-in experiment, scene or display as a file: paper-experiment (measured
+        /// converged, what `assess` runs), paper-grid-experiment (the grid estimator),
         /// framework-2020-experiment, paper-scene, paper-display.
         #[arg(long)]
         print: Option<String>,
@@ -386,9 +387,11 @@ fn run() -> Result<()> {
                 _ if !set.is_empty() => {
                     let mut s = match &experiment {
                         Some(p) => Settings::experiment_file(p)?,
-                        None => {
-                            Settings::builtin(&ExperimentSpec::paper(), "built-in paper experiment", Path::new("."))?
-                        }
+                        None => Settings::builtin(
+                            &ExperimentSpec::paper_converged(),
+                            "built-in paper-converged experiment",
+                            Path::new("."),
+                        )?,
                     };
                     if let Some(p) = &scene {
                         s.replace_scene(p)?;
@@ -396,7 +399,7 @@ fn run() -> Result<()> {
                     s.with_overrides(&set).resolve()?.experiment()?
                 }
                 Some(p) => Experiment::load(p)?,
-                None => Experiment::paper(),
+                None => Experiment::paper_converged(),
             };
             if let Some(p) = scene.as_ref().filter(|_| set.is_empty()) {
                 exp.scene = load_scene(&p.to_string_lossy(), Path::new(""))?;
@@ -586,11 +589,12 @@ fn run() -> Result<()> {
         Command::Info { display, print } => {
             if let Some(what) = print {
                 let text = match what.as_str() {
-                    "paper-experiment" => ExperimentSpec::paper().to_toml(),
+                    "paper-experiment" => ExperimentSpec::paper_converged().to_toml(),
+                    "paper-grid-experiment" => ExperimentSpec::paper().to_toml(),
                     "framework-2020-experiment" => ExperimentSpec::framework_2020().to_toml(),
                     "paper-scene" => toml::to_string_pretty(&SceneSpec::paper())?,
                     "paper-display" => toml::to_string_pretty(&DisplaySpec::from_display(&Display::paper()))?,
-                    other => bail!("unknown --print `{other}`: paper-experiment, framework-2020-experiment, paper-scene or paper-display"),
+                    other => bail!("unknown --print `{other}`: paper-experiment, paper-grid-experiment, framework-2020-experiment, paper-scene or paper-display"),
                 };
                 out!("{text}");
                 return Ok(());

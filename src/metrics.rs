@@ -204,7 +204,7 @@ pub struct Ssim {
 
 /// The normalised 1-D Gaussian window; its outer product with itself is the normalised 2-D
 /// window of `fspecial('gaussian', 11, 1.5)` (up to rounding).
-fn gaussian_1d() -> [f64; SSIM_WINDOW] {
+pub(crate) fn gaussian_1d() -> [f64; SSIM_WINDOW] {
     let mut g = [0.0; SSIM_WINDOW];
     for (k, v) in g.iter_mut().enumerate() {
         let d = k as f64 - HALF as f64;
@@ -259,7 +259,7 @@ fn ssim_value(mx: f64, my: f64, exx: f64, eyy: f64, exy: f64, c1: f64, c2: f64) 
 /// `out.len() == src.len() - 10`. Written per output sample with the taps folded in symmetric
 /// pairs (6 multiplications), which the compiler vectorises across outputs.
 #[inline]
-fn filter_row_valid(src: &[f64], g: &[f64; SSIM_WINDOW], out: &mut [f64]) {
+pub(crate) fn filter_row_valid(src: &[f64], g: &[f64; SSIM_WINDOW], out: &mut [f64]) {
     debug_assert_eq!(out.len() + SSIM_WINDOW - 1, src.len());
     let [g0, g1, g2, g3, g4, g5, ..] = *g;
     for (o, w) in out.iter_mut().zip(src.windows(SSIM_WINDOW)) {
@@ -275,7 +275,7 @@ fn filter_row_valid(src: &[f64], g: &[f64; SSIM_WINDOW], out: &mut [f64]) {
 /// 'valid' vertical filtering: `out[j] = Σk g[k] rows[k][j]`, taps folded as in
 /// [`filter_row_valid`].
 #[inline]
-fn filter_column_valid(rows: [&[f64]; SSIM_WINDOW], g: &[f64; SSIM_WINDOW], out: &mut [f64]) {
+pub(crate) fn filter_column_valid(rows: [&[f64]; SSIM_WINDOW], g: &[f64; SSIM_WINDOW], out: &mut [f64]) {
     let n = out.len();
     let [g0, g1, g2, g3, g4, g5, ..] = *g;
     let r: [&[f64]; SSIM_WINDOW] = rows.map(|row| &row[..n]);

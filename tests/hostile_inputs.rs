@@ -53,6 +53,21 @@ pub fn exr_header_bomb(w: i32, h: i32) -> Vec<u8> {
     b
 }
 
+/// `ground-truth` of a 16 x 16 pinhole retina of `scene`, written to `out`.
+fn gt_args<'a>(scene: &'a Path, out: &'a Path) -> Vec<&'a str> {
+    vec![
+        "--quiet",
+        "ground-truth",
+        "--pinhole",
+        "--retina",
+        "16",
+        "--scene",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]
+}
+
 fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
@@ -307,22 +322,7 @@ fn a_png_texture_claiming_a_huge_image_is_refused_before_decoding() {
     )
     .unwrap();
     let out = dir.path().join("gt.exr");
-    let o = run_capped(
-        1024,
-        &[
-            "--quiet",
-            "--max-memory",
-            "8G",
-            "ground-truth",
-            "--pinhole",
-            "--retina",
-            "16",
-            "--scene",
-            scene.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ],
-    );
+    let o = run_capped(1024, &[&["--max-memory", "8G"][..], &gt_args(&scene, &out)].concat());
     assert_clean_failure(&o, "bomb.png");
     assert!(stderr(&o).contains("memory limit"), "{}", stderr(&o));
 }
@@ -339,17 +339,7 @@ fn generated_and_mesh_geometry_cannot_overflow_or_loop() {
     )
     .unwrap();
     let out = dir.path().join("gt.exr");
-    let args = [
-        "--quiet",
-        "ground-truth",
-        "--pinhole",
-        "--retina",
-        "16",
-        "--scene",
-        scene.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ];
+    let args = gt_args(&scene, &out);
     let o = run_capped(1024, &args);
     assert_clean_failure(&o, "count");
     // Within the triangle cap but over a small memory limit: refused, naming the setting.
@@ -389,20 +379,7 @@ fn every_error_names_its_file_and_field() {
     )
     .unwrap();
     let out = dir.path().join("gt.exr");
-    let o = Command::new(inimtrace())
-        .args([
-            "--quiet",
-            "ground-truth",
-            "--pinhole",
-            "--retina",
-            "16",
-            "--scene",
-            scene.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
+    let o = Command::new(inimtrace()).args(gt_args(&scene, &out)).output().unwrap();
     assert_clean_failure(&o, "bright.toml");
     assert!(stderr(&o).contains("background"), "{}", stderr(&o));
     // PupilCenter exactly singular: the experiment file, the method and the display are named.

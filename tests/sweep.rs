@@ -375,3 +375,57 @@ fn bad_sweeps_name_the_file_and_the_key() {
     // A sweep that names points of different settings than the ones submitted.
     expect_error(&["sweep", &tiny(), "--points", "0", "--sweep-id", "0000000000000000"], &["submit again"]);
 }
+
+#[test]
+fn a_converged_sweep_carries_each_scores_interval_as_assess_gives_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("converged.toml");
+    let exp = root().join("experiments/paper-converged.toml");
+    std::fs::write(
+        &file,
+        format!(
+            "experiment = \"{}\"\n[set]\n\"display.lcd.resolution\" = [540, 540]\n\"eye.retina_resolution\" = 48\n\
+             \"eye_cases\" = [{{ name = \"Eye\", focus_diopters = 2.5 }}]\n\"methods\" = [\"LC\", \"LA\"]\n\
+             \"measurement.psnr_ci95_db\" = 0.3\n\"measurement.ssim_ci95\" = 0.02\n\"measurement.replicates\" = 4\n\
+             [[axes]]\n\"eye.pupil_diameter\" = [2.0, 4.0]\n",
+            exp.display()
+        ),
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let (ok, _, e) = inimtrace(&["sweep", file.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    assert!(ok, "{e}");
+    let (_, rows) = read_csv(&out.join("sweep.csv"));
+    assert_eq!(rows.len(), 4);
+    for r in &rows {
+        let (p, s): (f64, f64) = (r["psnr_ci95_db"].parse().unwrap(), r["ssim_ci95"].parse().unwrap());
+        assert!(p > 0.0 && p < 1.0 && s > 0.0 && s < 0.05, "{r:?}");
+    }
+    // Point 1 by hand: the same scores and intervals.
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("sweep.json")).unwrap()).unwrap();
+    let by_hand = dir.path().join("by-hand");
+    let mut args = vec!["assess".to_string(), exp.display().to_string(), "--out".into(), by_hand.display().to_string()];
+    args.extend(json["points"][1]["assess_args"].as_array().unwrap().iter().map(|a| a.as_str().unwrap().to_string()));
+    let (ok, _, e) = inimtrace(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(ok, "{e}");
+    let (header, results) = {
+        let text = std::fs::read_to_string(by_hand.join("results.csv")).unwrap();
+        let mut lines = text.lines();
+        let header = csv_fields(lines.next().unwrap());
+        let rows: Vec<Vec<String>> = lines.map(csv_fields).collect();
+        (header, rows)
+    };
+    let col = |name: &str| header.iter().position(|h| h == name).unwrap_or_else(|| panic!("no column {name}"));
+    let mut compared = 0;
+    for f in results.iter().filter(|f| f[0] == "score" && f[col("channel")] == "mean") {
+        let row = rows.iter().find(|r| r["point"] == "1" && r["method"] == f[col("method")]).unwrap();
+        for (ours, theirs) in
+            [("psnr_db", "psnr_db"), ("psnr_ci95_db", "psnr_ci95_db"), ("ssim", "ssim"), ("ssim_ci95", "ssim_ci95")]
+        {
+            assert_eq!(row[ours], f[col(theirs)], "{ours} of {}", row["method"]);
+        }
+        compared += 1;
+    }
+    assert_eq!(compared, 2);
+}

@@ -106,8 +106,13 @@ fn assess_with<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
                 v.push(("inimtrace:pupil_diameter_mm", format!("{pupil_diameter}")));
             }
         }
-        v.push(("inimtrace:pupil_samples", case.eye.pupil_samples().len().to_string()));
-        v.push(("inimtrace:retina_samples_per_pixel", (exp.retina.samples_per_pixel.pow(2)).to_string()));
+        match scores.iter().find(|s| s.eye_case == case.name).and_then(|s| s.samples_per_pixel) {
+            Some(spp) => v.extend(crate::measure::run::exr_attributes(exp, spp)),
+            None => {
+                v.push(("inimtrace:pupil_samples", case.eye.pupil_samples().len().to_string()));
+                v.push(("inimtrace:retina_samples_per_pixel", (exp.retina.samples_per_pixel.pow(2)).to_string()));
+            }
+        }
         v.push(("inimtrace:retina_half_tangent", exp.retina.half_tangent.to_string()));
         v
     };

@@ -7,15 +7,26 @@ use serde::Serialize;
 
 use super::{Experiment, ExperimentSpec};
 use crate::error::{Error, Result};
-use crate::metrics::{self, Psnr, Ssim, SsimConstants};
+use crate::measure::spec::EstimatorKind;
+use crate::measure::stats::Estimate;
+use crate::metrics::SsimConstants;
 
-/// One score: a method under an eye case.
+/// One score: a method under an eye case. The converged estimator adds the 95% half-widths
+/// (`ci95`, `channels_ci95` in `psnr` and `ssim`), its samples and whether the targets were met.
 #[derive(Clone, Debug, Serialize)]
 pub struct Score {
     pub method: String,
     pub eye_case: String,
-    pub psnr: Psnr,
-    pub ssim: Ssim,
+    pub psnr: Estimate,
+    pub ssim: Estimate,
+    /// Samples per retina pixel, over all replicates (converged estimator).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub samples_per_pixel: Option<u64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub replicates: Option<usize>,
+    /// Both 95% half-widths within the experiment's targets.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub target_met: Option<bool>,
 }
 
 /// Wall time of one stage.
@@ -65,13 +76,13 @@ pub fn table_markdown(report: &AssessReport, exp: &Experiment) -> String {
         s.push_str(&format!("| {} |", case.name));
         let find = |m: &str| report.scores.iter().find(|x| x.method == m && x.eye_case == case.name);
         for m in &methods {
-            let v = find(m).map(|x| metrics::format_db(x.psnr.mean, 2)).unwrap_or_default();
+            let v = find(m).map(crate::measure::report::psnr_cell).unwrap_or_default();
             s.push_str(&format!(" {v} |"));
         }
         // The framework's 8-bit constants pin SSIM near 1: show enough digits to tell methods apart.
         let digits = if exp.ssim == SsimConstants::Framework8Bit { 5 } else { 3 };
         for m in &methods {
-            let v = find(m).map(|x| format!("{:.digits$}", x.ssim.mean)).unwrap_or_default();
+            let v = find(m).map(|x| crate::measure::report::ssim_cell(x, digits)).unwrap_or_default();
             s.push_str(&format!(" {v} |"));
         }
         s.push('\n');
@@ -80,6 +91,9 @@ pub fn table_markdown(report: &AssessReport, exp: &Experiment) -> String {
         "\nPSNR: mean of the R, G, B channel PSNRs (linear values, peak 1). SSIM: Wang et al. 2004 window (11 x 11 Gaussian, sigma 1.5), constants `{}`, mean of channels.\n",
         report.ssim_constants
     ));
+    if exp.measurement.estimator == EstimatorKind::Converged {
+        s.push_str(&crate::measure::report::table_note(report, exp));
+    }
     s
 }
 
@@ -89,31 +103,38 @@ pub(super) fn write_reports(report: &AssessReport, exp: &Experiment, out: &Path)
         std::fs::write(&path, text).map_err(|e| Error::io(&path, e))
     };
     write("table.md", table_markdown(report, exp))?;
-    let mut csv = String::from("record,experiment,method,eye_case,channel,psnr_db,ssim,stage,seconds\n");
+    // psnr_ci95_db and ssim_ci95 (last, empty for the grid estimator): 95% half-widths.
+    let mut csv =
+        String::from("record,experiment,method,eye_case,channel,psnr_db,ssim,stage,seconds,psnr_ci95_db,ssim_ci95\n");
+    let ci = |h: Option<f64>| h.map(csv_db).unwrap_or_default();
     for s in &report.scores {
         for (c, name) in ["R", "G", "B"].iter().enumerate() {
             csv.push_str(&format!(
-                "score,{},{},{},{},{},{},,\n",
+                "score,{},{},{},{},{},{},,,{},{}\n",
                 report.experiment,
                 s.method,
                 s.eye_case,
                 name,
                 csv_db(s.psnr.channels[c]),
-                s.ssim.channels[c]
+                s.ssim.channels[c],
+                ci(s.psnr.channels_ci95.map(|h| h[c])),
+                ci(s.ssim.channels_ci95.map(|h| h[c])),
             ));
         }
         csv.push_str(&format!(
-            "score,{},{},{},mean,{},{},,\n",
+            "score,{},{},{},mean,{},{},,,{},{}\n",
             report.experiment,
             s.method,
             s.eye_case,
             csv_db(s.psnr.mean),
-            s.ssim.mean
+            s.ssim.mean,
+            ci(s.psnr.ci95),
+            ci(s.ssim.ci95),
         ));
     }
     for st in &report.stages {
         csv.push_str(&format!(
-            "stage,{},{},{},,,,{},{}\n",
+            "stage,{},{},{},,,,{},{},,\n",
             report.experiment,
             st.method.as_deref().unwrap_or(""),
             st.eye_case.as_deref().unwrap_or(""),
@@ -121,7 +142,7 @@ pub(super) fn write_reports(report: &AssessReport, exp: &Experiment, out: &Path)
             st.seconds
         ));
     }
-    csv.push_str(&format!("stage,{},,,,,,total,{}\n", report.experiment, report.total_seconds));
+    csv.push_str(&format!("stage,{},,,,,,total,{},,\n", report.experiment, report.total_seconds));
     write("results.csv", csv)?;
     let json = serde_json::to_string_pretty(report)
         .map_err(|e| Error::Unsupported(format!("cannot serialise the report: {e}")))?;

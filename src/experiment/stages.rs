@@ -108,7 +108,8 @@ pub fn perceived_images(
 pub type Table1 = (Vec<RgbImage>, Vec<Vec<RgbImage>>, Vec<Score>);
 
 /// Stages 2-3 of [`assess`](super::assess()): per eye case the ground truth and the perceived
-/// images, then the scores ([`Table1`]).
+/// images, then the scores ([`Table1`]), measured by the experiment's estimator: the converged
+/// one (`src/measure/`) or the grid one.
 pub fn table1<S: RadianceField + ?Sized>(
     exp: &Experiment,
     shade: &S,
@@ -116,6 +117,9 @@ pub fn table1<S: RadianceField + ?Sized>(
     quiet: bool,
     stages: &mut Vec<StageTime>,
 ) -> Result<Table1> {
+    if let Some(table) = crate::measure::run::table1(exp, shade, stack, quiet, stages)? {
+        return Ok(table);
+    }
     let mut gts = Vec::new();
     let mut sims = Vec::new();
     for case in &exp.cases {
@@ -152,8 +156,11 @@ pub fn table1_scores<G: Borrow<RgbImage> + Sync>(
             Ok(Score {
                 method: exp.methods[m].short_name().into(),
                 eye_case: exp.cases[c].name.clone(),
-                psnr: metrics::psnr(&sims[c][m], gts[c].borrow())?,
-                ssim: metrics::ssim(&sims[c][m], gts[c].borrow(), exp.ssim)?,
+                psnr: metrics::psnr(&sims[c][m], gts[c].borrow())?.into(),
+                ssim: metrics::ssim(&sims[c][m], gts[c].borrow(), exp.ssim)?.into(),
+                samples_per_pixel: None,
+                replicates: None,
+                target_met: None,
             })
         })
         .collect::<Result<_>>()?;

@@ -62,6 +62,13 @@ impl DisplayStack {
     pub fn is_empty(&self) -> bool {
         self.count == 0
     }
+
+    /// Every display image's value at LCD pixel `index` (row-major): `[image][channel]`.
+    #[inline(always)]
+    pub fn pixel(&self, index: usize) -> &[f32] {
+        let stride = 3 * self.count;
+        &self.values[index * stride..(index + 1) * stride]
+    }
 }
 
 /// Simulates what the eye sees of each display image in `displays` (all with the LCD's

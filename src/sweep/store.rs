@@ -37,9 +37,9 @@ impl From<&Score> for ScoreRow {
             method: s.method.clone(),
             eye_case: s.eye_case.clone(),
             psnr_db: s.psnr.mean,
-            psnr_ci95_db: None,
+            psnr_ci95_db: s.psnr.ci95,
             ssim: s.ssim.mean,
-            ssim_ci95: None,
+            ssim_ci95: s.ssim.ci95,
         }
     }
 }

@@ -1,0 +1,385 @@
+//! The paired estimator of the converged measurement: the ground-truth and perceived retinal
+//! images of one eye case (paper Sec. 2.3, 4.1) from the same eye rays.
+//!
+//! Every sample of a retina pixel ([`super::sampler`]) is ONE eye ray: a point of the pixel's
+//! square (its tangent) and a point of the pupil. The ray's radiance into the scene is the ground
+//! truth's sample ([`crate::render::retina::eye_scene_ray`] and the radiance field); the same ray
+//! traced retina -> eye lens -> lenslet -> LCD by eq. (1) reads every method's display image at
+//! the LCD pixel it meets (a ray that misses the LCD carries black and still counts). Because
+//! the images share their rays, the noise of their difference is much smaller than the noise of
+//! each.
+//!
+//! [`Replicates`] keeps, for each of R independent replicates (independent scrambles) and each
+//! pixel, the mean of every image over that replicate's samples; sums are taken in `f64` over a
+//! pass and stored as `f32` means. More samples are added by [`Replicates::extend`] (points
+//! `N..2N` of the same sequences), so nothing already traced is traced again.
+
+use glam::DVec2;
+use rayon::prelude::*;
+
+use super::sampler::Sampler;
+use crate::optics::display::PixelIndexer;
+use crate::optics::transfer::eye_scene_ray;
+use crate::optics::{Display, Eye, Retina};
+use crate::progress::Progress;
+use crate::raster::RgbImage;
+use crate::render::retina::DisplayStack;
+use crate::render::{RadianceField, Sample};
+
+/// One eye ray of the measurement: the tangent of a retina point and a pupil point (mm from
+/// the pupil centre).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct EyeSample {
+    pub tangent: DVec2,
+    pub pupil: DVec2,
+}
+
+/// What is measured along each eye ray: the radiance of several images, image 0 being the
+/// reference (the ground truth) and the others the images scored against it.
+pub trait PairedSource: Sync {
+    /// Number of images (at least 2: the reference and one scored image).
+    fn images(&self) -> usize;
+
+    /// The radiance of every image along every ray: `out[i * images + k]` is image `k`'s RGB
+    /// for `samples[i]` (`out.len() == samples.len() * images`).
+    fn eval(&self, samples: &[EyeSample], out: &mut [[f64; 3]]);
+}
+
+/// Eq. (1) from the eye to the LCD for any retina tangent and pupil point, with the per-eye
+/// constants folded in. Same arithmetic as the grid simulation's `FastTransfer`, so at one of
+/// its pupil-grid points both give the same LCD point bit for bit (tested).
+pub struct EyeToLcd<'a> {
+    display: &'a Display,
+    eye_xy: DVec2,
+    v0: f64,
+    d1: f64,
+    to_lenslets: f64,
+    lenslet_power: f64,
+    v2: f64,
+    indexer: PixelIndexer,
+}
+
+impl<'a> EyeToLcd<'a> {
+    pub fn new(display: &'a Display, eye: &Eye) -> Self {
+        Self {
+            display,
+            eye_xy: eye.position.truncate(),
+            v0: eye.retina_distance,
+            d1: eye.power(),
+            to_lenslets: display.lenslet_z() - eye.position.z,
+            lenslet_power: display.lenslet_power(),
+            v2: display.lenslets_to_lcd,
+            indexer: PixelIndexer::new(&display.lcd),
+        }
+    }
+
+    /// Where the eye ray for retina direction `tangent` through pupil point `pupil` meets the
+    /// LCD plane.
+    #[inline(always)]
+    pub fn lcd_point(&self, tangent: DVec2, pupil: DVec2) -> DVec2 {
+        let x1 = pupil + self.eye_xy;
+        let w1 = tangent + (pupil / self.v0 - pupil * self.d1);
+        let x2 = x1 + w1 * self.to_lenslets;
+        let c = self.display.lenslets.center(self.display.lenslets.nearest(x2));
+        let w2 = w1 - (x2 - c) * self.lenslet_power;
+        x2 + w2 * self.v2
+    }
+
+    /// The LCD pixel that ray meets, if any.
+    #[inline(always)]
+    pub fn pixel_index(&self, tangent: DVec2, pupil: DVec2) -> Option<usize> {
+        self.indexer.index(self.lcd_point(tangent, pupil))
+    }
+}
+
+/// The experiment's paired source: image 0 is the ground truth (the eye ray into the scene),
+/// image `1 + m` what the eye perceives of display image `m` of `stack`.
+pub struct DisplaySource<'a, F: RadianceField + ?Sized> {
+    eye: &'a Eye,
+    field: &'a F,
+    transfer: EyeToLcd<'a>,
+    stack: &'a DisplayStack,
+}
+
+impl<'a, F: RadianceField + ?Sized> DisplaySource<'a, F> {
+    pub fn new(display: &'a Display, eye: &'a Eye, field: &'a F, stack: &'a DisplayStack) -> Self {
+        Self { eye, field, transfer: EyeToLcd::new(display, eye), stack }
+    }
+}
+
+impl<F: RadianceField + ?Sized> PairedSource for DisplaySource<'_, F> {
+    fn images(&self) -> usize {
+        1 + self.stack.len()
+    }
+
+    fn eval(&self, samples: &[EyeSample], out: &mut [[f64; 3]]) {
+        let k = self.images();
+        let m = self.stack.len();
+        debug_assert_eq!(out.len(), samples.len() * k);
+        if self.field.prefers_batches() {
+            let rays: Vec<_> = samples.iter().map(|s| eye_scene_ray(self.eye, s.tangent, s.pupil)).collect();
+            let mut hits = vec![Sample::default(); rays.len()];
+            self.field.sample_many(&rays, &mut hits);
+            for (o, h) in out.chunks_exact_mut(k).zip(&hits) {
+                o[0] = h.radiance.to_array();
+            }
+        } else {
+            for (o, s) in out.chunks_exact_mut(k).zip(samples) {
+                o[0] = self.field.radiance(&eye_scene_ray(self.eye, s.tangent, s.pupil)).to_array();
+            }
+        }
+        // Where every ray meets the LCD first (independent work the CPU overlaps), then the
+        // reads (independent loads).
+        let lcd: Vec<u32> = samples
+            .iter()
+            .map(|s| self.transfer.pixel_index(s.tangent, s.pupil).map_or(u32::MAX, |i| i as u32))
+            .collect();
+        match m {
+            1 => self.read_stack::<1>(&lcd, out),
+            2 => self.read_stack::<2>(&lcd, out),
+            3 => self.read_stack::<3>(&lcd, out),
+            _ => {
+                for (o, &idx) in out.chunks_exact_mut(k).zip(&lcd) {
+                    if idx == u32::MAX {
+                        o[1..].fill([0.0; 3]);
+                    } else {
+                        for (dst, v) in o[1..].iter_mut().zip(self.stack.pixel(idx as usize).chunks_exact(3)) {
+                            *dst = [f64::from(v[0]), f64::from(v[1]), f64::from(v[2])];
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+impl<F: RadianceField + ?Sized> DisplaySource<'_, F> {
+    /// The perceived images' samples (images 1..=M of `out`) for a stack of `M` display images,
+    /// from the LCD pixel of every sample (`u32::MAX`: the ray missed the LCD).
+    #[inline(always)]
+    fn read_stack<const M: usize>(&self, lcd: &[u32], out: &mut [[f64; 3]]) {
+        for (o, &idx) in out.chunks_exact_mut(M + 1).zip(lcd) {
+            let o: &mut [[f64; 3]] = &mut o[1..];
+            if idx == u32::MAX {
+                for v in o.iter_mut().take(M) {
+                    *v = [0.0; 3];
+                }
+            } else {
+                let px: &[f32] = self.stack.pixel(idx as usize);
+                for j in 0..M {
+                    o[j] = [f64::from(px[3 * j]), f64::from(px[3 * j + 1]), f64::from(px[3 * j + 2])];
+                }
+            }
+        }
+    }
+}
+
+/// Samples handed to a source at once (per worker).
+const BATCH: usize = 2048;
+/// Side of the square tiles of retina pixels traced together.
+const TILE: usize = 16;
+
+/// Per-replicate, per-pixel means of every image of a [`PairedSource`] on a square retina.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Replicates {
+    resolution: usize,
+    replicates: usize,
+    images: usize,
+    samples: u32,
+    /// Planes `[replicate][image][channel]` of `resolution^2` pixels each, row-major.
+    means: Vec<f32>,
+}
+
+impl Replicates {
+    /// No samples yet: every mean is 0 until [`Replicates::extend`] adds some.
+    pub fn new(resolution: usize, replicates: usize, images: usize) -> Self {
+        Self {
+            resolution,
+            replicates,
+            images,
+            samples: 0,
+            means: vec![0.0; resolution * resolution * replicates * images * 3],
+        }
+    }
+
+    /// Replicates whose means are given: `f(pixel, replicate, image, channel)`, as if from
+    /// `samples` samples per replicate (for tests and for replicates computed elsewhere).
+    pub fn from_fn(
+        resolution: usize,
+        replicates: usize,
+        images: usize,
+        samples: u32,
+        f: impl Fn(usize, usize, usize, usize) -> f32,
+    ) -> Self {
+        let mut reps = Self::new(resolution, replicates, images);
+        reps.samples = samples;
+        let pixels = resolution * resolution;
+        for (i, v) in reps.means.iter_mut().enumerate() {
+            let (plane, p) = (i / pixels, i % pixels);
+            *v = f(p, plane / (images * 3), (plane / 3) % images, plane % 3);
+        }
+        reps
+    }
+
+    /// Retina pixels per side.
+    pub fn resolution(&self) -> usize {
+        self.resolution
+    }
+    pub fn replicates(&self) -> usize {
+        self.replicates
+    }
+    pub fn images(&self) -> usize {
+        self.images
+    }
+    /// Samples per pixel in each replicate.
+    pub fn samples_per_replicate(&self) -> u32 {
+        self.samples
+    }
+    /// Samples per pixel over all replicates.
+    pub fn samples_per_pixel(&self) -> u64 {
+        u64::from(self.samples) * self.replicates as u64
+    }
+
+    /// Channel `c` of image `k` in replicate `r`: one mean per pixel, row-major.
+    #[inline]
+    pub fn plane(&self, r: usize, k: usize, c: usize) -> &[f32] {
+        let pixels = self.resolution * self.resolution;
+        let i = (r * self.images + k) * 3 + c;
+        &self.means[i * pixels..(i + 1) * pixels]
+    }
+
+    /// Mean of image `k`, channel `c` in replicate `r` at `pixel` (row-major index).
+    #[inline]
+    pub fn value(&self, pixel: usize, r: usize, k: usize, c: usize) -> f32 {
+        self.plane(r, k, c)[pixel]
+    }
+
+    /// Image `k` of replicate `r`.
+    pub fn replicate_image(&self, k: usize, r: usize) -> RgbImage {
+        let n = self.resolution;
+        let mut img = RgbImage::new(n, n);
+        for (p, px) in img.pixels.iter_mut().enumerate() {
+            *px = std::array::from_fn(|c| self.value(p, r, k, c));
+        }
+        img
+    }
+
+    /// Image `k` averaged over the replicates (in replicate order, in `f64`).
+    pub fn mean_image(&self, k: usize) -> RgbImage {
+        let n = self.resolution;
+        let mut img = RgbImage::new(n, n);
+        let inv = 1.0 / self.replicates as f64;
+        let planes: Vec<[&[f32]; 3]> =
+            (0..self.replicates).map(|r| std::array::from_fn(|c| self.plane(r, k, c))).collect();
+        img.pixels.par_iter_mut().enumerate().for_each(|(p, px)| {
+            *px = std::array::from_fn(|c| {
+                let s: f64 = planes.iter().map(|pl| f64::from(pl[c][p])).sum();
+                (s * inv) as f32
+            });
+        });
+        img
+    }
+
+    /// Adds samples `N..total` of every replicate's sequences to every pixel (N: the samples
+    /// taken so far), through `source`. Bands of rows run in parallel; each pixel sums its
+    /// samples in index order, so the result does not depend on the thread count or the tiling.
+    pub fn extend<S: PairedSource + ?Sized>(
+        &mut self,
+        source: &S,
+        sampler: &Sampler,
+        retina: &Retina,
+        total: u32,
+        progress: &Progress,
+    ) {
+        assert_eq!(retina.resolution, self.resolution, "retina and replicate storage differ in size");
+        assert_eq!(source.images(), self.images, "source and replicate storage differ in images");
+        let old = self.samples;
+        if total <= old {
+            return;
+        }
+        let n = self.resolution;
+        let (nr, k) = (self.replicates, self.images);
+        let fresh = (total - old) as usize;
+        let inv_total = 1.0 / f64::from(total);
+        let old_weight = f64::from(old);
+        let step = 2.0 * retina.half_tangent / n as f64;
+        let batch = BATCH.min(TILE * TILE * fresh);
+        // Every plane cut into bands of TILE rows; band b of every plane goes to one task.
+        let band_len = TILE * n;
+        let bands = n.div_ceil(TILE);
+        let mut per_band: Vec<Vec<&mut [f32]>> = (0..bands).map(|_| Vec::with_capacity(nr * k * 3)).collect();
+        for plane in self.means.chunks_mut(n * n) {
+            for (b, chunk) in plane.chunks_mut(band_len).enumerate() {
+                per_band[b].push(chunk);
+            }
+        }
+        // Bands of TILE rows in parallel; inside, TILE x TILE tiles with every replicate and
+        // sample: the rays of one tile meet the LCD in a few small patches (one per lenslet the
+        // pupil covers), which then stay in cache.
+        per_band.into_par_iter().enumerate().for_each(|(band, mut planes)| {
+            let row0 = band * TILE;
+            let rows = planes[0].len() / n;
+            let mut samples = vec![EyeSample::default(); batch];
+            let mut owners = vec![0u32; batch];
+            let mut values = vec![[0.0f64; 3]; batch * k];
+            let mut sums = vec![0.0f64; TILE * TILE * k * 3];
+            let mut flush = |samples: &[EyeSample], owners: &[u32], sums: &mut [f64]| {
+                let vals = &mut values[..samples.len() * k];
+                source.eval(samples, vals);
+                for (v, &o) in vals.chunks_exact(k).zip(owners) {
+                    let dst = &mut sums[o as usize * k * 3..(o as usize + 1) * k * 3];
+                    for (d, rgb) in dst.chunks_exact_mut(3).zip(v) {
+                        d[0] += rgb[0];
+                        d[1] += rgb[1];
+                        d[2] += rgb[2];
+                    }
+                }
+            };
+            for col0 in (0..n).step_by(TILE) {
+                let cols = TILE.min(n - col0);
+                for r in 0..nr {
+                    sums.iter_mut().for_each(|s| *s = 0.0);
+                    // (pixel, sample) pairs in pixel order, cut into batches anywhere.
+                    let mut filled = 0;
+                    for dr in 0..rows {
+                        let row = row0 + dr;
+                        for dc in 0..cols {
+                            let c = col0 + dc;
+                            let owner = (dr * TILE + dc) as u32;
+                            let mut points = sampler.points((row * n + c) as u64, r as u32, old);
+                            for _ in old..total {
+                                let (frac, pupil) = points.next_point();
+                                // Retina::tangent, with the step hoisted.
+                                let tangent = DVec2::new(
+                                    -retina.half_tangent + (c as f64 + frac.x) * step,
+                                    retina.half_tangent - (row as f64 + frac.y) * step,
+                                );
+                                samples[filled] = EyeSample { tangent, pupil };
+                                owners[filled] = owner;
+                                filled += 1;
+                                if filled == batch {
+                                    flush(&samples, &owners, &mut sums);
+                                    filled = 0;
+                                }
+                            }
+                        }
+                    }
+                    if filled > 0 {
+                        flush(&samples[..filled], &owners[..filled], &mut sums);
+                    }
+                    for (j, plane) in planes[r * k * 3..(r + 1) * k * 3].iter_mut().enumerate() {
+                        for dr in 0..rows {
+                            for dc in 0..cols {
+                                let d = &mut plane[dr * n + col0 + dc];
+                                let s = sums[(dr * TILE + dc) * k * 3 + j];
+                                *d = ((f64::from(*d) * old_weight + s) * inv_total) as f32;
+                            }
+                        }
+                    }
+                }
+            }
+            progress.inc(rows as u64);
+        });
+        self.samples = total;
+    }
+}

@@ -1,0 +1,19 @@
+//! The converged measurement (issue 11): the paper's Table 1 (Sec. 4.2) of the converged
+//! retinal images, each score with a 95% interval, to a stated precision.
+//!
+//! - [`sampler`]: Owen-scrambled Sobol points over each retina pixel x the pupil disk;
+//! - [`estimator`]: the paired estimator (one eye ray for the ground truth and every method) and
+//!   the per-replicate images;
+//! - [`stats`], [`ssim`]: PSNR and SSIM from cross-replicate products (no noise bias), with
+//!   jackknife intervals;
+//! - [`adaptive`]: doubling the samples until every cell meets its target or the budget is spent;
+//! - [`spec`]: the experiment file's `[measurement]` table; [`run`]: `assess`'s converged Table 1.
+
+pub mod adaptive;
+pub mod estimator;
+pub mod report;
+pub mod run;
+pub mod sampler;
+pub mod spec;
+pub mod ssim;
+pub mod stats;

@@ -1,0 +1,145 @@
+//! The converged Table 1 of an experiment (paper Sec. 4.2, Table 1 and Fig. 3): every eye case
+//! measured by the paired estimator to the experiment's `[measurement]` precision, giving the
+//! images `assess` writes (the replicates' means) and the scores with their 95% intervals.
+
+use std::time::{Duration, Instant};
+
+use super::adaptive::{measure_case, CaseMeasurement, Precision};
+use super::estimator::{DisplaySource, PairedSource};
+use super::sampler::Sampler;
+use super::spec::EstimatorKind;
+use crate::error::Result;
+use crate::experiment::{Experiment, EyeCase, Score, StageTime};
+use crate::metrics::{self, Psnr, Ssim, SsimConstants};
+use crate::optics::{Aperture, Eye, Retina};
+use crate::progress::Progress;
+use crate::raster::RgbImage;
+use crate::render::retina::DisplayStack;
+use crate::render::RadianceField;
+
+/// Samples per replicate of the first round.
+pub const INITIAL_SAMPLES: u32 = 4;
+
+/// Ground truths (one per eye case), perceived images (`[case][method]`) and scores.
+pub type Table1 = (Vec<RgbImage>, Vec<Vec<RgbImage>>, Vec<Score>);
+
+/// The sampler of eye case `index` of an experiment measured with `seed`.
+pub fn case_sampler(seed: u64, index: usize, eye: &Eye) -> Sampler {
+    let radius = match eye.aperture {
+        Aperture::Pinhole => None,
+        Aperture::ThinLens { pupil_diameter, .. } => Some(0.5 * pupil_diameter),
+    };
+    Sampler::new(seed, index as u64, radius)
+}
+
+/// Measures one eye case of any paired source to `precision` (see [`measure_case`]), quietly:
+/// the building block of [`table1`] for tests and tools.
+pub fn measure<S: PairedSource + ?Sized>(
+    source: &S,
+    seed: u64,
+    case_index: usize,
+    eye: &Eye,
+    retina: &Retina,
+    constants: SsimConstants,
+    precision: &Precision,
+) -> CaseMeasurement {
+    measure_case(source, &case_sampler(seed, case_index, eye), retina, constants, precision, &Progress::hidden())
+}
+
+/// The converged Table 1 of `exp` (`None` when it uses the grid estimator): per eye case, the
+/// stages `converged_sampling` (tracing) and `converged_statistics` (scores and intervals).
+pub fn table1<F: RadianceField + ?Sized>(
+    exp: &Experiment,
+    field: &F,
+    stack: &DisplayStack,
+    quiet: bool,
+    stages: &mut Vec<StageTime>,
+) -> Result<Option<Table1>> {
+    let m = &exp.measurement;
+    if m.estimator != EstimatorKind::Converged {
+        return Ok(None);
+    }
+    let start = Instant::now();
+    let budget = (m.max_seconds.is_finite()).then(|| Duration::from_secs_f64(m.max_seconds));
+    let (mut gts, mut sims, mut scores) = (Vec::new(), Vec::new(), Vec::new());
+    for (index, case) in exp.cases.iter().enumerate() {
+        let t = Instant::now();
+        // What is left of the time budget, shared equally by the eye cases still to measure.
+        let deadline = budget.map(|b| {
+            let left = b.saturating_sub(start.elapsed());
+            t + left / (exp.cases.len() - index) as u32
+        });
+        let precision = Precision {
+            psnr_ci95_db: m.psnr_ci95_db,
+            ssim_ci95: m.ssim_ci95,
+            max_samples_per_pixel: m.max_samples_per_pixel,
+            deadline,
+            initial_samples: INITIAL_SAMPLES,
+            replicates: m.replicates,
+        };
+        let source = DisplaySource::new(&exp.display, &case.eye, field, stack);
+        let sampler = case_sampler(m.seed, index, &case.eye);
+        let label = format!("measure {}", case.name);
+        let progress = Progress::new(exp.retina.resolution as u64, &label, quiet);
+        let measured = measure_case(&source, &sampler, &exp.retina, exp.ssim, &precision, &progress);
+        progress.finish();
+        let (gt, case_sims, case_scores) = case_outputs(exp, case, &measured);
+        gts.push(gt);
+        sims.push(case_sims);
+        scores.extend(case_scores);
+        for (stage, seconds) in [
+            ("converged_sampling", measured.rounds.iter().map(|r| r.sample_seconds).sum::<f64>()),
+            ("converged_statistics", measured.rounds.iter().map(|r| r.stats_seconds).sum::<f64>()),
+        ] {
+            stages.push(StageTime { stage: stage.into(), method: None, eye_case: Some(case.name.clone()), seconds });
+        }
+    }
+    Ok(Some((gts, sims, scores)))
+}
+
+fn case_outputs(exp: &Experiment, case: &EyeCase, measured: &CaseMeasurement) -> (RgbImage, Vec<RgbImage>, Vec<Score>) {
+    let reps = &measured.replicates;
+    let gt = reps.mean_image(0);
+    let sims = (1..reps.images()).map(|k| reps.mean_image(k)).collect();
+    let scores = exp
+        .methods
+        .iter()
+        .zip(&measured.cells)
+        .map(|(m, cell)| Score {
+            method: m.short_name().into(),
+            eye_case: case.name.clone(),
+            psnr: cell.psnr,
+            ssim: cell.ssim,
+            samples_per_pixel: Some(reps.samples_per_pixel()),
+            replicates: Some(reps.replicates()),
+            target_met: Some(cell.target_met),
+        })
+        .collect();
+    (gt, sims, scores)
+}
+
+/// The naive scores of a measurement: today's PSNR and SSIM of the replicates' mean images
+/// (biased by the noise left in them). For the negative control and the bench.
+pub fn naive_scores(reps: &super::estimator::Replicates, constants: SsimConstants) -> Result<Vec<(Psnr, Ssim)>> {
+    let reference = reps.mean_image(0);
+    (1..reps.images())
+        .map(|k| {
+            let img = reps.mean_image(k);
+            Ok((metrics::psnr(&img, &reference)?, metrics::ssim(&img, &reference, constants)?))
+        })
+        .collect()
+}
+
+/// EXR attributes of a retinal image of eye case `case` measured converged with
+/// `samples_per_pixel` samples.
+pub fn exr_attributes(exp: &Experiment, samples_per_pixel: u64) -> Vec<(&'static str, String)> {
+    let m = &exp.measurement;
+    vec![
+        ("inimtrace:estimator", "converged (randomized QMC: Owen-scrambled Sobol over pixel x pupil disk)".into()),
+        ("inimtrace:pupil_samples", "continuous disk".into()),
+        ("inimtrace:retina_samples_per_pixel", samples_per_pixel.to_string()),
+        ("inimtrace:replicates", m.replicates.to_string()),
+        ("inimtrace:seed", m.seed.to_string()),
+        ("inimtrace:value", "mean over the replicates".into()),
+    ]
+}

@@ -1,0 +1,297 @@
+//! The randomized quasi-Monte Carlo points of the converged measurement (issue 11; the paper's
+//! perceived and ground-truth retinal images of Sec. 2.3 and 4.1, integrated instead of sampled
+//! on grids).
+//!
+//! A retina pixel's value is an integral over a four-dimensional domain: a point of the pixel's
+//! square (in tangent coordinates) times a point of the pupil disk, with uniform weight. Every
+//! (seed, eye case, replicate, pixel) gets its own Owen scramble of the 4-D Sobol sequence (the
+//! direction numbers and the hash-based Owen scramble of [`sobol_burley`], Burley 2020). Sample
+//! `i` is Sobol point `gray(i) = i ^ (i >> 1)` (Gray-code order, so each sample costs one XOR
+//! of direction numbers before its scramble; the first `2^m` samples are exactly the first `2^m`
+//! Sobol points, a (0, m, 2)-net in the pixel). Dimensions 0 and 1 give the pixel point, 2 and 3
+//! the pupil point, mapped onto the disk by the area-preserving concentric map of Shirley and
+//! Chiu. Each scrambled point is uniformly distributed over the domain, so the mean over any
+//! number of points is an unbiased estimate of the pixel's value; scrambles of different
+//! replicates are independent, which is what the statistics need. Sample `i` does not depend on
+//! how many samples are taken: doubling the count adds points `N..2N` of the same sequences
+//! (nested), keeping all earlier work.
+//!
+//! The pinhole eye uses the pupil centre for every sample (only dimensions 0 and 1 matter).
+
+use std::f64::consts::FRAC_PI_4;
+
+use glam::DVec2;
+use sobol_burley::parts::{hash_int4, owen_scramble_int4_rev, sobol_int4_rev, Int4};
+
+/// Largest number of samples per replicate and pixel (the Sobol sequence's length in
+/// [`sobol_burley`]).
+pub const MAX_SAMPLES_PER_REPLICATE: u64 = 1 << 16;
+
+/// The scrambled Sobol points of one measurement (one seed and one eye case).
+#[derive(Clone, Copy, Debug)]
+pub struct Sampler {
+    key: u64,
+    pupil_radius: f64,
+    /// Direction numbers of dimensions 0-3, bit-reversed: `directions[j]` is Sobol point `2^j`.
+    directions: [Int4; 16],
+}
+
+impl Sampler {
+    /// Points for `seed` and `stream` (the eye case's index, so that eye cases get independent
+    /// scrambles), over a pupil disk of `pupil_radius` mm (`None`: the pinhole eye, pupil point
+    /// always the centre).
+    pub fn new(seed: u64, stream: u64, pupil_radius: Option<f64>) -> Self {
+        Self {
+            key: mix64(mix64(seed) ^ stream.wrapping_mul(0xd6e8_feb8_6659_fd93)),
+            pupil_radius: pupil_radius.unwrap_or(0.0),
+            directions: std::array::from_fn(|j| sobol_int4_rev((1u32 << j).reverse_bits(), 0)),
+        }
+    }
+
+    /// Whether pupil points are all the centre.
+    pub fn is_pinhole(&self) -> bool {
+        self.pupil_radius == 0.0
+    }
+
+    /// The scramble seed of one replicate of one pixel. For a fixed pixel, different replicates
+    /// always get different seeds (an odd multiple of the replicate is added), so no two
+    /// replicates of a pixel can share a sequence.
+    #[inline]
+    pub fn scramble(&self, pixel: u64, replicate: u32) -> u32 {
+        let base = (mix64(self.key ^ pixel.wrapping_mul(0x9e37_79b9_7f4a_7c15)) >> 32) as u32;
+        base.wrapping_add(replicate.wrapping_mul(0x9e37_79b9))
+    }
+
+    /// Samples `start, start + 1, ...` of the sequence of one replicate of one pixel.
+    #[inline]
+    pub fn points(&self, pixel: u64, replicate: u32, start: u32) -> Points<'_> {
+        self.points_of(self.scramble(pixel, replicate), start)
+    }
+
+    /// Samples `start, start + 1, ...` of the sequence with scramble seed `scramble`.
+    #[inline]
+    pub fn points_of(&self, scramble: u32, start: u32) -> Points<'_> {
+        debug_assert!(u64::from(start) < MAX_SAMPLES_PER_REPLICATE);
+        let mut gray = start ^ (start >> 1);
+        let mut x = sobol_int4_rev(0, 0);
+        while gray != 0 {
+            x ^= self.directions[gray.trailing_zeros() as usize];
+            gray &= gray - 1;
+        }
+        Points { sampler: self, scramble: scramble_of(scramble), index: start, sobol_rev: x }
+    }
+
+    /// Sample `index` of the sequence with scramble seed `scramble` (random access; the
+    /// [`Points`] iterator is the fast way through consecutive samples).
+    pub fn point(&self, scramble: u32, index: u32) -> (DVec2, DVec2) {
+        self.points_of(scramble, index).next_point()
+    }
+}
+
+/// The per-dimension Owen scramble values of a seed, as `sobol_burley::sample_4d` derives them
+/// for dimension set 0.
+#[inline]
+fn scramble_of(seed: u32) -> Int4 {
+    let s: Int4 = [seed.wrapping_mul(0x9c8f_2d3b); 4].into();
+    hash_int4(s ^ [0x912f_69ba, 0x174f_18ab, 0x691e_72ca, 0xb40c_c1b8].into())
+}
+
+/// Consecutive samples of one scrambled sequence.
+pub struct Points<'a> {
+    sampler: &'a Sampler,
+    scramble: Int4,
+    index: u32,
+    /// Sobol point `gray(index)`, bit-reversed.
+    sobol_rev: Int4,
+}
+
+impl Points<'_> {
+    /// The four coordinates in [0, 1) of the current sample, then step to the next.
+    #[inline(always)]
+    pub fn next_raw(&mut self) -> [f32; 4] {
+        debug_assert!(u64::from(self.index) < MAX_SAMPLES_PER_REPLICATE);
+        let out = owen_scramble_int4_rev(self.sobol_rev, self.scramble).reverse_bits().to_f32_norm();
+        self.index += 1;
+        // gray(i + 1) = gray(i) ^ 2^ctz(i + 1).
+        self.sobol_rev ^= self.sampler.directions[(self.index.trailing_zeros() & 15) as usize];
+        out
+    }
+
+    /// The current sample: the point of the pixel square (fractions in [0, 1)^2, x right, y down
+    /// as [`crate::optics::Retina::tangent`] takes them) and the pupil point (mm from the pupil
+    /// centre); then step to the next.
+    #[inline(always)]
+    pub fn next_point(&mut self) -> (DVec2, DVec2) {
+        let [a, b, c, d] = self.next_raw();
+        let frac = DVec2::new(f64::from(a), f64::from(b));
+        let r = self.sampler.pupil_radius;
+        if r == 0.0 {
+            return (frac, DVec2::ZERO);
+        }
+        (frac, concentric_disk(f64::from(c), f64::from(d)) * r)
+    }
+}
+
+/// The Shirley-Chiu concentric map of the unit square onto the unit disk: area-preserving
+/// (uniform points stay uniform), continuous, and it keeps strata compact.
+#[inline]
+pub fn concentric_disk(u: f64, v: f64) -> DVec2 {
+    let a = 2.0 * u - 1.0;
+    let b = 2.0 * v - 1.0;
+    if a == 0.0 && b == 0.0 {
+        return DVec2::ZERO;
+    }
+    if a.abs() > b.abs() {
+        let (s, c) = sin_cos_quarter(FRAC_PI_4 * (b / a));
+        DVec2::new(a * c, a * s)
+    } else {
+        // phi = pi/2 - (pi/4)(a/b): cos phi = sin x, sin phi = cos x.
+        let (s, c) = sin_cos_quarter(FRAC_PI_4 * (a / b));
+        DVec2::new(b * s, b * c)
+    }
+}
+
+/// `(sin x, cos x)` for `|x| <= pi/4` by their Taylor series to x^13 and x^14, whose truncation
+/// error there (below 3e-14) is far below what matters (the points come from 24-bit uniforms),
+/// without the library's range reduction. Estrin's scheme keeps the dependency chains short.
+#[inline(always)]
+fn sin_cos_quarter(x: f64) -> (f64, f64) {
+    /// Coefficients of the series in y = x^2: sin x = x sum SIN[k] y^k, cos x = sum COS[k] y^k.
+    const SIN: [f64; 8] = {
+        let mut c = [0.0; 8];
+        let (mut k, mut f) = (0, 1.0);
+        while k < 7 {
+            c[k] = if k % 2 == 0 { 1.0 / f } else { -1.0 / f };
+            f *= ((2 * k + 2) * (2 * k + 3)) as f64;
+            k += 1;
+        }
+        c
+    };
+    const COS: [f64; 8] = {
+        let mut c = [0.0; 8];
+        let (mut k, mut f) = (0, 1.0);
+        while k < 8 {
+            c[k] = if k % 2 == 0 { 1.0 / f } else { -1.0 / f };
+            f *= ((2 * k + 1) * (2 * k + 2)) as f64;
+            k += 1;
+        }
+        c
+    };
+    #[inline(always)]
+    fn estrin(a: &[f64; 8], y: f64) -> f64 {
+        let y2 = y * y;
+        let y4 = y2 * y2;
+        ((a[0] + a[1] * y) + y2 * (a[2] + a[3] * y)) + y4 * ((a[4] + a[5] * y) + y2 * (a[6] + a[7] * y))
+    }
+    let y = x * x;
+    (x * estrin(&SIN, y), estrin(&COS, y))
+}
+
+/// SplitMix64's finaliser: a bijective 64-bit mixer.
+#[inline]
+pub(crate) fn mix64(mut z: u64) -> u64 {
+    z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn quarter_sin_cos_matches_the_library() {
+        for i in -1000..=1000 {
+            let x = FRAC_PI_4 * i as f64 / 1000.0;
+            let (s, c) = sin_cos_quarter(x);
+            assert!((s - x.sin()).abs() <= 3e-14 && (c - x.cos()).abs() <= 3e-14, "{x}");
+        }
+    }
+
+    #[test]
+    fn concentric_map_is_uniform_on_the_disk() {
+        // Midpoint rule over the unit square: the moments of the image must be the disk's.
+        let n = 1000;
+        let (mut mx, mut my, mut mxx, mut myy, mut mxy, mut mr4) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+        let mut inner = 0usize;
+        let mut quadrant = [0usize; 4];
+        for j in 0..n {
+            for i in 0..n {
+                let p = concentric_disk((i as f64 + 0.5) / n as f64, (j as f64 + 0.5) / n as f64);
+                assert!(p.length() <= 1.0 + 1e-15);
+                mx += p.x;
+                my += p.y;
+                mxx += p.x * p.x;
+                myy += p.y * p.y;
+                mxy += p.x * p.y;
+                mr4 += p.length_squared().powi(2);
+                inner += (p.length() < 0.5) as usize;
+                quadrant[(p.x < 0.0) as usize * 2 + (p.y < 0.0) as usize] += 1;
+            }
+        }
+        let m = (n * n) as f64;
+        assert!((mx / m).abs() < 1e-9 && (my / m).abs() < 1e-9 && (mxy / m).abs() < 1e-9);
+        // E[x^2] = E[y^2] = 1/4, E[r^4] = 1/3, P(r < 1/2) = 1/4 for the uniform unit disk.
+        assert!((mxx / m - 0.25).abs() < 1e-5, "{}", mxx / m);
+        assert!((myy / m - 0.25).abs() < 1e-5, "{}", myy / m);
+        assert!((mr4 / m - 1.0 / 3.0).abs() < 1e-5, "{}", mr4 / m);
+        assert!((inner as f64 / m - 0.25).abs() < 1e-3, "{}", inner as f64 / m);
+        assert!(quadrant.iter().all(|&q| q == n * n / 4), "{quadrant:?}");
+    }
+
+    #[test]
+    fn samples_are_sobol_burleys_scrambled_points_in_gray_code_order() {
+        let s = Sampler::new(9, 2, Some(1.0));
+        for seed in [0u32, 1, 0xdead_beef, 77] {
+            let mut it = s.points_of(seed, 0);
+            for i in 0..5000u32 {
+                let gray = i ^ (i >> 1);
+                let want = owen_scramble_int4_rev(sobol_int4_rev(gray.reverse_bits(), 0), scramble_of(seed))
+                    .reverse_bits()
+                    .to_f32_norm();
+                assert_eq!(it.next_raw(), want, "{seed} {i}");
+            }
+            // Starting anywhere gives the same samples.
+            for start in [1u32, 2, 3, 64, 1000, 65_535] {
+                let mut a = s.points_of(seed, start);
+                let mut b = s.points_of(seed, 0);
+                for _ in 0..start {
+                    b.next_raw();
+                }
+                assert_eq!(a.next_raw(), b.next_raw(), "{seed} {start}");
+            }
+        }
+    }
+
+    #[test]
+    fn sobol_burleys_scramble_is_reproduced() {
+        // With the index shuffle of `sample_4d` undone, our scramble is the crate's own.
+        for seed in [3u32, 1234] {
+            let a = sobol_burley::sample_4d(0, 0, seed);
+            let shuffled = sobol_burley::parts::owen_scramble_rev(0, sobol_burley::parts::hash(seed ^ 0x79c6_8e4a));
+            let b = owen_scramble_int4_rev(sobol_int4_rev(shuffled, 0), scramble_of(seed)).reverse_bits().to_f32_norm();
+            assert_eq!(a, b);
+        }
+    }
+
+    #[test]
+    fn every_power_of_two_prefix_stratifies_the_pixel() {
+        // Owen-scrambled Sobol: the first 2^m points of a scrambled sequence put exactly one
+        // point in each of the 2^m cells of every 2^a x 2^(m-a) grid of the pixel.
+        let s = Sampler::new(3, 0, Some(1.0));
+        for scramble in [s.scramble(0, 0), s.scramble(99, 5), s.scramble(7, 2)] {
+            for m in 1..=8u32 {
+                let pts: Vec<DVec2> = (0..1u32 << m).map(|i| s.point(scramble, i).0).collect();
+                for a in 0..=m {
+                    let (nx, ny) = (1usize << a, 1usize << (m - a));
+                    let mut cells = vec![0u8; nx * ny];
+                    for p in &pts {
+                        cells[(p.y * ny as f64) as usize * nx + (p.x * nx as f64) as usize] += 1;
+                    }
+                    assert!(cells.iter().all(|&c| c == 1), "m = {m}, a = {a}");
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,228 @@
+//! The `[measurement]` table of an experiment file: how Table 1 (paper Sec. 4.2) is measured.
+//!
+//! ```toml
+//! [measurement]
+//! estimator = "converged"        # or "grid": today's regular grids (pupil_grid, retina_samples)
+//! psnr_ci95_db = 0.02            # target: every PSNR's 95% half-width (dB)
+//! ssim_ci95 = 0.002              # target: every SSIM's 95% half-width
+//! max_samples_per_pixel = 4096   # budget: samples per retina pixel, over all replicates
+//! max_seconds = 600.0            # budget: wall seconds of the whole measurement
+//! seed = 1
+//! replicates = 8                 # independent scrambles, at least 3
+//! ```
+//!
+//! A file without the table uses the grid estimator (the published framework's way, and this
+//! tool's outputs before the converged measurement existed). Under `converged`, `eye.pupil_grid`
+//! and `eye.retina_samples` mean nothing: they must stay at their defaults (8 and 1) or be left
+//! out; other values are refused.
+
+use serde::ser::SerializeStruct;
+use serde::{Deserialize, Serialize};
+
+use super::sampler::MAX_SAMPLES_PER_REPLICATE;
+use crate::error::{Error, Result};
+
+/// How the retinal images and their scores are computed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum EstimatorKind {
+    /// Randomized quasi-Monte Carlo to a stated precision, with 95% intervals.
+    #[default]
+    Converged,
+    /// Regular grids over each pixel and the pupil (`pupil_grid`, `retina_samples`); no error
+    /// estimate.
+    Grid,
+}
+
+impl EstimatorKind {
+    pub fn name(self) -> &'static str {
+        match self {
+            EstimatorKind::Converged => "converged",
+            EstimatorKind::Grid => "grid",
+        }
+    }
+}
+
+/// `[measurement]`.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct MeasurementSpec {
+    pub estimator: EstimatorKind,
+    /// Target: half-width of every PSNR's 95% interval, dB (the mean of the channels).
+    pub psnr_ci95_db: f64,
+    /// Target: half-width of every SSIM's 95% interval (the mean of the channels).
+    pub ssim_ci95: f64,
+    /// Budget: samples per retina pixel over all replicates, per eye case.
+    pub max_samples_per_pixel: u64,
+    /// Budget: wall seconds of the measurement (all eye cases). Only this budget can make a
+    /// result depend on the machine; the report says when it stopped sampling.
+    pub max_seconds: f64,
+    /// Seed of the scrambles: the same experiment and seed give the same numbers bit for bit.
+    pub seed: u64,
+    /// Independent replicates (at least 3): the intervals' degrees of freedom are one fewer.
+    pub replicates: usize,
+}
+
+impl Default for MeasurementSpec {
+    fn default() -> Self {
+        Self {
+            estimator: EstimatorKind::Converged,
+            psnr_ci95_db: 0.02,
+            ssim_ci95: 0.002,
+            max_samples_per_pixel: 4096,
+            max_seconds: 600.0,
+            seed: 1,
+            replicates: 8,
+        }
+    }
+}
+
+impl MeasurementSpec {
+    /// The grid estimator (what a file without `[measurement]` gets).
+    pub fn grid() -> Self {
+        Self { estimator: EstimatorKind::Grid, ..Self::default() }
+    }
+
+    /// Checks the values; `source` names the file, fields are named `measurement.<field>`.
+    pub fn validate(&self, source: &str) -> Result<()> {
+        let field = |f: &str| format!("measurement.{f}");
+        if self.estimator == EstimatorKind::Grid {
+            return Ok(());
+        }
+        if !(self.psnr_ci95_db.is_finite() && self.psnr_ci95_db > 0.0) {
+            return Err(Error::invalid(
+                source,
+                field("psnr_ci95_db"),
+                format!("must be a positive number of dB, got {}", self.psnr_ci95_db),
+            ));
+        }
+        if !(self.ssim_ci95.is_finite() && self.ssim_ci95 > 0.0) {
+            return Err(Error::invalid(
+                source,
+                field("ssim_ci95"),
+                format!("must be positive, got {}", self.ssim_ci95),
+            ));
+        }
+        if !(3..=64).contains(&self.replicates) {
+            return Err(Error::invalid(
+                source,
+                field("replicates"),
+                format!("must be between 3 and 64 (the intervals need at least 3), got {}", self.replicates),
+            ));
+        }
+        let max = MAX_SAMPLES_PER_REPLICATE * self.replicates as u64;
+        if self.max_samples_per_pixel < self.replicates as u64 || self.max_samples_per_pixel > max {
+            return Err(Error::invalid(
+                source,
+                field("max_samples_per_pixel"),
+                format!(
+                    "must be between `replicates` ({}) and {max} (2^16 per replicate), got {}",
+                    self.replicates, self.max_samples_per_pixel
+                ),
+            ));
+        }
+        if self.max_seconds.is_nan() || self.max_seconds <= 0.0 {
+            return Err(Error::invalid(
+                source,
+                field("max_seconds"),
+                format!("must be positive (inf for no limit), got {}", self.max_seconds),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Written back as a file would give it: the grid estimator has nothing but its name.
+impl Serialize for MeasurementSpec {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        if self.estimator == EstimatorKind::Grid {
+            let mut st = s.serialize_struct("MeasurementSpec", 1)?;
+            st.serialize_field("estimator", &self.estimator)?;
+            return st.end();
+        }
+        let mut st = s.serialize_struct("MeasurementSpec", 7)?;
+        st.serialize_field("estimator", &self.estimator)?;
+        st.serialize_field("psnr_ci95_db", &self.psnr_ci95_db)?;
+        st.serialize_field("ssim_ci95", &self.ssim_ci95)?;
+        st.serialize_field("max_samples_per_pixel", &self.max_samples_per_pixel)?;
+        st.serialize_field("max_seconds", &self.max_seconds)?;
+        st.serialize_field("seed", &self.seed)?;
+        st.serialize_field("replicates", &self.replicates)?;
+        st.end()
+    }
+}
+
+impl MeasurementSpec {
+    /// Refuses grid-only settings under the converged estimator: `eye.pupil_grid` and
+    /// `eye.retina_samples` other than their defaults (which the converged estimator ignores).
+    pub fn check_grid_only(&self, source: &str, pupil_grid: usize, retina_samples: usize) -> Result<()> {
+        if self.estimator != EstimatorKind::Converged {
+            return Ok(());
+        }
+        let defaults = crate::experiment::EyeSpec::default();
+        for (key, value, default) in [
+            ("pupil_grid", pupil_grid, defaults.pupil_grid),
+            ("retina_samples", retina_samples, defaults.retina_samples),
+        ] {
+            if value != default {
+                return Err(Error::invalid(
+                    source,
+                    format!("eye.{key}"),
+                    format!(
+                        "{value} is a setting of the grid estimator; the converged estimator integrates each retina \
+                         pixel and the pupil disk (remove it, or set measurement.estimator = \"grid\")"
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_table_defaults_to_converged_and_round_trips() {
+        let m: MeasurementSpec = toml::from_str("seed = 5").unwrap();
+        assert_eq!(m, MeasurementSpec { seed: 5, ..MeasurementSpec::default() });
+        let back: MeasurementSpec = toml::from_str(&toml::to_string(&m).unwrap()).unwrap();
+        assert_eq!(back, m);
+        let g: MeasurementSpec = toml::from_str("estimator = \"grid\"").unwrap();
+        assert_eq!(g, MeasurementSpec::grid());
+        assert_eq!(toml::to_string(&g).unwrap().trim(), "estimator = \"grid\"");
+        assert!(toml::from_str::<MeasurementSpec>("estimator = \"exact\"").is_err());
+        assert!(toml::from_str::<MeasurementSpec>("replicate = 3").is_err());
+    }
+
+    #[test]
+    fn bad_values_name_the_field() {
+        for (m, field) in [
+            (MeasurementSpec { replicates: 2, ..Default::default() }, "measurement.replicates"),
+            (MeasurementSpec { psnr_ci95_db: 0.0, ..Default::default() }, "measurement.psnr_ci95_db"),
+            (MeasurementSpec { ssim_ci95: f64::NAN, ..Default::default() }, "measurement.ssim_ci95"),
+            (MeasurementSpec { max_samples_per_pixel: 4, ..Default::default() }, "measurement.max_samples_per_pixel"),
+            (
+                MeasurementSpec { max_samples_per_pixel: 1 << 20, ..Default::default() },
+                "measurement.max_samples_per_pixel",
+            ),
+            (MeasurementSpec { max_seconds: 0.0, ..Default::default() }, "measurement.max_seconds"),
+        ] {
+            let e = m.validate("x.toml").unwrap_err().to_string();
+            assert!(e.contains(field) && e.contains("x.toml"), "{e}");
+        }
+        MeasurementSpec { max_seconds: f64::INFINITY, ..Default::default() }.validate("x").unwrap();
+    }
+
+    #[test]
+    fn grid_only_settings_are_refused_under_converged() {
+        let c = MeasurementSpec::default();
+        let e = c.check_grid_only("e.toml", 16, 1).unwrap_err().to_string();
+        assert!(e.contains("e.toml") && e.contains("eye.pupil_grid"), "{e}");
+        let e = c.check_grid_only("e.toml", 8, 2).unwrap_err().to_string();
+        assert!(e.contains("eye.retina_samples"), "{e}");
+        c.check_grid_only("e", 8, 1).unwrap();
+        MeasurementSpec::grid().check_grid_only("e", 16, 4).unwrap();
+    }
+}
