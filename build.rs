@@ -7,6 +7,12 @@
 //! Without the feature (`--no-default-features`) it does nothing, so the crate then builds
 //! without Embree or libclang.
 //!
+//! It also records the git revision the package is built from (`git describe --always --dirty`,
+//! or `$INIMTRACE_GIT_REVISION` when set, else `unknown` outside a checkout) as the compile-time
+//! variable `INIMTRACE_GIT_REVISION` (see `src/version.rs`), so that a binary run anywhere
+//! names the source it was built from. It reruns when HEAD moves or a source file changes; the
+//! Embree bindings are then reused from the previous run when their inputs are unchanged.
+//!
 //! Where Embree is looked for: `$EMBREE_DIR/include/embree{4,3}` with libraries in
 //! `$EMBREE_DIR/lib` (or `lib64`) when `EMBREE_DIR` is set; otherwise the system include
 //! directories. Embree 4 is preferred when both versions are installed.
@@ -16,12 +22,46 @@ fn main() {
     // Declared unconditionally so that `cfg(embree4)` never trips the `unexpected_cfgs` lint.
     println!("cargo::rustc-check-cfg=cfg(embree4)");
     println!("cargo::rerun-if-changed=build.rs");
+    revision::record();
 
     // Cargo compiles build scripts with the package's features, so `cfg(feature = "embree")` here
     // is the same switch as the `CARGO_FEATURE_EMBREE` environment variable; bindgen (an optional
     // build-dependency) only exists when it is on.
     #[cfg(feature = "embree")]
     embree::generate();
+}
+
+mod revision {
+    use std::process::Command;
+
+    fn git(args: &[&str]) -> Option<String> {
+        let out = Command::new("git").args(args).output().ok().filter(|o| o.status.success())?;
+        Some(String::from_utf8_lossy(&out.stdout).trim().to_string()).filter(|s| !s.is_empty())
+    }
+
+    /// Sets `INIMTRACE_GIT_REVISION` and asks to be rerun when it may change.
+    pub fn record() {
+        println!("cargo::rerun-if-env-changed=INIMTRACE_GIT_REVISION");
+        for watched in ["src", "Cargo.toml", "Cargo.lock", "wrapper.h"] {
+            println!("cargo::rerun-if-changed={watched}");
+        }
+        if let Some(dir) = git(&["rev-parse", "--git-dir"]) {
+            println!("cargo::rerun-if-changed={dir}/HEAD");
+            println!("cargo::rerun-if-changed={dir}/index");
+        }
+        if let (Some(common), Some(reference)) =
+            (git(&["rev-parse", "--git-common-dir"]), git(&["symbolic-ref", "-q", "HEAD"]))
+        {
+            println!("cargo::rerun-if-changed={common}/{reference}");
+            println!("cargo::rerun-if-changed={common}/packed-refs");
+        }
+        let revision = std::env::var("INIMTRACE_GIT_REVISION")
+            .ok()
+            .filter(|s| !s.trim().is_empty())
+            .or_else(|| git(&["describe", "--always", "--dirty", "--abbrev=7", "--exclude=*"]))
+            .unwrap_or_else(|| "unknown".into());
+        println!("cargo::rustc-env=INIMTRACE_GIT_REVISION={}", revision.trim());
+    }
 }
 
 #[cfg(feature = "embree")]
@@ -98,6 +138,36 @@ mod embree {
         println!("cargo::rerun-if-changed={}", header_dir.display());
         println!("cargo::rerun-if-env-changed=LIBCLANG_PATH");
 
+        let out = PathBuf::from(env::var_os("OUT_DIR").unwrap_or_else(|| fail("OUT_DIR is not set")))
+            .join("embree_bindings.rs");
+        // Reruns for the git revision need not regenerate the bindings: reuse them when the
+        // header, its version and wrapper.h are what they were.
+        let stamp_path = out.with_extension("stamp");
+        let stamp = format!(
+            "{} {} {:?} {:?}",
+            header_dir.display(),
+            found.major,
+            std::fs::metadata(header_dir.join("rtcore.h")).and_then(|m| m.modified()).ok(),
+            std::fs::read("wrapper.h").unwrap_or_default()
+        );
+        let fresh = out.is_file() && std::fs::read_to_string(&stamp_path).is_ok_and(|s| s == stamp);
+        if !fresh {
+            generate_bindings(&found, &header_dir, &out);
+            let _ = std::fs::write(&stamp_path, &stamp);
+        }
+
+        if let Some(lib_dir) = &found.lib_dir {
+            println!("cargo::rustc-link-search=native={}", lib_dir.display());
+            // Let this package's tests, examples and binaries find a non-system Embree at run time.
+            println!("cargo::rustc-link-arg=-Wl,-rpath,{}", lib_dir.display());
+        }
+        println!("cargo::rustc-link-lib=dylib=embree{}", found.major);
+        if found.major >= 4 {
+            println!("cargo::rustc-cfg=embree4");
+        }
+    }
+
+    fn generate_bindings(found: &Found, header_dir: &Path, out: &Path) {
         let mut builder = bindgen::Builder::default()
             .header("wrapper.h")
             .clang_arg(format!("-I{}", found.include_root.display()))
@@ -138,20 +208,8 @@ mod embree {
                 fail(&format!("bindgen could not run ({what}); install libclang with `{INSTALL_HINT}`"))
             }
         };
-        let out = PathBuf::from(env::var_os("OUT_DIR").unwrap_or_else(|| fail("OUT_DIR is not set")))
-            .join("embree_bindings.rs");
-        if let Err(e) = bindings.write_to_file(&out) {
+        if let Err(e) = bindings.write_to_file(out) {
             fail(&format!("cannot write {}: {e}", out.display()));
-        }
-
-        if let Some(lib_dir) = &found.lib_dir {
-            println!("cargo::rustc-link-search=native={}", lib_dir.display());
-            // Let this package's tests, examples and binaries find a non-system Embree at run time.
-            println!("cargo::rustc-link-arg=-Wl,-rpath,{}", lib_dir.display());
-        }
-        println!("cargo::rustc-link-lib=dylib=embree{}", found.major);
-        if found.major >= 4 {
-            println!("cargo::rustc-cfg=embree4");
         }
     }
 }

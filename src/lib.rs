@@ -24,6 +24,7 @@ pub mod error;
 pub mod experiment;
 #[doc(hidden)]
 pub mod fixtures;
+pub mod info;
 pub mod io;
 pub mod measure;
 pub mod metrics;
@@ -36,5 +37,6 @@ pub mod render;
 pub mod scene;
 pub mod settings;
 pub mod sweep;
+pub mod version;
 
 pub use error::{Error, Result};

@@ -5,11 +5,12 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
-use clap::{Args, Parser, Subcommand};
+use clap::{Args, Parser, Subcommand, ValueEnum};
 use glam::DVec3;
 
-use inimtrace::experiment::{self, Experiment, ExperimentSpec, RunOptions};
+use inimtrace::experiment::{self, metadata, Experiment, ExperimentSpec, RunOptions};
 use inimtrace::io::display_file::DisplaySpec;
+use inimtrace::io::exr::{Attributes, ExrCompression};
 use inimtrace::io::scene_file::SceneSpec;
 use inimtrace::io::{load_display, load_scene};
 use inimtrace::metrics::{self, SsimConstants};
@@ -60,6 +61,9 @@ struct Cli {
     /// Print the wall time of every stage.
     #[arg(long, global = true)]
     timings: bool,
+    /// Compression of the EXR files written (every choice but pxr24 is lossless).
+    #[arg(long, global = true, value_enum, default_value_t = ExrCompression::Zip)]
+    exr_compression: ExrCompression,
     /// Memory limit (e.g. 4G, 512M): settings or input files that would need more are refused
     /// before anything is allocated (default: the memory available on this machine).
     #[arg(long, global = true, value_parser = inimtrace::budget::parse_bytes)]
@@ -88,17 +92,20 @@ enum Command {
     },
     /// Render one display image.
     RenderDisplay {
-        /// LC, PC, LA (5 x 5) or LA<k>.
+        /// The rendering method (case-insensitive).
         #[arg(long, default_value = "LC")]
-        method: String,
+        method: Method,
         #[command(flatten)]
         setup: Setup,
         /// k x k samples per display pixel.
         #[arg(long, default_value_t = 1)]
         samples_per_pixel: usize,
         /// z of the reference plane camera rays start on (mm).
-        #[arg(long, default_value_t = 0.0)]
+        #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
         reference_plane: f64,
+        /// Pupil centre PupilCenter aims at, mm.
+        #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true, default_value = "0,0,0")]
+        eye_position: DVec3,
         /// Output EXR with R, G, B and Z (hit distance, mm) channels; a PNG preview is written beside it.
         #[arg(long, short, value_parser = exr_path)]
         out: PathBuf,
@@ -131,9 +138,12 @@ enum Command {
     Compare {
         a: PathBuf,
         b: PathBuf,
-        /// SSIM constants: wang2004 or framework-8bit.
-        #[arg(long, default_value = "wang2004")]
-        ssim: String,
+        /// SSIM constants.
+        #[arg(long, value_enum, default_value_t = SsimConstants::Wang2004)]
+        ssim: SsimConstants,
+        /// Print JSON (PSNR and SSIM per channel; an infinite PSNR, identical channels, is null).
+        #[arg(long)]
+        json: bool,
     },
     /// Speed against error for every method and backend, the convergence of every sampling
     /// parameter, and which settings bring Table 1 within 0.1 dB of its converged values; writes
@@ -200,16 +210,25 @@ enum Command {
         #[command(flatten)]
         backend: BackendArg,
     },
-    /// Describe a display (central depth plane and more) and write the built-in files.
+    /// Describe a display design (central depth plane, eye box, field of view, pixels per
+    /// degree, views through the pupil) or a scene (objects, sizes, depth range), and write the
+    /// built-in files.
     Info {
         /// Display TOML or OpenCV YAML (default: the paper's).
         #[arg(long)]
         display: Option<PathBuf>,
-        /// Print the built-in experiment, scene or display as a file: paper-experiment (measured
-        /// converged, what `assess` runs), paper-grid-experiment (the grid estimator),
-        /// framework-2020-experiment, paper-scene, paper-display.
+        /// Describe this scene TOML instead of a display.
+        #[arg(long, conflicts_with = "display")]
+        scene: Option<PathBuf>,
+        /// Pupil diameter (mm) for the number of views through the pupil.
+        #[arg(long, default_value_t = 5.0)]
+        pupil: f64,
+        /// Print JSON.
         #[arg(long)]
-        print: Option<String>,
+        json: bool,
+        /// Print the built-in experiment, scene or display as a file.
+        #[arg(long, value_enum)]
+        print: Option<PrintTarget>,
     },
 }
 
@@ -223,18 +242,33 @@ fn exr_path(text: &str) -> std::result::Result<PathBuf, String> {
     }
 }
 
+/// `info --print`.
+#[derive(Clone, Copy, ValueEnum)]
+enum PrintTarget {
+    /// The paper's experiment measured converged (what `assess` runs with no file).
+    PaperExperiment,
+    /// The paper's experiment as its text states it, with the grid estimator.
+    PaperGridExperiment,
+    /// What the published framework ran.
+    #[value(name = "framework-2020-experiment")]
+    Framework2020Experiment,
+    /// The paper's scene.
+    PaperScene,
+    /// The paper's display.
+    PaperDisplay,
+}
+
 /// Scene intersection backend.
 #[derive(Args)]
 struct BackendArg {
-    /// auto (analytic for rectangle-only scenes, else embree), analytic, embree, bvh (pure Rust), or brute
-    /// (brute force, small scenes only).
-    #[arg(long = "backend", default_value = "auto")]
-    backend: String,
+    /// Scene intersection backend.
+    #[arg(long = "backend", value_enum, ignore_case = true, default_value_t = BackendChoice::Auto)]
+    backend: BackendChoice,
 }
 
 impl BackendArg {
     fn choice(&self) -> Result<BackendChoice> {
-        self.backend.parse().map_err(anyhow::Error::msg)
+        Ok(self.backend)
     }
 }
 
@@ -293,6 +327,12 @@ struct EyeArgs {
     /// k x k samples per retina pixel.
     #[arg(long, default_value_t = 1)]
     retina_samples: usize,
+    /// Pupil-to-retina distance v0, mm.
+    #[arg(long, default_value_t = 17.0)]
+    retina_distance: f64,
+    /// Pupil centre, mm.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true, default_value = "0,0,0")]
+    eye_position: DVec3,
 }
 
 impl EyeArgs {
@@ -303,12 +343,29 @@ impl EyeArgs {
             (false, None, Some(d)) => Aperture::ThinLens { pupil_diameter: self.pupil, focus: Focus::Diopters(d) },
             _ => bail!("give --pinhole, --focus-mm or --focus-diopters"),
         };
-        let eye = Eye { retina_distance: 17.0, aperture, pupil_grid: self.pupil_grid, position: DVec3::ZERO };
+        let eye = Eye {
+            retina_distance: self.retina_distance,
+            aperture,
+            pupil_grid: self.pupil_grid,
+            position: self.eye_position,
+        };
         eye.validate("command line")?;
         let retina =
             Retina { resolution: self.retina, half_tangent: self.half_tangent, samples_per_pixel: self.retina_samples };
         retina.validate("command line")?;
         Ok((eye, retina))
+    }
+}
+
+/// `X,Y,Z` (mm) on the command line: three finite numbers.
+fn parse_vec3(s: &str) -> std::result::Result<DVec3, String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f64>().map_err(|_| format!("`{x}` is not a number (expected X,Y,Z in mm)")))
+        .collect::<std::result::Result<_, _>>()?;
+    match v.as_slice() {
+        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(DVec3::new(*x, *y, *z)),
+        _ => Err(format!("expected three finite numbers X,Y,Z in mm, got `{s}`")),
     }
 }
 
@@ -341,15 +398,32 @@ fn write_image(
     path: &Path,
     img: &inimtrace::raster::RgbImage,
     depth: Option<&[f32]>,
-    attrs: &[(&str, String)],
+    attrs: &Attributes,
+    compression: ExrCompression,
 ) -> Result<()> {
-    use inimtrace::io::output::write_atomic;
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     }
-    write_atomic(path, |tmp| inimtrace::io::exr::write_rgb(tmp, img, depth, attrs))?;
+    use inimtrace::io::output::write_atomic;
+    write_atomic(path, |tmp| inimtrace::io::exr::write_rgb_with(tmp, img, depth, attrs, compression))?;
     write_atomic(&path.with_extension("png"), |tmp| inimtrace::io::png::write_preview(tmp, img))?;
     Ok(())
+}
+
+/// The error and its causes on one line, leaving out a cause its message already ends with
+/// (an I/O error is both the message's tail and its source).
+fn error_line(e: &anyhow::Error) -> String {
+    let mut line = String::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        if !line.ends_with(&text) {
+            if !line.is_empty() {
+                line.push_str(": ");
+            }
+            line.push_str(&text);
+        }
+    }
+    line
 }
 
 fn main() {
@@ -361,7 +435,7 @@ fn main() {
         {
             std::process::exit(141);
         }
-        eprintln!("error: {e:#}");
+        eprintln!("error: {}", error_line(&e));
         std::process::exit(1);
     }
 }
@@ -380,6 +454,8 @@ fn run() -> Result<()> {
     let quiet = cli.quiet;
     let set = cli.set;
     let start = Instant::now();
+    // `assess` and `bench` print their own total with --timings.
+    let mut printed_total = false;
     match cli.command {
         Command::Assess { experiment, out, scene, backend } => {
             let backend = backend.choice()?;
@@ -410,9 +486,11 @@ fn run() -> Result<()> {
             if !quiet {
                 eprintln!("{}", exp.display.summary());
             }
-            let report = experiment::assess(&exp, &out, RunOptions { quiet, backend })?;
+            let options = RunOptions { quiet, backend, exr_compression: cli.exr_compression };
+            let report = experiment::assess(&exp, &out, options)?;
             out!("{}", experiment::table_markdown(&report, &exp));
             if cli.timings {
+                printed_total = true;
                 for s in &report.stages {
                     let what = [s.method.as_deref(), s.eye_case.as_deref()]
                         .into_iter()
@@ -430,17 +508,13 @@ fn run() -> Result<()> {
                 eprintln!("wrote {}", out.display());
             }
         }
-        Command::RenderDisplay { method, setup, samples_per_pixel, reference_plane, out, backend } => {
+        Command::RenderDisplay { method, setup, samples_per_pixel, reference_plane, eye_position, out, backend } => {
             let backend = backend.choice()?;
             let (scene, display) = load_setup(&setup, &set)?;
             announce(&scene, backend, quiet);
-            let method: Method = method.parse().map_err(anyhow::Error::msg)?;
             inimtrace::optics::limits::REFERENCE_PLANE_Z.check("command line", "--reference-plane", reference_plane)?;
-            let settings = DisplayRenderSettings {
-                samples_per_pixel,
-                reference_plane_z: reference_plane,
-                eye_position: DVec3::ZERO,
-            };
+            let settings =
+                DisplayRenderSettings { samples_per_pixel, reference_plane_z: reference_plane, eye_position };
             let (img, depth, name) = with_field(&scene, backend, |fields| {
                 let p =
                     Progress::new(display.lcd.rows() as u64, &format!("display image {}", method.short_name()), quiet);
@@ -448,36 +522,26 @@ fn run() -> Result<()> {
                 p.finish();
                 Ok((img, depth, fields.name))
             })?;
-            write_image(
-                &out,
-                &img,
-                depth.as_deref(),
-                &[
-                    ("inimtrace:kind", "display image".into()),
-                    ("inimtrace:method", method.to_string()),
-                    ("inimtrace:display", display.summary()),
-                    ("inimtrace:backend", name.into()),
-                    ("inimtrace:Z", experiment::Z_CHANNEL_NOTE.into()),
-                ],
-            )?;
+            let mut attrs = metadata::common("display image", None);
+            attrs.extend(metadata::display_image(method, &display, &settings, name, depth.is_some()));
+            write_image(&out, &img, depth.as_deref(), &attrs, cli.exr_compression)?;
         }
         Command::Simulate { display_image, setup, eye, out } => {
             let (_, display) = load_setup(&setup, &set)?;
             let (eye, retina) = eye.eye()?;
             let img = inimtrace::io::exr::read_rgb(&display_image)?;
+            // The method, when the display image says which.
+            let method = inimtrace::io::exr::read_attributes(&display_image)?
+                .into_iter()
+                .find(|(k, _)| k == "inimtrace:method")
+                .and_then(|(_, v)| v.parse::<Method>().ok());
             let p = Progress::new(retina.resolution as u64, "simulate", quiet);
             let sim = simulate(&display, &eye, &retina, &[&img], &p)
                 .with_context(|| format!("simulating {}", display_image.display()))?;
             p.finish();
-            write_image(
-                &out,
-                &sim[0],
-                None,
-                &[
-                    ("inimtrace:kind", "simulated retinal image".into()),
-                    ("inimtrace:source", display_image.display().to_string()),
-                ],
-            )?;
+            let source = display_image.display().to_string();
+            let attrs = metadata::perceived(None, method, None, &eye, &retina, &display, Some(&source));
+            write_image(&out, &sim[0], None, &attrs, cli.exr_compression)?;
         }
         Command::GroundTruth { setup, eye, out, backend } => {
             let backend = backend.choice()?;
@@ -490,24 +554,35 @@ fn run() -> Result<()> {
                 p.finish();
                 Ok((img, fields.name))
             })?;
-            write_image(
-                &out,
-                &img,
-                None,
-                &[("inimtrace:kind", "ground truth retinal image".into()), ("inimtrace:backend", name.into())],
-            )?;
+            let attrs = metadata::ground_truth(None, None, &eye, &retina, name);
+            write_image(&out, &img, None, &attrs, cli.exr_compression)?;
         }
-        Command::Compare { a, b, ssim } => {
+        Command::Compare { a, b, ssim: constants, json } => {
             if !set.is_empty() {
                 bail!("--set does not apply to compare (it reads no experiment, scene or display)");
             }
-            let constants: SsimConstants = ssim.parse()?;
             let ia = inimtrace::io::exr::read_rgb(&a)?;
             let ib = inimtrace::io::exr::read_rgb(&b)?;
             let p =
                 metrics::psnr(&ia, &ib).with_context(|| format!("comparing {} and {}", a.display(), b.display()))?;
             let s = metrics::ssim(&ia, &ib, constants)
                 .with_context(|| format!("comparing {} and {}", a.display(), b.display()))?;
+            if json {
+                let channels = |v: [f64; 3], m: f64, f: &dyn Fn(f64) -> serde_json::Value| serde_json::json!({"R": f(v[0]), "G": f(v[1]), "B": f(v[2]), "mean": f(m)});
+                let db = |x: f64| serde_json::json!(metrics::finite_db(x));
+                let out = serde_json::json!({
+                    "a": a.display().to_string(),
+                    "b": b.display().to_string(),
+                    "width": ia.width,
+                    "height": ia.height,
+                    "psnr_db": channels(p.channels, p.mean, &db),
+                    "ssim": channels(s.channels, s.mean, &|x| serde_json::json!(x)),
+                    "ssim_constants": constants.name(),
+                    "tool": inimtrace::version::TOOL,
+                });
+                outln!("{}", serde_json::to_string_pretty(&out)?);
+                return Ok(());
+            }
             outln!(
                 "PSNR  {} dB  (R {}, G {}, B {})",
                 metrics::format_db(p.mean, 3),
@@ -538,6 +613,7 @@ fn run() -> Result<()> {
             let report = inimtrace::bench::run(&opts, &scene, &label)?;
             out!("{}", inimtrace::bench::console_table(&report));
             if cli.timings {
+                printed_total = true;
                 eprintln!("{:>8.3} s  bench ({} run)", report.total_seconds, report.mode);
             }
             if !quiet {
@@ -578,6 +654,7 @@ fn run() -> Result<()> {
                 quiet,
                 points,
                 images,
+                exr_compression: cli.exr_compression,
                 collect,
                 slurm,
                 wait,
@@ -586,28 +663,46 @@ fn run() -> Result<()> {
             let text = inimtrace::sweep::execute(&cmd, &mut |m| eprintln!("{m}"))?;
             out!("{text}");
         }
-        Command::Info { display, print } => {
+        Command::Info { display, scene, pupil, json, print } => {
             if let Some(what) = print {
-                let text = match what.as_str() {
-                    "paper-experiment" => ExperimentSpec::paper_converged().to_toml(),
-                    "paper-grid-experiment" => ExperimentSpec::paper().to_toml(),
-                    "framework-2020-experiment" => ExperimentSpec::framework_2020().to_toml(),
-                    "paper-scene" => toml::to_string_pretty(&SceneSpec::paper())?,
-                    "paper-display" => toml::to_string_pretty(&DisplaySpec::from_display(&Display::paper()))?,
-                    other => bail!("unknown --print `{other}`: paper-experiment, paper-grid-experiment, framework-2020-experiment, paper-scene or paper-display"),
+                let text = match what {
+                    PrintTarget::PaperExperiment => ExperimentSpec::paper_converged().to_toml(),
+                    PrintTarget::PaperGridExperiment => ExperimentSpec::paper().to_toml(),
+                    PrintTarget::Framework2020Experiment => ExperimentSpec::framework_2020().to_toml(),
+                    PrintTarget::PaperScene => toml::to_string_pretty(&SceneSpec::paper())?,
+                    PrintTarget::PaperDisplay => toml::to_string_pretty(&DisplaySpec::from_display(&Display::paper()))?,
                 };
                 out!("{text}");
                 return Ok(());
+            }
+            if let Some(p) = scene {
+                let scene = match set.is_empty() {
+                    true => load_scene(&p.to_string_lossy(), Path::new(""))?,
+                    false => scene_with(Some(&p), &set)?,
+                };
+                let summary = inimtrace::info::scene_summary(&scene);
+                match json {
+                    true => outln!("{}", serde_json::to_string_pretty(&summary)?),
+                    false => out!("{}", inimtrace::info::scene_summary_text(&summary)),
+                }
+                return Ok(());
+            }
+            if !(pupil.is_finite() && pupil > 0.0) {
+                bail!("--pupil must be a positive number of mm, got {pupil}");
             }
             let d = match display {
                 _ if !set.is_empty() => display_with(display.as_deref(), &set)?,
                 Some(p) => load_display(&p.to_string_lossy(), Path::new(""))?,
                 None => Display::paper(),
             };
-            outln!("{}", d.summary());
+            let design = inimtrace::info::display_design(&d, pupil);
+            match json {
+                true => outln!("{}", serde_json::to_string_pretty(&design)?),
+                false => out!("{}", inimtrace::info::display_design_text(&design, &d.summary())),
+            }
         }
     }
-    if cli.timings {
+    if cli.timings && !printed_total {
         eprintln!("total {:.3} s", start.elapsed().as_secs_f64());
     }
     std::io::Write::flush(&mut std::io::stdout())?;

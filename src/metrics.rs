@@ -139,18 +139,20 @@ pub fn finite_db(db: f64) -> Option<f64> {
 // ---------------------------------------------------------------------------------------------
 
 /// The SSIM stabilising constants `C1`, `C2`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum)]
 pub enum SsimConstants {
     /// Wang et al. 2004 with the dynamic range of our data, `L = 1`:
     /// `C1 = (0.01)² = 1e-4`, `C2 = (0.03)² = 9e-4`. Name `"wang2004"`.
     #[default]
     #[serde(rename = "wang2004")]
+    #[value(name = "wang2004")]
     Wang2004,
     /// The constants for 8-bit data, `C1 = (0.01·255)² = 6.5025`, `C2 = (0.03·255)² = 58.5225`,
     /// applied to `[0, 1]` data — what the paper's published framework did. These constants
     /// dwarf the image statistics and pin SSIM near 0.999 for almost any pair of images; use
     /// only to reproduce the paper's numbers. Name `"framework-8bit"`.
     #[serde(rename = "framework-8bit")]
+    #[value(name = "framework-8bit")]
     Framework8Bit,
 }
 

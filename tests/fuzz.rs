@@ -184,6 +184,26 @@ proptest! {
     }
 
     #[test]
+    fn fuzz_gltf(m in prop::collection::vec(mutation(), 1..4)) {
+        check(&root().join("tests/data/meshes/pyramid.gltf"), &m, mesh)?;
+    }
+
+    #[test]
+    fn fuzz_glb(m in prop::collection::vec(mutation(), 1..4)) {
+        check(&root().join("tests/data/meshes/pyramid.glb"), &m, mesh)?;
+    }
+
+    #[test]
+    fn fuzz_stl_ascii(m in prop::collection::vec(mutation(), 1..4)) {
+        check(&root().join("tests/data/meshes/pyramid_ascii.stl"), &m, mesh)?;
+    }
+
+    #[test]
+    fn fuzz_stl_binary(m in prop::collection::vec(mutation(), 1..4)) {
+        check(&root().join("tests/data/meshes/pyramid_binary.stl"), &m, mesh)?;
+    }
+
+    #[test]
     fn fuzz_exr(m in prop::collection::vec(mutation(), 1..3)) {
         let dir = tempfile::tempdir().unwrap();
         let seed = dir.path().join("seed.exr");
@@ -203,4 +223,31 @@ fn regression_mistyped_builtin_names_the_experiment_field() {
         .unwrap();
     let e = inimtrace::experiment::Experiment::load(&p).unwrap_err().to_string();
     assert!(e.contains("exp.toml") && e.contains("`scene`") && e.contains("cuiltin:paper"), "{e}");
+}
+
+/// Regression (found by `fuzz_experiment_toml`): an eye beyond the lenslets made PupilCenter's
+/// check fail with a message that named neither the experiment file nor the field.
+#[test]
+fn regression_pupil_center_check_names_the_experiment_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("exp.toml");
+    std::fs::write(
+        &p,
+        "name = \"x\"\nmethods = [\"PC\"]\n[eye]\nposition = [0.0, 0.0, 1e19]\n[[eye_cases]]\nname = \"A\"\npinhole = true\n",
+    )
+    .unwrap();
+    let e = inimtrace::experiment::Experiment::load(&p).unwrap_err().to_string();
+    assert!(e.contains("exp.toml") && e.contains("eye.position"), "{e}");
+}
+
+/// Regression (found by `fuzz_glb`): a POSITION accessor index past the end made gltf-json's
+/// validation index out of bounds and panic; it is now an error naming the attribute.
+#[test]
+fn regression_gltf_position_accessor_out_of_range() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(root().join("tests/data/meshes/pyramid.gltf")).unwrap();
+    let p = dir.path().join("bad.gltf");
+    std::fs::write(&p, text.replacen("\"POSITION\": 0", "\"POSITION\": 9", 1)).unwrap();
+    let e = inimtrace::io::load_mesh(&p).unwrap_err().to_string();
+    assert!(e.contains("bad.gltf") && e.contains("attributes.POSITION") && e.contains("accessor 9"), "{e}");
 }

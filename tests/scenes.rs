@@ -212,7 +212,7 @@ fn batched_tracing_gives_the_same_image_as_one_ray_at_a_time() {
     }
     let dir = tempfile::tempdir().unwrap();
     let scene = load(
-        "name = \"s\"\n[[objects]]\ntype = \"sphere-grid\"\ncenter = [0, 0, 400]\ncount = [5, 4]\nspacing = 30\nradius = 14\nsegments = 16\nmaterial = { albedo = [1, 0.5, 0.2] }\n",
+        "name = \"s\"\n[light]\ntype = \"none\"\n[[objects]]\ntype = \"sphere-grid\"\ncenter = [0, 0, 400]\ncount = [5, 4]\nspacing = 30\nradius = 14\nsegments = 16\nmaterial = { albedo = [1, 0.5, 0.2] }\n",
         dir.path(),
     )
     .unwrap();
@@ -329,7 +329,9 @@ fn mesh_objects_load_with_transform_and_materials() {
     let inimtrace::scene::Shape::Mesh(m) = &scene.objects[0].shape else { panic!() };
     assert_eq!(m.triangles.len(), raw.triangles.len());
     assert_eq!(m.positions[0], raw.positions[0] * 2.0 + DVec3::new(0.0, 0.0, 100.0));
-    assert!(scene.light.is_none() && scene.warnings.is_empty());
+    // A mesh scene without `[light]` is lit from the eye.
+    assert_eq!(scene.light, Some(inimtrace::io::scene_file::DEFAULT_LIGHT));
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
     // Relative paths resolve against the scene file's directory.
     std::fs::copy(root().join("tests/data/meshes/pyramid.obj"), dir.path().join("p.obj")).unwrap();
     let s2 = load(

@@ -129,15 +129,10 @@ fn load_average() -> Option<f64> {
     std::fs::read_to_string("/proc/loadavg").ok()?.split_whitespace().next()?.parse().ok()
 }
 
+/// The revision the binary was built from (fixed at build time, so it is known wherever the
+/// bench runs).
 fn git_revision() -> String {
-    std::process::Command::new("git")
-        .args(["describe", "--always", "--dirty", "--abbrev=7", "--exclude=*"])
-        .output()
-        .ok()
-        .filter(|o| o.status.success())
-        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
-        .filter(|s| !s.is_empty())
-        .unwrap_or_else(|| "unknown".into())
+    crate::version::GIT_REVISION.to_string()
 }
 
 /// Runs the benchmark on `scene` (named `scene_label` in the outputs) and the paper's display,

@@ -7,11 +7,13 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
+use super::metadata;
 use super::report::write_reports;
 use super::stages::{pack_display_images, render_display_images, stage_time, table1};
-use super::{AssessReport, Experiment, EyeCase};
+use super::{AssessReport, Experiment};
 use crate::accel::analytic::AnalyticRects;
 use crate::error::{Error, Result};
+use crate::io::exr::{Attributes, ExrCompression};
 use crate::optics::Aperture;
 use crate::raster::RgbImage;
 use crate::render::backend::resolve;
@@ -27,6 +29,8 @@ pub struct RunOptions {
     pub quiet: bool,
     /// Scene intersection backend (`auto`: analytic for rectangle-only scenes, else Embree).
     pub backend: BackendChoice,
+    /// Compression of the EXR files (default lossless ZIP).
+    pub exr_compression: ExrCompression,
 }
 
 /// Runs an experiment and writes every output into `out`.
@@ -61,7 +65,7 @@ struct Job<'a> {
     stem: String,
     image: &'a RgbImage,
     depth: Option<&'a [f32]>,
-    attributes: Vec<(&'static str, String)>,
+    attributes: Attributes,
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -87,54 +91,26 @@ fn assess_with<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
     // 4. Images: EXR + PNG preview each, written in parallel.
     let t = Instant::now();
     let mut jobs = Vec::new();
-    let common = |kind: &str| -> Vec<(&'static str, String)> {
-        vec![
-            ("inimtrace:kind", kind.to_string()),
-            ("inimtrace:experiment", exp.name.clone()),
-            ("inimtrace:units", "linear radiance (albedo units); lengths in mm".into()),
-            ("inimtrace:version", env!("CARGO_PKG_VERSION").into()),
-        ]
-    };
-    let eye_attrs = |case: &EyeCase| -> Vec<(&'static str, String)> {
-        let mut v = vec![("inimtrace:eye_case", case.name.clone())];
-        match case.eye.aperture {
-            Aperture::Pinhole => v.push(("inimtrace:eye", "pinhole".into())),
-            Aperture::ThinLens { pupil_diameter, focus } => {
-                v.push(("inimtrace:eye", "thin lens".into()));
-                v.push(("inimtrace:focus_mm", format!("{}", focus.distance_mm())));
-                v.push(("inimtrace:focus_diopters", format!("{}", focus.diopters())));
-                v.push(("inimtrace:pupil_diameter_mm", format!("{pupil_diameter}")));
-            }
-        }
-        match scores.iter().find(|s| s.eye_case == case.name).and_then(|s| s.samples_per_pixel) {
-            Some(spp) => v.extend(crate::measure::run::exr_attributes(exp, spp)),
-            None => {
-                v.push(("inimtrace:pupil_samples", case.eye.pupil_samples().len().to_string()));
-                v.push(("inimtrace:retina_samples_per_pixel", (exp.retina.samples_per_pixel.pow(2)).to_string()));
-            }
-        }
-        v.push(("inimtrace:retina_half_tangent", exp.retina.half_tangent.to_string()));
-        v
-    };
+    let name = Some(exp.name.as_str());
     for ((m, img), depth) in exp.methods.iter().zip(&displays).zip(&depths) {
-        let mut attributes = common("display image");
-        attributes.push(("inimtrace:method", m.to_string()));
-        attributes.push(("inimtrace:display", display.summary()));
-        attributes.push(("inimtrace:samples_per_pixel", exp.render.samples_per_pixel.pow(2).to_string()));
-        attributes.push(("inimtrace:backend", backend_name.to_string()));
-        if depth.is_some() {
-            attributes.push(("inimtrace:Z", Z_CHANNEL_NOTE.into()));
-        }
+        let mut attributes = metadata::common("display image", name);
+        attributes.extend(metadata::display_image(*m, display, &exp.render, backend_name, depth.is_some()));
         jobs.push(Job { stem: format!("display_{}", m.short_name()), image: img, depth: depth.as_deref(), attributes });
     }
     for (c, case) in exp.cases.iter().enumerate() {
-        let mut attributes = common("ground truth retinal image");
-        attributes.extend(eye_attrs(case));
+        // Samples per retina pixel when the eye case was measured converged.
+        let converged = scores.iter().find(|s| s.eye_case == case.name).and_then(|s| s.samples_per_pixel);
+        let measured = |mut a: crate::io::exr::Attributes| {
+            if let Some(spp) = converged {
+                crate::measure::run::set_exr_attributes(&mut a, exp, spp);
+            }
+            a
+        };
+        let attributes = measured(metadata::ground_truth(name, Some(&case.name), &case.eye, &exp.retina, backend_name));
         jobs.push(Job { stem: format!("gt_{}", case.name), image: &gts[c], depth: None, attributes });
         for (k, m) in exp.methods.iter().enumerate() {
-            let mut attributes = common("simulated retinal image");
-            attributes.push(("inimtrace:method", m.to_string()));
-            attributes.extend(eye_attrs(case));
+            let attributes =
+                measured(metadata::perceived(name, Some(*m), Some(&case.name), &case.eye, &exp.retina, display, None));
             jobs.push(Job {
                 stem: format!("sim_{}_{}", m.short_name(), case.name),
                 image: &sims[c][k],
@@ -145,34 +121,28 @@ fn assess_with<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
     }
     // Biggest first so the two cores finish together.
     jobs.sort_by_key(|j| std::cmp::Reverse(j.image.pixels.len()));
-    let figure_rows: Vec<(&str, Vec<&RgbImage>)> = exp
-        .cases
-        .iter()
-        .enumerate()
-        .map(|(c, case)| (case.name.as_str(), std::iter::once(&gts[c]).chain(sims[c].iter()).collect()))
-        .collect();
-    let mut labels = vec!["GT"];
-    labels.extend(exp.methods.iter().map(|m| m.short_name()));
+    let figure = figure(exp, &gts, &sims, &scores);
     let (image_result, figure_result) = rayon::join(
         || {
             jobs.par_iter().try_for_each(|j| -> Result<()> {
-                let attrs: Vec<(&str, String)> = j.attributes.iter().map(|(k, v)| (*k, v.clone())).collect();
-                crate::io::exr::write_rgb(&out.join(format!("{}.exr", j.stem)), j.image, j.depth, &attrs)?;
+                let path = out.join(format!("{}.exr", j.stem));
+                crate::io::exr::write_rgb_with(&path, j.image, j.depth, &j.attributes, opts.exr_compression)?;
                 crate::io::png::write_preview(&out.join(format!("{}.png", j.stem)), j.image)
             })
         },
-        || crate::io::figure::write_montage(&out.join("figure.png"), &figure_rows, &labels),
+        || crate::io::figure::write_figure(&out.join("figure.png"), &figure),
     );
     image_result?;
     figure_result?;
     stage_time(&mut stages, "write_images", None, None, t);
 
     let report = AssessReport {
+        tool: crate::version::TOOL,
         experiment: exp.name.clone(),
         ssim_constants: exp.ssim.name().into(),
         backend: backend_name.into(),
         threads: rayon::current_num_threads(),
-        display: display.summary(),
+        display: display.into(),
         central_depth_plane_mm: display.central_depth_plane(),
         scores,
         stages,
@@ -181,4 +151,47 @@ fn assess_with<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
     };
     write_reports(&report, exp, out)?;
     Ok(report)
+}
+
+/// Fig. 3 as `assess` draws it: a title, one row per eye case labelled with its focus, and each
+/// perceived image captioned with its PSNR and SSIM against the ground truth.
+fn figure<'a>(
+    exp: &Experiment,
+    gts: &'a [RgbImage],
+    sims: &'a [Vec<RgbImage>],
+    scores: &[super::Score],
+) -> crate::io::figure::Figure<'a> {
+    let mut column_labels = vec!["GT".to_string()];
+    column_labels.extend(exp.methods.iter().map(|m| m.short_name().to_string()));
+    let rows = exp
+        .cases
+        .iter()
+        .enumerate()
+        .map(|(c, case)| {
+            let label = match case.eye.aperture {
+                Aperture::Pinhole => format!("{}: pinhole", case.name),
+                Aperture::ThinLens { focus, .. } => {
+                    format!("{}: focus {:.0} mm ({:.2} D)", case.name, focus.distance_mm(), focus.diopters())
+                }
+            };
+            let mut cells = vec![(&gts[c], None)];
+            for (k, m) in exp.methods.iter().enumerate() {
+                let caption = scores
+                    .iter()
+                    .find(|s| s.method == m.short_name() && s.eye_case == case.name)
+                    .map(|s| format!("PSNR {} dB, SSIM {:.3}", crate::metrics::format_db(s.psnr.mean, 2), s.ssim.mean));
+                cells.push((&sims[c][k], caption));
+            }
+            (label, cells)
+        })
+        .collect();
+    crate::io::figure::Figure {
+        title: Some(format!(
+            "{}: perceived retinal images; PSNR and SSIM ({}) against the ground truth (GT)",
+            exp.name,
+            exp.ssim.name()
+        )),
+        column_labels,
+        rows,
+    }
 }

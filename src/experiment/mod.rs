@@ -2,10 +2,12 @@
 //! experiment file's spec types and their resolution into an [`Experiment`]; the `assess`
 //! pipeline that runs one lives beside it, one concept per file: `stages.rs` (render the display
 //! image of every method, simulate what each eye case perceives, render the ground truth, score
-//! with PSNR and SSIM), `assess.rs` (the run and its image outputs) and `report.rs` (Table 1 and
-//! the CSV/JSON reports). Everything public is re-exported here.
+//! with PSNR and SSIM), `assess.rs` (the run and its image outputs), `metadata.rs` (the typed EXR
+//! header of every image) and `report.rs` (Table 1 and the CSV/JSON reports). Everything public
+//! is re-exported here.
 
 mod assess;
+pub mod metadata;
 mod report;
 mod stages;
 
@@ -329,7 +331,12 @@ impl Experiment {
         if methods.contains(&Method::PupilCenter) {
             crate::optics::transfer::check_pupil_center(&display, render.eye_position).map_err(|e| {
                 let i = methods.iter().position(|m| *m == Method::PupilCenter).unwrap_or(0);
-                Error::invalid(source, format!("methods[{i}]"), format!("{e} (display `{}`)", spec.display))
+                let eye = if dr.eye_position.is_some() { "display_render.eye_position" } else { "eye.position" };
+                Error::invalid(
+                    source,
+                    format!("methods[{i}] (PupilCenter) at {eye}"),
+                    format!("{e} (display `{}`)", spec.display),
+                )
             })?;
         }
         let measurement = spec.measurement.clone().unwrap_or_else(MeasurementSpec::grid);

@@ -7,9 +7,11 @@ use serde::Serialize;
 
 use super::{Experiment, ExperimentSpec};
 use crate::error::{Error, Result};
+use crate::info::DisplayParameters;
 use crate::measure::spec::EstimatorKind;
 use crate::measure::stats::Estimate;
 use crate::metrics::SsimConstants;
+use crate::version::Tool;
 
 /// One score: a method under an eye case. The converged estimator adds the 95% half-widths
 /// (`ci95`, `channels_ci95` in `psnr` and `ssim`), its samples and whether the targets were met.
@@ -43,11 +45,14 @@ pub struct StageTime {
 /// What `assess` produced.
 #[derive(Clone, Debug, Serialize)]
 pub struct AssessReport {
+    /// The inimtrace that wrote the report: version and git revision.
+    pub tool: Tool,
     pub experiment: String,
     pub ssim_constants: String,
     pub backend: String,
     pub threads: usize,
-    pub display: String,
+    /// The display's parameters as fields (lengths in mm).
+    pub display: DisplayParameters,
     pub central_depth_plane_mm: Option<f64>,
     pub scores: Vec<Score>,
     pub stages: Vec<StageTime>,

@@ -2,12 +2,15 @@
 //! the simulated retinal images that the paper compares (its Figures 3–4 and Table 1 are made
 //! from them). Written and read with the `exr` crate.
 //!
-//! **Writing** ([`write_rgb`]): one layer with `f32` channels `R`, `G`, `B` and, when a depth
-//! plane is given, `Z` (the hit distance per pixel); scan-line blocks in increasing-Y line
-//! order, so row 0 of the [`RgbImage`] is the top row of the file (OpenEXR's y axis points
-//! down). Compression is [`COMPRESSION`]. Custom text attributes (for example
-//! `"inimtrace:method" = "LC"`) go into the header; names and values must be Latin-1 and names
-//! may not be OpenEXR's reserved attribute names. Sample values are written as given.
+//! **Writing** ([`write_rgb_with`], [`write_rgb`]): one layer with `f32` channels `R`, `G`, `B`
+//! and, when a depth plane is given, `Z` (the hit distance per pixel); scan-line blocks in
+//! increasing-Y line order, so row 0 of the [`RgbImage`] is the top row of the file (OpenEXR's y
+//! axis points down). Compression is lossless ZIP by default ([`ExrCompression`]). Custom
+//! attributes (for example `"inimtrace:method" = "LC"`, `"inimtrace:focus_mm" = 300.0`) go into
+//! the header typed ([`AttrValue`]: `string`, `double`, `float`, `int`); names and text must be
+//! Latin-1 and names may not be OpenEXR's reserved attribute names. Every file also carries
+//! `inimtrace:version`, `inimtrace:git_revision` and the standard `software` attribute
+//! ([`crate::version`]). Sample values are written as given.
 //!
 //! **Reading** ([`read_rgb`], [`read_rgb_depth`]): the first layer that has `R`, `G` and `B`
 //! channels; each may be stored as `f16`, `f32` or `u32` and is converted to `f32`. `Z` is
@@ -24,21 +27,67 @@ use std::path::Path;
 
 use exr::image::{AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer};
 use exr::math::Vec2;
-use exr::meta::attribute::{AttributeValue, Text};
+use exr::meta::attribute::Text;
 use exr::meta::header::{standard_names, LayerAttributes};
 use exr::prelude::{read, Blocks, Compression, LineOrder, ReadChannels, ReadLayers, SmallVec, WritableImage};
 
+pub use super::exr_attributes::{AttrValue, Attributes};
 use crate::error::{Error, Result};
 use crate::raster::RgbImage;
 
-/// Compression of written files: uncompressed scan lines. Measured on a 2160×2160 RGB `f32`
-/// image with fine noise (release build, 2 busy cores): uncompressed 56 MB in 0.11–0.2 s;
-/// RLE saved nothing at 0.4–1.2 s; ZIP1/ZIP16 saved 2–6 % at 2–3.5 s; PIZ saved 22 % at
-/// ~2.3 s. Lossless codecs gain little on noisy `f32` radiance, so speed wins.
-pub const COMPRESSION: Compression = Compression::Uncompressed;
+/// Compression of written files (`--exr-compression`). Every choice but `pxr24` is lossless.
+///
+/// Rendered display images are mostly flat regions and compress well: the paper's 2160 x 2160
+/// display image with its `Z` channel is 74.7 MB uncompressed and 6.7 MB with ZIP; a 512 x 512
+/// retinal image 3.15 MB and 0.35 MB. Fine noise compresses little (2-6 % with ZIP, 22 % with
+/// PIZ) at 2-3 s per 2160 x 2160 image; `none` writes fastest.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ExrCompression {
+    /// Uncompressed scan lines (largest, fastest).
+    None,
+    /// Run-length encoding (lossless; flat areas only).
+    Rle,
+    /// ZIP (deflate) per scan line (lossless).
+    Zips,
+    /// ZIP (deflate) per 16 scan lines (lossless; the default).
+    #[default]
+    Zip,
+    /// Wavelet + Huffman (lossless; best on noisy images).
+    Piz,
+    /// Rounds f32 samples to 24 bits, then ZIP (lossy for f32).
+    Pxr24,
+}
 
-fn encoding() -> Encoding {
-    Encoding { compression: COMPRESSION, blocks: Blocks::ScanLines, line_order: LineOrder::Increasing }
+impl ExrCompression {
+    /// The name used on the command line and in headers.
+    pub fn name(self) -> &'static str {
+        match self {
+            ExrCompression::None => "none",
+            ExrCompression::Rle => "rle",
+            ExrCompression::Zips => "zips",
+            ExrCompression::Zip => "zip",
+            ExrCompression::Piz => "piz",
+            ExrCompression::Pxr24 => "pxr24",
+        }
+    }
+
+    fn to_exr(self) -> Compression {
+        match self {
+            ExrCompression::None => Compression::Uncompressed,
+            ExrCompression::Rle => Compression::RLE,
+            ExrCompression::Zips => Compression::ZIP1,
+            ExrCompression::Zip => Compression::ZIP16,
+            ExrCompression::Piz => Compression::PIZ,
+            ExrCompression::Pxr24 => Compression::PXR24,
+        }
+    }
+}
+
+impl std::fmt::Display for ExrCompression {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
 }
 
 fn exr_error(path: &Path, err: exr::error::Error) -> Error {
@@ -61,13 +110,27 @@ fn latin1_text(path: &Path, what: &str, s: &str) -> Result<Text> {
     })
 }
 
+/// Writes `img` (linear RGB, row 0 at top) as an `f32` OpenEXR file with the default
+/// compression (ZIP) and the given text attributes: [`write_rgb_with`] for typed attributes and
+/// another compression.
+pub fn write_rgb(path: &Path, img: &RgbImage, depth: Option<&[f32]>, attributes: &[(&str, String)]) -> Result<()> {
+    let typed = Attributes(attributes.iter().map(|(k, v)| (k.to_string(), AttrValue::Text(v.clone()))).collect());
+    write_rgb_with(path, img, depth, &typed, ExrCompression::default())
+}
+
 /// Writes `img` (linear RGB, row 0 at top) as an `f32` OpenEXR file, with an `f32` `Z` channel
-/// when `depth` is given (row-major, one value per pixel) and the given text attributes in the
-/// header. See the module comment for the layout.
+/// when `depth` is given (row-major, one value per pixel), the given typed attributes plus the
+/// version attributes in the header, and `compression`. See the module comment for the layout.
 ///
 /// Errors: image or depth size mismatch, empty image, non-Latin-1 or reserved attribute names,
 /// and file-system failures (naming `path`).
-pub fn write_rgb(path: &Path, img: &RgbImage, depth: Option<&[f32]>, attributes: &[(&str, String)]) -> Result<()> {
+pub fn write_rgb_with(
+    path: &Path,
+    img: &RgbImage,
+    depth: Option<&[f32]>,
+    attributes: &Attributes,
+    compression: ExrCompression,
+) -> Result<()> {
     let source = path.display().to_string();
     let n = img.width * img.height;
     if n == 0 {
@@ -103,8 +166,12 @@ pub fn write_rgb(path: &Path, img: &RgbImage, depth: Option<&[f32]>, attributes:
     }
 
     let mut layer_attributes = LayerAttributes::default();
-    let mut other: HashMap<Text, AttributeValue> = HashMap::new();
-    for (name, value) in attributes {
+    let mut other = HashMap::new();
+    let version = [
+        ("inimtrace:version".to_string(), AttrValue::from(crate::version::VERSION)),
+        ("inimtrace:git_revision".to_string(), AttrValue::from(crate::version::GIT_REVISION)),
+    ];
+    for (name, value) in version.iter().chain(&attributes.0) {
         if name.is_empty() || standard_names::ALL.contains(&name.as_bytes()) {
             return Err(Error::invalid(
                 source,
@@ -113,10 +180,17 @@ pub fn write_rgb(path: &Path, img: &RgbImage, depth: Option<&[f32]>, attributes:
             ));
         }
         let key = latin1_text(path, "name", name)?;
-        let val = latin1_text(path, &format!("value of `{name}`"), value)?;
-        other.insert(key, AttributeValue::Text(val));
+        let val = value.to_exr().ok_or_else(|| {
+            Error::invalid(
+                path.display().to_string(),
+                "attributes",
+                format!("value of `{name}` `{value}` has characters outside Latin-1, which OpenEXR text cannot hold"),
+            )
+        })?;
+        other.insert(key, val);
     }
     layer_attributes.other = other;
+    layer_attributes.software_name = Text::new_or_none(crate::version::software());
 
     let plane = |c: usize| FlatSamples::F32(img.pixels.iter().map(|p| p[c]).collect());
     let mut channels =
@@ -124,10 +198,12 @@ pub fn write_rgb(path: &Path, img: &RgbImage, depth: Option<&[f32]>, attributes:
     if let Some(z) = depth {
         channels.push(AnyChannel::new("Z", FlatSamples::F32(z.to_vec())));
     }
+    let encoding =
+        Encoding { compression: compression.to_exr(), blocks: Blocks::ScanLines, line_order: LineOrder::Increasing };
     let layer = Layer::new(
         Vec2(img.width, img.height),
         layer_attributes,
-        encoding(),
+        encoding,
         AnyChannels::sort(SmallVec::from_vec(channels)),
     );
     Image::from_layer(layer).write().to_file(path).map_err(|e| exr_error(path, e))
@@ -281,10 +357,17 @@ pub fn read_rgb_depth(path: &Path) -> Result<(RgbImage, Option<Vec<f32>>)> {
     Ok((img, depth))
 }
 
-/// The text attributes in the headers of an OpenEXR file, as `(name, value)` pairs sorted by
-/// name: the custom ones written by [`write_rgb`] and the standard text attributes `owner`,
-/// `comments`, `capDate` and `software` when present. Errors name the file.
+/// The attributes in the headers of an OpenEXR file as text, `(name, value)` pairs sorted by
+/// name: the custom ones written by [`write_rgb_with`] (numbers printed as Rust prints them,
+/// `300`, `2.5925`) and the standard text attributes `owner`, `comments`, `capDate` and
+/// `software` when present. Errors name the file.
 pub fn read_attributes(path: &Path) -> Result<Vec<(String, String)>> {
+    Ok(read_typed_attributes(path)?.into_iter().map(|(k, v)| (k, v.to_string())).collect())
+}
+
+/// Like [`read_attributes`], keeping each value's type (`string`, `double`, `float`, `int`;
+/// other OpenEXR attribute types are left out).
+pub fn read_typed_attributes(path: &Path) -> Result<Vec<(String, AttrValue)>> {
     check_readable_file(path)?;
     let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| exr_error(path, e))?;
     let mut out = Vec::new();
@@ -297,18 +380,36 @@ pub fn read_attributes(path: &Path) -> Result<Vec<(String, String)>> {
             ("software", &own.software_name),
         ] {
             if let Some(v) = value {
-                out.push((name.to_string(), v.to_string()));
+                out.push((name.to_string(), AttrValue::Text(v.to_string())));
             }
         }
         for map in [&own.other, &header.shared_attributes.other] {
             for (name, value) in map {
-                if let AttributeValue::Text(t) = value {
-                    out.push((name.to_string(), t.to_string()));
+                if let Some(v) = AttrValue::from_exr(value) {
+                    out.push((name.to_string(), v));
                 }
             }
         }
     }
-    out.sort();
+    out.sort_by(|a, b| a.0.cmp(&b.0));
     out.dedup();
     Ok(out)
+}
+
+/// The compression of the first header of an OpenEXR file (`None` for one this crate does not
+/// write, e.g. DWAA). Errors name the file.
+pub fn read_compression(path: &Path) -> Result<Option<ExrCompression>> {
+    check_readable_file(path)?;
+    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| exr_error(path, e))?;
+    let c = meta.headers.first().map(|h| h.compression);
+    Ok([
+        ExrCompression::None,
+        ExrCompression::Rle,
+        ExrCompression::Zips,
+        ExrCompression::Zip,
+        ExrCompression::Piz,
+        ExrCompression::Pxr24,
+    ]
+    .into_iter()
+    .find(|x| Some(x.to_exr()) == c))
 }

@@ -1,11 +1,13 @@
 //! Paper-style image grids: a PNG montage like the paper's Figure 3, with one row per eye case
 //! and one column per image (ground truth, LC, PC, LA), row labels on the left and column labels
-//! on top.
+//! on top; [`write_figure`] adds a title above and a caption under each cell (`assess` puts each
+//! panel's PSNR and SSIM there, and the eye case's focus in the row label).
 //!
 //! Layout (all sizes in pixels, see [`montage_size`] and [`cell_origin`]): a white canvas; a
 //! label strip of [`ROW_LABEL_WIDTH`] on the left and [`COLUMN_LABEL_HEIGHT`] on top; cells of
 //! [`CELL_SIZE`]² separated by white gaps of [`SEPARATOR`], and a [`SEPARATOR`] margin right and
-//! below. Every source image is scaled, in linear light, to fit its cell with its aspect ratio
+//! below. With a title, a strip of [`TITLE_HEIGHT`] comes first; with captions, each row of cells
+//! is followed by a caption strip of [`CAPTION_HEIGHT`] ([`Layout`]). Every source image is scaled, in linear light, to fit its cell with its aspect ratio
 //! kept (centred, black bars if not square) by area averaging (an exact box filter: downscaling
 //! averages the covered source pixels, integer upscaling replicates them), then sRGB-encoded
 //! like [`super::png::write_preview`].
@@ -32,21 +34,83 @@ pub const SEPARATOR: usize = 4;
 pub const ROW_LABEL_WIDTH: usize = 180;
 /// Height of the column-label strip on top.
 pub const COLUMN_LABEL_HEIGHT: usize = 40;
+/// Height of the title strip of [`write_figure`].
+pub const TITLE_HEIGHT: usize = 44;
+/// Height of the caption strip under each row of cells in [`write_figure`].
+pub const CAPTION_HEIGHT: usize = 24;
 
 const FONT: &str = "sans-serif";
 const COLUMN_FONT_SIZE: f64 = 24.0;
 const ROW_FONT_SIZE: f64 = 20.0;
+const TITLE_FONT_SIZE: f64 = 24.0;
+const CAPTION_FONT_SIZE: f64 = 16.0;
+
+/// Where things go: the strips above the cells and the height of one row of cells.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Layout {
+    /// Title strip height (0 without a title).
+    pub title: usize,
+    /// Caption strip height under each row (0 without captions).
+    pub caption: usize,
+}
+
+impl Layout {
+    /// The montage of [`write_montage`]: no title, no captions.
+    pub const PLAIN: Layout = Layout { title: 0, caption: 0 };
+
+    fn top(&self) -> usize {
+        self.title + COLUMN_LABEL_HEIGHT
+    }
+
+    fn row_pitch(&self) -> usize {
+        CELL_SIZE + self.caption + SEPARATOR
+    }
+
+    /// `(width, height)` with `n_rows` rows and `n_cols` columns.
+    pub fn size(&self, n_rows: usize, n_cols: usize) -> (usize, usize) {
+        (ROW_LABEL_WIDTH + n_cols * (CELL_SIZE + SEPARATOR), self.top() + n_rows * self.row_pitch())
+    }
+
+    /// `(x, y)` of the top-left pixel of cell (`row`, `col`); its caption starts at
+    /// `y + CELL_SIZE`.
+    pub fn cell_origin(&self, row: usize, col: usize) -> (usize, usize) {
+        (ROW_LABEL_WIDTH + col * (CELL_SIZE + SEPARATOR), self.top() + row * self.row_pitch())
+    }
+}
 
 /// `(width, height)` of a montage with `n_rows` rows and `n_cols` columns:
 /// `width = ROW_LABEL_WIDTH + n_cols * (CELL_SIZE + SEPARATOR)`,
 /// `height = COLUMN_LABEL_HEIGHT + n_rows * (CELL_SIZE + SEPARATOR)`.
 pub fn montage_size(n_rows: usize, n_cols: usize) -> (usize, usize) {
-    (ROW_LABEL_WIDTH + n_cols * (CELL_SIZE + SEPARATOR), COLUMN_LABEL_HEIGHT + n_rows * (CELL_SIZE + SEPARATOR))
+    Layout::PLAIN.size(n_rows, n_cols)
 }
 
-/// `(x, y)` of the top-left pixel of cell (`row`, `col`).
+/// `(x, y)` of the top-left pixel of cell (`row`, `col`) of a montage.
 pub fn cell_origin(row: usize, col: usize) -> (usize, usize) {
-    (ROW_LABEL_WIDTH + col * (CELL_SIZE + SEPARATOR), COLUMN_LABEL_HEIGHT + row * (CELL_SIZE + SEPARATOR))
+    Layout::PLAIN.cell_origin(row, col)
+}
+
+/// One row of a [`Figure`]: its label, and its images with their captions.
+pub type FigureRow<'a> = (String, Vec<(&'a RgbImage, Option<String>)>);
+
+/// A figure: a title, column labels, and rows of images with a label each and an optional
+/// caption per image.
+#[derive(Clone, Debug, Default)]
+pub struct Figure<'a> {
+    pub title: Option<String>,
+    pub column_labels: Vec<String>,
+    pub rows: Vec<FigureRow<'a>>,
+}
+
+impl Figure<'_> {
+    /// The layout this figure is drawn with.
+    pub fn layout(&self) -> Layout {
+        let captions = self.rows.iter().any(|(_, cells)| cells.iter().any(|(_, c)| c.is_some()));
+        Layout {
+            title: if self.title.is_some() { TITLE_HEIGHT } else { 0 },
+            caption: if captions { CAPTION_HEIGHT } else { 0 },
+        }
+    }
 }
 
 /// Box-filter weights mapping `src` samples onto `dst` samples along one axis: for each output
@@ -125,7 +189,20 @@ fn wrap(text: &str, max_width: u32, measure: &dyn Fn(&str) -> Result<u32>) -> Re
 /// differ). Errors: no rows or columns, a row of the wrong length, an empty or non-finite image,
 /// no usable font, or a file-system failure, each naming `path`.
 pub fn write_montage(path: &Path, rows: &[(&str, Vec<&RgbImage>)], column_labels: &[&str]) -> Result<()> {
+    let figure = Figure {
+        title: None,
+        column_labels: column_labels.iter().map(|s| s.to_string()).collect(),
+        rows: rows.iter().map(|(l, imgs)| (l.to_string(), imgs.iter().map(|i| (*i, None)).collect())).collect(),
+    };
+    write_figure(path, &figure)
+}
+
+/// Writes a [`Figure`] as an sRGB PNG: the montage of [`write_montage`] with the title and
+/// captions (see the module comment for the layout). Same errors as [`write_montage`].
+pub fn write_figure(path: &Path, figure: &Figure) -> Result<()> {
     let source = path.display().to_string();
+    let column_labels = &figure.column_labels;
+    let rows = &figure.rows;
     let n_cols = column_labels.len();
     if rows.is_empty() || n_cols == 0 {
         return Err(Error::invalid(source, "montage", "needs at least one row and one column"));
@@ -138,7 +215,7 @@ pub fn write_montage(path: &Path, rows: &[(&str, Vec<&RgbImage>)], column_labels
                 format!("has {} images but there are {n_cols} column labels", images.len()),
             ));
         }
-        for (c, img) in images.iter().enumerate() {
+        for (c, (img, _)) in images.iter().enumerate() {
             if img.width == 0 || img.height == 0 || img.pixels.len() != img.width * img.height || !img.all_finite() {
                 return Err(Error::invalid(
                     source,
@@ -149,10 +226,11 @@ pub fn write_montage(path: &Path, rows: &[(&str, Vec<&RgbImage>)], column_labels
         }
     }
 
-    let (width, height) = montage_size(rows.len(), n_cols);
+    let layout = figure.layout();
+    let (width, height) = layout.size(rows.len(), n_cols);
     let mut canvas = vec![255u8; width * height * 3];
     for (r, (_, images)) in rows.iter().enumerate() {
-        for (c, img) in images.iter().enumerate() {
+        for (c, (img, _)) in images.iter().enumerate() {
             let scale = (CELL_SIZE as f64 / img.width as f64).min(CELL_SIZE as f64 / img.height as f64);
             let w = ((img.width as f64 * scale).round() as usize).clamp(1, CELL_SIZE);
             let h = ((img.height as f64 * scale).round() as usize).clamp(1, CELL_SIZE);
@@ -165,7 +243,7 @@ pub fn write_montage(path: &Path, rows: &[(&str, Vec<&RgbImage>)], column_labels
                 }
             }
             let bytes = to_srgb8(&padded);
-            let (x0, y0) = cell_origin(r, c);
+            let (x0, y0) = layout.cell_origin(r, c);
             for y in 0..CELL_SIZE {
                 let dst = ((y0 + y) * width + x0) * 3;
                 canvas[dst..dst + CELL_SIZE * 3].copy_from_slice(&bytes[y * CELL_SIZE * 3..(y + 1) * CELL_SIZE * 3]);
@@ -173,7 +251,7 @@ pub fn write_montage(path: &Path, rows: &[(&str, Vec<&RgbImage>)], column_labels
         }
     }
 
-    draw_labels(&mut canvas, (width, height), rows, column_labels).map_err(|message| {
+    draw_labels(&mut canvas, (width, height), figure, layout).map_err(|message| {
         Error::Unsupported(format!(
             "{source}: cannot draw montage labels: {message} (needs fontconfig and a sans-serif font, e.g. Debian package fonts-dejavu-core)"
         ))
@@ -184,9 +262,10 @@ pub fn write_montage(path: &Path, rows: &[(&str, Vec<&RgbImage>)], column_labels
 fn draw_labels(
     canvas: &mut [u8],
     (width, height): (usize, usize),
-    rows: &[(&str, Vec<&RgbImage>)],
-    column_labels: &[&str],
+    figure: &Figure,
+    layout: Layout,
 ) -> std::result::Result<(), String> {
+    let (rows, column_labels) = (&figure.rows, &figure.column_labels);
     let root = BitMapBackend::with_buffer(canvas, (width as u32, height as u32)).into_drawing_area();
     let column_style =
         TextStyle::from((FONT, COLUMN_FONT_SIZE).into_font()).color(&BLACK).pos(Pos::new(HPos::Center, VPos::Center));
@@ -194,10 +273,26 @@ fn draw_labels(
         TextStyle::from((FONT, ROW_FONT_SIZE).into_font()).color(&BLACK).pos(Pos::new(HPos::Right, VPos::Center));
     let err = |e: DrawingAreaErrorKind<_>| e.to_string();
 
+    if let Some(title) = &figure.title {
+        let style =
+            TextStyle::from((FONT, TITLE_FONT_SIZE).into_font()).color(&BLACK).pos(Pos::new(HPos::Left, VPos::Center));
+        root.draw_text(title, &style, (2 * SEPARATOR as i32, (TITLE_HEIGHT / 2) as i32)).map_err(err)?;
+    }
     for (c, label) in column_labels.iter().enumerate() {
-        let (x0, _) = cell_origin(0, c);
-        let centre = ((x0 + CELL_SIZE / 2) as i32, (COLUMN_LABEL_HEIGHT / 2) as i32);
+        let (x0, _) = layout.cell_origin(0, c);
+        let centre = ((x0 + CELL_SIZE / 2) as i32, (layout.title + COLUMN_LABEL_HEIGHT / 2) as i32);
         root.draw_text(label, &column_style, centre).map_err(err)?;
+    }
+    let caption_style =
+        TextStyle::from((FONT, CAPTION_FONT_SIZE).into_font()).color(&BLACK).pos(Pos::new(HPos::Center, VPos::Center));
+    for (r, (_, cells)) in rows.iter().enumerate() {
+        for (c, (_, caption)) in cells.iter().enumerate() {
+            if let Some(caption) = caption {
+                let (x0, y0) = layout.cell_origin(r, c);
+                let centre = ((x0 + CELL_SIZE / 2) as i32, (y0 + CELL_SIZE + CAPTION_HEIGHT / 2) as i32);
+                root.draw_text(caption, &caption_style, centre).map_err(err)?;
+            }
+        }
     }
     let max_width = (ROW_LABEL_WIDTH - 3 * SEPARATOR) as u32;
     let measure = |s: &str| -> Result<u32> {
@@ -206,7 +301,7 @@ fn draw_labels(
     for (r, (label, _)) in rows.iter().enumerate() {
         let lines = wrap(label, max_width, &measure).map_err(|e| e.to_string())?;
         let line_height = (ROW_FONT_SIZE * 1.25) as i32;
-        let (_, y0) = cell_origin(r, 0);
+        let (_, y0) = layout.cell_origin(r, 0);
         let centre_y = (y0 + CELL_SIZE / 2) as i32;
         let top = centre_y - line_height * (lines.len() as i32 - 1) / 2;
         let x = (ROW_LABEL_WIDTH - 2 * SEPARATOR) as i32;

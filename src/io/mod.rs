@@ -1,10 +1,13 @@
 //! File input and output, one format per file: display files (our TOML and the framework's
-//! OpenCV YAML), scene files (TOML), triangle meshes (OBJ, PLY), OpenEXR images, PNG previews
-//! and figures. The loaders most callers need are re-exported here.
+//! OpenCV YAML), scene files (TOML), triangle meshes (OBJ, PLY, STL, glTF 2.0 / GLB), OpenEXR
+//! images and their typed header attributes, PNG previews and figures. The loaders most callers
+//! need are re-exported here.
 
 pub mod display_file;
 pub mod exr;
+mod exr_attributes;
 pub mod figure;
+mod gltf;
 pub mod input;
 pub mod mesh;
 mod obj;
@@ -12,8 +15,10 @@ pub mod output;
 mod ply;
 pub mod png;
 pub mod scene_file;
+mod scene_mesh;
+mod stl;
 pub mod text;
 
 pub use display_file::load_display;
-pub use mesh::{load_mesh, MeshLoad};
+pub use mesh::{load_mesh, FileMaterial, FileTexture, MeshLoad, MeshPart, TextureSource};
 pub use scene_file::load_scene;

@@ -2,16 +2,18 @@
 //! [`crate::scene::polygon::triangulate`]: convex faces as a fan, concave ones by ear clipping). A validation
 //! pass of our own runs first so that bad numbers, out-of-range indices and non-finite vertices
 //! are reported with their line number (tobj's errors carry none). Multi-object files are merged
-//! into one [`Mesh`]. The diffuse texture (`map_Kd`) of the first material that has one is
-//! returned, resolved relative to the OBJ file; a missing `.mtl` file is not an error (no
-//! texture). Shared conventions (colours, degenerate triangles): [`super::mesh`].
+//! into one [`Mesh`]; each object's material (`usemtl`: `map_Kd` resolved relative to the OBJ
+//! file, else `Kd` as a linear colour) becomes a [`MeshPart`]. The diffuse texture of the first
+//! material that has one is also returned on its own (`texture = "mtl"` in a scene file). A
+//! missing `.mtl` file is not an error (no materials). Shared conventions (colours, degenerate
+//! triangles): [`super::mesh`].
 
 use std::io::Cursor;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use glam::{DVec2, DVec3};
 
-use super::mesh::srgb_to_linear;
+use super::mesh::{srgb_to_linear, FileMaterial, FileTexture, Loaded, MeshPart, TextureSource};
 use crate::error::{Error, Result};
 use crate::scene::mesh::Mesh;
 
@@ -20,7 +22,7 @@ fn tf<F: Into<f64>>(x: F) -> f64 {
     x.into()
 }
 
-pub(super) fn load_obj(path: &Path, bytes: &[u8]) -> Result<(Mesh, Option<PathBuf>)> {
+pub(super) fn load_obj(path: &Path, bytes: &[u8]) -> Result<Loaded> {
     let text = std::str::from_utf8(bytes).map_err(|e| {
         let line = 1 + bytes[..e.valid_up_to()].iter().filter(|&&b| b == b'\n').count();
         Error::parse(path, format!("line {line}: not valid UTF-8 text"))
@@ -46,8 +48,32 @@ pub(super) fn load_obj(path: &Path, bytes: &[u8]) -> Result<(Mesh, Option<PathBu
     let mut mesh = Mesh::default();
     let (mut normals, mut uvs, mut colors) = (Some(Vec::new()), Some(Vec::new()), Some(Vec::new()));
     let mut texture = None;
+    let mut parts: Vec<(Option<usize>, MeshPart)> = Vec::new();
     for model in &models {
         let m = &model.mesh;
+        let first = mesh.triangles.len();
+        let range = first..first + m.indices.len() / 3;
+        match parts.last_mut() {
+            Some((id, part)) if *id == m.material_id => part.triangles.end = range.end,
+            _ => {
+                let material = m.material_id.and_then(|id| materials.get(id)).map(|mat| FileMaterial {
+                    name: Some(mat.name.clone()),
+                    // With a texture, `map_Kd` alone gives the colour (exporters write a
+                    // placeholder `Kd` beside it, e.g. Blender's 0.8).
+                    base_color: mat
+                        .diffuse
+                        .filter(|_| mat.diffuse_texture.is_none())
+                        .map(|d| DVec3::new(tf(d[0]), tf(d[1]), tf(d[2]))),
+                    texture: mat.diffuse_texture.as_deref().map(|t| FileTexture {
+                        source: TextureSource::File(base_dir.join(t.trim())),
+                        filter: None,
+                        wrap: None,
+                    }),
+                    vertex_colors: false,
+                });
+                parts.push((m.material_id, MeshPart { triangles: range, material: material.unwrap_or_default() }));
+            }
+        }
         let nv = m.positions.len() / 3;
         let offset = mesh.positions.len();
         let offset_u32 =
@@ -104,7 +130,11 @@ pub(super) fn load_obj(path: &Path, bytes: &[u8]) -> Result<(Mesh, Option<PathBu
     mesh.normals = nonempty(normals);
     mesh.uvs = nonempty(uvs);
     mesh.colors = nonempty(colors);
-    Ok((mesh, texture))
+    let mut parts: Vec<MeshPart> = parts.into_iter().map(|(_, p)| p).filter(|p| !p.triangles.is_empty()).collect();
+    for p in &mut parts {
+        p.material.vertex_colors = mesh.colors.is_some();
+    }
+    Ok(Loaded { mesh, parts, texture, warnings: Vec::new() })
 }
 
 /// `None` for an absent or empty attribute.

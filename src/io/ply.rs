@@ -3,14 +3,17 @@
 //! release 2020, old `peg`), and its maintained fork `ply-rs-bw` 4 needs Rust 1.87 (this crate:
 //! 1.80) and reports a truncated binary body as a bare end-of-file I/O error without the element
 //! index. We only need vertices and faces, which the reader below covers in a few hundred lines
-//! with precise error locations. Polygons are triangulated by [`crate::scene::polygon::triangulate`] (convex: the fan `(0, i, i + 1)`; concave: ear clipping)
-//! for OBJ. Shared conventions (colours, degenerate triangles): [`super::mesh`].
+//! with precise error locations. Polygons are triangulated by [`crate::scene::polygon::triangulate`]
+//! (convex: the fan `(0, i, i + 1)`; concave: ear clipping). A header line with an unknown keyword
+//! (Blender 2.47 wrote its "Created by Blender3D" banner without `comment`) is skipped with a
+//! warning, as other readers do; malformed `format`, `element` and `property` lines stay errors.
+//! Shared conventions (colours, degenerate triangles): [`super::mesh`].
 
 use std::path::Path;
 
 use glam::{DVec2, DVec3};
 
-use super::mesh::srgb_to_linear;
+use super::mesh::{srgb_to_linear, Loaded};
 use crate::error::{Error, Result};
 use crate::scene::mesh::Mesh;
 
@@ -114,6 +117,8 @@ struct PlyHeader {
     body_start: usize,
     /// Number of header lines (the ASCII body starts on the next line).
     header_lines: usize,
+    /// Skipped header lines, as warnings naming the file and line.
+    warnings: Vec<String>,
 }
 
 fn parse_ply_header(path: &Path, bytes: &[u8]) -> Result<PlyHeader> {
@@ -122,6 +127,7 @@ fn parse_ply_header(path: &Path, bytes: &[u8]) -> Result<PlyHeader> {
     let mut line_no = 0;
     let mut format = None;
     let mut elements: Vec<Element> = Vec::new();
+    let mut warnings = Vec::new();
     loop {
         if pos >= bytes.len() {
             return Err(Error::parse(path, "bad PLY header: no 'end_header' line before the end of the file"));
@@ -186,13 +192,17 @@ fn parse_ply_header(path: &Path, bytes: &[u8]) -> Result<PlyHeader> {
                 element.props.push(prop);
             }
             Some("end_header") => break,
-            Some(other) => return Err(bad(line_no, format!("unexpected keyword '{other}'"))),
+            Some(_) => warnings.push(format!(
+                "{}: PLY header line {line_no}: skipped a line with an unknown keyword: '{}'",
+                path.display(),
+                text.trim()
+            )),
         }
     }
     let Some(format) = format else {
         return Err(Error::parse(path, "bad PLY header: no 'format' line"));
     };
-    Ok(PlyHeader { format, elements, body_start: pos, header_lines: line_no })
+    Ok(PlyHeader { format, elements, body_start: pos, header_lines: line_no, warnings })
 }
 
 /// Where in the body a value is being read, for error messages.
@@ -382,7 +392,7 @@ fn vertex_layout(path: &Path, element: &Element) -> Result<VertexLayout> {
     Ok(VertexLayout { xyz, normal, uv, color })
 }
 
-pub(super) fn load_ply(path: &Path, bytes: &[u8]) -> Result<Mesh> {
+pub(super) fn load_ply(path: &Path, bytes: &[u8]) -> Result<Loaded> {
     let header = parse_ply_header(path, bytes)?;
     let vertex_el = header.elements.iter().find(|e| e.name == "vertex");
     let Some(vertex_el) = vertex_el else {
@@ -405,7 +415,7 @@ pub(super) fn load_ply(path: &Path, bytes: &[u8]) -> Result<Mesh> {
 
     let body = &bytes[header.body_start..];
     check_claimed_counts(path, &header, body.len())?;
-    match header.format {
+    let mesh = match header.format {
         PlyFormat::Ascii => {
             let text = std::str::from_utf8(body).map_err(|_| Error::parse(path, "ASCII PLY body is not valid text"))?;
             let mut reader = AsciiBody {
@@ -414,13 +424,21 @@ pub(super) fn load_ply(path: &Path, bytes: &[u8]) -> Result<Mesh> {
                 line: header.header_lines,
                 words: "".split_whitespace(),
             };
-            read_ply_body(path, &header.elements, &layout, face_prop, &mut reader)
+            read_ply_body(path, &header.elements, &layout, face_prop, &mut reader)?
         }
         PlyFormat::BinaryLe | PlyFormat::BinaryBe => {
             let mut reader = BinaryBody { bytes: body, pos: 0, big_endian: header.format == PlyFormat::BinaryBe };
-            read_ply_body(path, &header.elements, &layout, face_prop, &mut reader)
+            read_ply_body(path, &header.elements, &layout, face_prop, &mut reader)?
         }
+    };
+    let vertex_colors = mesh.colors.is_some();
+    let mut loaded = Loaded::plain(mesh);
+    loaded.warnings = header.warnings;
+    if vertex_colors {
+        let material = super::mesh::FileMaterial { vertex_colors: true, ..Default::default() };
+        loaded.parts = vec![super::mesh::MeshPart { triangles: 0..loaded.mesh.triangles.len(), material }];
     }
+    Ok(loaded)
 }
 
 /// Refuses a header whose element counts cannot fit in the body: every element instance takes

@@ -19,9 +19,7 @@ use image::{ExtendedColorType, ImageEncoder};
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
-use glam::DVec3;
-
-use crate::raster::{srgb_to_linear, RgbImage};
+use crate::raster::RgbImage;
 use crate::scene::image_texture::{Filter, ImageTexture, Wrap};
 
 /// The 8-bit sRGB code of a linear value: clamp to `[0, 1]` (`NaN` → 0), apply the sRGB
@@ -133,40 +131,11 @@ pub fn write_preview(path: &Path, img: &RgbImage) -> Result<()> {
     write_rgb8(path, img.width, img.height, &to_srgb8(img))
 }
 
-/// Loads a PNG texture (sRGB-encoded) as linear texels. The size in the PNG header is checked
-/// against the memory limit ([`crate::budget::memory_limit`]) before anything is decoded: a small
-/// file claiming a huge image is an error naming the file, not an allocation. Errors name the file.
+/// Loads a PNG or JPEG texture (sRGB-encoded) from a regular file; its claimed size is checked
+/// against the memory limit before decoding ([`ImageTexture::decode`]). Errors name the file.
 pub fn load_texture(path: &Path, filter: Filter, wrap: Wrap) -> Result<ImageTexture> {
     let bytes = crate::io::input::read_regular(path)?;
-    let not_png = |e: image::ImageError| Error::parse(path, format!("not a readable PNG texture: {e}"));
-    let reader = || image::ImageReader::with_format(std::io::Cursor::new(&bytes[..]), image::ImageFormat::Png);
-    let (w, h) = reader().into_dimensions().map_err(not_png)?;
-    // Decoded 32-bit float RGB(A) (16 bytes) plus our linear f64 texels (24 bytes) per texel.
-    let need = (w as u64).saturating_mul(h as u64).saturating_mul(40);
-    let limit = crate::budget::memory_limit();
-    if need > limit {
-        return Err(Error::parse(
-            path,
-            format!(
-                "PNG header claims {w} x {h} pixels, which would need {} as a texture, more than the memory limit of {} \
-                 (--max-memory)",
-                crate::budget::Bytes(need),
-                crate::budget::Bytes(limit)
-            ),
-        ));
-    }
-    let mut decoder = reader();
-    let mut limits = image::Limits::default();
-    limits.max_alloc = Some(need.max(1 << 20));
-    decoder.limits(limits);
-    let img = decoder.decode().map_err(not_png)?;
-    let rgb = img.to_rgb32f();
-    let (w, h) = (rgb.width() as usize, rgb.height() as usize);
-    let texels = rgb
-        .pixels()
-        .map(|p| DVec3::new(srgb_to_linear(p[0] as f64), srgb_to_linear(p[1] as f64), srgb_to_linear(p[2] as f64)))
-        .collect();
-    ImageTexture::new(w, h, texels, filter, wrap).ok_or_else(|| Error::parse(path, "texture image is empty"))
+    ImageTexture::decode(&bytes, &path.display().to_string(), filter, wrap)
 }
 
 #[cfg(test)]

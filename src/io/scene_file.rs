@@ -1,8 +1,15 @@
 //! Scene files (the scene of Sec. 4.1 and Fig. 3, and scenes beyond it): TOML read into a
-//! [`Scene`]: rects (the paper's charts and backdrop), meshes from OBJ/PLY files and procedural
-//! sphere grids, each with a material, plus an optional distant light. Every error names the
-//! scene file and the field (`objects[i].name`); errors from a referenced mesh, texture or bar
-//! list file name that file as well. `builtin:paper` names the paper's scene without a file.
+//! [`Scene`]: rects (the paper's charts and backdrop), meshes from OBJ, PLY, STL and glTF files
+//! (placed and coloured in `scene_mesh.rs`) and procedural sphere grids, each with a material,
+//! plus a distant light. Every error names the scene file and the field (`objects[i].name`);
+//! errors from a referenced mesh, texture or bar list file name that file as well.
+//! `builtin:paper` names the paper's scene without a file.
+//!
+//! Defaults: the scene's `name` is the file's stem; an object without `material` takes the mesh
+//! file's own materials, else [`DEFAULT_ALBEDO`] (0.8 grey); a scene with a mesh or sphere grid
+//! and no `[light]` is lit by [`DEFAULT_LIGHT`], a light from the eye (travelling along +z), so
+//! that surfaces facing the eye keep their albedo and turned ones darken with the cosine
+//! (`[light] type = "none"` keeps radiance = albedo). Rect-only scenes (the paper's) stay unlit.
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -10,7 +17,7 @@ use std::sync::Arc;
 use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
-use super::mesh::load_mesh;
+pub use super::scene_mesh::{FitSpec, DEFAULT_ALBEDO};
 use super::text::{read_text, toml_error};
 use crate::error::{Error, Result};
 use crate::scene::image_texture::{Filter, Wrap};
@@ -72,6 +79,13 @@ pub struct MaterialSpec {
     pub wrap: Option<Wrap>,
 }
 
+impl MaterialSpec {
+    /// True when no field is given (`material` left out): the object's own or default colours.
+    pub fn is_unset(&self) -> bool {
+        *self == MaterialSpec::default()
+    }
+}
+
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(rename_all = "kebab-case")]
 pub enum ShapeKind {
@@ -83,9 +97,9 @@ pub enum ShapeKind {
 /// One scene object.
 /// - `type = "rect"`: facing the eye, given by `center` and `size` (width along x, height
 ///   along y); any other orientation by `center`, `half_u` and `half_v`.
-/// - `type = "mesh"`: a triangle mesh from `file` (OBJ or PLY, relative to the scene file),
-///   placed by `transform = { scale, rotation_deg, translation }` (see
-///   [`crate::scene::Transform`]).
+/// - `type = "mesh"`: a triangle mesh from `file` (OBJ, PLY, STL, glTF or GLB, relative to the
+///   scene file), placed by `transform = { scale, rotation_deg, translation }` (see
+///   [`crate::scene::Transform`]) or `fit = { size, center }` ([`FitSpec`]).
 /// - `type = "sphere-grid"`: `count = [nx, ny]` UV spheres of `radius` with `segments`
 ///   longitudes, `spacing` mm apart in the plane `z = center.z`, centred on `center`
 ///   ([`crate::scene::procedural::sphere_grid`]).
@@ -103,6 +117,8 @@ pub struct ObjectSpec {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub transform: Option<Transform>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fit: Option<FitSpec>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub count: Option<[usize; 2]>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub spacing: Option<f64>,
@@ -116,17 +132,22 @@ pub struct ObjectSpec {
     pub half_u: Option<[f64; 3]>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub half_v: Option<[f64; 3]>,
+    /// Left out: the mesh file's own materials, else [`DEFAULT_ALBEDO`].
+    #[serde(default, skip_serializing_if = "MaterialSpec::is_unset")]
     pub material: MaterialSpec,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct SceneSpec {
-    pub name: String,
+    /// Default: the scene file's stem.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
     /// Radiance of rays that hit nothing (default black).
     #[serde(default)]
     pub background: [f64; 3],
-    /// Optional distant light (`[light] type = "distant"`).
+    /// `[light] type = "distant"` or `"none"`; left out: [`DEFAULT_LIGHT`] for scenes with a
+    /// mesh or sphere grid, none for rect-only scenes.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub light: Option<LightSpec>,
     #[serde(rename = "objects")]
@@ -137,18 +158,25 @@ pub struct SceneSpec {
 #[serde(rename_all = "kebab-case")]
 pub enum LightKind {
     Distant,
+    /// No light: radiance = albedo.
+    None,
 }
 
 /// `[light]`: a distant light travelling along `direction` (normalised on load) with linear
-/// RGB `radiance`.
+/// RGB `radiance` (default white), or `type = "none"`.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct LightSpec {
     #[serde(rename = "type")]
     pub kind: LightKind,
-    pub direction: [f64; 3],
-    pub radiance: [f64; 3],
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub direction: Option<[f64; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radiance: Option<[f64; 3]>,
 }
+
+/// The light of a scene with meshes and no `[light]`: from the eye, travelling along +z, white.
+pub const DEFAULT_LIGHT: Light = Light { direction: DVec3::Z, radiance: DVec3::ONE };
 
 fn finite3(src: &str, field: &str, v: [f64; 3]) -> Result<DVec3> {
     if v.iter().all(|x| x.is_finite()) {
@@ -178,7 +206,8 @@ fn albedo3(src: &str, field: &str, v: [f64; 3]) -> Result<DVec3> {
 }
 
 impl SceneSpec {
-    /// Builds the scene; `base` resolves relative file paths.
+    /// Builds the scene; `src` names the file (its stem is the default name), `base` resolves
+    /// relative file paths.
     pub fn to_scene(&self, src: &str, base: &Path) -> Result<Scene> {
         let background = albedo3(src, "background", self.background)?;
         let mut objects = Vec::with_capacity(self.objects.len());
@@ -186,12 +215,19 @@ impl SceneSpec {
         let mut warnings = Vec::new();
         for (index, spec) in self.objects.iter().enumerate() {
             let o = ObjectInput { src, base, index, spec };
-            let (shape, mesh_texture) = match spec.kind {
-                ShapeKind::Rect => (o.rect_shape()?, None),
-                ShapeKind::Mesh => o.mesh_shape(&mut warnings)?,
-                ShapeKind::SphereGrid => (o.sphere_grid_shape()?, None),
+            let shape = match spec.kind {
+                ShapeKind::Mesh => {
+                    objects.extend(o.mesh_objects(&mut framework_chart, &mut warnings)?);
+                    continue;
+                }
+                ShapeKind::Rect => o.rect_shape()?,
+                ShapeKind::SphereGrid => o.sphere_grid_shape()?,
             };
-            let material = o.material(&shape, mesh_texture, &mut framework_chart)?;
+            let material = if spec.material.is_unset() {
+                Material::Albedo(DEFAULT_ALBEDO)
+            } else {
+                o.material(&shape, None, &mut framework_chart)?
+            };
             objects.push(Object {
                 name: spec.name.clone().unwrap_or_else(|| format!("object {index}")),
                 shape,
@@ -202,17 +238,29 @@ impl SceneSpec {
             return Err(Error::invalid(src, "objects", "a scene needs at least one object"));
         }
         let light = match &self.light {
+            None if self.objects.iter().any(|o| o.kind != ShapeKind::Rect) => Some(DEFAULT_LIGHT),
             None => None,
-            Some(l) => {
-                let d = finite3(src, "light.direction", l.direction)?;
+            Some(LightSpec { kind: LightKind::None, direction, radiance }) => {
+                if direction.is_some() || radiance.is_some() {
+                    return Err(Error::invalid(src, "light", "`type = \"none\"` takes no direction or radiance"));
+                }
+                None
+            }
+            Some(LightSpec { kind: LightKind::Distant, direction, radiance }) => {
+                let direction = direction
+                    .ok_or_else(|| Error::invalid(src, "light.direction", "missing (a distant light needs it)"))?;
+                let d = finite3(src, "light.direction", direction)?;
                 if d.length() == 0.0 {
                     return Err(Error::invalid(src, "light.direction", "must be non-zero"));
                 }
-                let radiance = albedo3(src, "light.radiance", l.radiance)?;
+                let radiance = albedo3(src, "light.radiance", radiance.unwrap_or([1.0; 3]))?;
                 Some(Light { direction: d.normalize(), radiance })
             }
         };
-        Ok(Scene { name: self.name.clone(), objects, background, light, warnings })
+        let name = self.name.clone().unwrap_or_else(|| {
+            Path::new(src).file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| src.to_string())
+        });
+        Ok(Scene { name, objects, background, light, warnings })
     }
 
     /// The paper's scene as a file (written to `scenes/paper.toml`).
@@ -226,7 +274,7 @@ impl SceneSpec {
             ..ObjectSpec::rect_default()
         };
         SceneSpec {
-            name: "paper".into(),
+            name: Some("paper".into()),
             background: [0.0; 3],
             light: None,
             objects: vec![
@@ -248,20 +296,20 @@ impl SceneSpec {
 
 /// One `[[objects]]` entry being resolved into a shape and a material; names the scene file and
 /// the entry's fields (`objects[i].field`) in its errors.
-struct ObjectInput<'a> {
-    src: &'a str,
-    base: &'a Path,
-    index: usize,
-    spec: &'a ObjectSpec,
+pub(super) struct ObjectInput<'a> {
+    pub(super) src: &'a str,
+    pub(super) base: &'a Path,
+    pub(super) index: usize,
+    pub(super) spec: &'a ObjectSpec,
 }
 
 impl ObjectInput<'_> {
-    fn field(&self, name: &str) -> String {
+    pub(super) fn field(&self, name: &str) -> String {
         format!("objects[{}].{name}", self.index)
     }
 
     /// Rejects shape fields that the object's kind does not use.
-    fn only(&self, allowed: &[&str]) -> Result<()> {
+    pub(super) fn only(&self, allowed: &[&str]) -> Result<()> {
         let o = self.spec;
         let given = [
             ("center", o.center.is_some()),
@@ -270,6 +318,7 @@ impl ObjectInput<'_> {
             ("half_v", o.half_v.is_some()),
             ("file", o.file.is_some()),
             ("transform", o.transform.is_some()),
+            ("fit", o.fit.is_some()),
             ("count", o.count.is_some()),
             ("spacing", o.spacing.is_some()),
             ("radius", o.radius.is_some()),
@@ -332,50 +381,6 @@ impl ObjectInput<'_> {
         })
     }
 
-    /// `type = "mesh"`: the mesh file, placed by its transform; also the OBJ material's texture.
-    fn mesh_shape(&self, warnings: &mut Vec<String>) -> Result<(Shape, Option<PathBuf>)> {
-        let (src, o, i) = (self.src, self.spec, self.index);
-        let f = |name: &str| self.field(name);
-        self.only(&["file", "transform"])?;
-        let file = o
-            .file
-            .as_ref()
-            .ok_or_else(|| Error::invalid(src, f("file"), "missing (a mesh needs `file = \"path.obj\"` or .ply)"))?;
-        let transform: Transform = o.transform.unwrap_or_default();
-        transform.validate(src).map_err(|e| match e {
-            Error::Invalid { source_name, field, message } => {
-                Error::invalid(source_name, f(&format!("transform.{field}")), message)
-            }
-            other => other,
-        })?;
-        let path = self.base.join(file);
-        // Name the scene file and field as well as the mesh file and its line/element.
-        let loaded = load_mesh(&path).map_err(|e| Error::invalid(src, f("file"), e.to_string()))?;
-        if loaded.dropped_degenerate > 0 {
-            warnings.push(format!(
-                "{}: dropped {} degenerate (zero-area) triangle(s) of {} (objects[{i}])",
-                src,
-                loaded.dropped_degenerate,
-                path.display()
-            ));
-        }
-        let mut mesh = loaded.mesh;
-        transform.apply(&mut mesh);
-        // A transform can push finite vertices past f64 range, or flatten triangles.
-        mesh.validate(&format!("{} (objects[{i}], {} after transform)", src, path.display()))?;
-        let flattened = mesh.remove_degenerate();
-        if mesh.triangles.is_empty() {
-            return Err(Error::invalid(src, f("transform"), "leaves no triangle with non-zero area"));
-        }
-        if flattened > 0 {
-            warnings.push(format!(
-                "{src}: the transform of objects[{i}] made {flattened} triangle(s) of {} degenerate; dropped",
-                path.display()
-            ));
-        }
-        Ok((Shape::Mesh(Arc::new(mesh)), loaded.texture))
-    }
-
     /// `type = "sphere-grid"`.
     fn sphere_grid_shape(&self) -> Result<Shape> {
         let (src, o) = (self.src, self.spec);
@@ -413,7 +418,7 @@ impl ObjectInput<'_> {
     }
 
     /// `material`: exactly one of an albedo, vertex colours, an image texture or a chart.
-    fn material(
+    pub(super) fn material(
         &self,
         shape: &Shape,
         mesh_texture: Option<PathBuf>,
@@ -529,6 +534,7 @@ impl ObjectSpec {
             center: None,
             file: None,
             transform: None,
+            fit: None,
             count: None,
             spacing: None,
             radius: None,

@@ -2,6 +2,7 @@
 //! measured by the paired estimator to the experiment's `[measurement]` precision, giving the
 //! images `assess` writes (the replicates' means) and the scores with their 95% intervals.
 
+use crate::io::exr::{AttrValue, Attributes};
 use std::time::{Duration, Instant};
 
 use super::adaptive::{measure_case, CaseMeasurement, Precision};
@@ -130,16 +131,17 @@ pub fn naive_scores(reps: &super::estimator::Replicates, constants: SsimConstant
         .collect()
 }
 
-/// EXR attributes of a retinal image of eye case `case` measured converged with
-/// `samples_per_pixel` samples.
-pub fn exr_attributes(exp: &Experiment, samples_per_pixel: u64) -> Vec<(&'static str, String)> {
+/// The EXR attributes of a retinal image measured converged with `samples_per_pixel` samples
+/// per retina pixel (all replicates). They replace the grid estimator's pupil-grid attributes of
+/// `attributes` (the pupil is sampled as a continuous disk).
+pub fn set_exr_attributes(attributes: &mut Attributes, exp: &Experiment, samples_per_pixel: u64) {
     let m = &exp.measurement;
-    vec![
-        ("inimtrace:estimator", "converged (randomized QMC: Owen-scrambled Sobol over pixel x pupil disk)".into()),
-        ("inimtrace:pupil_samples", "continuous disk".into()),
-        ("inimtrace:retina_samples_per_pixel", samples_per_pixel.to_string()),
-        ("inimtrace:replicates", m.replicates.to_string()),
-        ("inimtrace:seed", m.seed.to_string()),
-        ("inimtrace:value", "mean over the replicates".into()),
-    ]
+    attributes.0.retain(|(name, _)| name != "inimtrace:pupil_samples" && name != "inimtrace:pupil_grid");
+    attributes
+        .set("inimtrace:estimator", "converged (randomized QMC: Owen-scrambled Sobol over pixel x pupil disk)")
+        .set("inimtrace:pupil_sampling", "continuous disk")
+        .set("inimtrace:retina_samples_per_pixel", AttrValue::count(samples_per_pixel as usize))
+        .set("inimtrace:replicates", AttrValue::count(m.replicates))
+        .set("inimtrace:seed", m.seed.to_string())
+        .set("inimtrace:value", "mean over the replicates");
 }

@@ -20,15 +20,20 @@ use crate::scene::{Mesh, Rect, Scene, Shape};
 /// every ray, so it is for small scenes and tests only.
 pub const BRUTE_MAX_TRIANGLES: usize = 10_000;
 
-/// `--backend`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+/// `--backend` (a clap value enum: `--help` lists the values).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum)]
 pub enum BackendChoice {
+    /// Analytic for rectangle-only scenes, else Embree.
     #[default]
     Auto,
+    /// Exact f64 rectangles (the paper's kind of scene).
     Analytic,
+    /// Intel Embree (triangles).
     Embree,
     /// The pure-Rust BVH (inimtrace's own 4-wide tree, f64 watertight triangle test).
     Bvh,
+    /// Every triangle for every ray (small scenes only).
+    #[value(alias = "brute-force")]
     Brute,
 }
 

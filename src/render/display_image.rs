@@ -73,9 +73,15 @@ impl fmt::Display for Method {
 
 impl FromStr for Method {
     type Err = String;
-    /// "LC", "PC", "LA" (5 x 5) or "LA3" / "LA:3" for a 3 x 3 grid; case-insensitive.
+    /// "LC", "PC", "LA" (5 x 5) or "LA3" / "LA:3" for a 3 x 3 grid; case-insensitive. Also
+    /// reads what `Display` writes ("LA (3x3)").
     fn from_str(s: &str) -> std::result::Result<Self, String> {
         let u = s.trim().to_ascii_uppercase();
+        if let Some((a, b)) = u.strip_prefix("LA (").and_then(|r| r.strip_suffix(')')).and_then(|r| r.split_once('X')) {
+            if a == b {
+                return format!("LA{a}").parse();
+            }
+        }
         match u.as_str() {
             "LC" | "LENSLETCENTER" => Ok(Method::LensletCenter),
             "PC" | "PUPILCENTER" => Ok(Method::PupilCenter),
@@ -88,6 +94,52 @@ impl FromStr for Method {
                 }
             }
         }
+    }
+}
+
+/// `--method` on the command line: parses like [`Method::from_str`] (so a typo is a usage error
+/// before any work) and lists `LC`, `PC`, `LA` and `LA<k>` in `--help`.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct MethodValueParser;
+
+impl clap::builder::TypedValueParser for MethodValueParser {
+    type Value = Method;
+
+    fn parse_ref(
+        &self,
+        cmd: &clap::Command,
+        arg: Option<&clap::Arg>,
+        value: &std::ffi::OsStr,
+    ) -> std::result::Result<Method, clap::Error> {
+        let text = value.to_str().unwrap_or_default();
+        text.parse::<Method>().map_err(|message| {
+            let name = arg.map(|a| a.to_string()).unwrap_or_else(|| "--method".into());
+            clap::Error::raw(
+                clap::error::ErrorKind::InvalidValue,
+                format!("invalid value '{text}' for '{name}': {message}\n"),
+            )
+            .with_cmd(cmd)
+        })
+    }
+
+    fn possible_values(&self) -> Option<Box<dyn Iterator<Item = clap::builder::PossibleValue> + '_>> {
+        use clap::builder::PossibleValue;
+        Some(Box::new(
+            [
+                PossibleValue::new("LC").help("LensletCenter"),
+                PossibleValue::new("PC").help("PupilCenter"),
+                PossibleValue::new("LA").help("LensletAverage, 5 x 5"),
+                PossibleValue::new("LA<k>").help("LensletAverage, k x k with 1 <= k <= 64 (LA3, LA:3)"),
+            ]
+            .into_iter(),
+        ))
+    }
+}
+
+impl clap::builder::ValueParserFactory for Method {
+    type Parser = MethodValueParser;
+    fn value_parser() -> MethodValueParser {
+        MethodValueParser
     }
 }
 

@@ -13,11 +13,15 @@
 //!   [`Wrap::Clamp`] uses the nearest edge texel. A NaN or infinite UV (which finite meshes do
 //!   not produce, but a broken file may) gives the texture's mean colour, so no NaN ever
 //!   reaches an image.
-//! * PNG files (8 or 16 bit, grey or colour, with or without alpha; alpha is ignored) are taken
-//!   to be sRGB-encoded and are linearised with the sRGB transfer function on load.
+//! * PNG files (8 or 16 bit, grey or colour, with or without alpha; alpha is ignored) and JPEG
+//!   files (what glTF files embed) are taken to be sRGB-encoded and are linearised with the sRGB
+//!   transfer function on load. The format is told by the file's content, not its name.
 
 use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use crate::raster::srgb_to_linear;
 
 /// Texture filtering.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -58,6 +62,58 @@ impl ImageTexture {
         }
         let mean = texels.iter().copied().sum::<DVec3>() / texels.len() as f64;
         Some(Self { width, height, texels, filter, wrap, mean })
+    }
+
+    /// Decodes a PNG or JPEG image held in memory (sRGB-encoded), e.g. one embedded in a glTF
+    /// file. Errors name `source` (the file and the image within it).
+    pub fn decode(bytes: &[u8], source: &str, filter: Filter, wrap: Wrap) -> Result<Self> {
+        let format = image::guess_format(bytes)
+            .ok()
+            .filter(|f| matches!(f, image::ImageFormat::Png | image::ImageFormat::Jpeg))
+            .ok_or_else(|| Error::parse(source, "texture is not a PNG or JPEG image"))?;
+        let not_readable =
+            |e: image::ImageError| Error::parse(source, format!("not a readable {format:?} texture: {e}"));
+        let reader = || image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
+        // The size in the header is checked against the memory limit before anything is decoded:
+        // a small file claiming a huge image is an error naming it, not an allocation.
+        let (w, h) = reader().into_dimensions().map_err(not_readable)?;
+        // Decoded 32-bit float RGB(A) (16 bytes) plus our linear f64 texels (24 bytes) per texel.
+        let need = (w as u64).saturating_mul(h as u64).saturating_mul(40);
+        let limit = crate::budget::memory_limit();
+        if need > limit {
+            return Err(Error::parse(
+                source,
+                format!(
+                    "image header claims {w} x {h} pixels, which would need {} as a texture, more than the memory \
+                     limit of {} (--max-memory)",
+                    crate::budget::Bytes(need),
+                    crate::budget::Bytes(limit)
+                ),
+            ));
+        }
+        let mut decoder = reader();
+        let mut limits = image::Limits::default();
+        limits.max_alloc = Some(need.max(1 << 20));
+        decoder.limits(limits);
+        let img = decoder.decode().map_err(not_readable)?;
+        let path = std::path::Path::new(source);
+        let rgb = img.to_rgb32f();
+        let (w, h) = (rgb.width() as usize, rgb.height() as usize);
+        let texels = rgb
+            .pixels()
+            .map(|p| DVec3::new(srgb_to_linear(p[0] as f64), srgb_to_linear(p[1] as f64), srgb_to_linear(p[2] as f64)))
+            .collect();
+        Self::new(w, h, texels, filter, wrap).ok_or_else(|| Error::parse(path, "texture image is empty"))
+    }
+
+    /// The texture with every texel multiplied by `factor` (a glTF `baseColorFactor` or MTL
+    /// `Kd` applied to its texture).
+    pub fn scaled(mut self, factor: DVec3) -> Self {
+        for t in &mut self.texels {
+            *t *= factor;
+        }
+        self.mean *= factor;
+        self
     }
 
     fn texel(&self, i: i64, j: i64) -> DVec3 {

@@ -25,8 +25,9 @@ pub struct SweepCommand {
     pub quiet: bool,
     /// Only these points (`0..4`, `3,5,8..10`), and no collection (what an array task runs).
     pub points: Option<String>,
-    /// Every point's images too (also `images = true` in the file).
+    /// Every point's images too (also `images = true` in the file), with this EXR compression.
     pub images: bool,
+    pub exr_compression: crate::io::exr::ExrCompression,
     /// Collect what is complete and list what is missing; run nothing.
     pub collect: bool,
     /// Submit to Slurm instead of running here.
@@ -64,7 +65,7 @@ pub fn execute(cmd: &SweepCommand, log: &mut dyn FnMut(String)) -> Result<String
 
     if let Some(slurm) = &cmd.slurm {
         validate(&resolved)?;
-        let opts = SlurmOptions { images, backend: cmd.backend, ..slurm.clone() };
+        let opts = SlurmOptions { images, backend: cmd.backend, exr_compression: cmd.exr_compression, ..slurm.clone() };
         let sub = submit(&sweep, &resolved, &store, &opts)?;
         if opts.dry_run {
             if sub.points.is_empty() {
@@ -106,7 +107,7 @@ pub fn execute(cmd: &SweepCommand, log: &mut dyn FnMut(String)) -> Result<String
         None => (0..n).collect(),
     };
     let values = sweep.value_texts();
-    let opts = LocalOptions { backend: cmd.backend, quiet: cmd.quiet, images };
+    let opts = LocalOptions { backend: cmd.backend, quiet: cmd.quiet, images, exr_compression: cmd.exr_compression };
     let run = run_points(&resolved, &values, &selection, &store, opts)?;
     for w in &run.warnings {
         log(format!("warning: {w}"));

@@ -27,6 +27,8 @@ pub struct LocalOptions {
     pub quiet: bool,
     /// Write every point's images (a full `assess` output in `points/<id>/`).
     pub images: bool,
+    /// Compression of those images.
+    pub exr_compression: crate::io::exr::ExrCompression,
 }
 
 /// What a run did.
@@ -110,7 +112,7 @@ pub fn run_points(
     for (_, scene, jobs) in &scenes {
         if opts.images {
             for job in jobs {
-                run_with_images(job, store, opts.backend)?;
+                run_with_images(job, store, opts)?;
                 progress.inc(1);
             }
         } else {
@@ -125,11 +127,13 @@ pub fn run_points(
 }
 
 /// A full `assess` of one point into `points/<id>/`, then its record.
-fn run_with_images(job: &Job, store: &Store, backend: BackendChoice) -> Result<()> {
+fn run_with_images(job: &Job, store: &Store, local: LocalOptions) -> Result<()> {
     let t = Instant::now();
-    // (More options may come: the rest keep their defaults.)
-    #[allow(clippy::needless_update)]
-    let opts = experiment::RunOptions { quiet: true, backend, ..Default::default() };
+    let opts = experiment::RunOptions {
+        quiet: true,
+        backend: local.backend,
+        exr_compression: local.exr_compression,
+    };
     let report = experiment::assess(&job.exp, &store.images_dir(&job.id), opts)?;
     store.write(&record(job, &report.scores, t.elapsed(), &report.backend))
 }

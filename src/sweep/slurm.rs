@@ -34,6 +34,7 @@ pub struct SlurmOptions {
     pub dry_run: bool,
     pub backend: BackendChoice,
     pub images: bool,
+    pub exr_compression: crate::io::exr::ExrCompression,
 }
 
 impl Default for SlurmOptions {
@@ -47,6 +48,7 @@ impl Default for SlurmOptions {
             dry_run: false,
             backend: BackendChoice::Auto,
             images: false,
+            exr_compression: Default::default(),
         }
     }
 }
@@ -223,8 +225,13 @@ fn script(sweep: &Sweep, chunks: &[String], id: &str, out: &Path, opts: &SlurmOp
             quote(&sweep_file.display().to_string())
         ),
         format!("--out {} --points \"${{POINTS[$SLURM_ARRAY_TASK_ID]}}\"", quote(&out.display().to_string())),
-        format!("--sweep-id {id} --backend {}{}", opts.backend, if opts.images { " --images" } else { "" }),
+        format!("--sweep-id {id} --backend {}", opts.backend),
     ];
+    if opts.images {
+        use clap::ValueEnum;
+        let compression = opts.exr_compression.to_possible_value().map(|v| v.get_name().to_string());
+        lines.push(format!("--images --exr-compression {}", compression.unwrap_or_else(|| "zip".into())));
+    }
     for o in &sweep.overrides {
         lines.push(format!("--set {}", quote(&o.to_arg())));
     }

@@ -1,12 +1,17 @@
 #!/usr/bin/env python3
-"""Writes the small mesh fixtures used by tests/mesh_io.rs (run from this directory).
+"""Writes the small mesh fixtures used by tests/mesh_io.rs, tests/formats.rs and tests/fuzz.rs
+(run from this directory).
 
 One square pyramid (5 vertices, a quad base and 4 side triangles = 6 triangles) in OBJ, ASCII
 PLY, binary little-endian PLY and binary big-endian PLY, with per-vertex normals, uvs and 8-bit
-colours. All coordinates are dyadic so that float32 storage is exact, and the OBJ colours are
+colours; and the same triangles (the base fan-triangulated like the PLY reader does) in glTF
+(buffer as a data: URI), GLB, ASCII STL and binary STL, with normals and uvs (glTF) or
+positions only (STL). All coordinates are dyadic so that float32 storage is exact, and the OBJ colours are
 c / 255 printed with repr(), so every file loads to bit-identical f64 values. Also writes the
 broken fixtures in ../bad/.
 """
+import base64
+import json
 import struct
 
 P = [(-1.0, -1.0, 0.0), (1.0, -1.0, 0.0), (1.0, 1.0, 0.0), (-1.0, 1.0, 0.0), (0.0, 0.0, 2.0)]
@@ -84,6 +89,83 @@ with open("pyramid.mtl", "w") as f:
 ply_ascii("pyramid_ascii.ply")
 ply_binary("pyramid_le.ply", False)
 ply_binary("pyramid_be.ply", True)
+
+TRIS = [t for face in FACES for t in ([face[0], face[i], face[i + 1]] for i in range(1, len(face) - 1))]
+
+
+def gltf_parts():
+    """The glTF buffer (positions, normals, uvs with v flipped, u16 indices) and document."""
+    buf = b"".join(struct.pack("<3f", *p) for p in P)
+    buf += b"".join(struct.pack("<3f", *n) for n in N)
+    buf += b"".join(struct.pack("<2f", t[0], 1.0 - t[1]) for t in UV)
+    buf += b"".join(struct.pack("<3H", *t) for t in TRIS)
+    nv, ni = len(P), 3 * len(TRIS)
+    views = [(0, 12 * nv), (12 * nv, 12 * nv), (24 * nv, 8 * nv), (32 * nv, 2 * ni)]
+    doc = {
+        "asset": {"version": "2.0", "generator": "make_fixtures.py"},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"name": "pyramid", "mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2}, "indices": 3}]}],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": nv, "type": "VEC3",
+             "min": [-1.0, -1.0, 0.0], "max": [1.0, 1.0, 2.0]},
+            {"bufferView": 1, "componentType": 5126, "count": nv, "type": "VEC3"},
+            {"bufferView": 2, "componentType": 5126, "count": nv, "type": "VEC2"},
+            {"bufferView": 3, "componentType": 5123, "count": ni, "type": "SCALAR"},
+        ],
+        "bufferViews": [{"buffer": 0, "byteOffset": o, "byteLength": n} for o, n in views],
+        "buffers": [{"byteLength": len(buf)}],
+    }
+    return buf, doc
+
+
+def gltf(path):
+    buf, doc = gltf_parts()
+    doc["buffers"][0]["uri"] = "data:application/octet-stream;base64," + base64.b64encode(buf).decode()
+    with open(path, "w") as f:
+        json.dump(doc, f, indent=1)
+        f.write("\n")
+
+
+def glb(path):
+    buf, doc = gltf_parts()
+    js = json.dumps(doc).encode()
+    js += b" " * (-len(js) % 4)
+    buf += b"\0" * (-len(buf) % 4)
+    total = 12 + 8 + len(js) + 8 + len(buf)
+    with open(path, "wb") as f:
+        f.write(struct.pack("<4sII", b"glTF", 2, total))
+        f.write(struct.pack("<I4s", len(js), b"JSON") + js)
+        f.write(struct.pack("<I4s", len(buf), b"BIN\0") + buf)
+
+
+def stl_ascii(path):
+    with open(path, "w") as f:
+        f.write("solid pyramid\n")
+        for t in TRIS:
+            f.write("  facet normal 0 0 0\n    outer loop\n")
+            for i in t:
+                f.write("      vertex %s %s %s\n" % tuple(map(fmt, P[i])))
+            f.write("    endloop\n  endfacet\n")
+        f.write("endsolid pyramid\n")
+
+
+def stl_binary(path):
+    with open(path, "wb") as f:
+        f.write(b"solid pyramid (binary; exporters often start the header with 'solid')".ljust(80, b" "))
+        f.write(struct.pack("<I", len(TRIS)))
+        for t in TRIS:
+            f.write(struct.pack("<3f", 0.0, 0.0, 0.0))
+            for i in t:
+                f.write(struct.pack("<3f", *P[i]))
+            f.write(b"\0\0")
+
+
+gltf("pyramid.gltf")
+glb("pyramid.glb")
+stl_ascii("pyramid_ascii.stl")
+stl_binary("pyramid_binary.stl")
 
 # Two zero-area triangles (a repeated index and three collinear points) and one good one.
 with open("degenerate.obj", "w") as f:

@@ -1,0 +1,151 @@
+//! What every image of the pipeline (Fig. 2: display image, ground truth, perceived image)
+//! records about how it was made, as typed EXR header attributes. `assess` and the single-stage
+//! commands (`render-display`, `ground-truth`, `simulate`) build their headers here, so the same
+//! image carries the same metadata whichever command wrote it.
+//!
+//! Numbers are `double` (lengths in mm, diopters, tangents) or `int` (counts); names and notes
+//! are `string`. Every file also carries `inimtrace:version` and `inimtrace:git_revision`
+//! (added by [`crate::io::exr::write_rgb_with`]).
+
+use super::assess::Z_CHANNEL_NOTE;
+use crate::io::exr::{AttrValue, Attributes};
+use crate::optics::{Aperture, Display, Eye, Lattice, Retina};
+use crate::render::{DisplayRenderSettings, Method};
+
+/// What all images share: `kind` ("display image", "ground truth retinal image", "simulated
+/// retinal image"), the experiment's name when there is one, and the units.
+pub fn common(kind: &str, experiment: Option<&str>) -> Attributes {
+    let mut a = Attributes::new();
+    a.set("inimtrace:kind", kind);
+    if let Some(name) = experiment {
+        a.set("inimtrace:experiment", name);
+    }
+    a.set("inimtrace:units", "linear radiance (albedo units); lengths in mm");
+    a
+}
+
+fn lattice(a: &mut Attributes, prefix: &str, l: &Lattice) {
+    let [m00, m01, m10, m11] = l.row_major();
+    a.set(format!("inimtrace:{prefix}_shift_x_mm"), l.shift.x);
+    a.set(format!("inimtrace:{prefix}_shift_y_mm"), l.shift.y);
+    for (k, v) in [("m00", m00), ("m01", m01), ("m10", m10), ("m11", m11)] {
+        a.set(format!("inimtrace:{prefix}_pitch_{k}_mm"), v);
+    }
+}
+
+/// The display: its name, v1, v2, f, both lattices (shift and row-major pitch matrix), the LCD
+/// and the central depth plane (absent when at infinity or real).
+pub fn display(d: &Display) -> Attributes {
+    let mut a = Attributes::new();
+    a.set("inimtrace:display", d.name.as_str());
+    a.set("inimtrace:display_v1_mm", d.eye_to_lenslets);
+    a.set("inimtrace:display_v2_mm", d.lenslets_to_lcd);
+    a.set("inimtrace:display_focal_length_mm", d.focal_length);
+    lattice(&mut a, "lenslets", &d.lenslets);
+    lattice(&mut a, "elemental_images", &d.elemental_images);
+    a.set("inimtrace:lcd_width_mm", d.lcd.size.x);
+    a.set("inimtrace:lcd_height_mm", d.lcd.size.y);
+    a.set("inimtrace:lcd_columns", AttrValue::count(d.lcd.columns()));
+    a.set("inimtrace:lcd_rows", AttrValue::count(d.lcd.rows()));
+    if let Some(z) = d.central_depth_plane() {
+        a.set("inimtrace:central_depth_plane_mm", z);
+        a.set("inimtrace:central_depth_plane_diopters", 1000.0 / z);
+    }
+    a
+}
+
+/// A display image: the method (and LA's grid), the sampling, the reference plane, the pupil
+/// centre PupilCenter aims at, the backend and, with a depth plane, what `Z` holds; then the
+/// display.
+pub fn display_image(
+    method: Method,
+    d: &Display,
+    render: &DisplayRenderSettings,
+    backend: &str,
+    has_depth: bool,
+) -> Attributes {
+    let mut a = Attributes::new();
+    a.set("inimtrace:method", method.to_string());
+    if let Method::LensletAverage { grid } = method {
+        a.set("inimtrace:la_grid", AttrValue::count(grid));
+    }
+    a.set("inimtrace:samples_per_pixel", AttrValue::count(render.samples_per_pixel.pow(2)));
+    a.set("inimtrace:reference_plane_z_mm", render.reference_plane_z);
+    a.set("inimtrace:pc_eye_x_mm", render.eye_position.x);
+    a.set("inimtrace:pc_eye_y_mm", render.eye_position.y);
+    a.set("inimtrace:pc_eye_z_mm", render.eye_position.z);
+    a.set("inimtrace:backend", backend);
+    if has_depth {
+        a.set("inimtrace:Z", Z_CHANNEL_NOTE);
+    }
+    a.extend(display(d));
+    a
+}
+
+/// A retinal image's eye: the eye case's name when there is one, the aperture (and for a thin
+/// lens the focus in mm and diopters and the pupil diameter), the pupil grid and samples, the
+/// retina distance, the pupil centre, and the retina's resolution, field and samples.
+pub fn eye(case: Option<&str>, eye: &Eye, retina: &Retina) -> Attributes {
+    let mut a = Attributes::new();
+    if let Some(name) = case {
+        a.set("inimtrace:eye_case", name);
+    }
+    match eye.aperture {
+        Aperture::Pinhole => {
+            a.set("inimtrace:eye", "pinhole");
+        }
+        Aperture::ThinLens { pupil_diameter, focus } => {
+            a.set("inimtrace:eye", "thin lens");
+            a.set("inimtrace:focus_mm", focus.distance_mm());
+            a.set("inimtrace:focus_diopters", focus.diopters());
+            a.set("inimtrace:pupil_diameter_mm", pupil_diameter);
+            a.set("inimtrace:pupil_grid", AttrValue::count(eye.pupil_grid));
+        }
+    }
+    a.set("inimtrace:pupil_samples", AttrValue::count(eye.pupil_samples().len()));
+    a.set("inimtrace:retina_distance_mm", eye.retina_distance);
+    a.set("inimtrace:eye_x_mm", eye.position.x);
+    a.set("inimtrace:eye_y_mm", eye.position.y);
+    a.set("inimtrace:eye_z_mm", eye.position.z);
+    a.set("inimtrace:retina_resolution", AttrValue::count(retina.resolution));
+    a.set("inimtrace:retina_half_tangent", retina.half_tangent);
+    a.set("inimtrace:retina_samples_per_pixel", AttrValue::count(retina.samples_per_pixel.pow(2)));
+    a
+}
+
+/// A ground-truth retinal image: common, eye, backend.
+pub fn ground_truth(
+    experiment: Option<&str>,
+    case: Option<&str>,
+    e: &Eye,
+    retina: &Retina,
+    backend: &str,
+) -> Attributes {
+    let mut a = common("ground truth retinal image", experiment);
+    a.extend(eye(case, e, retina));
+    a.set("inimtrace:backend", backend);
+    a
+}
+
+/// A perceived (simulated) retinal image: common, the method when known, eye, display, and the
+/// display image it came from when it was read from a file.
+pub fn perceived(
+    experiment: Option<&str>,
+    method: Option<Method>,
+    case: Option<&str>,
+    e: &Eye,
+    retina: &Retina,
+    d: &Display,
+    source: Option<&str>,
+) -> Attributes {
+    let mut a = common("simulated retinal image", experiment);
+    if let Some(m) = method {
+        a.set("inimtrace:method", m.to_string());
+    }
+    if let Some(s) = source {
+        a.set("inimtrace:source", s);
+    }
+    a.extend(eye(case, e, retina));
+    a.extend(display(d));
+    a
+}

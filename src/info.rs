@@ -1,0 +1,425 @@
+//! `inimtrace info`: what a display design (paper Sec. 2.2, Fig. 2a) offers an eye at the
+//! pupil plane, and what a scene holds (Sec. 4.1), as data ([`DisplayDesign`],
+//! [`SceneSummary`], both serialisable to JSON) and as text.
+//!
+//! Display quantities (the eye's pupil centre at the origin, lenslets at `z = v1`, LCD at
+//! `z = v1 + v2`; `m = v1 / v2`):
+//! * **viewing zone** of a lenslet: the eye-plane region from which the lenslet shows its own
+//!   elemental image: the elemental-image cell projected through the lenslet's centre,
+//!   `(1 + m) c_lenslet - m x` for LCD points `x` of the cell; its width along x and y is `m`
+//!   times the cell's;
+//! * **eye box** at the eye relief `v1`: the intersection of the viewing zones of every lenslet
+//!   whose elemental image is on the LCD (per axis), where the eye sees every lenslet show its
+//!   own elemental image;
+//! * **field of view**: the angle the LCD subtends at the pupil centre, `2 atan(W / 2 (v1 + v2))`;
+//! * **angular pixel pitch at the central depth plane** (CDP at `z`): an LCD pixel `p` magnified
+//!   by the lenslet, `p (z - v1) / v2`, seen from the pupil centre, `p (z - v1) / (v2 z)` rad;
+//!   pixels per degree is its inverse (LCD in the focal plane: `p / f`);
+//! * **pixels per elemental image**: cell area over pixel area, and cell widths over pixel pitch;
+//! * **views through a pupil** of diameter `D` centred on the axis: the pixels of the central
+//!   elemental image whose rays through the lenslet's centre enter the pupil (spots `m p` apart).
+//! * A warning when the elemental-image lattice is not a scaled copy of the lenslet lattice
+//!   (square elemental images under hexagonal lenslets), or the eye box is empty.
+
+use glam::{DVec2, IVec2};
+use serde::Serialize;
+
+use crate::optics::{Display, Lattice};
+use crate::scene::{Material, Scene, Shape};
+
+/// A lattice as numbers: centre of cell (0, 0) and the row-major pitch matrix `[a, b, c, d]`
+/// (`centre(i, j) = shift + [[a, b], [c, d]] (i, j)`), mm.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct LatticeParameters {
+    pub shift_mm: [f64; 2],
+    pub pitch_matrix_mm: [f64; 4],
+}
+
+impl From<&Lattice> for LatticeParameters {
+    fn from(l: &Lattice) -> Self {
+        Self { shift_mm: l.shift.to_array(), pitch_matrix_mm: l.row_major() }
+    }
+}
+
+/// A display's parameters as structured fields (`results.json`, `info --json`).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct DisplayParameters {
+    pub name: String,
+    /// v1: pupil plane to lenslet plane.
+    pub eye_to_lenslets_mm: f64,
+    /// v2: lenslet plane to LCD.
+    pub lenslets_to_lcd_mm: f64,
+    pub focal_length_mm: f64,
+    pub lenslets: LatticeParameters,
+    pub elemental_images: LatticeParameters,
+    pub lcd_size_mm: [f64; 2],
+    /// Columns, rows.
+    pub lcd_resolution: [usize; 2],
+    /// `None`: at infinity or real (LCD at or beyond the lenslets' focal plane).
+    pub central_depth_plane_mm: Option<f64>,
+    pub central_depth_plane_diopters: Option<f64>,
+}
+
+impl From<&Display> for DisplayParameters {
+    fn from(d: &Display) -> Self {
+        let cdp = d.central_depth_plane();
+        Self {
+            name: d.name.clone(),
+            eye_to_lenslets_mm: d.eye_to_lenslets,
+            lenslets_to_lcd_mm: d.lenslets_to_lcd,
+            focal_length_mm: d.focal_length,
+            lenslets: (&d.lenslets).into(),
+            elemental_images: (&d.elemental_images).into(),
+            lcd_size_mm: d.lcd.size.to_array(),
+            lcd_resolution: d.lcd.resolution,
+            central_depth_plane_mm: cdp,
+            central_depth_plane_diopters: cdp.map(|z| 1000.0 / z),
+        }
+    }
+}
+
+/// What a display design offers the eye (see the module comment for the definitions).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct DisplayDesign {
+    pub display: DisplayParameters,
+    /// v1.
+    pub eye_relief_mm: f64,
+    /// Width (x) and height (y) of one lenslet's viewing zone.
+    pub viewing_zone_mm: [f64; 2],
+    /// Width and height of the eye box; `None` when the viewing zones have no common point.
+    pub eye_box_mm: Option<[f64; 2]>,
+    pub eye_box_center_mm: Option<[f64; 2]>,
+    /// How many lenslets (with their elemental image on the LCD) the eye box accounts for.
+    pub lenslets_on_lcd: usize,
+    /// Horizontal and vertical.
+    pub field_of_view_deg: [f64; 2],
+    pub pixel_pitch_mm: [f64; 2],
+    /// At the central depth plane, x and y; `None` when the image is real.
+    pub angular_pixel_pitch_arcmin: Option<[f64; 2]>,
+    pub pixels_per_degree: Option<[f64; 2]>,
+    /// Elemental-image cell area over pixel area.
+    pub pixels_per_elemental_image: f64,
+    /// Cell width along x and y over the pixel pitch.
+    pub pixels_per_elemental_image_xy: [f64; 2],
+    pub pupil_diameter_mm: f64,
+    /// Eye-plane spacing of the views (one per LCD pixel) of a lenslet, `m p`.
+    pub view_spacing_mm: [f64; 2],
+    /// Pixels of the central elemental image whose rays enter the pupil.
+    pub views_through_pupil: usize,
+    pub warnings: Vec<String>,
+}
+
+/// Half-width of the lattice's cell (0, 0) along `dir` from its centre (bisection on the
+/// nearest-centre rule).
+fn cell_half_extent(l: &Lattice, dir: DVec2) -> f64 {
+    let home = l.nearest(l.shift);
+    let (mut inside, mut outside) = (0.0, l.matrix.x_axis.length() + l.matrix.y_axis.length());
+    for _ in 0..60 {
+        let mid = 0.5 * (inside + outside);
+        if l.nearest(l.shift + mid * dir) == home {
+            inside = mid;
+        } else {
+            outside = mid;
+        }
+    }
+    0.5 * (inside + outside)
+}
+
+/// The design quantities of `d` for a pupil of `pupil_diameter` mm centred on the axis.
+pub fn display_design(d: &Display, pupil_diameter: f64) -> DisplayDesign {
+    let (v1, v2) = (d.eye_to_lenslets, d.lenslets_to_lcd);
+    let m = v1 / v2;
+    let pitch = d.lcd.pixel_pitch();
+    let half =
+        DVec2::new(cell_half_extent(&d.elemental_images, DVec2::X), cell_half_extent(&d.elemental_images, DVec2::Y));
+    let zone = 2.0 * m * half;
+    let mut warnings = Vec::new();
+
+    // Viewing zones of every lenslet whose elemental-image centre is on the LCD.
+    let (w, h) = (0.5 * d.lcd.size.x, 0.5 * d.lcd.size.y);
+    let corners = [DVec2::new(-w, -h), DVec2::new(w, -h), DVec2::new(w, h), DVec2::new(-w, h)];
+    let uv: Vec<DVec2> = corners.iter().map(|c| d.elemental_images.coordinates(*c)).collect();
+    let lo = uv.iter().fold(DVec2::INFINITY, |a, b| a.min(*b)).floor();
+    let hi = uv.iter().fold(DVec2::NEG_INFINITY, |a, b| a.max(*b)).ceil();
+    let (mut box_lo, mut box_hi, mut count) = (DVec2::NEG_INFINITY, DVec2::INFINITY, 0usize);
+    let range = |a: f64, b: f64| (a.max(-1e6) as i32)..=(b.min(1e6) as i32);
+    for j in range(lo.y, hi.y) {
+        for i in range(lo.x, hi.x) {
+            let idx = IVec2::new(i, j);
+            let e = d.elemental_images.center(idx);
+            if e.x.abs() > w || e.y.abs() > h {
+                continue;
+            }
+            let centre = (1.0 + m) * d.lenslets.center(idx) - m * e;
+            box_lo = box_lo.max(centre - 0.5 * zone);
+            box_hi = box_hi.min(centre + 0.5 * zone);
+            count += 1;
+        }
+    }
+    let eye_box = (count > 0 && box_hi.cmpgt(box_lo).all()).then(|| (box_hi - box_lo, 0.5 * (box_lo + box_hi)));
+    if eye_box.is_none() {
+        warnings.push(format!(
+            "no eye box: the viewing zones of the {count} lenslets do not overlap at the eye relief ({v1} mm); \
+             the elemental-image pitch does not suit the lenslet pitch and distances (ideal ratio (v1 + v2) / v1 = {:.5})",
+            (v1 + v2) / v1
+        ));
+    }
+
+    // Is the elemental-image lattice a scaled copy of the lenslet lattice?
+    let (ml, me) = (d.lenslets.row_major(), d.elemental_images.row_major());
+    let dot = |a: &[f64; 4], b: &[f64; 4]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+    let k = dot(&me, &ml) / dot(&ml, &ml);
+    let residual = me.iter().zip(&ml).map(|(e, l)| (e - k * l).powi(2)).sum::<f64>().sqrt() / dot(&me, &me).sqrt();
+    if residual.is_nan() || residual > 1e-3 {
+        warnings.push(format!(
+            "the elemental-image lattice {me:?} is not a scaled copy of the lenslet lattice {ml:?} (e.g. square \
+             elemental images under hexagonal lenslets): pixels near elemental-image borders are seen through \
+             other lenslets"
+        ));
+    }
+
+    let cdp = d.central_depth_plane();
+    let angular = match cdp {
+        Some(z) => Some(pitch * (z - v1) / (v2 * z)),
+        None if (1.0 / v2 - 1.0 / d.focal_length).abs() <= 1e-12 => Some(pitch / d.focal_length),
+        None => None,
+    };
+    let to_deg = |r: DVec2| r * (180.0 / std::f64::consts::PI);
+
+    // Views: pixels of the central elemental image whose rays enter the pupil.
+    let home = d.lenslets.nearest(DVec2::ZERO);
+    let (cl, ce) = (d.lenslets.center(home), d.elemental_images.center(home));
+    let r2 = (0.5 * pupil_diameter).powi(2);
+    let reach = half.max_element() * 1.5 + pitch.max_element();
+    let col = |x: f64| ((x + w) / pitch.x).floor() as i64;
+    let row = |y: f64| ((h - y) / pitch.y).floor() as i64;
+    let (c0, c1) = (col(ce.x - reach).max(0), col(ce.x + reach).min(d.lcd.columns() as i64 - 1));
+    let (r0, r1) = (row(ce.y + reach).max(0), row(ce.y - reach).min(d.lcd.rows() as i64 - 1));
+    let mut views = 0;
+    for r in r0..=r1 {
+        for c in c0..=c1 {
+            let x = d.lcd.pixel_center(r as usize, c as usize);
+            if d.elemental_image_of(x) == home && ((1.0 + m) * cl - m * x).length_squared() <= r2 {
+                views += 1;
+            }
+        }
+    }
+
+    DisplayDesign {
+        display: d.into(),
+        eye_relief_mm: v1,
+        viewing_zone_mm: zone.to_array(),
+        eye_box_mm: eye_box.map(|(s, _)| s.to_array()),
+        eye_box_center_mm: eye_box.map(|(_, c)| c.to_array()),
+        lenslets_on_lcd: count,
+        field_of_view_deg: [2.0 * (w / (v1 + v2)).atan().to_degrees(), 2.0 * (h / (v1 + v2)).atan().to_degrees()],
+        pixel_pitch_mm: pitch.to_array(),
+        angular_pixel_pitch_arcmin: angular.map(|a| (to_deg(a) * 60.0).to_array()),
+        pixels_per_degree: angular.map(|a| (DVec2::ONE / to_deg(a)).to_array()),
+        pixels_per_elemental_image: d.elemental_images.cell_area() / (pitch.x * pitch.y),
+        pixels_per_elemental_image_xy: (2.0 * half / pitch).to_array(),
+        pupil_diameter_mm: pupil_diameter,
+        view_spacing_mm: (m * pitch).to_array(),
+        views_through_pupil: views,
+        warnings,
+    }
+}
+
+/// [`DisplayDesign`] as the text `inimtrace info` prints.
+pub fn display_design_text(x: &DisplayDesign, summary: &str) -> String {
+    let pair = |v: [f64; 2], digits: usize| format!("{:.digits$} x {:.digits$}", v[0], v[1]);
+    let mut s = format!("{summary}\n");
+    s += &format!(
+        "eye box at the eye relief ({} mm): {}\n",
+        x.eye_relief_mm,
+        match (x.eye_box_mm, x.eye_box_center_mm) {
+            (Some(b), Some(c)) => format!(
+                "{} mm centred at ({:.3}, {:.3}) (one lenslet's viewing zone {} mm; {} lenslets on the LCD)",
+                pair(b, 3),
+                c[0],
+                c[1],
+                pair(x.viewing_zone_mm, 3),
+                x.lenslets_on_lcd
+            ),
+            _ => "none".into(),
+        }
+    );
+    s += &format!("field of view: {} degrees (horizontal x vertical)\n", pair(x.field_of_view_deg, 2));
+    s += &match (x.angular_pixel_pitch_arcmin, x.pixels_per_degree) {
+        (Some(a), Some(p)) => format!(
+            "angular pixel pitch at the central depth plane: {} arcmin ({} pixels per degree)\n",
+            pair(a, 3),
+            pair(p, 2)
+        ),
+        _ => "angular pixel pitch: undefined (the lenslets form a real image of the LCD)\n".into(),
+    };
+    s += &format!(
+        "pixels per elemental image: {:.1} ({} across)\n",
+        x.pixels_per_elemental_image,
+        pair(x.pixels_per_elemental_image_xy, 1)
+    );
+    s += &format!(
+        "views through a {} mm pupil: {} (view spacing {} mm at the pupil)\n",
+        x.pupil_diameter_mm,
+        x.views_through_pupil,
+        pair(x.view_spacing_mm, 4)
+    );
+    for w in &x.warnings {
+        s += &format!("warning: {w}\n");
+    }
+    s
+}
+
+/// One scene object as `info --scene` reports it.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ObjectSummary {
+    pub name: String,
+    /// "rect" or "mesh".
+    pub shape: &'static str,
+    /// Tessellated rectangles count 2.
+    pub triangles: usize,
+    /// Axis-aligned bounds after the object's transform, mm.
+    pub bounds_min_mm: [f64; 3],
+    pub bounds_max_mm: [f64; 3],
+    /// "albedo [r, g, b]", "chart", "vertex colours", "texture W x H".
+    pub material: String,
+}
+
+/// A scene as `info --scene` reports it.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SceneSummary {
+    pub name: String,
+    pub objects: Vec<ObjectSummary>,
+    pub triangles: usize,
+    /// Nearest and farthest z of the scene's geometry (along the optical axis), mm.
+    pub depth_range_mm: [f64; 2],
+    /// The same in diopters (1000 / z; nearest first, so the larger value first).
+    pub depth_range_diopters: [f64; 2],
+    /// `None`: radiance = albedo.
+    pub light_direction: Option<[f64; 3]>,
+    pub light_radiance: Option<[f64; 3]>,
+    pub background: [f64; 3],
+    pub warnings: Vec<String>,
+}
+
+/// Summarises a loaded scene.
+pub fn scene_summary(scene: &Scene) -> SceneSummary {
+    let objects: Vec<ObjectSummary> = scene
+        .objects
+        .iter()
+        .map(|o| {
+            let (shape, triangles, (lo, hi)) = match &o.shape {
+                Shape::Rect(r) => ("rect", 2, r.to_mesh().bounds()),
+                Shape::Mesh(m) => ("mesh", m.triangle_count(), m.bounds()),
+            };
+            let material = match &o.material {
+                Material::Albedo(a) => format!("albedo [{}, {}, {}]", a.x, a.y, a.z),
+                Material::Chart { .. } => "chart".into(),
+                Material::VertexColor => "vertex colours".into(),
+                Material::Texture(t) => format!("texture {} x {}", t.width, t.height),
+            };
+            ObjectSummary {
+                name: o.name.clone(),
+                shape,
+                triangles,
+                bounds_min_mm: lo.to_array(),
+                bounds_max_mm: hi.to_array(),
+                material,
+            }
+        })
+        .collect();
+    let near = objects.iter().map(|o| o.bounds_min_mm[2]).fold(f64::INFINITY, f64::min);
+    let far = objects.iter().map(|o| o.bounds_max_mm[2]).fold(f64::NEG_INFINITY, f64::max);
+    let mut warnings = scene.warnings.clone();
+    if near <= 0.0 {
+        warnings.push(format!("geometry reaches z = {near} mm, at or behind the pupil plane"));
+    }
+    SceneSummary {
+        name: scene.name.clone(),
+        triangles: scene.triangle_count(),
+        objects,
+        depth_range_mm: [near, far],
+        depth_range_diopters: [1000.0 / near, 1000.0 / far],
+        light_direction: scene.light.map(|l| l.direction.to_array()),
+        light_radiance: scene.light.map(|l| l.radiance.to_array()),
+        background: scene.background.to_array(),
+        warnings,
+    }
+}
+
+/// [`SceneSummary`] as the text `inimtrace info --scene` prints.
+pub fn scene_summary_text(s: &SceneSummary) -> String {
+    let v3 = |v: [f64; 3]| format!("({:.3}, {:.3}, {:.3})", v[0], v[1], v[2]);
+    let mut t = format!("scene {}: {} object(s), {} triangle(s)\n", s.name, s.objects.len(), s.triangles);
+    for o in &s.objects {
+        t += &format!(
+            "  {} ({}, {} triangle(s), {}): bounds {} to {} mm, size {}\n",
+            o.name,
+            o.shape,
+            o.triangles,
+            o.material,
+            v3(o.bounds_min_mm),
+            v3(o.bounds_max_mm),
+            v3([0, 1, 2].map(|k| o.bounds_max_mm[k] - o.bounds_min_mm[k]))
+        );
+    }
+    t += &format!(
+        "depth range: z = {:.1} to {:.1} mm ({:.3} to {:.3} D)\n",
+        s.depth_range_mm[0], s.depth_range_mm[1], s.depth_range_diopters[0], s.depth_range_diopters[1]
+    );
+    t += &match (s.light_direction, s.light_radiance) {
+        (Some(d), Some(r)) => format!("light: distant, travelling along {}, radiance {}\n", v3(d), v3(r)),
+        _ => "light: none (radiance = albedo)\n".into(),
+    };
+    t += &format!("background: {}\n", v3(s.background));
+    for w in &s.warnings {
+        t += &format!("warning: {w}\n");
+    }
+    t
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn paper_display_design_numbers() {
+        let x = display_design(&Display::paper(), 5.0);
+        // One lenslet's viewing zone: m * EI pitch = 20 / 6.316 * 1.58 mm.
+        let zone = 20.0 / 6.316 * 1.58;
+        assert!((x.viewing_zone_mm[0] - zone).abs() < 1e-9, "{:?}", x.viewing_zone_mm);
+        // The pitches are pupil-centred to 0.06 %: the eye box is the zone less the small drift.
+        let b = x.eye_box_mm.unwrap();
+        assert!(b[0] < zone && b[0] > zone - 0.1, "{b:?}");
+        assert_eq!(b[0], b[1]);
+        // LCD 21.6 mm at 26.316 mm: 2 atan(10.8 / 26.316) = 44.6 degrees.
+        assert!((x.field_of_view_deg[0] - 2.0 * (10.8f64 / 26.316).atan().to_degrees()).abs() < 1e-12);
+        // 0.01 mm pixels: 158 x 158 per elemental image, 24,964 in area.
+        assert!((x.pixels_per_elemental_image - 24964.0).abs() < 1e-6);
+        assert!((x.pixels_per_elemental_image_xy[0] - 158.0).abs() < 1e-6);
+        // Views 0.0317 mm apart at the pupil: a 5 mm pupil holds about pi/4 (5 / 0.0317)^2.
+        let spacing: f64 = 0.01 * 20.0 / 6.316;
+        let disc = std::f64::consts::FRAC_PI_4 * (5.0 / spacing).powi(2);
+        assert!((x.views_through_pupil as f64 - disc).abs() < 0.03 * disc, "{} vs {disc}", x.views_through_pupil);
+        // CDP 385.7 mm: a pixel magnified by (385.7 - 20) / 6.316, seen from 385.7 mm.
+        let z = Display::paper().central_depth_plane().unwrap();
+        let ppd = 1.0 / (0.01 * (z - 20.0) / (6.316 * z)).to_degrees();
+        assert!((x.pixels_per_degree.unwrap()[0] - ppd).abs() < 1e-9);
+        assert!(ppd > 11.0 && ppd < 12.0, "{ppd}");
+        assert!(x.warnings.is_empty(), "{:?}", x.warnings);
+    }
+
+    #[test]
+    fn square_elemental_images_under_hexagonal_lenslets_warn() {
+        let mut d = Display::paper();
+        let p = 1.2;
+        d.lenslets = Lattice::from_row_major(DVec2::ZERO, [p, 0.5 * p, 0.0, 0.75f64.sqrt() * p]).unwrap();
+        let x = display_design(&d, 5.0);
+        assert!(x.warnings.iter().any(|w| w.contains("hexagonal")), "{:?}", x.warnings);
+        // A mismatched pitch ratio leaves no common eye box.
+        let mut d = Display::paper();
+        d.elemental_images = Lattice::square(2.0).unwrap();
+        let x = display_design(&d, 5.0);
+        assert!(x.eye_box_mm.is_none() && x.warnings.iter().any(|w| w.contains("no eye box")), "{x:?}");
+    }
+}

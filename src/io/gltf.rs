@@ -1,0 +1,701 @@
+//! glTF 2.0 meshes (`.gltf` with embedded `data:` or external buffers, and binary `.glb`): the
+//! format most modelled and many scanned meshes arrive in. The `gltf` crate parses and validates
+//! the JSON document (index ranges, required extensions); buffers and accessors are read here so
+//! that every malformed file gives one line naming the file and the element
+//! (`meshes[0].primitives[1].indices: ...`), never a panic.
+//!
+//! What is read:
+//! * the default scene (else the first; else every node that is no other node's child), its node
+//!   hierarchy with each node's `matrix` or translation/rotation/scale composed in `f64`; a node
+//!   that is its own ancestor is an error;
+//! * triangle primitives (`TRIANGLES`, and `TRIANGLE_STRIP` / `TRIANGLE_FAN` unrolled to
+//!   triangles in the specification's order); points and lines are skipped with a warning;
+//! * `POSITION` (float `VEC3`), `NORMAL` (float `VEC3`, transformed by the inverse transpose),
+//!   `TEXCOORD_n` (float or normalised integer `VEC2`; `v` flipped to the OBJ convention) for the
+//!   set the material's base colour texture uses, and `COLOR_0` (float or normalised integer
+//!   `VEC3`/`VEC4`, linear, alpha dropped);
+//! * each primitive's material as a [`FileMaterial`]: `baseColorFactor` (linear) and
+//!   `baseColorTexture` (PNG or JPEG, sRGB, from a file, a `data:` URI or a buffer view) with
+//!   its sampler's magnification filter and `wrapS` (mirrored repeat is read as repeat, with a
+//!   warning).
+//!
+//! Everything else (animations, skins, morph targets, cameras, other textures, PBR parameters,
+//! alpha) is ignored; extensions the file uses are named in a warning, and a file that
+//! *requires* one is refused. Sparse accessors are refused. Coordinates are used as they are
+//! (taken as millimetres, where glTF means metres): see [`super::mesh`].
+
+use std::path::{Path, PathBuf};
+
+use base64::Engine;
+use glam::{DMat3, DMat4, DQuat, DVec2, DVec3};
+use gltf::accessor::{DataType, Dimensions};
+use gltf::mesh::Mode;
+
+use super::mesh::{FileMaterial, FileTexture, Loaded, MeshPart, TextureSource};
+use crate::error::{Error, Result};
+use crate::scene::image_texture::{Filter, Wrap};
+use crate::scene::mesh::Mesh;
+
+/// Most mesh instances a node hierarchy may expand to (guards against exponential node graphs).
+const MAX_INSTANCES: usize = 1_000_000;
+
+pub(super) fn load_gltf(path: &Path, bytes: &[u8]) -> Result<Loaded> {
+    let gltf = gltf::Gltf::from_slice_without_validation(bytes)
+        .map_err(|e| Error::parse(path, format!("not a readable glTF/GLB file: {e}")))?;
+    let doc = &gltf.document;
+    validate(path, doc)?;
+    let base = path.parent().unwrap_or(Path::new(""));
+    let mut warnings: Vec<String> = doc
+        .extensions_used()
+        .map(|ext| format!("{}: glTF extension {ext} is used by the file and ignored", path.display()))
+        .collect();
+    let buffers =
+        doc.buffers().map(|b| load_buffer(path, base, &b, gltf.blob.as_deref())).collect::<Result<Vec<Vec<u8>>>>()?;
+    let reader = Reader { path, buffers: &buffers };
+
+    let instances = instances(path, doc)?;
+    let mut out = Builder::default();
+    for (node, world) in &instances {
+        let Some(mesh) = node.mesh() else { continue };
+        for prim in mesh.primitives() {
+            let at = format!("meshes[{}].primitives[{}]", mesh.index(), prim.index());
+            let mode = prim.mode();
+            if !matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
+                warnings.push(format!(
+                    "{}: {at}: mode {mode:?} draws points or lines, not triangles; skipped",
+                    path.display()
+                ));
+                continue;
+            }
+            out.add_primitive(&reader, &at, &prim, *world, &mut warnings)?;
+        }
+    }
+    if out.mesh.triangles.is_empty() {
+        return Err(Error::parse(
+            path,
+            format!(
+                "contains no triangles ({} node(s) with a mesh in the scene, {} mesh(es) in the file)",
+                instances.iter().filter(|(n, _)| n.mesh().is_some()).count(),
+                doc.meshes().count()
+            ),
+        ));
+    }
+    let Builder { mut mesh, parts, has_normals, has_uvs, has_colors, .. } = out;
+    if !has_normals {
+        mesh.normals = None;
+    }
+    if !has_uvs {
+        mesh.uvs = None;
+    }
+    if !has_colors {
+        mesh.colors = None;
+    }
+    let parts = parts.into_iter().map(|(_, p)| p).collect();
+    Ok(Loaded { mesh, parts, texture: None, warnings })
+}
+
+/// The `gltf` crate's validation (index ranges, required extensions, ...), less the rule that
+/// `POSITION` accessors declare `min` and `max`, which this reader does not use and exporters
+/// sometimes leave out. The first problem (with its JSON path) is the error, on one line.
+fn validate(path: &Path, doc: &gltf::Document) -> Result<()> {
+    use gltf::json::validation::{Checked, Error as V, Validate};
+    let root = doc.as_json();
+    // gltf-json 1.4's own check of POSITION indexes the accessors without a bounds check.
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (k, prim) in mesh.primitives.iter().enumerate() {
+            if let Some(i) = prim.attributes.get(&Checked::Valid(gltf::json::mesh::Semantic::Positions)) {
+                if i.value() >= root.accessors.len() {
+                    return Err(Error::parse(
+                        path,
+                        format!(
+                            "meshes[{m}].primitives[{k}].attributes.POSITION: accessor {} does not exist (the file has {})",
+                            i.value(),
+                            root.accessors.len()
+                        ),
+                    ));
+                }
+            }
+        }
+    }
+    let mut problems = Vec::new();
+    root.validate(root, gltf::json::Path::new, &mut |p, e| {
+        let p = p().to_string();
+        if !(matches!(e, V::Missing) && (p.ends_with(".min") || p.ends_with(".max"))) {
+            problems.push((p, e));
+        }
+    });
+    let more =
+        if problems.len() > 1 { format!(" (and {} more problem(s))", problems.len() - 1) } else { String::new() };
+    match problems.first() {
+        None => Ok(()),
+        Some((p, V::Unsupported)) => {
+            Err(Error::parse(path, format!("{p}: required extension not supported by inimtrace{more}")))
+        }
+        Some((p, e)) => Err(Error::parse(path, format!("invalid glTF: {p}: {e}{more}"))),
+    }
+}
+
+/// The bytes of a `data:` URI, or the file a relative URI names.
+enum UriTarget {
+    Data(Vec<u8>),
+    File(PathBuf),
+}
+
+fn resolve_uri(path: &Path, base: &Path, at: &str, uri: &str) -> Result<UriTarget> {
+    if let Some(rest) = uri.strip_prefix("data:") {
+        let Some((header, data)) = rest.split_once(',') else {
+            return Err(Error::parse(path, format!("{at}: malformed data URI (no comma)")));
+        };
+        if !header.ends_with(";base64") {
+            return Err(Error::parse(path, format!("{at}: data URI is not base64-encoded")));
+        }
+        let bytes = base64::engine::general_purpose::STANDARD
+            .decode(data.trim())
+            .map_err(|e| Error::parse(path, format!("{at}: bad base64 in data URI: {e}")))?;
+        return Ok(UriTarget::Data(bytes));
+    }
+    if uri.contains("://") {
+        return Err(Error::parse(path, format!("{at}: URI `{uri}` is not a relative file path or data URI")));
+    }
+    Ok(UriTarget::File(base.join(percent_decode(uri))))
+}
+
+/// Decodes `%XX` escapes of a URI path (invalid escapes are kept as they are).
+fn percent_decode(s: &str) -> String {
+    let b = s.as_bytes();
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        let hex = |c: u8| (c as char).to_digit(16);
+        if b[i] == b'%' && i + 2 < b.len() {
+            if let (Some(h), Some(l)) = (hex(b[i + 1]), hex(b[i + 2])) {
+                out.push((h * 16 + l) as u8);
+                i += 3;
+                continue;
+            }
+        }
+        out.push(b[i]);
+        i += 1;
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+fn load_buffer(path: &Path, base: &Path, buffer: &gltf::Buffer, blob: Option<&[u8]>) -> Result<Vec<u8>> {
+    let at = format!("buffers[{}]", buffer.index());
+    let data = match buffer.source() {
+        gltf::buffer::Source::Bin => blob
+            .ok_or_else(|| Error::parse(path, format!("{at}: refers to the GLB binary chunk, which the file lacks")))?
+            .to_vec(),
+        gltf::buffer::Source::Uri(uri) => match resolve_uri(path, base, &at, uri)? {
+            UriTarget::Data(d) => d,
+            UriTarget::File(file) => std::fs::read(&file)
+                .map_err(|e| Error::parse(path, format!("{at}: cannot read `{}`: {e}", file.display())))?,
+        },
+    };
+    if data.len() < buffer.length() {
+        return Err(Error::parse(
+            path,
+            format!("{at}: holds {} bytes but the file declares byteLength {}", data.len(), buffer.length()),
+        ));
+    }
+    Ok(data)
+}
+
+/// Every node of the scene with its world matrix, depth first.
+fn instances<'a>(path: &Path, doc: &'a gltf::Document) -> Result<Vec<(gltf::Node<'a>, DMat4)>> {
+    let roots: Vec<gltf::Node> = match doc.default_scene().or_else(|| doc.scenes().next()) {
+        Some(scene) => scene.nodes().collect(),
+        None => {
+            let mut is_child = vec![false; doc.nodes().count()];
+            for n in doc.nodes() {
+                for c in n.children() {
+                    is_child[c.index()] = true;
+                }
+            }
+            doc.nodes().filter(|n| !is_child[n.index()]).collect()
+        }
+    };
+    let mut out = Vec::new();
+    let mut on_path = vec![false; doc.nodes().count()];
+    for root in roots {
+        visit(path, root, DMat4::IDENTITY, &mut on_path, &mut out)?;
+    }
+    Ok(out)
+}
+
+fn visit<'a>(
+    path: &Path,
+    node: gltf::Node<'a>,
+    parent: DMat4,
+    on_path: &mut [bool],
+    out: &mut Vec<(gltf::Node<'a>, DMat4)>,
+) -> Result<()> {
+    let i = node.index();
+    if on_path[i] {
+        return Err(Error::parse(path, format!("nodes[{i}]: is its own ancestor (the node hierarchy has a cycle)")));
+    }
+    if out.len() >= MAX_INSTANCES {
+        return Err(Error::parse(
+            path,
+            format!("nodes[{i}]: the node hierarchy expands to over {MAX_INSTANCES} nodes"),
+        ));
+    }
+    let local = node_matrix(path, &node)?;
+    let world = parent * local;
+    on_path[i] = true;
+    let children: Vec<gltf::Node<'a>> = node.children().collect();
+    out.push((node, world));
+    for child in children {
+        visit(path, child, world, on_path, out)?;
+    }
+    on_path[i] = false;
+    Ok(())
+}
+
+/// A node's local matrix in `f64`: its `matrix`, or `T * R * S`.
+fn node_matrix(path: &Path, node: &gltf::Node) -> Result<DMat4> {
+    let i = node.index();
+    let f = |v: f32| f64::from(v);
+    let m = match node.transform() {
+        gltf::scene::Transform::Matrix { matrix } => DMat4::from_cols_array_2d(&matrix.map(|col| col.map(f))),
+        gltf::scene::Transform::Decomposed { translation: t, rotation: r, scale: s } => {
+            let q = DQuat::from_xyzw(f(r[0]), f(r[1]), f(r[2]), f(r[3]));
+            if !(q.is_finite() && q.length() > 0.0) {
+                return Err(Error::parse(
+                    path,
+                    format!("nodes[{i}].rotation: not a finite non-zero quaternion: {r:?}"),
+                ));
+            }
+            DMat4::from_scale_rotation_translation(
+                DVec3::new(f(s[0]), f(s[1]), f(s[2])),
+                q.normalize(),
+                DVec3::new(f(t[0]), f(t[1]), f(t[2])),
+            )
+        }
+    };
+    if !m.is_finite() {
+        return Err(Error::parse(path, format!("nodes[{i}]: transform has a non-finite value")));
+    }
+    Ok(m)
+}
+
+/// Most elements an accessor without a buffer view (all zeros) may declare.
+const MAX_ZERO_ELEMENTS: usize = 1 << 24;
+
+/// An accessor's elements as `f64` components, `comps` per element.
+struct Elements {
+    comps: usize,
+    data: Vec<f64>,
+}
+
+impl Elements {
+    fn len(&self) -> usize {
+        self.data.len() / self.comps
+    }
+
+    fn iter(&self) -> std::slice::ChunksExact<'_, f64> {
+        self.data.chunks_exact(self.comps)
+    }
+}
+
+/// Typed, bounds-checked reads of accessors.
+struct Reader<'a> {
+    path: &'a Path,
+    buffers: &'a [Vec<u8>],
+}
+
+impl Reader<'_> {
+    /// The components of every element as `f64` (normalised integers mapped to `[0, 1]` or
+    /// `[-1, 1]`), after checking the accessor's type against `dims` and `types`.
+    fn read(
+        &self,
+        at: &str,
+        accessor: &gltf::Accessor,
+        dims: &[Dimensions],
+        types: &[(DataType, bool)],
+        want: &str,
+    ) -> Result<Elements> {
+        let err = |msg: String| Error::parse(self.path, format!("{at}: accessor {}: {msg}", accessor.index()));
+        let (dt, dim, norm) = (accessor.data_type(), accessor.dimensions(), accessor.normalized());
+        if !dims.contains(&dim) || !types.contains(&(dt, norm)) {
+            let n = if norm { " normalized" } else { "" };
+            return Err(err(format!("is {} of{n} {}, expected {want}", dims_name(dim), type_name(dt))));
+        }
+        if accessor.sparse().is_some() {
+            return Err(err("sparse accessors are not supported".into()));
+        }
+        let count = accessor.count();
+        let comps = dim.multiplicity();
+        let size = dt.size();
+        let elem = comps * size;
+        let Some(view) = accessor.view() else {
+            // No buffer view: zeros (the specification's initial value of sparse accessors).
+            if count > MAX_ZERO_ELEMENTS {
+                return Err(err(format!("{count} elements without a buffer view (over {MAX_ZERO_ELEMENTS})")));
+            }
+            return Ok(Elements { comps, data: vec![0.0; comps * count] });
+        };
+        let stride = view.stride().unwrap_or(elem);
+        if stride < elem {
+            return Err(err(format!("byteStride {stride} is smaller than one element ({elem} bytes)")));
+        }
+        let buffer = &self.buffers[view.buffer().index()];
+        let start = view.offset() as u128 + accessor.offset() as u128;
+        let view_end = view.offset() as u128 + view.length() as u128;
+        let end = if count == 0 { start } else { start + stride as u128 * (count as u128 - 1) + elem as u128 };
+        if end > view_end || view_end > buffer.len() as u128 {
+            return Err(err(format!(
+                "{count} elements of {elem} bytes (stride {stride}) at byte {start} run past the end of bufferViews[{}] \
+                 (bytes {}..{view_end}) or of its buffer ({} bytes)",
+                view.index(),
+                view.offset(),
+                buffer.len()
+            )));
+        }
+        let start = start as usize;
+        let mut data = Vec::with_capacity(count * comps);
+        for k in 0..count {
+            let e = &buffer[start + k * stride..start + k * stride + elem];
+            data.extend((0..comps).map(|c| component(&e[c * size..(c + 1) * size], dt, norm)));
+        }
+        Ok(Elements { comps, data })
+    }
+}
+
+/// The glTF name of an accessor type.
+fn dims_name(d: Dimensions) -> &'static str {
+    match d {
+        Dimensions::Scalar => "SCALAR",
+        Dimensions::Vec2 => "VEC2",
+        Dimensions::Vec3 => "VEC3",
+        Dimensions::Vec4 => "VEC4",
+        Dimensions::Mat2 => "MAT2",
+        Dimensions::Mat3 => "MAT3",
+        Dimensions::Mat4 => "MAT4",
+    }
+}
+
+/// The glTF name of a component type.
+fn type_name(t: DataType) -> &'static str {
+    match t {
+        DataType::I8 => "BYTE",
+        DataType::U8 => "UNSIGNED_BYTE",
+        DataType::I16 => "SHORT",
+        DataType::U16 => "UNSIGNED_SHORT",
+        DataType::U32 => "UNSIGNED_INT",
+        DataType::F32 => "FLOAT",
+    }
+}
+
+fn component(b: &[u8], dt: DataType, norm: bool) -> f64 {
+    let (v, max) = match dt {
+        DataType::I8 => (f64::from(b[0] as i8), 127.0),
+        DataType::U8 => (f64::from(b[0]), 255.0),
+        DataType::I16 => (f64::from(i16::from_le_bytes([b[0], b[1]])), 32767.0),
+        DataType::U16 => (f64::from(u16::from_le_bytes([b[0], b[1]])), 65535.0),
+        DataType::U32 => (f64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])), 4294967295.0),
+        DataType::F32 => return f64::from(f32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+    };
+    if norm {
+        (v / max).max(-1.0)
+    } else {
+        v
+    }
+}
+
+const FLOAT: (DataType, bool) = (DataType::F32, false);
+const UNORM8: (DataType, bool) = (DataType::U8, true);
+const UNORM16: (DataType, bool) = (DataType::U16, true);
+
+/// The merged mesh being built, and its parts keyed by material index.
+#[derive(Default)]
+struct Builder {
+    mesh: Mesh,
+    parts: Vec<(Option<usize>, MeshPart)>,
+    has_normals: bool,
+    has_uvs: bool,
+    has_colors: bool,
+}
+
+impl Builder {
+    fn add_primitive(
+        &mut self,
+        r: &Reader,
+        at: &str,
+        prim: &gltf::Primitive,
+        world: DMat4,
+        warnings: &mut Vec<String>,
+    ) -> Result<()> {
+        let path = r.path;
+        let position = prim
+            .get(&gltf::Semantic::Positions)
+            .ok_or_else(|| Error::parse(path, format!("{at}: has no POSITION attribute")))?;
+        let positions =
+            r.read(&format!("{at}.attributes.POSITION"), &position, &[Dimensions::Vec3], &[FLOAT], "VEC3 of FLOAT")?;
+        let n = positions.len();
+        let same_count = |name: &str, len: usize| -> Result<()> {
+            if len == n {
+                Ok(())
+            } else {
+                Err(Error::parse(path, format!("{at}.attributes.{name}: {len} elements, but POSITION has {n}")))
+            }
+        };
+        let normals = match prim.get(&gltf::Semantic::Normals) {
+            Some(a) => {
+                let v =
+                    r.read(&format!("{at}.attributes.NORMAL"), &a, &[Dimensions::Vec3], &[FLOAT], "VEC3 of FLOAT")?;
+                same_count("NORMAL", v.len())?;
+                Some(v)
+            }
+            None => None,
+        };
+        let material = prim.material();
+        let pbr = material.pbr_metallic_roughness();
+        let tex_info = pbr.base_color_texture();
+        let set = tex_info.as_ref().map_or(0, |t| t.tex_coord());
+        let uvs = match prim.get(&gltf::Semantic::TexCoords(set)) {
+            Some(a) => {
+                let name = format!("TEXCOORD_{set}");
+                let v = r.read(
+                    &format!("{at}.attributes.{name}"),
+                    &a,
+                    &[Dimensions::Vec2],
+                    &[FLOAT, UNORM8, UNORM16],
+                    "VEC2 of FLOAT or normalized UNSIGNED_BYTE/UNSIGNED_SHORT",
+                )?;
+                same_count(&name, v.len())?;
+                Some(v)
+            }
+            None => None,
+        };
+        let colors = match prim.get(&gltf::Semantic::Colors(0)) {
+            Some(a) => {
+                let v = r.read(
+                    &format!("{at}.attributes.COLOR_0"),
+                    &a,
+                    &[Dimensions::Vec3, Dimensions::Vec4],
+                    &[FLOAT, UNORM8, UNORM16],
+                    "VEC3/VEC4 of FLOAT or normalized UNSIGNED_BYTE/UNSIGNED_SHORT",
+                )?;
+                same_count("COLOR_0", v.len())?;
+                Some(v)
+            }
+            None => None,
+        };
+        let indices: Vec<u32> = match prim.indices() {
+            Some(a) => {
+                let at_i = format!("{at}.indices");
+                let v = r.read(
+                    &at_i,
+                    &a,
+                    &[Dimensions::Scalar],
+                    &[(DataType::U8, false), (DataType::U16, false), (DataType::U32, false)],
+                    "SCALAR of UNSIGNED_BYTE, UNSIGNED_SHORT or UNSIGNED_INT",
+                )?;
+                let mut out = Vec::with_capacity(v.len());
+                for (k, x) in v.iter().enumerate() {
+                    let idx = x[0];
+                    if idx >= n as f64 {
+                        return Err(Error::parse(
+                            path,
+                            format!("{at_i}: index {idx} (element {k}) is out of range (POSITION has {n} vertices)"),
+                        ));
+                    }
+                    out.push(idx as u32);
+                }
+                out
+            }
+            None => {
+                (0..u32::try_from(n).map_err(|_| Error::parse(path, format!("{at}: over 2^32 vertices")))?).collect()
+            }
+        };
+        let corners = unroll(prim.mode(), &indices);
+        if corners.len() * 3 != indices.len() && prim.mode() == Mode::Triangles {
+            warnings.push(format!(
+                "{}: {at}: {} indices is not a multiple of 3; the last {} ignored",
+                path.display(),
+                indices.len(),
+                indices.len() % 3
+            ));
+        }
+
+        // Transform into the file's world frame.
+        let linear = DMat3::from_mat4(world);
+        let mirror = linear.determinant() < 0.0;
+        let normal_matrix = if linear.determinant().abs() > 0.0 { linear.inverse().transpose() } else { DMat3::ZERO };
+        let offset = self.mesh.positions.len();
+        let base =
+            u32::try_from(offset + n).map(|_| offset as u32).map_err(|_| Error::parse(path, "over 2^32 vertices"))?;
+        for (k, p) in positions.iter().enumerate() {
+            let w = world.transform_point3(DVec3::new(p[0], p[1], p[2]));
+            if !w.is_finite() {
+                return Err(Error::parse(
+                    path,
+                    format!(
+                        "{at}.attributes.POSITION: vertex {k} is not finite ({}, {}, {}) in the scene frame",
+                        p[0], p[1], p[2]
+                    ),
+                ));
+            }
+            self.mesh.positions.push(w);
+        }
+        let normals_out = self.mesh.normals.get_or_insert_with(Vec::new);
+        normals_out.resize(offset, DVec3::ZERO);
+        match &normals {
+            Some(v) => {
+                self.has_normals = true;
+                for (k, x) in v.iter().enumerate() {
+                    let nn = DVec3::new(x[0], x[1], x[2]);
+                    if !nn.is_finite() {
+                        return Err(Error::parse(path, format!("{at}.attributes.NORMAL: element {k} is not finite")));
+                    }
+                    normals_out.push((normal_matrix * nn).normalize_or_zero());
+                }
+            }
+            // Zero normals: shading falls back to the geometric normal.
+            None => normals_out.resize(offset + n, DVec3::ZERO),
+        }
+        let uvs_out = self.mesh.uvs.get_or_insert_with(Vec::new);
+        uvs_out.resize(offset, DVec2::ZERO);
+        match &uvs {
+            Some(v) => {
+                self.has_uvs = true;
+                for (k, x) in v.iter().enumerate() {
+                    if !(x[0].is_finite() && x[1].is_finite()) {
+                        return Err(Error::parse(
+                            path,
+                            format!("{at}.attributes.TEXCOORD_{set}: element {k} is not finite"),
+                        ));
+                    }
+                    uvs_out.push(DVec2::new(x[0], 1.0 - x[1]));
+                }
+            }
+            None => uvs_out.resize(offset + n, DVec2::ZERO),
+        }
+        let colors_out = self.mesh.colors.get_or_insert_with(Vec::new);
+        colors_out.resize(offset, DVec3::ONE);
+        match &colors {
+            Some(v) => {
+                self.has_colors = true;
+                for (k, x) in v.iter().enumerate() {
+                    let c = DVec3::new(x[0], x[1], x[2]);
+                    if !c.is_finite() || c.min_element() < 0.0 {
+                        return Err(Error::parse(
+                            path,
+                            format!("{at}.attributes.COLOR_0: element {k} is not a finite colour >= 0"),
+                        ));
+                    }
+                    colors_out.push(c);
+                }
+            }
+            None => colors_out.resize(offset + n, DVec3::ONE),
+        }
+        let first = self.mesh.triangles.len();
+        for [a, b, c] in corners {
+            let t = [base + a, base + b, base + c];
+            self.mesh.triangles.push(if mirror { [t[0], t[2], t[1]] } else { t });
+        }
+        let range = first..self.mesh.triangles.len();
+        if range.is_empty() {
+            return Ok(());
+        }
+        let key = material.index();
+        match self.parts.last_mut() {
+            Some((k, part)) if *k == key && part.material.vertex_colors == colors.is_some() => {
+                part.triangles.end = range.end;
+            }
+            _ => {
+                let file_material = file_material(r, at, &material, colors.is_some(), uvs.is_some(), warnings)?;
+                self.parts.push((key, MeshPart { triangles: range, material: file_material }));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Triangle corners (indices into the primitive's vertices) of a triangle primitive.
+fn unroll(mode: Mode, idx: &[u32]) -> Vec<[u32; 3]> {
+    match mode {
+        Mode::Triangles => idx.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+        // Specification: triangle i is {v_i, v_(i + 1 + i % 2), v_(i + 2 - i % 2)}.
+        Mode::TriangleStrip => {
+            (0..idx.len().saturating_sub(2)).map(|i| [idx[i], idx[i + 1 + i % 2], idx[i + 2 - i % 2]]).collect()
+        }
+        // Specification: triangle i is {v_(i + 1), v_(i + 2), v_0}.
+        Mode::TriangleFan => (0..idx.len().saturating_sub(2)).map(|i| [idx[i + 1], idx[i + 2], idx[0]]).collect(),
+        _ => Vec::new(),
+    }
+}
+
+/// A primitive's material as the mesh layer describes it.
+fn file_material(
+    r: &Reader,
+    at: &str,
+    material: &gltf::Material,
+    vertex_colors: bool,
+    has_uvs: bool,
+    warnings: &mut Vec<String>,
+) -> Result<FileMaterial> {
+    let path = r.path;
+    let Some(index) = material.index() else {
+        return Ok(FileMaterial { vertex_colors, ..Default::default() });
+    };
+    let pbr = material.pbr_metallic_roughness();
+    let [cr, cg, cb, _] = pbr.base_color_factor().map(f64::from);
+    let base_color = DVec3::new(cr, cg, cb);
+    let at_m = format!("materials[{index}]");
+    if !base_color.is_finite() || base_color.min_element() < 0.0 {
+        return Err(Error::parse(path, format!("{at_m}.baseColorFactor: must be finite and >= 0, got {base_color}")));
+    }
+    let texture = match pbr.base_color_texture() {
+        None => None,
+        Some(_) if !has_uvs => {
+            warnings.push(format!(
+                "{}: {at}: {at_m} has a base colour texture but the primitive has no texture coordinates; texture ignored",
+                path.display()
+            ));
+            None
+        }
+        Some(info) => {
+            let tex = info.texture();
+            let image = tex.source();
+            let at_img = format!("images[{}]", image.index());
+            let source = match image.source() {
+                gltf::image::Source::View { view, .. } => {
+                    let buffer = &r.buffers[view.buffer().index()];
+                    let bytes = buffer.get(view.offset()..view.offset() + view.length()).ok_or_else(|| {
+                        Error::parse(
+                            path,
+                            format!("{at_img}: bufferViews[{}] runs past the end of its buffer", view.index()),
+                        )
+                    })?;
+                    TextureSource::Embedded { name: at_img, bytes: bytes.to_vec() }
+                }
+                gltf::image::Source::Uri { uri, .. } => {
+                    match resolve_uri(path, path.parent().unwrap_or(Path::new("")), &at_img, uri)? {
+                        UriTarget::Data(bytes) => TextureSource::Embedded { name: at_img, bytes },
+                        UriTarget::File(file) => TextureSource::File(file),
+                    }
+                }
+            };
+            let sampler = tex.sampler();
+            let filter = match sampler.mag_filter() {
+                Some(gltf::texture::MagFilter::Nearest) => Filter::Nearest,
+                _ => Filter::Bilinear,
+            };
+            let wrap = match sampler.wrap_s() {
+                gltf::texture::WrappingMode::ClampToEdge => Wrap::Clamp,
+                gltf::texture::WrappingMode::Repeat => Wrap::Repeat,
+                gltf::texture::WrappingMode::MirroredRepeat => {
+                    warnings.push(format!(
+                        "{}: {at_m}: mirrored-repeat texture wrapping is read as repeat",
+                        path.display()
+                    ));
+                    Wrap::Repeat
+                }
+            };
+            Some(FileTexture { source, filter: Some(filter), wrap: Some(wrap) })
+        }
+    };
+    Ok(FileMaterial { name: material.name().map(String::from), base_color: Some(base_color), texture, vertex_colors })
+}

@@ -1,0 +1,29 @@
+//! Which inimtrace made an output: the package version and the git revision it was built from
+//! (fixed at build time by `build.rs`, so a binary run outside the checkout still knows it).
+//! Written into every EXR header, `results.json` and the bench reports.
+
+use serde::Serialize;
+
+/// The package version (`Cargo.toml`).
+pub const VERSION: &str = env!("CARGO_PKG_VERSION");
+
+/// `git describe --always --dirty --abbrev=7` of the source tree at build time (`-dirty` when
+/// it had uncommitted changes), `$INIMTRACE_GIT_REVISION` when that was set at build time, or
+/// `unknown` when built outside a git checkout.
+pub const GIT_REVISION: &str = env!("INIMTRACE_GIT_REVISION");
+
+/// The tool that wrote an output, as reports record it.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct Tool {
+    pub name: &'static str,
+    pub version: &'static str,
+    pub git_revision: &'static str,
+}
+
+/// This build.
+pub const TOOL: Tool = Tool { name: "inimtrace", version: VERSION, git_revision: GIT_REVISION };
+
+/// `"inimtrace 0.1.0 (git abc1234)"`: the EXR `software` attribute.
+pub fn software() -> String {
+    format!("inimtrace {VERSION} (git {GIT_REVISION})")
+}

@@ -1,0 +1,193 @@
+//! EXR output for downstream tools (issue "compressed, typed EXR"): lossless compression round
+//! trips bit for bit, numeric header attributes keep their types, the paper's display image
+//! shrinks to at most a third of its uncompressed size, and OpenEXR's own Python bindings read
+//! back the same pixels, types and values.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use inimtrace::io::exr::{
+    read_compression, read_rgb_depth, read_typed_attributes, write_rgb_with, AttrValue, Attributes, ExrCompression,
+};
+use inimtrace::optics::Display;
+use inimtrace::progress::Progress;
+use inimtrace::raster::RgbImage;
+use inimtrace::render::{render_display_image_with_depth, with_fields, BackendChoice, DisplayRenderSettings, Method};
+use inimtrace::scene::Scene;
+
+/// A smooth image with flat regions and noise-like mantissas, and a depth plane with misses.
+fn image(w: usize, h: usize) -> (RgbImage, Vec<f32>) {
+    let mut img = RgbImage::new(w, h);
+    let mut depth = Vec::with_capacity(w * h);
+    for r in 0..h {
+        for c in 0..w {
+            let k = (r * w + c) as u32;
+            let noise = f32::from_bits(0x3e00_0000 + k.wrapping_mul(2_654_435_761) % 0x0080_0000);
+            img.set(r, c, if c < w / 3 { [0.2, 0.7, 0.8] } else { [noise, (r as f32) / h as f32, 1.0e-30] });
+            depth.push(if r == 0 { f32::INFINITY } else { 300.0 + 0.01 * k as f32 });
+        }
+    }
+    (img, depth)
+}
+
+fn typed() -> Attributes {
+    let mut a = Attributes::new();
+    a.set("inimtrace:focus_mm", 300.0f64)
+        .set("inimtrace:focus_diopters", 1000.0 / 300.0)
+        .set("inimtrace:half_float_note", 0.25f32)
+        .set("inimtrace:pupil_samples", 52i32)
+        .set("inimtrace:method", "LA (5x5)");
+    a
+}
+
+#[test]
+fn every_lossless_compression_round_trips_bit_for_bit_with_typed_attributes() {
+    let dir = tempfile::tempdir().unwrap();
+    let (img, depth) = image(67, 41);
+    for c in [ExrCompression::None, ExrCompression::Rle, ExrCompression::Zips, ExrCompression::Zip, ExrCompression::Piz]
+    {
+        let path = dir.path().join(format!("{c}.exr"));
+        write_rgb_with(&path, &img, Some(&depth), &typed(), c).unwrap();
+        assert_eq!(read_compression(&path).unwrap(), Some(c));
+        let (back, z) = read_rgb_depth(&path).unwrap();
+        assert!(back.pixels.iter().zip(&img.pixels).all(|(a, b)| a.map(f32::to_bits) == b.map(f32::to_bits)), "{c}");
+        assert!(z.unwrap().iter().zip(&depth).all(|(a, b)| a.to_bits() == b.to_bits()), "{c}: Z");
+        let attrs = read_typed_attributes(&path).unwrap();
+        let get = |k: &str| attrs.iter().find(|(n, _)| n == k).map(|(_, v)| v.clone());
+        assert_eq!(get("inimtrace:focus_mm"), Some(AttrValue::F64(300.0)));
+        assert_eq!(get("inimtrace:focus_diopters"), Some(AttrValue::F64(1000.0 / 300.0)));
+        assert_eq!(get("inimtrace:half_float_note"), Some(AttrValue::F32(0.25)));
+        assert_eq!(get("inimtrace:pupil_samples"), Some(AttrValue::I32(52)));
+        assert_eq!(get("inimtrace:method"), Some(AttrValue::Text("LA (5x5)".into())));
+        assert_eq!(get("inimtrace:version"), Some(AttrValue::Text(inimtrace::version::VERSION.into())));
+        assert_eq!(get("inimtrace:git_revision"), Some(AttrValue::Text(inimtrace::version::GIT_REVISION.into())));
+        assert_eq!(get("software"), Some(AttrValue::Text(inimtrace::version::software())));
+    }
+    // PXR24 is lossy for f32: within its 24-bit precision, not exact.
+    let path = dir.path().join("pxr24.exr");
+    write_rgb_with(&path, &img, None, &typed(), ExrCompression::Pxr24).unwrap();
+    let (back, _) = read_rgb_depth(&path).unwrap();
+    let mut exact = true;
+    for (a, b) in back.pixels.iter().zip(&img.pixels) {
+        for k in 0..3 {
+            assert!((a[k] - b[k]).abs() <= 1e-4 * b[k].abs() + 1e-38, "{a:?} vs {b:?}");
+            exact &= a[k] == b[k];
+        }
+    }
+    assert!(!exact, "pxr24 rounds f32 mantissas");
+}
+
+fn paper_display_image(display: &Display) -> (RgbImage, Option<Vec<f32>>) {
+    let scene = Scene::paper();
+    with_fields(&scene, BackendChoice::Analytic, |f| {
+        render_display_image_with_depth(
+            display,
+            Method::LensletCenter,
+            &DisplayRenderSettings::default(),
+            f.with_depth,
+            &Progress::hidden(),
+        )
+    })
+    .unwrap()
+}
+
+#[test]
+fn the_papers_display_image_compresses_to_under_a_third() {
+    // The issue's case: the paper's 2160 x 2160 LC display image with its Z channel.
+    let display = Display::paper();
+    let (img, depth) = paper_display_image(&display);
+    let dir = tempfile::tempdir().unwrap();
+    let size = |c: ExrCompression| {
+        let p = dir.path().join(format!("display_{c}.exr"));
+        write_rgb_with(&p, &img, depth.as_deref(), &typed(), c).unwrap();
+        std::fs::metadata(&p).unwrap().len()
+    };
+    let (none, zip) = (size(ExrCompression::None), size(ExrCompression::Zip));
+    // Four f32 channels: the uncompressed file is the samples plus a small header.
+    assert!(none >= (2160 * 2160 * 16) as u64 && none < (2160 * 2160 * 16 + 200_000) as u64, "{none}");
+    assert!(3 * zip <= none, "ZIP {zip} bytes is over a third of {none}");
+    eprintln!("display_LC.exr: {none} bytes uncompressed, {zip} bytes ZIP ({:.1} %)", 100.0 * zip as f64 / none as f64);
+}
+
+/// The Python with OpenEXR's bindings: `$INIMTRACE_PYTHON`, the venv that
+/// `scripts/install-deps.sh` makes under `target/`, `/tmp/venv-exr`, or `python3`.
+fn python_with_openexr() -> Result<PathBuf, String> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut candidates: Vec<PathBuf> = std::env::var_os("INIMTRACE_PYTHON").map(PathBuf::from).into_iter().collect();
+    candidates.extend([root.join("target/venv-exr/bin/python"), PathBuf::from("/tmp/venv-exr/bin/python")]);
+    candidates.push(PathBuf::from("python3"));
+    let mut tried = Vec::new();
+    for py in candidates {
+        match Command::new(&py).args(["-c", "import OpenEXR, numpy"]).output() {
+            Ok(o) if o.status.success() => return Ok(py),
+            Ok(_) => tried.push(format!("{} (no OpenEXR/numpy module)", py.display())),
+            Err(e) => tried.push(format!("{} ({e})", py.display())),
+        }
+    }
+    Err(format!("no python with OpenEXR and numpy: tried {}", tried.join(", ")))
+}
+
+const READER: &str = r#"
+import json, sys
+import numpy as np
+import OpenEXR
+f = OpenEXR.File(sys.argv[1])
+h = f.header()
+out = {}
+for k, v in h.items():
+    if not k.startswith("inimtrace:") and k != "software":
+        continue
+    if isinstance(v, str):
+        out[k] = ["string", v]
+    elif isinstance(v, int):
+        out[k] = ["int", v]
+    elif isinstance(v, float):
+        out[k] = ["float", v]
+    elif isinstance(v, np.ndarray) and v.dtype == np.float64 and v.size == 1:
+        out[k] = ["double", float(v[0])]
+    else:
+        out[k] = ["other", repr(v)]
+out["compression"] = ["compression", str(h["compression"])]
+ch = f.channels()
+rgb = ch["RGB"].pixels
+out["rgb_shape"] = ["shape", list(rgb.shape)]
+out["rgb_dtype"] = ["dtype", str(rgb.dtype)]
+open(sys.argv[2], "wb").write(np.ascontiguousarray(rgb, dtype=np.float32).tobytes())
+print(json.dumps(out))
+"#;
+
+#[test]
+fn openexr_python_bindings_read_back_types_values_and_pixels() {
+    let py = match python_with_openexr() {
+        Ok(p) => p,
+        Err(why) => {
+            assert!(std::env::var_os("INIMTRACE_REQUIRE_OPENEXR").is_none(), "INIMTRACE_REQUIRE_OPENEXR is set: {why}");
+            eprintln!("SKIPPED openexr_python_bindings_read_back_types_values_and_pixels: {why}");
+            return;
+        }
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let (img, depth) = image(53, 29);
+    let path = dir.path().join("typed.exr");
+    write_rgb_with(&path, &img, Some(&depth), &typed(), ExrCompression::Zip).unwrap();
+    let raw = dir.path().join("rgb.f32");
+    let script = dir.path().join("read.py");
+    std::fs::write(&script, READER).unwrap();
+    let out = Command::new(&py).arg(&script).arg(&path).arg(&raw).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let get = |k: &str| (v[k][0].as_str().unwrap_or("missing").to_string(), v[k][1].clone());
+    assert_eq!(get("inimtrace:focus_mm"), ("double".into(), serde_json::json!(300.0)));
+    assert_eq!(get("inimtrace:focus_diopters"), ("double".into(), serde_json::json!(1000.0 / 300.0)));
+    assert_eq!(get("inimtrace:half_float_note"), ("float".into(), serde_json::json!(0.25)));
+    assert_eq!(get("inimtrace:pupil_samples"), ("int".into(), serde_json::json!(52)));
+    assert_eq!(get("inimtrace:method"), ("string".into(), serde_json::json!("LA (5x5)")));
+    assert_eq!(get("inimtrace:git_revision"), ("string".into(), serde_json::json!(inimtrace::version::GIT_REVISION)));
+    assert_eq!(get("software").1, serde_json::json!(inimtrace::version::software()));
+    assert!(get("compression").1.as_str().unwrap().contains("ZIP"), "{v}");
+    assert_eq!(get("rgb_shape").1, serde_json::json!([29, 53, 3]));
+    // The pixels, row 0 at the top, bit for bit.
+    let bytes = std::fs::read(&raw).unwrap();
+    let ours: Vec<u8> = img.pixels.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
+    assert!(bytes == ours, "OpenEXR reads other pixels than inimtrace wrote");
+}
