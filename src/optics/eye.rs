@@ -110,7 +110,7 @@ impl Eye {
         }
         limits::RETINA_DISTANCE.check(source, "retina_distance", self.retina_distance)?;
         for (axis, v) in ["x", "y", "z"].iter().zip(self.position.to_array()) {
-            limits::EYE_POSITION.check(source, &format!("eye_position.{axis}"), v)?;
+            limits::EYE_POSITION.check(source, &format!("position.{axis}"), v)?;
         }
         if let Aperture::ThinLens { pupil_diameter, focus } = self.aperture {
             if !(pupil_diameter.is_finite() && pupil_diameter > 0.0) {
