@@ -22,7 +22,7 @@ use inimtrace::render::{
     ground_truth, render_display_image_with_depth, with_fields, BackendChoice, DisplayRenderSettings, Fields, Method,
 };
 use inimtrace::scene::Scene;
-use inimtrace::settings::{display_with, scene_with, Settings};
+use inimtrace::settings::{display_with, scene_with, setup_with, Settings};
 
 /// `print!` that returns write errors (a closed pipe) instead of panicking.
 macro_rules! out {
@@ -371,7 +371,7 @@ fn parse_vec3(s: &str) -> std::result::Result<DVec3, String> {
 
 fn load_setup(setup: &Setup, set: &[Override]) -> Result<(Scene, Display)> {
     if !set.is_empty() {
-        return Ok((scene_with(setup.scene.as_deref(), set)?, display_with(setup.display.as_deref(), set)?));
+        return Ok(setup_with(setup.scene.as_deref(), setup.display.as_deref(), set)?);
     }
     let scene = match &setup.scene {
         Some(p) => load_scene(&p.to_string_lossy(), Path::new(""))?,
@@ -665,6 +665,9 @@ fn run() -> Result<()> {
         }
         Command::Info { display, scene, pupil, json, print } => {
             if let Some(what) = print {
+                if !set.is_empty() {
+                    bail!("--set does not apply to --print (it prints the built-in files as they are)");
+                }
                 let text = match what {
                     PrintTarget::PaperExperiment => ExperimentSpec::paper_converged().to_toml(),
                     PrintTarget::PaperGridExperiment => ExperimentSpec::paper().to_toml(),

@@ -326,16 +326,23 @@ impl Resolved {
     }
 }
 
-/// Loads `scene` of an experiment, or a single-stage command's `--scene`, with `overrides`
-/// (keys `scene.…`; `display.…` keys are left to [`display_with`]).
+/// Loads a single-stage command's scene (`--scene`, default the paper's) with `overrides`
+/// (keys `scene.…`).
 pub fn scene_with(path: Option<&Path>, overrides: &[Override]) -> Result<Scene> {
-    Settings::parts(Some(path), None)?.with_overrides(overrides.iter().filter(|o| o.top() != "display")).scene()
+    Settings::parts(Some(path), None)?.with_overrides(overrides).scene()
 }
 
-/// Loads a display (`--display`, default the paper's) with `overrides` (keys `display.…`;
-/// `scene.…` keys are left to [`scene_with`]).
+/// Loads a single-stage command's display (`--display`, default the paper's) with `overrides`
+/// (keys `display.…`).
 pub fn display_with(path: Option<&Path>, overrides: &[Override]) -> Result<Display> {
-    Settings::parts(None, Some(path))?.with_overrides(overrides.iter().filter(|o| o.top() != "scene")).display()
+    Settings::parts(None, Some(path))?.with_overrides(overrides).display()
+}
+
+/// Loads a single-stage command's scene and display with `overrides` (keys `scene.…` or
+/// `display.…`).
+pub fn setup_with(scene: Option<&Path>, display: Option<&Path>, overrides: &[Override]) -> Result<(Scene, Display)> {
+    let s = Settings::parts(Some(scene), Some(display))?.with_overrides(overrides);
+    Ok((s.scene()?, s.display()?))
 }
 
 type ExperimentSpecs = (ExperimentSpec, SceneSpec, DisplaySpec);
@@ -532,8 +539,11 @@ mod tests {
 
     #[test]
     fn single_stage_commands_take_scene_and_display_keys_only() {
-        let d = display_with(None, &set(&["display.lcd.resolution=[540, 540]", "scene.name=\"x\""])).unwrap();
+        let (s, d) = setup_with(None, None, &set(&["display.lcd.resolution=[540, 540]", "scene.name=\"x\""])).unwrap();
         assert_eq!(d.lcd.resolution, [540, 540]);
+        assert_eq!(s.name, "x");
+        let e = display_with(None, &set(&["scene.name=\"x\""])).unwrap_err().to_string();
+        assert!(e.contains("scene.name") && e.contains("`display.`"), "{e}");
         let s = scene_with(None, &set(&["scene.objects[1].size=[10, 10]"])).unwrap();
         assert!(format!("{:?}", s.objects[1].shape).contains("5.0"));
         let e = display_with(None, &set(&["eye.pupil_diameter=3"])).unwrap_err().to_string();

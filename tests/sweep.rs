@@ -168,6 +168,8 @@ fn set_errors_name_the_key() {
         &["scene.objects[0].center", "invalid length"],
     );
     expect_error(&["compare", "a.exr", "b.exr", "--set", "eye.pupil_diameter=3"], &["--set", "compare"]);
+    expect_error(&["info", "--print", "paper-scene", "--set", "scene.name=x"], &["--set", "--print"]);
+    expect_error(&["info", "--set", "scene.name=x"], &["scene.name", "`display.`"]);
 }
 
 /// Runs the tiny sweep into `out` with extra arguments.
