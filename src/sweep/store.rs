@@ -18,16 +18,19 @@ use crate::io::output::{write_atomic, TEMP_PREFIX};
 
 /// One score row of a point: a method under an eye case. PSNR in dB (`inf` for identical
 /// images); the 95% half-widths are present when the experiment's measurement gives them.
+/// Scores are stored as decimal text in their shortest round-trip form, so that they read back
+/// bit for bit (and `inf`, which JSON has no number for).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ScoreRow {
     pub method: String,
     pub eye_case: String,
-    #[serde(with = "db")]
+    #[serde(with = "exact")]
     pub psnr_db: f64,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(default, with = "exact_option", skip_serializing_if = "Option::is_none")]
     pub psnr_ci95_db: Option<f64>,
+    #[serde(with = "exact")]
     pub ssim: f64,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(default, with = "exact_option", skip_serializing_if = "Option::is_none")]
     pub ssim_ci95: Option<f64>,
 }
 
@@ -131,37 +134,37 @@ pub fn unix_now() -> u64 {
     std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.as_secs()).unwrap_or(0)
 }
 
-/// PSNR in JSON: a number, or the string "inf" for identical images (JSON has no infinity).
-mod db {
-    use serde::{Deserialize, Deserializer, Serializer};
+/// An `f64` as JSON text: Rust's shortest round-trip decimal form (`24.928587269627645`,
+/// `inf`), read back with a correctly rounded parse, so a score survives a record bit for bit.
+mod exact {
+    use serde::{de::Error, Deserialize, Deserializer, Serializer};
 
     pub fn serialize<S: Serializer>(v: &f64, s: S) -> Result<S::Ok, S::Error> {
-        if v.is_finite() {
-            s.serialize_f64(*v)
-        } else {
-            s.serialize_str(if *v > 0.0 {
-                "inf"
-            } else if *v < 0.0 {
-                "-inf"
-            } else {
-                "nan"
-            })
-        }
+        s.serialize_str(&v.to_string())
     }
 
     pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
-        #[derive(Deserialize)]
-        #[serde(untagged)]
-        enum Db {
-            Number(f64),
-            Text(String),
+        let text = String::deserialize(d)?;
+        text.parse().map_err(|_| D::Error::custom(format!("`{text}` is not a number")))
+    }
+}
+
+/// [`exact`] for an optional value.
+mod exact_option {
+    use serde::{de::Error, Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(v: &Option<f64>, s: S) -> Result<S::Ok, S::Error> {
+        match v {
+            Some(v) => s.serialize_str(&v.to_string()),
+            None => s.serialize_none(),
         }
-        Ok(match Db::deserialize(d)? {
-            Db::Number(v) => v,
-            Db::Text(t) if t == "inf" => f64::INFINITY,
-            Db::Text(t) if t == "-inf" => f64::NEG_INFINITY,
-            Db::Text(_) => f64::NAN,
-        })
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+        match Option::<String>::deserialize(d)? {
+            Some(text) => text.parse().map(Some).map_err(|_| D::Error::custom(format!("`{text}` is not a number"))),
+            None => Ok(None),
+        }
     }
 }
 
@@ -188,6 +191,19 @@ mod tests {
             host: host_name(),
             finished_unix: unix_now(),
             version: "0".into(),
+        }
+    }
+
+    #[test]
+    fn scores_read_back_bit_for_bit() {
+        // Numbers whose JSON round trip through a fast float parser can lose the last bit.
+        let mut r = record("00000000000000ee");
+        for v in [13.441554971949857, 0.7831291879228122, 13.779903480640753, 1e-300, 5e-324, f64::INFINITY] {
+            r.scores[0].psnr_db = v;
+            r.scores[0].ssim_ci95 = Some(v);
+            let back: PointRecord = serde_json::from_slice(&serde_json::to_vec(&r).unwrap()).unwrap();
+            assert_eq!(back.scores[0].psnr_db.to_bits(), v.to_bits());
+            assert_eq!(back.scores[0].ssim_ci95.map(f64::to_bits), Some(v.to_bits()));
         }
     }
 
