@@ -21,7 +21,7 @@ SECONDS=0
 target/release/inimtrace bench --quiet --out "$out" "$@" > "$out/stdout.md"
 echo "inimtrace bench: ${SECONDS} s wall" >&2
 for f in bench.md summary.md bench.csv builds.csv bench.json \
-    speed_psnr speed_ssim la_grid pupil_grid retina_samples table1; do
+    speed_psnr speed_ssim la_grid pupil_grid retina_samples precision; do
     case $f in
         *.*) cp "$out/$f" "$docs/" ;;
         *) cp "$out/$f.png" "$out/$f.svg" "$docs/" ;;

@@ -102,3 +102,60 @@ pub fn bunny_eye_rays(rows: usize) -> Vec<crate::ray::Ray> {
     }
     rays
 }
+
+/// A few hundred bytes: an OpenEXR header (R, G, B float channels, no compression) whose data
+/// window claims `w` x `h` pixels, and no pixel data.
+pub fn exr_header_bomb(w: i32, h: i32) -> Vec<u8> {
+    fn attr(out: &mut Vec<u8>, name: &str, ty: &str, value: &[u8]) {
+        out.extend_from_slice(name.as_bytes());
+        out.push(0);
+        out.extend_from_slice(ty.as_bytes());
+        out.push(0);
+        out.extend_from_slice(&(value.len() as i32).to_le_bytes());
+        out.extend_from_slice(value);
+    }
+    let mut b = vec![0x76, 0x2f, 0x31, 0x01, 2, 0, 0, 0];
+    let mut channels = Vec::new();
+    for name in ["B", "G", "R"] {
+        channels.extend_from_slice(name.as_bytes());
+        channels.push(0);
+        channels.extend_from_slice(&2i32.to_le_bytes()); // FLOAT
+        channels.extend_from_slice(&[0, 0, 0, 0]); // pLinear + reserved
+        channels.extend_from_slice(&1i32.to_le_bytes());
+        channels.extend_from_slice(&1i32.to_le_bytes());
+    }
+    channels.push(0);
+    attr(&mut b, "channels", "chlist", &channels);
+    attr(&mut b, "compression", "compression", &[0]);
+    let window: Vec<u8> = [0, 0, w - 1, h - 1].iter().flat_map(|v: &i32| v.to_le_bytes()).collect();
+    attr(&mut b, "dataWindow", "box2i", &window);
+    attr(&mut b, "displayWindow", "box2i", &window);
+    attr(&mut b, "lineOrder", "lineOrder", &[0]);
+    attr(&mut b, "pixelAspectRatio", "float", &1f32.to_le_bytes());
+    attr(&mut b, "screenWindowCenter", "v2f", &[0; 8]);
+    attr(&mut b, "screenWindowWidth", "float", &1f32.to_le_bytes());
+    b.push(0);
+    b
+}
+
+/// A 57-byte PNG whose header claims `w` x `h` RGB pixels (and whose one data chunk is empty).
+pub fn png_header_bomb(w: u32, h: u32) -> Vec<u8> {
+    fn chunk(out: &mut Vec<u8>, kind: &[u8; 4], data: &[u8]) {
+        out.extend_from_slice(&(data.len() as u32).to_be_bytes());
+        let mut crc = crc32fast::Hasher::new();
+        crc.update(kind);
+        crc.update(data);
+        out.extend_from_slice(kind);
+        out.extend_from_slice(data);
+        out.extend_from_slice(&crc.finalize().to_be_bytes());
+    }
+    let mut b = vec![0x89, b'P', b'N', b'G', 0x0d, 0x0a, 0x1a, 0x0a];
+    let mut ihdr = Vec::new();
+    ihdr.extend_from_slice(&w.to_be_bytes());
+    ihdr.extend_from_slice(&h.to_be_bytes());
+    ihdr.extend_from_slice(&[8, 2, 0, 0, 0]); // 8-bit RGB, deflate, no filter, no interlace
+    chunk(&mut b, b"IHDR", &ihdr);
+    chunk(&mut b, b"IDAT", &[]);
+    chunk(&mut b, b"IEND", &[]);
+    b
+}

@@ -146,7 +146,8 @@ enum Command {
         json: bool,
     },
     /// Speed against error for every method and backend, the convergence of every sampling
-    /// parameter, and which settings bring Table 1 within 0.1 dB of its converged values; writes
+    /// parameter, and the seconds each Table 1 estimator needs to come within 0.1 to 0.01 dB of the
+    /// converged Table 1; writes
     /// bench.csv, builds.csv, bench.json, bench.md and plots (PNG, SVG).
     Bench {
         /// Small sizes (LCD 540 x 540, retina 128 x 128).
@@ -230,6 +231,14 @@ enum Command {
         #[arg(long, value_enum)]
         print: Option<PrintTarget>,
     },
+}
+
+/// Refuses an image of `pixels` pixels at `bytes_each` bytes that would not fit in the memory
+/// limit (`--max-memory`), naming the setting, before anything is allocated.
+fn check_memory(what: &str, setting: &str, pixels: usize, bytes_each: u64) -> Result<()> {
+    let mut e = inimtrace::budget::Estimate::default();
+    e.add(what, setting, pixels as u64, bytes_each);
+    Ok(e.check_memory(inimtrace::budget::memory_limit(), "command line")?)
 }
 
 /// An output image path: it must end in `.exr` (the PNG preview goes beside it), so that the
@@ -513,6 +522,12 @@ fn run() -> Result<()> {
             let (scene, display) = load_setup(&setup, &set)?;
             announce(&scene, backend, quiet);
             inimtrace::optics::limits::REFERENCE_PLANE_Z.check("command line", "--reference-plane", reference_plane)?;
+            check_memory(
+                "the display image, its depth plane and its preview",
+                &format!("lcd.resolution = {:?} of the display", display.lcd.resolution),
+                display.lcd.pixel_count(),
+                32,
+            )?;
             let settings =
                 DisplayRenderSettings { samples_per_pixel, reference_plane_z: reference_plane, eye_position };
             let (img, depth, name) = with_field(&scene, backend, |fields| {
@@ -529,6 +544,7 @@ fn run() -> Result<()> {
         Command::Simulate { display_image, setup, eye, out } => {
             let (_, display) = load_setup(&setup, &set)?;
             let (eye, retina) = eye.eye()?;
+            check_memory("the retinal image", "--retina", retina.resolution * retina.resolution, 24)?;
             let img = inimtrace::io::exr::read_rgb(&display_image)?;
             // The method, when the display image says which.
             let method = inimtrace::io::exr::read_attributes(&display_image)?
@@ -547,6 +563,7 @@ fn run() -> Result<()> {
             let backend = backend.choice()?;
             let (scene, _) = load_setup(&setup, &set)?;
             let (eye, retina) = eye.eye()?;
+            check_memory("the retinal image", "--retina", retina.resolution * retina.resolution, 24)?;
             announce(&scene, backend, quiet);
             let (img, name) = with_field(&scene, backend, |fields| {
                 let p = Progress::new(retina.resolution as u64, "ground truth", quiet);

@@ -6,7 +6,7 @@
 use std::sync::Arc;
 
 use glam::DVec3;
-use inimtrace::bench::{run, BenchOptions, Sizes};
+use inimtrace::bench::{run, BenchOptions, Estimator, Sizes, PRECISION_TARGETS_DB};
 use inimtrace::scene::procedural::icosphere;
 use inimtrace::scene::{Material, Object, Rect, Scene, Shape};
 
@@ -25,10 +25,11 @@ fn tiny() -> Sizes {
         pupil_grid_reference: 8,
         retina_samples: vec![1, 2],
         retina_samples_reference: 4,
-        table1_retina_samples: vec![1, 2],
-        table1_display_samples: vec![1, 2],
-        table1_pupil_grids: vec![4, 8],
-        table1_la_grids: vec![1, 5],
+        precision_reference_db: 0.02,
+        precision_reference_max_samples: 1 << 14,
+        precision_reference_seconds: 60.0,
+        precision_grids: vec![(4, 1), (8, 2)],
+        precision_samples: vec![2, 8, 32],
     }
 }
 
@@ -111,15 +112,39 @@ fn mesh_scene_runs_on_the_mesh_backends_only() {
         assert_eq!(c.backend, expected[0]);
         assert!(c.rate.is_some_and(|p| p < 0.0), "{c:?}");
     }
-    // So does the Table 1 series: every sweep, 3 methods x 4 eye cases per setting.
-    assert_eq!(report.table1.len(), 4);
-    for t in &report.table1 {
-        assert_eq!(t.backend, expected[0]);
-        assert_eq!(t.parameters.len(), 2, "{t:?}");
-        assert!(t.all_methods.is_some() && t.per_method.len() == 3, "{t:?}");
+    // So does the cost of precision: the reference and every estimator, 3 methods x 4 eye cases
+    // per point, each point's error the largest over those 12 cells.
+    let p = &report.precision;
+    assert!(p.reference_ci95_db <= 0.02 && p.reference_samples_per_pixel > 0, "{p:?}");
+    assert_eq!(p.reference_stopped_by, "target met");
+    assert_eq!(report.precision_rows(Estimator::Reference).count(), 12);
+    let counts = [(Estimator::Grid, 2), (Estimator::Random, 3), (Estimator::RqmcNaive, 3), (Estimator::Rqmc, 3)];
+    for (e, n) in counts {
+        let pts: Vec<_> = p.points.iter().filter(|q| q.estimator == e).collect();
+        assert_eq!(pts.len(), n, "{e}");
+        assert_eq!(report.precision_rows(e).count(), 12 * n, "{e}");
+        for r in report.precision_rows(e) {
+            assert!(r.psnr_db.is_finite() && r.psnr_db > 3.0 && r.scene == "ball" && r.backend == expected[0], "{r:?}");
+            let reference = report
+                .precision_rows(Estimator::Reference)
+                .find(|x| x.eye_case == r.eye_case && x.method == r.method)
+                .unwrap();
+            let pt = pts.iter().find(|q| q.samples_per_pixel == r.samples as u64).unwrap();
+            assert!((r.psnr_db - reference.psnr_db).abs() <= pt.max_psnr_error_db + 1e-9, "{r:?}");
+        }
+        assert!(pts.iter().all(|q| q.seconds > 0.0 && q.max_psnr_error_db.is_finite()), "{pts:?}");
+        // More samples: more seconds.
+        assert!(pts.windows(2).all(|w| w[1].seconds > w[0].seconds && w[1].samples_per_pixel > w[0].samples_per_pixel));
     }
-    let table1: Vec<_> = report.rows.iter().filter(|r| r.series == "table1").collect();
-    assert_eq!(table1.len(), 4 * 2 * 12);
-    assert!(table1.iter().all(|r| r.psnr_db.is_finite() && r.psnr_db > 3.0 && r.scene == "ball"));
-    assert!(dir.path().join("table1.svg").is_file());
+    // The naive RQMC PSNR is biased low by the noise; the de-biased one is not, so it is closer
+    // to the converged Table 1 at the same samples (the fewest: where the bias is largest).
+    let at = |e: Estimator| p.points.iter().find(|q| q.estimator == e).unwrap();
+    assert!(
+        at(Estimator::Rqmc).max_psnr_error_db < at(Estimator::RqmcNaive).max_psnr_error_db,
+        "{:?} vs {:?}",
+        at(Estimator::Rqmc),
+        at(Estimator::RqmcNaive)
+    );
+    assert_eq!(p.reached.len(), 4 * PRECISION_TARGETS_DB.len());
+    assert!(dir.path().join("precision.svg").is_file() && dir.path().join("precision.png").is_file());
 }

@@ -302,7 +302,9 @@ fn csv_fields(line: &str) -> Vec<String> {
 /// `inimtrace bench --quick` writes its CSVs, JSON, Markdown report and plots; every backend
 /// that can render the paper's scene measures every method on the display image and on each
 /// focused eye case; the convergence series approach their references; LA with k = 1 is LC; the
-/// Table 1 series is `assess`'s Table 1, and its 0.1-dB answers are what its rows say.
+/// cost of precision measures every Table 1 estimator against a converged reference (the grid
+/// estimator at the paper's settings being `assess`'s Table 1), and its thresholds are what its
+/// points say.
 #[test]
 fn bench_quick_writes_well_formed_reports() {
     let dir = tempfile::tempdir().unwrap();
@@ -313,7 +315,7 @@ fn bench_quick_writes_well_formed_reports() {
     for f in ["bench.csv", "builds.csv", "bench.json", "bench.md", "summary.md"] {
         assert!(out.join(f).is_file(), "missing {f}");
     }
-    for name in ["speed_psnr", "speed_ssim", "la_grid", "pupil_grid", "retina_samples", "table1"] {
+    for name in ["speed_psnr", "speed_ssim", "la_grid", "pupil_grid", "retina_samples", "precision"] {
         let png = std::fs::read(out.join(format!("{name}.png"))).unwrap();
         assert!(png.starts_with(b"\x89PNG\r\n\x1a\n") && png.len() > 10_000, "{name}.png");
         let svg = std::fs::read_to_string(out.join(format!("{name}.svg"))).unwrap();
@@ -435,6 +437,7 @@ fn bench_quick_writes_well_formed_reports() {
         assert_eq!(fields.len(), lines[0].len(), "{fields:?}");
         assert_eq!(fields[col("series")], r["series"].as_str().unwrap());
         assert_eq!(fields[col("sweep")], r["sweep"].as_str().unwrap());
+        assert_eq!(fields[col("estimator")], r["estimator"].as_str().unwrap_or(""));
         assert_eq!(fields[col("backend")], r["backend"].as_str().unwrap());
         assert_eq!(fields[col("reference")], r["reference"].as_str().unwrap());
         // (serde_json's float parsing may differ from Rust's in the last bit.)
@@ -449,142 +452,119 @@ fn bench_quick_writes_well_formed_reports() {
     }
     assert!(std::fs::read_to_string(out.join("summary.md")).unwrap().contains("| PC | analytic |"));
 
-    check_table1_series(&report, &stdout, &out, dir.path());
+    check_precision_series(&report, &stdout, &out, dir.path());
 }
 
-/// The `table1` rows and summaries of a `bench --quick` report.
-fn check_table1_series(report: &serde_json::Value, stdout: &str, out: &Path, dir: &Path) {
+/// The `precision` rows and summary of a `bench --quick` report.
+fn check_precision_series(report: &serde_json::Value, stdout: &str, out: &Path, dir: &Path) {
     let rows: Vec<&serde_json::Value> =
-        report["rows"].as_array().unwrap().iter().filter(|r| r["series"] == "table1").collect();
+        report["rows"].as_array().unwrap().iter().filter(|r| r["series"] == "precision").collect();
     let f = |r: &serde_json::Value, k: &str| r[k].as_f64().unwrap();
     let u = |r: &serde_json::Value, k: &str| r[k].as_u64().unwrap() as usize;
-    let sweeps: [(&str, Vec<usize>); 4] = [
-        ("retina_samples", vec![1, 2, 3, 4]),
-        ("display_samples", vec![1, 2, 3, 4]),
-        ("pupil_grid", vec![2, 3, 4, 5, 6, 8, 10, 12, 16]),
-        ("la_grid", vec![1, 2, 3, 4, 5, 6, 8]),
-    ];
-    // The paper's settings: 1 x 1 per retina and display pixel, pupil grid 8, LA 5 x 5.
-    let paper = [1, 1, 8, 5];
     let cases = ["Pin", "Near", "Cen", "Far"];
     let methods = ["LC", "PC", "LA"];
-    let tol = 0.1;
-    let summaries = report["table1"].as_array().unwrap();
-    assert_eq!(summaries.len(), 4);
-    // The Table 1 of the paper's settings, as every sweep measured it.
-    let mut paper_tables: Vec<Vec<f64>> = Vec::new();
-    for (si, (sweep, settings)) in sweeps.iter().enumerate() {
-        let sweep_rows: Vec<&serde_json::Value> = rows.iter().copied().filter(|r| r["sweep"] == *sweep).collect();
-        let point = |p: usize| -> Vec<&serde_json::Value> {
-            let mut v: Vec<&serde_json::Value> =
-                sweep_rows.iter().copied().filter(|r| u(r, "parameter") == p).collect();
-            v.sort_by_key(|r| {
-                let c = cases.iter().position(|c| r["eye_case"] == *c).unwrap();
-                (c, methods.iter().position(|m| r["method"] == *m).unwrap())
-            });
-            v
-        };
-        let psnr = |p: usize| point(p).iter().map(|r| f(r, "psnr_db")).collect::<Vec<_>>();
-        let mut seen: Vec<usize> = Vec::new();
-        for r in &sweep_rows {
-            if !seen.contains(&u(r, "parameter")) {
-                seen.push(u(r, "parameter"));
-            }
-        }
-        assert_eq!(&seen, settings, "{sweep}");
-        let mut rays = 0;
-        for &p in settings {
-            let pt = point(p);
-            // Every method under every eye case, scored by assess's metrics, with its settings.
-            assert_eq!(pt.len(), 12, "{sweep} {p}");
-            for (i, r) in pt.iter().enumerate() {
-                assert_eq!(r["eye_case"], cases[i / 3]);
-                assert_eq!(r["method"], methods[i % 3]);
+    let p = &report["precision"];
+    // The reference: the tight target met, one row per method and eye case.
+    assert!(f(p, "reference_ci95_db") <= f(p, "reference_target_db") && f(p, "reference_target_db") <= 0.01, "{p}");
+    assert_eq!(p["reference_stopped_by"], "target met");
+    let reference: Vec<&serde_json::Value> = rows.iter().copied().filter(|r| r["estimator"] == "reference").collect();
+    assert_eq!(reference.len(), 12);
+    let ref_psnr = |case: &serde_json::Value, method: &serde_json::Value| {
+        f(reference.iter().find(|r| &r["eye_case"] == case && &r["method"] == method).unwrap(), "psnr_db")
+    };
+    // Quick sizes: 4 grid settings, 6 sample counts of 8 replicates.
+    let points = p["points"].as_array().unwrap();
+    let spp = [8, 16, 32, 64, 128, 256];
+    let expect: [(&str, Vec<usize>); 4] = [
+        ("grid", vec![12, 52, 208, 1872]),
+        ("random", spp.to_vec()),
+        ("rqmc_naive", spp.to_vec()),
+        ("rqmc", spp.to_vec()),
+    ];
+    let mut errors: Vec<(&str, usize, f64, f64)> = Vec::new();
+    for (e, counts) in &expect {
+        let pts: Vec<&serde_json::Value> = points.iter().filter(|q| q["estimator"] == *e).collect();
+        assert_eq!(pts.iter().map(|q| u(q, "samples_per_pixel")).collect::<Vec<_>>(), *counts, "{e}");
+        let mut seconds = 0.0;
+        for q in &pts {
+            let n = u(q, "samples_per_pixel");
+            let pt: Vec<&serde_json::Value> =
+                rows.iter().copied().filter(|r| r["estimator"] == *e && u(r, "samples") == n).collect();
+            // Every method under every eye case, with finite scores and the point's seconds.
+            assert_eq!(pt.len(), 12, "{e} {n}");
+            let mut worst = 0.0f64;
+            for r in &pt {
+                assert!(
+                    cases.contains(&r["eye_case"].as_str().unwrap())
+                        && methods.contains(&r["method"].as_str().unwrap())
+                );
                 assert_eq!(r["quantity"], "perceived");
-                let db = f(r, "psnr_db");
-                assert!(db.is_finite() && db > 5.0 && db < 60.0, "{r}");
-                assert!(f(r, "ssim") > 0.0 && f(r, "ssim") < 1.0, "{r}");
-                assert_eq!(f(r, "seconds"), f(pt[0], "seconds"));
-                assert_eq!(u(r, "rays"), u(pt[0], "rays"));
-                let mut expected = paper;
-                expected[si] = p;
-                let setting = [u(r, "retina_samples"), u(r, "display_samples"), u(r, "pupil_grid")];
-                assert_eq!(setting[..], expected[..3], "{r}");
-                assert_eq!(u(r, "la_grid"), if r["method"] == "LA" { expected[3] } else { 1 }, "{r}");
+                let (db, ssim) = (f(r, "psnr_db"), f(r, "ssim"));
+                assert!(db.is_finite() && db > 5.0 && db < 60.0 && ssim > 0.0 && ssim < 1.0, "{r}");
+                assert_eq!(f(r, "seconds"), f(q, "seconds"));
+                worst = worst.max((db - ref_psnr(&r["eye_case"], &r["method"])).abs());
             }
-            // More samples, more rays.
-            assert!(u(pt[0], "rays") > rays, "{sweep} {p}");
-            rays = u(pt[0], "rays");
-            assert!(f(pt[0], "seconds") > 0.0);
+            // The point's error is the largest over its rows.
+            assert!((f(q, "max_psnr_error_db") - worst).abs() < 1e-9, "{e} {n}: {q} vs {worst}");
+            assert!(f(q, "max_ssim_error").is_finite() && f(q, "seconds") > seconds, "{q}");
+            seconds = f(q, "seconds");
+            errors.push((e, n, worst, seconds));
         }
-        if settings.contains(&paper[si]) {
-            paper_tables.push(psnr(paper[si]));
-        }
+    }
+    let err = |e: &str, n: usize| errors.iter().find(|x| x.0 == e && x.1 == n).unwrap().2;
+    for n in spp {
+        // The naive PSNR is biased by the noise left in the images; the de-biased one is not.
+        assert!(err("rqmc", n) < err("rqmc_naive", n), "{n}: {} vs {}", err("rqmc", n), err("rqmc_naive", n));
+    }
+    // Scrambled Sobol points beat independent ones with the same naive scores, once there are
+    // enough samples per replicate for the stratification to show.
+    assert!(err("rqmc_naive", 256) < err("random", 256));
+    // More samples, closer to converged: the naive bias falls as 1/N (32x over the sweep), the
+    // de-biased error with the noise of the estimate.
+    assert!(err("random", 256) * 4.0 < err("random", 8));
+    assert!(err("rqmc_naive", 256) * 4.0 < err("rqmc_naive", 8));
+    assert!(err("rqmc", 256) < err("rqmc", 8));
 
-        // The summary: converged = the highest setting; the reported setting is within 0.1 dB of
-        // it for every method and eye case, and no cheaper setting of the sweep is.
-        let c = summaries.iter().find(|c| c["sweep"] == *sweep).unwrap();
-        let last = *settings.last().unwrap();
-        assert_eq!(u(c, "converged_parameter"), last);
-        let converged = psnr(last);
-        let diff = |p: usize, keep: &dyn Fn(usize) -> bool| {
-            psnr(p)
-                .iter()
-                .zip(&converged)
-                .enumerate()
-                .filter(|(i, _)| keep(*i))
-                .map(|(_, (a, b))| (a - b).abs())
-                .fold(0.0, f64::max)
-        };
-        let check = |w: &serde_json::Value, keep: &dyn Fn(usize) -> bool| {
-            let p = u(w, "parameter");
-            assert!(diff(p, keep) <= tol, "{sweep} {w}: {} dB", diff(p, keep));
-            assert!((f(w, "max_diff_db") - diff(p, keep)).abs() < 1e-9, "{sweep} {w}");
-            let i = settings.iter().position(|s| *s == p).unwrap();
-            for &cheaper in &settings[..i] {
-                assert!(diff(cheaper, keep) > tol, "{sweep} {w}: {cheaper} is within {tol} dB too");
+    // The thresholds: for each estimator and target, the first point after which every point
+    // is within the target, or none.
+    let reached = p["reached"].as_array().unwrap();
+    assert_eq!(reached.len(), 16);
+    for r in reached {
+        let (e, target) = (r["estimator"].as_str().unwrap(), f(r, "target_db"));
+        let mine: Vec<&(&str, usize, f64, f64)> = errors.iter().filter(|x| x.0 == e).collect();
+        let first = (0..mine.len()).find(|&i| mine[i..].iter().all(|x| x.2 <= target));
+        match first {
+            Some(i) => {
+                assert_eq!(r["seconds"].as_f64(), Some(mine[i].3), "{r}");
+                assert_eq!(r["samples_per_pixel"].as_u64(), Some(mine[i].1 as u64), "{r}");
+                let line =
+                    format!("precision {e}: +-{target} dB in {:.3} s ({} samples per pixel)", mine[i].3, mine[i].1);
+                assert!(stdout.contains(&line), "{line}\n{stdout}");
             }
-            let stays = settings[i..].iter().all(|s| diff(*s, keep) <= tol);
-            assert_eq!(w["stays_within"].as_bool().unwrap(), stays, "{sweep} {w}");
-            assert_eq!(f(w, "seconds"), f(point(p)[0], "seconds"));
-        };
-        assert_eq!(c["all_methods"]["methods"], "all");
-        check(&c["all_methods"], &|_| true);
-        let per = c["per_method"].as_array().unwrap();
-        assert_eq!(per.len(), 3);
-        for (mi, m) in methods.iter().enumerate() {
-            let w = per.iter().find(|w| w["methods"] == *m).unwrap();
-            check(w, &|i| i % 3 == mi);
-            // One method's eye cases never need more than all of them.
-            assert!(u(w, "parameter") <= u(&c["all_methods"], "parameter"));
-        }
-        let second = settings[settings.len() - 2];
-        assert!((f(c, "last_step_db") - diff(second, &|_| true)).abs() < 1e-9, "{sweep}");
-        assert!((f(c, "paper_max_diff_db") - diff(paper[si], &|_| true)).abs() < 1e-9, "{sweep}");
-        assert!(stdout.contains(&format!("table1 {sweep}: converged = {last}")), "{stdout}");
-
-        // What a sweep does not change stays bit for bit: LC and PC do not depend on LA's k, nor
-        // the pinhole eye on the pupil grid; LA with k = 1 is LC.
-        for &p in settings {
-            let (now, first) = (point(p), point(settings[0]));
-            for i in 0..12 {
-                let fixed = match *sweep {
-                    "la_grid" => i % 3 != 2,
-                    "pupil_grid" => i / 3 == 0,
-                    _ => false,
-                };
-                if fixed {
-                    assert_eq!(f(now[i], "psnr_db"), f(first[i], "psnr_db"), "{sweep} {p} {i}");
-                }
-                if *sweep == "la_grid" && p == 1 && i % 3 == 2 {
-                    assert_eq!(f(now[i], "psnr_db"), f(now[i - 2], "psnr_db"), "LA k = 1 vs LC");
-                }
+            None => {
+                assert!(r["seconds"].is_null() && r["samples_per_pixel"].is_null(), "{r}");
+                assert!(stdout.contains(&format!("precision {e}: +-{target} dB not reached")), "{stdout}");
             }
         }
     }
-    // Every sweep holds the paper's setting; they all measured the same Table 1 there.
-    assert_eq!(paper_tables.len(), 4);
-    assert!(paper_tables.iter().all(|t| t == &paper_tables[0]));
+
+    // The grid estimator at the paper's settings (pupil grid 8, 1 sample per retina pixel).
+    let paper_table: Vec<f64> = (0..12)
+        .map(|i| {
+            let r = rows
+                .iter()
+                .find(|r| {
+                    r["estimator"] == "grid"
+                        && u(r, "pupil_grid") == 8
+                        && u(r, "retina_samples") == 1
+                        && r["eye_case"] == cases[i / 3]
+                        && r["method"] == methods[i % 3]
+                })
+                .unwrap();
+            f(r, "psnr_db")
+        })
+        .collect();
+    let paper_tables = [paper_table];
     // It is `inimtrace assess`'s Table 1 for the same display, retina and settings.
     let display =
         std::fs::read_to_string(root().join("displays/paper.toml")).unwrap().replace("[2160, 2160]", "[540, 540]");
@@ -611,13 +591,16 @@ fn check_table1_series(report: &serde_json::Value, stdout: &str, out: &Path, dir
 
     // The reports.
     let summary = std::fs::read_to_string(out.join("summary.md")).unwrap();
-    for needle in ["**Table 1 convergence**", "| samples per retina pixel, k x k | 1, 2, 3, 4 |", "within 0.1 dB"] {
+    for needle in [
+        "**The cost of precision**",
+        "| estimator | +-0.1 dB | +-0.05 dB | +-0.02 dB | +-0.01 dB |",
+        "| RQMC de-biased (cross-replicate) |",
+    ] {
         assert!(summary.contains(needle), "summary.md lacks `{needle}`");
     }
+    assert!(!summary.contains("Table 1 convergence"));
     let md = std::fs::read_to_string(out.join("bench.md")).unwrap();
-    for needle in
-        ["## Table 1 convergence: pupil grid n x n", "| LA k = 5 (paper) |", "![Table 1 convergence](table1.png)"]
-    {
+    for needle in ["## The cost of precision", "| rqmc | 8 x 32 | 256 |", "![The cost of precision](precision.png)"] {
         assert!(md.contains(needle), "bench.md lacks `{needle}`");
     }
 }

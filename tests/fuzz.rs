@@ -251,3 +251,63 @@ fn regression_gltf_position_accessor_out_of_range() {
     let e = inimtrace::io::load_mesh(&p).unwrap_err().to_string();
     assert!(e.contains("bad.gltf") && e.contains("attributes.POSITION") && e.contains("accessor 9"), "{e}");
 }
+
+// Header bombs: a few bytes claiming huge sizes. Every reader must refuse them (naming the file)
+// before allocating: the memory limit is set to 256 MiB here, so an allocation of the claimed
+// size would not pass unnoticed.
+proptest! {
+    #![proptest_config(ProptestConfig {
+        cases: std::env::var("PROPTEST_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(64),
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    })]
+
+    #[test]
+    fn fuzz_exr_header_bombs(w in 1i32..i32::MAX, h in 1i32..i32::MAX, cut in 0usize..400) {
+        inimtrace::budget::set_memory_limit(256 << 20);
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("bomb.exr");
+        let mut bytes = inimtrace::fixtures::exr_header_bomb(w, h);
+        bytes.truncate(bytes.len().max(cut) - cut.min(bytes.len() / 2));
+        std::fs::write(&p, bytes).unwrap();
+        let r = catch_unwind(AssertUnwindSafe(|| exr(&p)));
+        let r = r.map_err(|_| TestCaseError::fail(format!("panic on a {w} x {h} header")))?;
+        // Small claims may be readable (all-zero pixels are not in the file, so still an error).
+        prop_assert!(r.is_err(), "a pixel-less header was read as an image");
+        let e = r.unwrap_err();
+        prop_assert!(e.contains("bomb.exr"), "{}", e);
+    }
+
+    #[test]
+    fn fuzz_png_header_bombs(w in 1u32..u32::MAX / 2, h in 1u32..u32::MAX / 2) {
+        inimtrace::budget::set_memory_limit(256 << 20);
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("bomb.png");
+        std::fs::write(&p, inimtrace::fixtures::png_header_bomb(w, h)).unwrap();
+        let r = catch_unwind(AssertUnwindSafe(|| {
+            inimtrace::io::png::load_texture(&p, Default::default(), Default::default()).map(|_| ())
+        }))
+        .map_err(|_| TestCaseError::fail(format!("panic on a {w} x {h} PNG header")))?;
+        let e = r.expect_err("a PNG without pixel data was decoded").to_string();
+        prop_assert!(e.contains("bomb.png"), "{}", e);
+    }
+
+    #[test]
+    fn fuzz_ply_count_bombs(vertices in 0u64..u64::MAX / 2, faces in 0u64..u64::MAX / 2, binary in any::<bool>()) {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("bomb.ply");
+        let format = if binary { "binary_little_endian" } else { "ascii" };
+        std::fs::write(
+            &p,
+            format!(
+                "ply\nformat {format} 1.0\nelement vertex {vertices}\nproperty float x\nproperty float y\nproperty float z\n\
+                 element face {faces}\nproperty list uchar int vertex_indices\nend_header\n"
+            ),
+        )
+        .unwrap();
+        let r = catch_unwind(AssertUnwindSafe(|| mesh(&p)))
+            .map_err(|_| TestCaseError::fail(format!("panic on {vertices} vertices, {faces} faces")))?;
+        let e = r.expect_err("an empty body was read as a mesh");
+        prop_assert!(e.contains("bomb.ply"), "{}", e);
+    }
+}

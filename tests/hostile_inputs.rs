@@ -18,41 +18,6 @@ fn run_capped(cap_mb: u64, args: &[&str]) -> Output {
     Command::new("bash").arg("-c").arg(cmd).arg(inimtrace()).args(args).output().expect("run inimtrace")
 }
 
-/// A few hundred bytes: an OpenEXR header (R, G, B float channels, no compression) whose data
-/// window claims `w` x `h` pixels, and no pixel data.
-pub fn exr_header_bomb(w: i32, h: i32) -> Vec<u8> {
-    fn attr(out: &mut Vec<u8>, name: &str, ty: &str, value: &[u8]) {
-        out.extend_from_slice(name.as_bytes());
-        out.push(0);
-        out.extend_from_slice(ty.as_bytes());
-        out.push(0);
-        out.extend_from_slice(&(value.len() as i32).to_le_bytes());
-        out.extend_from_slice(value);
-    }
-    let mut b = vec![0x76, 0x2f, 0x31, 0x01, 2, 0, 0, 0];
-    let mut channels = Vec::new();
-    for name in ["B", "G", "R"] {
-        channels.extend_from_slice(name.as_bytes());
-        channels.push(0);
-        channels.extend_from_slice(&2i32.to_le_bytes()); // FLOAT
-        channels.extend_from_slice(&[0, 0, 0, 0]); // pLinear + reserved
-        channels.extend_from_slice(&1i32.to_le_bytes());
-        channels.extend_from_slice(&1i32.to_le_bytes());
-    }
-    channels.push(0);
-    attr(&mut b, "channels", "chlist", &channels);
-    attr(&mut b, "compression", "compression", &[0]);
-    let window: Vec<u8> = [0, 0, w - 1, h - 1].iter().flat_map(|v: &i32| v.to_le_bytes()).collect();
-    attr(&mut b, "dataWindow", "box2i", &window);
-    attr(&mut b, "displayWindow", "box2i", &window);
-    attr(&mut b, "lineOrder", "lineOrder", &[0]);
-    attr(&mut b, "pixelAspectRatio", "float", &1f32.to_le_bytes());
-    attr(&mut b, "screenWindowCenter", "v2f", &[0; 8]);
-    attr(&mut b, "screenWindowWidth", "float", &1f32.to_le_bytes());
-    b.push(0);
-    b
-}
-
 /// `ground-truth` of a 16 x 16 pinhole retina of `scene`, written to `out`.
 fn gt_args<'a>(scene: &'a Path, out: &'a Path) -> Vec<&'a str> {
     vec![
@@ -83,7 +48,7 @@ fn assert_clean_failure(o: &Output, must_name: &str) {
 fn an_exr_header_claiming_a_huge_image_is_refused_before_allocating() {
     let dir = tempfile::tempdir().unwrap();
     let bomb = dir.path().join("bomb.exr");
-    std::fs::write(&bomb, exr_header_bomb(1_000_000_000, 1_000_000_000)).unwrap();
+    std::fs::write(&bomb, inimtrace::fixtures::exr_header_bomb(1_000_000_000, 1_000_000_000)).unwrap();
     assert!(std::fs::metadata(&bomb).unwrap().len() < 1000);
     let p = bomb.to_str().unwrap();
     let o = run_capped(1024, &["compare", p, p]);
@@ -91,7 +56,7 @@ fn an_exr_header_claiming_a_huge_image_is_refused_before_allocating() {
     assert!(stderr(&o).contains("memory limit"), "{}", stderr(&o));
     // A plausible size whose pixels are simply not in the file: truncated, not allocated.
     let small = dir.path().join("claims.exr");
-    std::fs::write(&small, exr_header_bomb(4000, 4000)).unwrap();
+    std::fs::write(&small, inimtrace::fixtures::exr_header_bomb(4000, 4000)).unwrap();
     let s = small.to_str().unwrap();
     let o = run_capped(1024, &["simulate", s, "--pinhole", "--out", dir.path().join("x.exr").to_str().unwrap()]);
     assert_clean_failure(&o, "claims.exr");
@@ -284,32 +249,10 @@ fn absurd_thread_counts_and_misnamed_outputs_are_refused_before_work() {
     assert!(!png.exists(), "the PNG preview path was written");
 }
 
-/// A 57-byte PNG whose header claims `w` x `h` RGB pixels (and whose one data chunk is empty).
-fn png_header_bomb(w: u32, h: u32) -> Vec<u8> {
-    fn chunk(out: &mut Vec<u8>, kind: &[u8; 4], data: &[u8]) {
-        out.extend_from_slice(&(data.len() as u32).to_be_bytes());
-        let mut crc = crc32fast::Hasher::new();
-        crc.update(kind);
-        crc.update(data);
-        out.extend_from_slice(kind);
-        out.extend_from_slice(data);
-        out.extend_from_slice(&crc.finalize().to_be_bytes());
-    }
-    let mut b = vec![0x89, b'P', b'N', b'G', 0x0d, 0x0a, 0x1a, 0x0a];
-    let mut ihdr = Vec::new();
-    ihdr.extend_from_slice(&w.to_be_bytes());
-    ihdr.extend_from_slice(&h.to_be_bytes());
-    ihdr.extend_from_slice(&[8, 2, 0, 0, 0]); // 8-bit RGB, deflate, no filter, no interlace
-    chunk(&mut b, b"IHDR", &ihdr);
-    chunk(&mut b, b"IDAT", &[]);
-    chunk(&mut b, b"IEND", &[]);
-    b
-}
-
 #[test]
 fn a_png_texture_claiming_a_huge_image_is_refused_before_decoding() {
     let dir = tempfile::tempdir().unwrap();
-    std::fs::write(dir.path().join("bomb.png"), png_header_bomb(200_000, 200_000)).unwrap();
+    std::fs::write(dir.path().join("bomb.png"), inimtrace::fixtures::png_header_bomb(200_000, 200_000)).unwrap();
     std::fs::write(
         dir.path().join("quad.obj"),
         "v -50 -50 400\nv 50 -50 400\nv 50 50 400\nv -50 50 400\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nf 1/1 2/2 3/3 4/4\n",
@@ -408,4 +351,188 @@ fn every_error_names_its_file_and_field() {
     assert_clean_failure(&o, "pc.toml");
     let e = stderr(&o);
     assert!(e.contains("methods[1]") && e.contains("singular.toml") && e.contains("PupilCenter"), "{e}");
+}
+
+fn paper_grid() -> String {
+    format!("{}/experiments/paper.toml", env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Every final-named file in `dir` is complete: EXRs and PNGs decode; and `results.json`, when
+/// present, lists files that match their sizes and checksums.
+fn assert_no_incomplete_files(dir: &Path) {
+    for entry in std::fs::read_dir(dir).unwrap().flatten() {
+        let p = entry.path();
+        let name = entry.file_name().to_string_lossy().into_owned();
+        if name.starts_with('.') {
+            continue;
+        }
+        match p.extension().and_then(|e| e.to_str()) {
+            Some("exr") => {
+                inimtrace::io::exr::read_rgb(&p).unwrap_or_else(|e| panic!("incomplete EXR under its final name: {e}"));
+            }
+            Some("png") => {
+                image::open(&p).unwrap_or_else(|e| panic!("incomplete PNG {name}: {e}"));
+            }
+            _ => {}
+        }
+    }
+    if let Ok(text) = std::fs::read_to_string(dir.join("results.json")) {
+        let v: serde_json::Value = serde_json::from_str(&text).expect("results.json is complete JSON");
+        let files: Vec<inimtrace::io::output::OutputFile> = serde_json::from_value(v["files"].clone()).unwrap();
+        assert!(files.len() > 30, "the manifest lists every file");
+        inimtrace::io::output::verify(dir, &files).unwrap();
+    }
+}
+
+#[test]
+fn a_killed_run_leaves_nothing_that_looks_complete() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let exp = paper_grid();
+    let mut killed_mid_run = 0;
+    for delay_ms in [50u64, 300, 800, 1500, 2200] {
+        let mut child = Command::new(inimtrace())
+            .args(["--quiet", "assess", &exp, "--out", out.to_str().unwrap()])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(delay_ms));
+        let finished = child.try_wait().unwrap().is_some();
+        let _ = child.kill(); // SIGKILL
+        let _ = child.wait();
+        if !finished {
+            killed_mid_run += 1;
+            // A results.json left by an earlier complete run is removed before anything else
+            // is written, so a killed run never stands next to one that does not describe it.
+            if out.join(".inimtrace.lock").exists() && out.join("display_LC.exr").exists() {
+                let report = std::fs::read_to_string(out.join("results.json")).unwrap_or_default();
+                assert!(report.is_empty() || report.contains("\"files\""), "stale report");
+            }
+        }
+        assert_no_incomplete_files(&out);
+    }
+    assert!(killed_mid_run >= 3, "only {killed_mid_run} kills happened while the run was working");
+}
+
+#[test]
+fn a_second_run_into_the_same_folder_fails_at_once_and_the_first_completes() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let exp = paper_grid();
+    let first = Command::new(inimtrace())
+        .args(["--quiet", "assess", &exp, "--out", out.to_str().unwrap()])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Wait until the first run owns the folder.
+    let lock = out.join(".inimtrace.lock");
+    for _ in 0..200 {
+        if std::fs::read_to_string(&lock).map(|t| t.contains("inimtrace process")).unwrap_or(false) {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    let t = std::time::Instant::now();
+    let second =
+        Command::new(inimtrace()).args(["--quiet", "assess", &exp, "--out", out.to_str().unwrap()]).output().unwrap();
+    assert!(t.elapsed().as_secs_f64() < 1.5, "the second run did not fail at once");
+    assert_clean_failure(&second, "in use by inimtrace process");
+    let first = first.wait_with_output().unwrap();
+    assert!(first.status.success(), "{}", stderr(&first));
+    assert!(out.join("results.json").exists());
+    assert_no_incomplete_files(&out);
+}
+
+#[test]
+fn a_full_filesystem_ends_with_an_error_and_no_report() {
+    let dir = tempfile::tempdir().unwrap();
+    let mnt = dir.path().join("small");
+    std::fs::create_dir(&mnt).unwrap();
+    let mounted = Command::new("mount")
+        .args(["-t", "tmpfs", "-o", "size=3m", "tmpfs", mnt.to_str().unwrap()])
+        .stderr(Stdio::null())
+        .status()
+        .map(|s| s.success())
+        .unwrap_or(false);
+    if !mounted {
+        eprintln!("skipped: cannot mount a small tmpfs here (needs root; CI runs as root)");
+        return;
+    }
+    let out = mnt.join("out");
+    let o =
+        Command::new(inimtrace()).args(["--quiet", "assess", &paper_grid(), "--out", out.to_str().unwrap()]).output();
+    let listing: Vec<String> = std::fs::read_dir(&out)
+        .map(|d| d.flatten().map(|e| e.file_name().to_string_lossy().into_owned()).collect())
+        .unwrap_or_default();
+    let complete_check = std::panic::catch_unwind(|| assert_no_incomplete_files(&out));
+    let _ = Command::new("umount").arg(&mnt).status();
+    let o = o.unwrap();
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(e.contains("No space left") && e.contains("out"), "{e}");
+    assert!(!listing.iter().any(|n| n == "results.json"), "a results.json on a full disk: {listing:?}");
+    assert!(!listing.iter().any(|n| n.starts_with(".inimtrace-tmp-")), "temporary files left: {listing:?}");
+    complete_check.expect("a final-named file is incomplete");
+}
+
+#[test]
+fn accepted_sizes_that_do_not_fit_in_memory_are_refused_before_allocating() {
+    let dir = tempfile::tempdir().unwrap();
+    let display = dir.path().join("huge.toml");
+    std::fs::write(
+        &display,
+        "name = \"huge\"\neye_to_lenslets = 20.0\nlenslets_to_lcd = 6.316\n[lenslets]\nfocal_length = 6.427\nshift = [0.0, 0.0]\n\
+         pitch = 1.2\n[elemental_images]\nshift = [0.0, 0.0]\npitch = 1.58\n[lcd]\nsize = [21.6, 21.6]\nresolution = [30000, 30000]\n",
+    )
+    .unwrap();
+    let out = dir.path().join("d.exr");
+    let o = run_capped(
+        1024,
+        &[
+            "--quiet",
+            "--max-memory",
+            "2G",
+            "render-display",
+            "--display",
+            display.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ],
+    );
+    assert_clean_failure(&o, "lcd.resolution");
+    let o = run_capped(
+        1024,
+        &[
+            "--quiet",
+            "--max-memory",
+            "2G",
+            "ground-truth",
+            "--pinhole",
+            "--retina",
+            "32768",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+    );
+    assert_clean_failure(&o, "--retina");
+    // The same display in an experiment: refused by `assess` before any work.
+    let exp = dir.path().join("exp.toml");
+    std::fs::write(&exp, "name = \"huge\"\ndisplay = \"huge.toml\"\n[[eye_cases]]\nname = \"Pin\"\npinhole = true\n")
+        .unwrap();
+    let o = run_capped(
+        1024,
+        &[
+            "--quiet",
+            "--max-memory",
+            "2G",
+            "assess",
+            exp.to_str().unwrap(),
+            "--out",
+            dir.path().join("o").to_str().unwrap(),
+        ],
+    );
+    assert_clean_failure(&o, "lcd.resolution");
+    assert!(!dir.path().join("o").join("results.json").exists());
 }

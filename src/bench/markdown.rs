@@ -1,11 +1,11 @@
 //! The bench's Markdown reports: `summary.md` (the run's settings, methods x backends, the
-//! builds, the convergence summaries and Table 1 convergence) and `bench.md` (the summary, then
+//! builds, the convergence summaries and the cost of precision) and `bench.md` (the summary, then
 //! every measured point), with the text helpers the plots share.
 
-use std::fmt::{Display, Write as _};
+use std::fmt::Write as _;
 
-use super::options::{BenchRow, MethodLabel, Parameter, Quantity, Series};
-use super::summary::{max_abs_diff, MethodSet, Table1Sweep, Table1Within, CONVERGED_TOLERANCE_DB};
+use super::options::{BenchRow, Estimator, MethodLabel, Quantity, Series};
+use super::precision::{PRECISION_TARGETS_DB, SWEPT};
 use super::BenchReport;
 
 /// Two decimals (PSNR).
@@ -30,36 +30,12 @@ fn load_text(v: Option<f64>) -> String {
     v.map(|v| format!("{v:.2}")).unwrap_or_else(|| "unknown".into())
 }
 
-fn join<T: Display>(items: &[T], separator: &str) -> String {
-    items.iter().map(|v| v.to_string()).collect::<Vec<_>>().join(separator)
-}
-
 /// A setting of a convergence series ("k = 3", "n = 8 (52)", "2x2").
 pub fn series_setting(series: Series, parameter: usize, samples: usize) -> String {
     match series {
         Series::LaGrid => format!("k = {parameter}"),
         Series::PupilGrid => format!("n = {parameter} ({samples})"),
-        Series::Method | Series::RetinaSamples | Series::Table1 => format!("{parameter}x{parameter}"),
-    }
-}
-
-/// What a Table 1 sweep varies, for tables and plots.
-pub fn sweep_name(sweep: Parameter) -> &'static str {
-    match sweep {
-        Parameter::RetinaSamples => "samples per retina pixel, k x k",
-        Parameter::DisplaySamples => "samples per display pixel, k x k",
-        Parameter::PupilGrid => "pupil grid n x n",
-        Parameter::LaGrid => "LA lenslet grid k x k",
-    }
-}
-
-/// A setting of a Table 1 sweep, in words.
-fn table1_setting(sweep: Parameter, parameter: usize, samples: usize) -> String {
-    match sweep {
-        Parameter::RetinaSamples => format!("{parameter}x{parameter} per retina pixel"),
-        Parameter::DisplaySamples => format!("{parameter}x{parameter} per display pixel"),
-        Parameter::PupilGrid => format!("pupil n = {parameter} ({samples})"),
-        Parameter::LaGrid => format!("LA k = {parameter}"),
+        Series::Method | Series::RetinaSamples | Series::Precision => format!("{parameter}x{parameter}"),
     }
 }
 
@@ -70,7 +46,7 @@ pub fn markdown(rep: &BenchReport) -> (String, String) {
     methods_table(rep, &mut s);
     builds_table(rep, &mut s);
     convergence_table(rep, &mut s);
-    table1_summary(rep, &mut s);
+    precision_summary(rep, &mut s);
     let _ = writeln!(
         s,
         "\nCheck: LA with k = 1 renders {} display image as LC.",
@@ -83,7 +59,7 @@ pub fn markdown(rep: &BenchReport) -> (String, String) {
         full,
         "\n## Plots\n\n![PSNR against wall time](speed_psnr.png)\n\n![SSIM against wall time](speed_ssim.png)\n\n\
          ![LA lenslet grid](la_grid.png)\n\n![pupil grid](pupil_grid.png)\n\n![samples per retina pixel](retina_samples.png)\n\n\
-         ![Table 1 convergence](table1.png)\n"
+         ![The cost of precision](precision.png)\n"
     );
     method_points(rep, &mut full);
     let _ = writeln!(full, "\n## Other stages\n\n| stage | s |\n|---|---:|");
@@ -91,7 +67,7 @@ pub fn markdown(rep: &BenchReport) -> (String, String) {
         let _ = writeln!(full, "| {} | {} |", st.stage, secs(st.seconds));
     }
     convergence_points(rep, &mut full);
-    table1_points(rep, &mut full);
+    precision_points(rep, &mut full);
     (s, full)
 }
 
@@ -199,8 +175,8 @@ fn convergence_table(rep: &BenchReport, s: &mut String) {
         "\n**Convergence** on the {} backend, each quantity against its own high-sample reference. Rate p: \
          least-squares slope of ln(error) against ln(samples per pixel) over the whole sweep, error = 10^(-PSNR/20) \
          (the geometric mean of the R, G, B RMSEs). At these rates every series still gains several dB at its \
-         highest setting; which settings are enough for the numbers users report is the Table 1 convergence \
-         below.\n\n| series | against | rate p (error ~ N^p) | highest setting: PSNR, s |\n|---|---|---:|---:|",
+         highest setting; what the numbers users report (Table 1) cost at a given precision is the cost of \
+         precision below.\n\n| series | against | rate p (error ~ N^p) | highest setting: PSNR, s |\n|---|---|---:|---:|",
         rep.backends.first().map(|b| b.as_str()).unwrap_or("?"),
     );
     for c in &rep.convergence {
@@ -271,215 +247,80 @@ fn convergence_points(rep: &BenchReport, full: &mut String) {
     }
 }
 
-fn table1_samples(rep: &BenchReport, sweep: Parameter, parameter: usize) -> usize {
-    rep.table1_rows(sweep).find(|r| r.parameter == parameter).map(|r| r.samples).unwrap_or(0)
-}
-
-fn table1_within_text(t: &Table1Sweep, w: Option<&Table1Within>, diff: bool) -> String {
-    match w {
-        Some(w) => format!(
-            "{}, {} s{}{}",
-            table1_setting(t.sweep, w.parameter, w.samples),
-            secs(w.seconds),
-            if diff { format!(" ({:.2})", w.max_diff_db) } else { String::new() },
-            if w.stays_within { "" } else { " *" }
-        ),
-        None => "-".into(),
+/// What an estimator is, in words.
+pub fn estimator_name(e: Estimator) -> &'static str {
+    match e {
+        Estimator::Grid => "grid (paper: pupil grid n x n, s x s per retina pixel)",
+        Estimator::Random => "random (independent points, PSNR of the mean image)",
+        Estimator::RqmcNaive => "RQMC naive (PSNR of the replicates' mean image)",
+        Estimator::Rqmc => "RQMC de-biased (cross-replicate)",
+        Estimator::Reference => "converged reference",
     }
 }
 
-/// The eye cases of some rows, in first-seen order.
-fn eye_cases<'a>(rows: impl Iterator<Item = &'a BenchRow>) -> Vec<String> {
-    let mut v: Vec<String> = Vec::new();
-    for r in rows {
-        if !v.contains(&r.eye_case) {
-            v.push(r.eye_case.clone());
-        }
+/// The cost-of-precision section of summary.md: the reference and the seconds each estimator
+/// needs per target.
+fn precision_summary(rep: &BenchReport, s: &mut String) {
+    let p = &rep.precision;
+    if p.points.is_empty() {
+        return;
     }
-    v
-}
-
-/// The Table 1 convergence section of summary.md.
-fn table1_summary(rep: &BenchReport, s: &mut String) {
-    let Some(first) = rep.table1.first() else { return };
-    let methods: Vec<MethodSet> = first.per_method.iter().map(|w| w.methods).collect();
-    let cases = eye_cases(rep.table1_rows(first.sweep));
-    let paper_display =
-        rep.table1.iter().find(|t| t.sweep == Parameter::DisplaySamples).map(|t| t.paper_parameter).unwrap_or(1);
     let _ = writeln!(
         s,
-        "\n**Table 1 convergence** on the {} backend: the paper's Table 1 as `inimtrace assess` computes it (PSNR of \
-         the perceived image against the ground-truth retinal image, mean of R, G, B; {} x {}), with one sampling \
-         parameter swept and the others at the paper's settings ({}x{} per retina pixel, {}x{} per display pixel, \
-         pupil n = {}, LA k = {}). Converged: the Table 1 of the sweep's highest setting. Seconds: computing the \
-         whole Table 1 at that setting ({} display images, {} ground truths and simulations, the scores; no files); \
-         images a sweep does not change are computed once and their time counted at each setting. \"Within {} \
-         dB\": the cheapest setting (fewest samples) whose Table-1 PSNRs are all within {} dB of their converged \
-         values, for every method and eye case at once (\"all\") and for each method's {} eye cases{}.\n",
-        first.backend,
-        join(&methods, ", "),
-        cases.join(", "),
-        rep.retina_samples,
-        rep.retina_samples,
-        paper_display,
-        paper_display,
-        rep.pupil_grid,
-        rep.la_grid,
-        methods.len(),
-        cases.len(),
-        CONVERGED_TOLERANCE_DB,
-        CONVERGED_TOLERANCE_DB,
-        cases.len(),
-        if rep.table1.iter().flat_map(|t| t.all_methods.iter().chain(&t.per_method)).any(|w| !w.stays_within) {
-            format!("; `*`: a higher setting of the sweep is again more than {CONVERGED_TOLERANCE_DB} dB away")
-        } else {
-            String::new()
-        }
+        "\n**The cost of precision** on the {} backend: Table 1 (PSNR of the perceived image against the ground truth, \
+         every method and eye case) by each estimator, against the converged Table 1 (a reference run of the \
+         de-biased RQMC estimator with its own seed, to a 95% half-width of {} dB; reached {:.4} dB with {} samples \
+         per pixel in {} s, stopped by: {}). Error: the largest |PSNR - converged PSNR| over Table 1's cells. Seconds: eye rays and \
+         scoring of the whole Table 1 (the display images, common to all, not counted); RQMC and random use {} \
+         replicates. Seconds to stay within each target from then on to the sweep's top (\"not reached\": the top \
+         is not within it):\n",
+        rep.backends.first().map(|b| b.as_str()).unwrap_or("?"),
+        p.reference_target_db,
+        p.reference_ci95_db,
+        p.reference_samples_per_pixel,
+        secs(p.reference_seconds),
+        p.reference_stopped_by,
+        p.replicates,
     );
-    let mut head = format!(
-        "| parameter swept | settings | paper's setting: largest diff. to converged (dB) | converged: highest \
-         setting, s | last step (dB) | within {CONVERGED_TOLERANCE_DB} dB, all: setting, s (largest diff., dB) |"
-    );
-    let mut rule = "|---|---|---:|---:|---:|---:|".to_string();
-    for m in &methods {
-        let _ = write!(head, " {m} |");
-        rule.push_str("---:|");
+    let _ = write!(s, "| estimator |");
+    for t in PRECISION_TARGETS_DB {
+        let _ = write!(s, " +-{t} dB |");
     }
-    let _ = writeln!(s, "{head}\n{rule}");
-    for t in &rep.table1 {
-        let paper = match t.paper_max_diff_db {
-            Some(d) => format!(
-                "{}: {:.2}",
-                table1_setting(t.sweep, t.paper_parameter, table1_samples(rep, t.sweep, t.paper_parameter)),
-                d
-            ),
-            None => "-".into(),
-        };
-        let _ = write!(
-            s,
-            "| {} | {} | {} | {}, {} s | {} | {} |",
-            sweep_name(t.sweep),
-            join(&t.parameters, ", "),
-            paper,
-            table1_setting(t.sweep, t.converged_parameter, table1_samples(rep, t.sweep, t.converged_parameter)),
-            t.seconds.last().map(|v| secs(*v)).unwrap_or_default(),
-            t.last_step_db.map(|d| format!("{d:.2}")).unwrap_or_else(|| "-".into()),
-            table1_within_text(t, t.all_methods.as_ref(), true)
-        );
-        for m in &methods {
-            let w = t.per_method.iter().find(|w| &w.methods == m);
-            let _ = write!(s, " {} |", table1_within_text(t, w, false));
+    let _ = writeln!(s, "\n|---|{}", "---:|".repeat(PRECISION_TARGETS_DB.len()));
+    for e in SWEPT {
+        let _ = write!(s, "| {} |", estimator_name(e));
+        for r in p.reached.iter().filter(|r| r.estimator == e) {
+            let _ = match (r.seconds, r.samples_per_pixel) {
+                (Some(t), Some(n)) => write!(s, " {} s ({n}) |", secs(t)),
+                _ => write!(s, " not reached |"),
+            };
         }
-        s.push('\n');
+        let _ = writeln!(s);
     }
-    table1_answer(rep, s);
+    let _ = writeln!(s, "\n(In parentheses: samples per retina pixel.)");
 }
 
-/// The answer of the Table 1 series in words.
-fn table1_answer(rep: &BenchReport, s: &mut String) {
-    let answers: Vec<String> = rep
-        .table1
-        .iter()
-        .filter_map(|t| {
-            t.all_methods.as_ref().map(|w| {
-                let open = t.last_step_db.is_some_and(|d| d > CONVERGED_TOLERANCE_DB);
-                format!(
-                    "{} ({} s{})",
-                    table1_setting(t.sweep, w.parameter, w.samples),
-                    secs(w.seconds),
-                    if open {
-                        format!(
-                            "; the sweep's highest setting, not levelled off: its last step still moves Table 1 by \
-                             {:.2} dB",
-                            t.last_step_db.unwrap_or(f64::NAN)
-                        )
-                    } else {
-                        String::new()
-                    }
-                )
-            })
-        })
-        .collect();
-    let paper_off: Vec<String> = rep
-        .table1
-        .iter()
-        .filter_map(|t| t.paper_max_diff_db.map(|d| format!("{d:.2} dB ({})", sweep_name(t.sweep))))
-        .collect();
-    let _ = writeln!(
-        s,
-        "\nOne parameter at a time, every method and eye case of Table 1 is within {} dB of its converged value \
-         from: {}. At the paper's settings Table 1 is off its converged value by up to {}.",
-        CONVERGED_TOLERANCE_DB,
-        answers.join("; "),
-        paper_off.join(", ")
-    );
-}
-
-/// Every point of every Table 1 sweep, for bench.md: PSNR then SSIM, one table each.
-fn table1_points(rep: &BenchReport, full: &mut String) {
-    for t in &rep.table1 {
-        for ssim in [false, true] {
-            table1_sweep_table(rep, t, ssim, full);
-        }
+/// Every point of the cost-of-precision sweep, for bench.md.
+fn precision_points(rep: &BenchReport, full: &mut String) {
+    let p = &rep.precision;
+    if p.points.is_empty() {
+        return;
     }
-}
-
-/// The PSNR (or SSIM) table of one Table 1 sweep.
-fn table1_sweep_table(rep: &BenchReport, t: &Table1Sweep, ssim: bool, full: &mut String) {
-    let rows: Vec<&BenchRow> = rep.table1_rows(t.sweep).collect();
-    let cases = eye_cases(rows.iter().copied());
-    let mut methods: Vec<MethodLabel> = Vec::new();
-    for r in &rows {
-        if !methods.contains(&r.method) {
-            methods.push(r.method);
-        }
-    }
-    let value = |p: usize, c: &str, m: MethodLabel| {
-        rows.iter()
-            .find(|r| r.parameter == p && r.eye_case == c && r.method == m)
-            .map(|r| if ssim { format!("{:.4}", r.ssim) } else { f2(r.psnr_db) })
-            .unwrap_or_else(|| "-".into())
-    };
-    let converged: Vec<f64> = rows.iter().filter(|r| r.parameter == t.converged_parameter).map(|r| r.psnr_db).collect();
     let _ = writeln!(
         full,
-        "\n## Table 1 convergence: {}{}\n\n{} of the perceived image against the ground truth ({} backend), \
-         the other parameters at the paper's settings; s: computing the whole Table 1 at that setting{}.\n",
-        sweep_name(t.sweep),
-        if ssim { " (SSIM)" } else { "" },
-        if ssim { "SSIM (Wang 2004)" } else { "PSNR (dB)" },
-        t.backend,
-        if ssim { "" } else { "; largest diff.: largest |PSNR - converged PSNR| over every method and eye case" }
+        "\n## The cost of precision\n\nLargest |error| over Table 1's cells against the converged Table 1.\n\n\
+         | estimator | setting | samples per pixel | s | max PSNR error (dB) | max SSIM error |\n|---|---|---:|---:|---:|---:|"
     );
-    let mut head = "| setting | s | Mrays/s |".to_string();
-    let mut rule = "|---|---:|---:|".to_string();
-    for c in &cases {
-        let _ = write!(head, " {c} {} |", join(&methods, " / "));
-        rule.push_str("---:|");
-    }
-    if !ssim {
-        head.push_str(" largest diff. (dB) |");
-        rule.push_str("---:|");
-    }
-    let _ = writeln!(full, "{head}\n{rule}");
-    for (i, &p) in t.parameters.iter().enumerate() {
-        let Some(first) = rows.iter().find(|r| r.parameter == p) else { continue };
-        let _ = write!(
+    for pt in &p.points {
+        let _ = writeln!(
             full,
-            "| {}{} | {} | {} |",
-            table1_setting(t.sweep, p, first.samples),
-            if p == t.paper_parameter { " (paper)" } else { "" },
-            secs(t.seconds[i]),
-            mrays(first)
+            "| {} | {} | {} | {} | {:.4} | {:.5} |",
+            pt.estimator,
+            pt.setting,
+            pt.samples_per_pixel,
+            secs(pt.seconds),
+            pt.max_psnr_error_db,
+            pt.max_ssim_error
         );
-        for c in &cases {
-            let v: Vec<String> = methods.iter().map(|m| value(p, c, *m)).collect();
-            let _ = write!(full, " {} |", v.join(" / "));
-        }
-        if !ssim {
-            let here: Vec<f64> = rows.iter().filter(|r| r.parameter == p).map(|r| r.psnr_db).collect();
-            let _ = write!(full, " {:.3} |", max_abs_diff(&here, &converged));
-        }
-        full.push('\n');
     }
 }

@@ -20,47 +20,48 @@
 //!   eye case for n = 2..16 against n = 32; the ground truth at that eye case for 1, 2 x 2,
 //!   3 x 3, 4 x 4 samples per retina pixel against 8 x 8 (until the Table 1 series existed: 1,
 //!   2 x 2, 4 x 4, 8 x 8 against 16 x 16, a minute more of the full run for the same rate);
-//! - **Table 1 convergence** (`series = "table1"`, the swept parameter in `sweep`), on the
-//!   fastest backend: the quantity users report, the paper's Table 1 (PSNR and SSIM of the
-//!   perceived image against the ground-truth retinal image, per method and eye case, computed
-//!   by the stage functions of [`crate::experiment`] that `assess` runs), with one sampling
-//!   parameter swept and the others at the paper's settings: samples per retina pixel, samples
-//!   per display pixel, the eye's pupil grid n and LA's k. The value at a sweep's highest setting
-//!   is taken as converged; [`Table1Sweep`] reports the cheapest setting within
-//!   [`CONVERGED_TOLERANCE_DB`] of it, for every method and eye case at once and per method.
+//! - **the cost of precision** (`series = "precision"`, the estimator in `estimator`), on the
+//!   fastest backend: the paper's Table 1 (PSNR and SSIM of the perceived image against the
+//!   ground-truth retinal image, per method and eye case) by the grid estimator, plain random
+//!   sampling, and randomized QMC scored naively and de-biased, at increasing sample counts,
+//!   against a converged reference run; the error (largest |PSNR error| over Table 1's cells)
+//!   against seconds, and the seconds each estimator needs to stay within
+//!   [`PRECISION_TARGETS_DB`] (`precision`).
 //!
 //! Writes `bench.csv` (one row per measured point, with the core count, git revision and every
 //! setting), `builds.csv` (acceleration-structure build time and triangle count per mesh
 //! backend), `bench.json` (all of it, plus the observed convergence rates and checks),
 //! `bench.md` (the report), `summary.md` (its tables, for the README) and plots as PNG and SVG
-//! (plotters): `speed_psnr`, `speed_ssim`, `la_grid`, `pupil_grid`, `retina_samples`, `table1`.
+//! (plotters): `speed_psnr`, `speed_ssim`, `la_grid`, `pupil_grid`, `retina_samples`, `precision`.
 //!
 //! Every image, references included, is made by the stage functions `assess` runs, on copies of
 //! the paper's experiment with one sampling setting changed (`pipeline`). The parts: `options`
 //! (sizes and the typed rows), `runs` (backends, builds, the method and convergence series),
-//! `table1` (Table 1 convergence), `summary` (rates and settings within tolerance), `report`
+//! `precision` (the cost of precision), `summary` (rates and settings within tolerance), `report`
 //! (CSV, JSON, the console table), `markdown` and `plots`.
 
 mod markdown;
 mod options;
 mod pipeline;
 mod plots;
+mod precision;
 mod report;
 mod runs;
 mod summary;
-mod table1;
 
 use std::time::Instant;
 
 use serde::Serialize;
 
-pub use options::{Backend, BenchOptions, BenchRow, BuildRecord, MethodLabel, Parameter, Quantity, Series, Sizes};
+pub use options::{
+    Backend, BenchOptions, BenchRow, BuildRecord, Estimator, MethodLabel, Parameter, Quantity, Series, Sizes,
+};
+pub use precision::{PrecisionPoint, PrecisionReached, PrecisionSummary, PRECISION_TARGETS_DB};
 pub use report::{console_table, rows_csv};
 pub use summary::{
-    cheapest_within, convergence_rate, first_within, max_abs_diff, ConvergenceSummary, MethodSet, Table1Sweep,
-    Table1Within, WithinTolerance, CONVERGED_TOLERANCE_DB, IDENTICAL_PSNR_DB,
+    cheapest_within, convergence_rate, first_within, max_abs_diff, ConvergenceSummary, WithinTolerance,
+    CONVERGED_TOLERANCE_DB, IDENTICAL_PSNR_DB,
 };
-pub use table1::TABLE1_SWEEPS;
 
 use crate::error::{Error, Result};
 use crate::progress::Progress;
@@ -106,8 +107,8 @@ pub struct BenchReport {
     pub backends: Vec<Backend>,
     pub builds: Vec<BuildRecord>,
     pub convergence: Vec<ConvergenceSummary>,
-    /// Table 1 convergence, one entry per sweep.
-    pub table1: Vec<Table1Sweep>,
+    /// The cost of precision: each Table 1 estimator against the converged Table 1.
+    pub precision: PrecisionSummary,
     pub checks: Checks,
     /// Where the rest of the time went.
     pub stages: Vec<StageTime>,
@@ -119,9 +120,9 @@ pub struct BenchReport {
 }
 
 impl BenchReport {
-    /// The rows of the Table 1 sweep of `sweep`.
-    pub fn table1_rows(&self, sweep: Parameter) -> impl Iterator<Item = &BenchRow> + '_ {
-        self.rows.iter().filter(move |r| r.series == Series::Table1 && r.sweep == sweep)
+    /// The rows of the cost-of-precision section of `estimator`.
+    pub fn precision_rows(&self, estimator: Estimator) -> impl Iterator<Item = &BenchRow> + '_ {
+        self.rows.iter().filter(move |r| r.series == Series::Precision && r.estimator == Some(estimator))
     }
 }
 
@@ -159,7 +160,7 @@ pub fn run(opts: &BenchOptions, scene: &Scene, scene_label: &str) -> Result<Benc
     let best = backends[0];
     let set_up = StageTime::since("set up backends (including the builds)", t);
 
-    let progress = Progress::new(backends.len() as u64 + 4 + TABLE1_SWEEPS.len() as u64, "bench", opts.quiet);
+    let progress = Progress::new(backends.len() as u64 + 4 + 3, "bench", opts.quiet);
     let mut runs = runs::Runs::new(&base, sz, &ctx, &progress);
     runs.method_series(&backends)?;
     let (lc, la_k1_equals_lc) = runs.la_grid_series(&best)?;
@@ -167,12 +168,12 @@ pub fn run(opts: &BenchOptions, scene: &Scene, scene_label: &str) -> Result<Benc
     drop(lc);
     runs.retina_samples_series(&best)?;
     let t = Instant::now();
-    table1::table1_series(&base, sz, &best, &ctx, &progress, &mut runs.rows)?;
+    let precision = precision::precision_series(&base, sz, &best, &ctx, &progress, &mut runs.rows)?;
     progress.finish();
 
     let mut stages = vec![set_up];
     stages.append(&mut runs.stages);
-    stages.push(StageTime::since("Table 1 convergence (wall time of every sweep, scoring included)", t));
+    stages.push(StageTime::since("the cost of precision (wall time: reference, every estimator, display images)", t));
     stages.push(StageTime { stage: "scoring (PSNR and SSIM)".into(), seconds: runs.score_seconds });
     let rows = runs.rows;
     let paper = pipeline::Sampling::of(&base);
@@ -196,7 +197,7 @@ pub fn run(opts: &BenchOptions, scene: &Scene, scene_label: &str) -> Result<Benc
         backends: backends.iter().map(|b| b.backend).collect(),
         builds: built.builds.clone(),
         convergence: Series::CONVERGENCE.iter().filter_map(|s| summary::summarize(*s, &rows)).collect(),
-        table1: TABLE1_SWEEPS.iter().filter_map(|s| summary::summarize_table1(*s, paper.get(*s), &rows)).collect(),
+        precision,
         checks: Checks { la_k1_equals_lc },
         stages,
         load_average: [load_at_start, load_average()],

@@ -33,13 +33,17 @@ pub struct Sizes {
     pub pupil_grid_reference: usize,
     pub retina_samples: Vec<usize>,
     pub retina_samples_reference: usize,
-    /// Table 1 convergence: the settings of each sweep, lowest first (each includes the
-    /// paper's setting; the highest is taken as converged): samples per retina pixel and per
-    /// display pixel (per axis), the pupil grid n, LA's k.
-    pub table1_retina_samples: Vec<usize>,
-    pub table1_display_samples: Vec<usize>,
-    pub table1_pupil_grids: Vec<usize>,
-    pub table1_la_grids: Vec<usize>,
+    /// The cost of precision: the reference run's target (half-width of every Table 1 PSNR's
+    /// 95% interval, dB), its budget of samples per pixel and its time budget (seconds, over
+    /// every eye case) ...
+    pub precision_reference_db: f64,
+    pub precision_reference_max_samples: u64,
+    pub precision_reference_seconds: f64,
+    /// ... the grid estimator's settings (pupil grid n, samples per retina pixel per axis),
+    /// cheapest first ...
+    pub precision_grids: Vec<(usize, usize)>,
+    /// ... and samples per replicate of the random and randomized-QMC points, increasing.
+    pub precision_samples: Vec<u32>,
 }
 
 impl Sizes {
@@ -59,29 +63,26 @@ impl Sizes {
             pupil_grid_reference: 32,
             retina_samples: vec![1, 2, 3, 4],
             retina_samples_reference: 8,
-            table1_retina_samples: vec![1, 2, 3, 4],
-            table1_display_samples: vec![1, 2, 3, 4],
-            table1_pupil_grids: vec![2, 3, 4, 5, 6, 8, 10, 12, 16],
-            // Every sweep of the Table 1 series recomputes the whole Table 1 (3 display images,
-            // 4 ground truths and simulations) at each setting: about 3 minutes of the full run
-            // on 2 shared cores. The highest settings are what fits; see `last_step_db`.
-            table1_la_grids: vec![1, 2, 3, 4, 5, 6, 8],
+            precision_reference_db: 0.005,
+            precision_reference_max_samples: 1 << 16,
+            precision_reference_seconds: 900.0,
+            precision_grids: vec![(4, 1), (8, 1), (8, 2), (12, 2), (16, 3), (24, 4)],
+            precision_samples: vec![1, 2, 4, 8, 16, 32, 64, 128],
         }
     }
 
     /// `--quick`: the same sweeps at a quarter of the LCD's and retina's resolution (a
-    /// sixteenth of the pixels).
+    /// sixteenth of the pixels), and a shorter cost-of-precision sweep (a looser reference).
     pub fn quick() -> Self {
-        Self { lcd_resolution: 540, retina_resolution: 128, ..Self::full() }
-    }
-
-    /// The settings of a Table 1 sweep, lowest first.
-    pub fn table1_settings(&self, sweep: Parameter) -> &[usize] {
-        match sweep {
-            Parameter::RetinaSamples => &self.table1_retina_samples,
-            Parameter::DisplaySamples => &self.table1_display_samples,
-            Parameter::PupilGrid => &self.table1_pupil_grids,
-            Parameter::LaGrid => &self.table1_la_grids,
+        Self {
+            lcd_resolution: 540,
+            retina_resolution: 128,
+            precision_reference_db: 0.01,
+            precision_reference_max_samples: 1 << 13,
+            precision_reference_seconds: 60.0,
+            precision_grids: vec![(4, 1), (8, 1), (8, 2), (16, 3)],
+            precision_samples: vec![1, 2, 4, 8, 16, 32],
+            ..Self::full()
         }
     }
 }
@@ -145,10 +146,27 @@ pub enum Series {
     PupilGrid,
     /// Convergence of samples per retina pixel (ground truth).
     RetinaSamples,
-    /// Table 1 convergence, one swept parameter per sweep.
-    Table1,
+    /// The cost of precision: Table 1 by each estimator at increasing sample counts.
+    Precision,
 }
-names!(Series { Method => "method", LaGrid => "la_grid", PupilGrid => "pupil_grid", RetinaSamples => "retina_samples", Table1 => "table1" });
+names!(Series { Method => "method", LaGrid => "la_grid", PupilGrid => "pupil_grid", RetinaSamples => "retina_samples", Precision => "precision" });
+
+/// An estimator of Table 1 (the `estimator` column of `precision` rows).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Estimator {
+    /// The paper's grids: pupil grid n x n, s x s samples per retina pixel.
+    Grid,
+    /// Independent uniform points, PSNR of the mean image.
+    Random,
+    /// Randomized QMC replicates, PSNR of their mean image (noise-biased).
+    RqmcNaive,
+    /// Randomized QMC replicates, cross-replicate (de-biased) PSNR.
+    Rqmc,
+    /// The converged reference the others are scored against.
+    Reference,
+}
+names!(Estimator { Grid => "grid", Random => "random", RqmcNaive => "rqmc_naive", Rqmc => "rqmc", Reference => "reference" });
 
 impl Series {
     /// The convergence series, in report order.
@@ -236,10 +254,12 @@ pub fn la_grid_of(m: Method) -> usize {
 pub struct BenchRow {
     pub series: Series,
     /// The parameter `parameter` holds: `display_samples` (`method` series), the series' own
-    /// parameter (`la_grid`, `pupil_grid`, `retina_samples`), or the swept parameter of a
-    /// `table1` row.
+    /// parameter (`la_grid`, `pupil_grid`, `retina_samples`); `retina_samples` for `precision`
+    /// rows (samples per retina pixel).
     pub sweep: Parameter,
-    /// What was rendered and scored (`table1` rows: perceived, scored against the ground
+    /// The estimator of a `precision` row; `None` (empty) for the other series.
+    pub estimator: Option<Estimator>,
+    /// What was rendered and scored (`precision` rows: perceived, scored against the ground
     /// truth).
     pub quantity: Quantity,
     /// Eye case of perceived and ground-truth images ("Near"); empty for display images.
@@ -249,20 +269,21 @@ pub struct BenchRow {
     pub backend: Backend,
     pub method: MethodLabel,
     /// The swept parameter's value: samples per display pixel per axis (`method`), k, n, or
-    /// samples per retina pixel per axis.
+    /// samples per retina pixel per axis (`precision`: samples per retina pixel).
     pub parameter: usize,
     /// Samples per pixel along the swept dimension: parameter^2, or the pupil samples kept
-    /// inside the circle for `pupil_grid`.
+    /// inside the circle for `pupil_grid` (`precision`: samples per retina pixel).
     pub samples: usize,
     /// Wall time. Perceived rows of the `method` series: display render plus simulation.
-    /// `table1` rows: computing the whole Table 1 at that setting (every display image, ground
-    /// truth, simulation and score; no files), the same for each of the point's rows.
+    /// `precision` rows: the estimator's eye rays and scoring for the whole Table 1 at that
+    /// sample count (display images not counted; the reference: its eye case), the same for each
+    /// of the point's rows.
     pub seconds: f64,
     /// Rays traced: camera rays of the display render, plus eye rays of the simulation.
-    /// `table1` rows: every camera and eye ray (ground truths and simulations) of the point.
+    /// `precision` rows: the eye rays of the point (the reference's: of its eye case).
     pub rays: u64,
     pub rays_per_second: f64,
-    /// Mean of the R, G, B PSNRs against the reference (peak 1, linear values). `table1`
+    /// Mean of the R, G, B PSNRs against the reference (peak 1, linear values). `precision`
     /// rows: Table 1's PSNR (perceived image against the ground truth).
     pub psnr_db: f64,
     /// Mean SSIM (Wang 2004 constants) of R, G, B against the reference.
@@ -324,6 +345,7 @@ impl RowContext {
         BenchRow {
             series,
             sweep,
+            estimator: None,
             quantity,
             eye_case: String::new(),
             focus_mm: None,
@@ -404,7 +426,8 @@ mod tests {
         same_text(Backend::ALL);
         same_text(MethodLabel::ALL);
         let text: Vec<&str> = Series::ALL.iter().map(|s| s.as_str()).collect();
-        assert_eq!(text, ["method", "la_grid", "pupil_grid", "retina_samples", "table1"]);
+        assert_eq!(text, ["method", "la_grid", "pupil_grid", "retina_samples", "precision"]);
+        same_text(Estimator::ALL);
         let text: Vec<&str> = Backend::ALL.iter().map(|s| s.as_str()).collect();
         assert_eq!(text, ["analytic-fused", "analytic", "embree", "bvh"]);
         let text: Vec<&str> = MethodLabel::ALL.iter().map(|s| s.as_str()).collect();

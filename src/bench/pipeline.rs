@@ -70,6 +70,7 @@ impl Sampling {
     }
 
     /// The value of `parameter`.
+    #[cfg(test)]
     pub fn get(self, parameter: Parameter) -> usize {
         match parameter {
             Parameter::RetinaSamples => self.retina,

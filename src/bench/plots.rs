@@ -1,7 +1,7 @@
 //! The bench's plots, as PNG and SVG (plotters): speed against error (`speed_psnr`,
 //! `speed_ssim`: PSNR or SSIM against wall time per method and backend), the convergence of
-//! each series (`la_grid`, `pupil_grid`, `retina_samples`) with its fitted power law, and Table 1
-//! convergence (`table1`).
+//! each series (`la_grid`, `pupil_grid`, `retina_samples`) with its fitted power law, and the cost
+//! of precision (`precision`: each Table 1 estimator's error against seconds).
 
 use std::path::Path;
 
@@ -9,9 +9,10 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use super::markdown::{secs, series_setting, sweep_name};
-use super::options::{BenchRow, MethodLabel, Parameter, Series};
-use super::summary::{ConvergenceSummary, CONVERGED_TOLERANCE_DB};
+use super::markdown::{estimator_name, secs, series_setting};
+use super::options::{BenchRow, Estimator, MethodLabel, Series};
+use super::precision::{PRECISION_TARGETS_DB, SWEPT};
+use super::summary::ConvergenceSummary;
 use super::BenchReport;
 use crate::error::{Error, Result};
 
@@ -40,8 +41,8 @@ pub fn write_plots(report: &BenchReport, out: &Path) -> Result<()> {
     for s in &report.convergence {
         draw_plot!(out, s.series, (900, 560), |area| plot_convergence(area, report, s));
     }
-    if !report.table1.is_empty() {
-        draw_plot!(out, "table1", (1400, 1100), |area| plot_table1(area, report));
+    if !report.precision.points.is_empty() {
+        draw_plot!(out, "precision", (1200, 800), |area| plot_precision(area, report));
     }
     Ok(())
 }
@@ -221,7 +222,7 @@ where
         .x_desc(match c.series {
             Series::LaGrid => "lenslet samples per display pixel, k x k (log)",
             Series::PupilGrid => "pupil samples: n x n grid, kept inside the circle (log)",
-            Series::Method | Series::RetinaSamples | Series::Table1 => "samples per retina pixel, k x k (log)",
+            Series::Method | Series::RetinaSamples | Series::Precision => "samples per retina pixel, k x k (log)",
         })
         .y_desc("PSNR (dB)")
         .draw()
@@ -279,126 +280,82 @@ where
     area.present().map_err(e2s)
 }
 
-/// Table 1 convergence: one panel per sweep, x = the swept setting, y = Table 1's PSNR, one line
-/// per method (colour) and eye case (marker); the seconds of each setting along the top, the
-/// paper's setting and the cheapest setting within the tolerance for every method and eye case
-/// as vertical lines; the legend in a strip along the bottom.
-fn plot_table1<DB: DrawingBackend>(area: DrawingArea<DB, Shift>, rep: &BenchReport) -> PlotResult
+/// The cost of precision: x = seconds (log), y = largest |PSNR error| over Table 1's cells
+/// against the converged Table 1 (log), one line per estimator with its points labelled by
+/// samples per pixel; dashed horizontal lines at the targets of the thresholds table.
+fn plot_precision<DB: DrawingBackend>(area: DrawingArea<DB, Shift>, rep: &BenchReport) -> PlotResult
 where
     DB::ErrorType: 'static,
 {
     area.fill(&WHITE).map_err(e2s)?;
-    let area = area
-        .titled(
-            "Table 1 PSNR (perceived image vs ground truth) against each sampling setting; labels: seconds for the \
-             whole Table 1",
-            ("sans-serif", 22),
+    let p = &rep.precision;
+    let floor = 1e-4;
+    let err = |v: f64| v.max(floor);
+    let (t0, t1) = range(p.points.iter().map(|q| q.seconds.max(1e-4)));
+    let (e0, e1) = range(p.points.iter().map(|q| err(q.max_psnr_error_db)));
+    let (e0, e1) = (e0.min(PRECISION_TARGETS_DB[3]) * 0.5, e1.max(PRECISION_TARGETS_DB[0]) * 2.0);
+    let mut chart = ChartBuilder::on(&area)
+        .caption(
+            format!(
+                "The cost of precision: Table 1's largest |PSNR error| against the converged Table 1 ({} backend)",
+                rep.backends.first().map(|b| b.as_str()).unwrap_or("?")
+            ),
+            ("sans-serif", 20),
         )
+        .margin(16)
+        .x_label_area_size(44)
+        .y_label_area_size(64)
+        .build_cartesian_2d((t0 * 0.7..t1 * 1.4).log_scale(), (e0..e1).log_scale())
         .map_err(e2s)?;
-    let (_, h) = area.dim_in_pixel();
-    let (panels, strip) = area.split_vertically(h.saturating_sub(44));
+    chart
+        .configure_mesh()
+        .max_light_lines(1)
+        .x_desc("seconds (eye rays and scoring of the whole Table 1; log)")
+        .y_desc("largest |PSNR - converged| over Table 1 (dB, log)")
+        .x_label_formatter(&|v| significant(*v))
+        .y_label_formatter(&|v| significant(*v))
+        .draw()
+        .map_err(e2s)?;
     let gray = RGBColor(150, 150, 150);
-    let gold = RGBColor(230, 150, 0);
-    let centred =
-        |size: u32| ("sans-serif", size).into_font().into_text_style(&panels).pos(Pos::new(HPos::Center, VPos::Center));
-    let mut cases: Vec<String> = Vec::new();
-    for r in rep.rows.iter().filter(|r| r.series == Series::Table1) {
-        if !cases.contains(&r.eye_case) {
-            cases.push(r.eye_case.clone());
-        }
-    }
-    let cells = panels.split_evenly((rep.table1.len().div_ceil(2).max(1), 2));
-    for (t, cell) in rep.table1.iter().zip(cells.iter()) {
-        let rows: Vec<&BenchRow> = rep.table1_rows(t.sweep).collect();
-        if rows.is_empty() {
-            continue;
-        }
-        let (x0, x1) = range(t.parameters.iter().map(|p| *p as f64));
-        let (v0, v1) = range(rows.iter().map(|r| r.psnr_db.min(120.0)));
-        let pad = ((v1 - v0) * 0.08).max(0.3);
-        let top = v1 + 3.0 * pad;
-        let xpad = ((x1 - x0) * 0.06).max(0.3);
-        let mut chart = ChartBuilder::on(cell)
-            .caption(
-                format!("{} (others at the paper's; {} backend)", sweep_name(t.sweep), t.backend),
-                ("sans-serif", 17),
-            )
-            .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(56)
-            .build_cartesian_2d((x0 - xpad)..(x1 + xpad), (v0 - pad)..top)
-            .map_err(e2s)?;
+    for t in PRECISION_TARGETS_DB {
         chart
-            .configure_mesh()
-            .max_light_lines(1)
-            .x_labels(t.parameters.len().max(2))
-            .x_label_formatter(&|v| format!("{v:.0}"))
-            .x_desc(match t.sweep {
-                Parameter::PupilGrid => "n (pupil grid n x n)",
-                Parameter::LaGrid => "k (LA lenslet grid k x k)",
-                Parameter::RetinaSamples | Parameter::DisplaySamples => "k (k x k samples per pixel)",
-            })
-            .y_desc("Table 1 PSNR (dB)")
-            .y_label_formatter(&|v| format!("{v:.1}"))
-            .draw()
+            .draw_series(DashedLineSeries::new([(t0 * 0.7, t), (t1 * 1.4, t)], 6, 4, gray.stroke_width(1)))
             .map_err(e2s)?;
-        // Vertical lines: the paper's setting, and the cheapest setting within the tolerance.
-        let paper = t.paper_parameter as f64;
-        chart.draw_series(LineSeries::new([(paper, v0 - pad), (paper, top)], gray.stroke_width(2))).map_err(e2s)?;
-        if let Some(w) = &t.all_methods {
-            let x = w.parameter as f64;
-            chart.draw_series(LineSeries::new([(x, v0 - pad), (x, top)], gold.stroke_width(3))).map_err(e2s)?;
-        }
-        for m in MethodLabel::METHODS {
-            let color = method_color(m);
-            for (ci, c) in cases.iter().enumerate() {
-                let line: Vec<(f64, f64)> = rows
-                    .iter()
-                    .filter(|r| r.method == m && &r.eye_case == c)
-                    .map(|r| (r.parameter as f64, r.psnr_db.min(120.0)))
-                    .collect();
-                if line.is_empty() {
-                    continue;
-                }
-                chart.draw_series(LineSeries::new(line.clone(), color.stroke_width(2))).map_err(e2s)?;
-                chart
-                    .draw_series(line.iter().map(|p| EmptyElement::at(*p) + marker_element(ci, color)))
-                    .map_err(e2s)?;
-            }
-        }
-        // Seconds of each setting along the top, on two alternating rows.
-        for (k, (p, sec)) in t.parameters.iter().zip(&t.seconds).enumerate() {
-            let y = if k % 2 == 0 { top - 0.8 * pad } else { top - 1.9 * pad };
-            chart
-                .draw_series(std::iter::once(Text::new(format!("{} s", secs(*sec)), (*p as f64, y), centred(12))))
-                .map_err(e2s)?;
-        }
     }
-    // The legend strip.
-    let label = ("sans-serif", 14).into_font().into_text_style(&strip).pos(Pos::new(HPos::Left, VPos::Center));
-    let y = 22;
-    let mut x = 30;
-    for m in MethodLabel::METHODS {
-        strip.draw(&PathElement::new(vec![(x, y), (x + 24, y)], method_color(m).stroke_width(2))).map_err(e2s)?;
-        strip.draw(&Text::new(m.to_string(), (x + 30, y), label.clone())).map_err(e2s)?;
-        x += 80;
+    let small = ("sans-serif", 12).into_font().into_text_style(&area).pos(Pos::new(HPos::Left, VPos::Bottom));
+    for (i, e) in SWEPT.into_iter().enumerate() {
+        let color = estimator_color(e);
+        let pts: Vec<_> = p.points.iter().filter(|q| q.estimator == e).collect();
+        let line: Vec<(f64, f64)> = pts.iter().map(|q| (q.seconds.max(1e-4), err(q.max_psnr_error_db))).collect();
+        chart
+            .draw_series(LineSeries::new(line.clone(), color.stroke_width(2)))
+            .map_err(e2s)?
+            .label(estimator_name(e))
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], color.stroke_width(2)));
+        chart.draw_series(line.iter().map(|q| EmptyElement::at(*q) + marker_element(i, color))).map_err(e2s)?;
+        chart
+            .draw_series(
+                pts.iter().zip(&line).map(|(q, xy)| Text::new(q.samples_per_pixel.to_string(), *xy, small.clone())),
+            )
+            .map_err(e2s)?;
     }
-    for (ci, c) in cases.iter().enumerate() {
-        strip.draw(&(EmptyElement::at((x + 8, y)) + marker_element(ci, RGBColor(60, 60, 60)))).map_err(e2s)?;
-        strip.draw(&Text::new(c.clone(), (x + 20, y), label.clone())).map_err(e2s)?;
-        x += 90;
-    }
-    for (color, width, text) in [
-        (gray, 2, "paper's setting".to_string()),
-        (
-            gold,
-            3,
-            format!("cheapest setting within {CONVERGED_TOLERANCE_DB} dB of converged, every method and eye case"),
-        ),
-    ] {
-        strip.draw(&PathElement::new(vec![(x, y - 10), (x, y + 10)], color.stroke_width(width))).map_err(e2s)?;
-        strip.draw(&Text::new(text.clone(), (x + 10, y), label.clone())).map_err(e2s)?;
-        x += 40 + 7 * text.len() as i32;
-    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 15))
+        .draw()
+        .map_err(e2s)?;
     area.present().map_err(e2s)
+}
+
+fn estimator_color(e: Estimator) -> RGBColor {
+    match e {
+        Estimator::Grid => RGBColor(31, 119, 180),
+        Estimator::Random => RGBColor(255, 127, 14),
+        Estimator::RqmcNaive => RGBColor(214, 39, 40),
+        Estimator::Rqmc => RGBColor(44, 160, 44),
+        Estimator::Reference => RGBColor(80, 80, 80),
+    }
 }

@@ -8,7 +8,6 @@ use std::path::Path;
 use super::markdown::markdown;
 use super::options::{BenchRow, BuildRecord};
 use super::plots::write_plots;
-use super::summary::{Table1Within, CONVERGED_TOLERANCE_DB};
 use super::BenchReport;
 use crate::error::{Error, Result};
 
@@ -23,7 +22,7 @@ fn csv_field(s: &str) -> String {
 /// `bench.csv`: one line per row, the columns of [`BenchRow`] in order.
 pub fn rows_csv(rows: &[BenchRow]) -> String {
     let mut csv = String::from(
-        "series,sweep,quantity,eye_case,focus_mm,backend,method,parameter,samples,seconds,rays,rays_per_second,psnr_db,ssim,\
+        "series,sweep,estimator,quantity,eye_case,focus_mm,backend,method,parameter,samples,seconds,rays,rays_per_second,psnr_db,ssim,\
          scene,lcd_resolution,retina_resolution,display_samples,la_grid,pupil_grid,pupil_samples,retina_samples,\
          reference,threads,cores,git_revision\n",
     );
@@ -31,6 +30,7 @@ pub fn rows_csv(rows: &[BenchRow]) -> String {
         let fields = [
             csv_field(r.series.as_str()),
             csv_field(r.sweep.as_str()),
+            r.estimator.map(|e| e.as_str()).unwrap_or_default().to_string(),
             csv_field(r.quantity.as_str()),
             csv_field(&r.eye_case),
             r.focus_mm.map(|f| f.to_string()).unwrap_or_default(),
@@ -103,7 +103,7 @@ pub fn write_json(report: &BenchReport, out: &Path) -> Result<()> {
 }
 
 /// What `inimtrace bench` prints on stdout: every row as a Markdown table, the rate of each
-/// convergence series, and the converged and cheapest settings of each Table 1 sweep.
+/// convergence series, and the seconds each Table 1 estimator needs per precision target.
 pub fn console_table(report: &BenchReport) -> String {
     let mut s = String::new();
     s.push_str("| series | image | backend | method | parameter | seconds | Mrays/s | PSNR (dB) | SSIM |\n");
@@ -132,20 +132,16 @@ pub fn console_table(report: &BenchReport) -> String {
             c.rate.map(|p| format!("{p:.2}")).unwrap_or_else(|| "?".into())
         );
     }
-    let within = |w: &Table1Within| format!("{} ({:.2} s)", w.parameter, w.seconds);
-    let tol = CONVERGED_TOLERANCE_DB;
-    for t in &report.table1 {
-        let per: Vec<String> = t.per_method.iter().map(|w| format!("{} {}", w.methods, within(w))).collect();
+    for r in &report.precision.reached {
         let _ = writeln!(
             s,
-            "table1 {}: converged = {} (last step {} dB{}); within {tol} dB for every method and eye case at {}; \
-             per method: {}",
-            t.sweep,
-            t.converged_parameter,
-            t.last_step_db.map(|d| format!("{d:.2}")).unwrap_or_else(|| "?".into()),
-            if t.last_step_db.is_some_and(|d| d > tol) { ", not levelled off" } else { "" },
-            t.all_methods.as_ref().map(within).unwrap_or_else(|| "-".into()),
-            per.join(", ")
+            "precision {}: +-{} dB {}",
+            r.estimator,
+            r.target_db,
+            match (r.seconds, r.samples_per_pixel) {
+                (Some(t), Some(n)) => format!("in {t:.3} s ({n} samples per pixel)"),
+                _ => "not reached".into(),
+            }
         );
     }
     s

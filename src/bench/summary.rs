@@ -1,13 +1,10 @@
 //! What the measured rows say about convergence: the observed rate of each convergence series
-//! (error ~ samples^p), and for each Table 1 sweep the cheapest setting whose Table-1 PSNRs are
-//! within [`CONVERGED_TOLERANCE_DB`] of their converged values (those of the sweep's highest
-//! setting).
+//! (error ~ samples^p) and the first setting within [`CONVERGED_TOLERANCE_DB`] of the converged
+//! PSNR (that of the highest setting), with the helpers to compare sets of PSNRs.
 
-use std::fmt;
+use serde::Serialize;
 
-use serde::{Serialize, Serializer};
-
-use super::options::{Backend, BenchRow, MethodLabel, Parameter, Series};
+use super::options::{Backend, BenchRow, Series};
 
 /// PSNR reported for identical images, so that tables, fits and plots stay finite.
 pub const IDENTICAL_PSNR_DB: f64 = 200.0;
@@ -51,77 +48,6 @@ pub struct ConvergenceSummary {
     pub highest_parameter: usize,
     pub highest_seconds: f64,
     pub first_within_tolerance: Option<WithinTolerance>,
-}
-
-/// The Table-1 values a [`Table1Within`] covers: every method and eye case at once ("all"), or
-/// one method's eye cases ("LC", "PC", "LA").
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum MethodSet {
-    All,
-    One(MethodLabel),
-}
-
-impl MethodSet {
-    fn contains(self, m: MethodLabel) -> bool {
-        match self {
-            MethodSet::All => true,
-            MethodSet::One(one) => one == m,
-        }
-    }
-}
-
-impl fmt::Display for MethodSet {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            MethodSet::All => f.write_str("all"),
-            MethodSet::One(m) => m.fmt(f),
-        }
-    }
-}
-
-impl Serialize for MethodSet {
-    fn serialize<S: Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        s.collect_str(self)
-    }
-}
-
-/// The cheapest setting of a Table 1 sweep at which a set of Table-1 PSNRs is within
-/// [`CONVERGED_TOLERANCE_DB`] of their converged values (those at the sweep's highest setting).
-#[derive(Clone, Debug, Serialize)]
-pub struct Table1Within {
-    pub methods: MethodSet,
-    pub parameter: usize,
-    pub samples: usize,
-    /// Computing the whole Table 1 at that setting.
-    pub seconds: f64,
-    /// Largest |PSNR - converged PSNR| at that setting over those methods and eye cases.
-    pub max_diff_db: f64,
-    /// Every higher setting of the sweep is within the tolerance too.
-    pub stays_within: bool,
-}
-
-/// One Table 1 sweep: its settings, their cost, and which reach the converged Table 1.
-#[derive(Clone, Debug, Serialize)]
-pub struct Table1Sweep {
-    pub sweep: Parameter,
-    pub backend: Backend,
-    /// The paper's setting of the swept parameter (the others stay at theirs).
-    pub paper_parameter: usize,
-    /// Settings in sweep order (fewest samples first), and the seconds each cost.
-    pub parameters: Vec<usize>,
-    pub seconds: Vec<f64>,
-    /// The highest setting, whose Table 1 is taken as converged.
-    pub converged_parameter: usize,
-    /// Largest |PSNR - converged PSNR| over every method and eye case at the paper's setting.
-    pub paper_max_diff_db: Option<f64>,
-    /// Largest change of any Table-1 PSNR over the sweep's last step (second-highest to highest
-    /// setting). Above the tolerance, the sweep has not levelled off: its "converged" Table 1 is
-    /// only the best it measured, and the setting within tolerance is its highest.
-    pub last_step_db: Option<f64>,
-    /// The cheapest setting within tolerance for every method and eye case at once...
-    pub all_methods: Option<Table1Within>,
-    /// ... and for each method on its own (its eye cases).
-    pub per_method: Vec<Table1Within>,
 }
 
 /// p in error ~ samples^p (see [`ConvergenceSummary::rate`]) from (samples, PSNR) points.
@@ -196,68 +122,8 @@ fn describe_series(series: Series, r: &BenchRow) -> String {
         Series::LaGrid => "LA display image, k x k lenslet grid".into(),
         Series::PupilGrid => format!("LC perceived image ({}), n x n pupil grid", r.eye_case),
         Series::RetinaSamples => format!("ground truth ({}), k x k samples per retina pixel", r.eye_case),
-        Series::Method | Series::Table1 => series.to_string(),
+        Series::Method | Series::Precision => series.to_string(),
     }
-}
-
-/// The methods of some Table 1 rows, in first-seen order.
-fn table1_methods(rows: &[&BenchRow]) -> Vec<MethodLabel> {
-    let mut methods: Vec<MethodLabel> = Vec::new();
-    for r in rows {
-        if !methods.contains(&r.method) {
-            methods.push(r.method);
-        }
-    }
-    methods
-}
-
-/// The Table 1 sweep of `sweep` over its rows; `paper_parameter` is the paper's setting of the
-/// swept parameter.
-pub fn summarize_table1(sweep: Parameter, paper_parameter: usize, rows: &[BenchRow]) -> Option<Table1Sweep> {
-    let pts: Vec<&BenchRow> = rows.iter().filter(|r| r.series == Series::Table1 && r.sweep == sweep).collect();
-    let mut parameters: Vec<usize> = Vec::new();
-    for r in &pts {
-        if !parameters.contains(&r.parameter) {
-            parameters.push(r.parameter);
-        }
-    }
-    let last = *parameters.last()?;
-    let at = |p: usize| pts.iter().filter(move |r| r.parameter == p);
-    let psnr_at = |p: usize| at(p).map(|r| r.psnr_db).collect::<Vec<_>>();
-    let seconds: Vec<f64> = parameters.iter().map(|&p| at(p).next().map(|r| r.seconds).unwrap_or(f64::NAN)).collect();
-    let within = |methods: MethodSet| -> Option<Table1Within> {
-        let values: Vec<Vec<f64>> = parameters
-            .iter()
-            .map(|&p| at(p).filter(|r| methods.contains(r.method)).map(|r| r.psnr_db).collect())
-            .collect();
-        let i = cheapest_within(&values, CONVERGED_TOLERANCE_DB)?;
-        let converged = values.last()?;
-        let first = at(parameters[i]).next()?;
-        Some(Table1Within {
-            methods,
-            parameter: parameters[i],
-            samples: first.samples,
-            seconds: first.seconds,
-            max_diff_db: max_abs_diff(&values[i], converged),
-            stays_within: values[i..].iter().all(|v| max_abs_diff(v, converged) <= CONVERGED_TOLERANCE_DB),
-        })
-    };
-    let paper_max_diff_db =
-        parameters.contains(&paper_parameter).then(|| max_abs_diff(&psnr_at(paper_parameter), &psnr_at(last)));
-    let last_step_db =
-        (parameters.len() >= 2).then(|| max_abs_diff(&psnr_at(parameters[parameters.len() - 2]), &psnr_at(last)));
-    Some(Table1Sweep {
-        sweep,
-        backend: pts.first()?.backend,
-        paper_parameter,
-        last_step_db,
-        parameters: parameters.clone(),
-        seconds,
-        converged_parameter: last,
-        paper_max_diff_db,
-        all_methods: within(MethodSet::All),
-        per_method: table1_methods(&pts).into_iter().filter_map(|m| within(MethodSet::One(m))).collect(),
-    })
 }
 
 #[cfg(test)]
@@ -303,13 +169,10 @@ mod tests {
     }
 
     #[test]
-    fn identical_images_and_method_sets_read_as_before() {
+    fn identical_images_read_as_the_cap() {
         assert_eq!(capped_psnr(f64::INFINITY), IDENTICAL_PSNR_DB);
         assert_eq!(capped_psnr(f64::NAN), IDENTICAL_PSNR_DB);
         assert_eq!(capped_psnr(250.0), IDENTICAL_PSNR_DB);
         assert_eq!(capped_psnr(31.5), 31.5);
-        assert_eq!(serde_json::to_string(&MethodSet::All).unwrap(), "\"all\"");
-        assert_eq!(serde_json::to_string(&MethodSet::One(MethodLabel::Pc)).unwrap(), "\"PC\"");
-        assert!(MethodSet::All.contains(MethodLabel::La) && !MethodSet::One(MethodLabel::Lc).contains(MethodLabel::La));
     }
 }

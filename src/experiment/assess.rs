@@ -12,8 +12,10 @@ use super::report::write_reports;
 use super::stages::{pack_display_images, render_display_images, stage_time, table1};
 use super::{AssessReport, Experiment};
 use crate::accel::analytic::AnalyticRects;
-use crate::error::{Error, Result};
+use crate::budget::Estimate;
+use crate::error::Result;
 use crate::io::exr::{Attributes, ExrCompression};
+use crate::io::output::OutputDir;
 use crate::optics::Aperture;
 use crate::raster::RgbImage;
 use crate::render::backend::resolve;
@@ -36,29 +38,80 @@ pub struct RunOptions {
 /// Runs an experiment and writes every output into `out`.
 pub fn assess(exp: &Experiment, out: &Path, opts: RunOptions) -> Result<AssessReport> {
     let start = Instant::now();
-    prepare_output_dir(out)?;
+    // Refuse settings that cannot fit in memory before anything is allocated; say so when the
+    // run will be long, even when stderr is not a terminal.
+    let estimate = estimate(exp);
+    estimate.check_memory(crate::budget::memory_limit(), &exp.source)?;
+    let seconds = estimate.seconds(RAYS_PER_SECOND * rayon::current_num_threads() as f64);
+    if seconds > 60.0 {
+        eprintln!(
+            "note: this run traces about {:.2e} rays: roughly {} on this machine",
+            estimate.rays as f64,
+            if seconds < 3600.0 {
+                format!("{:.0} minutes", seconds / 60.0)
+            } else {
+                format!("{:.1} hours", seconds / 3600.0)
+            }
+        );
+    }
+    // The folder is owned by this run (a second run into it fails at once) and every file
+    // appears under its final name only when complete; `results.json` comes last.
+    let dir = &OutputDir::open(out)?;
     // The paper's kind of scene: the fused planar kernel, called directly (no virtual call per
     // ray) for both images and depths. Everything else: the backend chosen by `with_fields`.
     if resolve(&exp.scene, opts.backend) == BackendChoice::Analytic && exp.scene.is_analytic() {
         let backend = AnalyticRects::new(&exp.scene)?;
         if let Some(fast) = FacingPlanes::new(&exp.scene, &backend) {
-            return assess_with(exp, out, opts, &fast, &fast, "analytic (fused planar kernel)", start);
+            return assess_with(exp, dir, opts, &fast, &fast, "analytic (fused planar kernel)", start);
         }
     }
     with_fields(&exp.scene, opts.backend, |fields| {
-        assess_with(exp, out, opts, fields.shade, fields.with_depth, fields.name, start)
+        assess_with(exp, dir, opts, fields.shade, fields.with_depth, fields.name, start)
     })
 }
 
-/// Creates the output directory and checks it can be written, before any long computation.
+/// Creates the output directory and checks it can be written, before any long computation
+/// (and removes what an earlier run left there; see [`OutputDir::open`]).
 pub fn prepare_output_dir(out: &Path) -> Result<()> {
-    std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
-    let probe = out.join(".inimtrace-write-test");
-    std::fs::write(&probe, b"").map_err(|e| Error::io(out, e))?;
-    let _ = std::fs::remove_file(&probe);
-    // An interrupted earlier run must not look complete: the report is written last.
-    let _ = std::fs::remove_file(out.join("results.json"));
-    Ok(())
+    OutputDir::open(out).map(|_| ())
+}
+
+/// Rays per second per thread assumed by the announcement of long runs (a conservative figure
+/// for the generic tracers; the fused planar kernel is faster).
+const RAYS_PER_SECOND: f64 = 10e6;
+
+/// The run's peak memory and its rays, from the settings alone (before anything is allocated).
+pub fn estimate(exp: &Experiment) -> Estimate {
+    let mut e = Estimate::default();
+    let lcd = exp.display.lcd.pixel_count() as u64;
+    let methods = exp.methods.len() as u64;
+    let lcd_setting = format!("lcd.resolution = {:?} of display `{}`", exp.display.lcd.resolution, exp.spec.display);
+    // Display images (RGB f32 + depth), and their interleaved copy for the simulation.
+    e.add("the display images and their depth planes", lcd_setting.clone(), lcd * methods, 16);
+    e.add("the display images packed for the simulation", lcd_setting, lcd * methods, 12);
+    let n = exp.retina.resolution as u64;
+    let cases = exp.cases.len() as u64;
+    let retina_setting = format!("eye.retina_resolution = {n}");
+    e.add("the retinal images", retina_setting.clone(), n * n * cases * (1 + methods), 12);
+    let spp = (exp.render.samples_per_pixel as u64).pow(2);
+    for m in &exp.methods {
+        let per_pixel = match m {
+            crate::render::Method::LensletAverage { grid } => (*grid as u64).pow(2),
+            _ => 1,
+        };
+        e.add_rays(lcd.saturating_mul(spp).saturating_mul(per_pixel));
+    }
+    if exp.measurement.estimator == crate::measure::spec::EstimatorKind::Converged {
+        let r = exp.measurement.replicates as u64;
+        e.add("the converged estimator's replicates", retina_setting, n * n * r * (1 + methods), 12);
+        e.add_rays(n * n * cases * exp.measurement.max_samples_per_pixel.min(256) * (1 + methods));
+    } else {
+        let per_pixel = (exp.retina.samples_per_pixel as u64).pow(2);
+        for case in &exp.cases {
+            e.add_rays(n * n * per_pixel * case.eye.pupil_samples().len() as u64 * (1 + methods));
+        }
+    }
+    e
 }
 
 struct Job<'a> {
@@ -71,7 +124,7 @@ struct Job<'a> {
 #[allow(clippy::too_many_arguments)]
 fn assess_with<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
     exp: &Experiment,
-    out: &Path,
+    dir: &OutputDir,
     opts: RunOptions,
     shade: &S,
     with_depth: &D,
@@ -125,12 +178,13 @@ fn assess_with<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
     let (image_result, figure_result) = rayon::join(
         || {
             jobs.par_iter().try_for_each(|j| -> Result<()> {
-                let path = out.join(format!("{}.exr", j.stem));
-                crate::io::exr::write_rgb_with(&path, j.image, j.depth, &j.attributes, opts.exr_compression)?;
-                crate::io::png::write_preview(&out.join(format!("{}.png", j.stem)), j.image)
+                dir.write_with(&format!("{}.exr", j.stem), |p| {
+                    crate::io::exr::write_rgb_with(p, j.image, j.depth, &j.attributes, opts.exr_compression)
+                })?;
+                dir.write_with(&format!("{}.png", j.stem), |p| crate::io::png::write_preview(p, j.image))
             })
         },
-        || crate::io::figure::write_figure(&out.join("figure.png"), &figure),
+        || dir.write_with("figure.png", |p| crate::io::figure::write_figure(p, &figure)),
     );
     image_result?;
     figure_result?;
@@ -149,7 +203,7 @@ fn assess_with<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
         total_seconds: start.elapsed().as_secs_f64(),
         settings: exp.spec.clone(),
     };
-    write_reports(&report, exp, out)?;
+    write_reports(&report, exp, dir)?;
     Ok(report)
 }
 

@@ -1,13 +1,12 @@
 //! The outputs of an assessment as data and text: the scores of Table 1 (Sec. 4.2), the stage
 //! timings, and their Markdown table, CSV and JSON reports.
 
-use std::path::{Path, PathBuf};
-
 use serde::Serialize;
 
 use super::{Experiment, ExperimentSpec};
 use crate::error::{Error, Result};
 use crate::info::DisplayParameters;
+use crate::io::output::OutputDir;
 use crate::measure::spec::EstimatorKind;
 use crate::measure::stats::Estimate;
 use crate::metrics::SsimConstants;
@@ -102,11 +101,8 @@ pub fn table_markdown(report: &AssessReport, exp: &Experiment) -> String {
     s
 }
 
-pub(super) fn write_reports(report: &AssessReport, exp: &Experiment, out: &Path) -> Result<()> {
-    let write = |name: &str, text: String| -> Result<()> {
-        let path: PathBuf = out.join(name);
-        std::fs::write(&path, text).map_err(|e| Error::io(&path, e))
-    };
+pub(super) fn write_reports(report: &AssessReport, exp: &Experiment, dir: &OutputDir) -> Result<()> {
+    let write = |name: &str, text: String| -> Result<()> { dir.write_bytes(name, text.as_bytes()) };
     write("table.md", table_markdown(report, exp))?;
     // psnr_ci95_db and ssim_ci95 (last, empty for the grid estimator): 95% half-widths.
     let mut csv =
@@ -149,10 +145,14 @@ pub(super) fn write_reports(report: &AssessReport, exp: &Experiment, out: &Path)
     }
     csv.push_str(&format!("stage,{},,,,,,total,{},,\n", report.experiment, report.total_seconds));
     write("results.csv", csv)?;
-    let json = serde_json::to_string_pretty(report)
-        .map_err(|e| Error::Unsupported(format!("cannot serialise the report: {e}")))?;
-    // Last: its presence marks a complete run.
-    write("results.json", json)
+    // Last: its presence marks a complete run, and it lists every other file of the run with
+    // its size and CRC-32 (`files`), so a reader can verify the set.
+    dir.finish_report("results.json", |files| {
+        let mut value = serde_json::to_value(report)
+            .map_err(|e| Error::Unsupported(format!("cannot serialise the report: {e}")))?;
+        value["files"] = serde_json::to_value(files).map_err(|e| Error::Unsupported(e.to_string()))?;
+        serde_json::to_vec_pretty(&value).map_err(|e| Error::Unsupported(format!("cannot serialise the report: {e}")))
+    })
 }
 
 /// PSNR for CSV: identical images give "inf".

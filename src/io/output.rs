@@ -130,6 +130,12 @@ impl OutputDir {
     /// Writes the run's report `name` last, from the manifest of every other file, and
     /// releases the folder.
     pub fn finish(self, name: &str, report: impl FnOnce(&[OutputFile]) -> Result<Vec<u8>>) -> Result<()> {
+        self.finish_report(name, report)
+    }
+
+    /// Writes the run's report `name` from the manifest of every file written so far (the folder
+    /// stays owned until this handle is dropped).
+    pub fn finish_report(&self, name: &str, report: impl FnOnce(&[OutputFile]) -> Result<Vec<u8>>) -> Result<()> {
         let bytes = report(&self.manifest())?;
         self.write_bytes(name, &bytes)
     }

@@ -33,6 +33,16 @@ pub fn case_sampler(seed: u64, index: usize, eye: &Eye) -> Sampler {
     Sampler::new(seed, index as u64, radius)
 }
 
+/// The plain random sampler ([`Sampler::independent`]) of eye case `index` of an experiment
+/// measured with `seed`: the bench's Monte Carlo baseline.
+pub fn independent_case_sampler(seed: u64, index: usize, eye: &Eye) -> Sampler {
+    let radius = match eye.aperture {
+        Aperture::Pinhole => None,
+        Aperture::ThinLens { pupil_diameter, .. } => Some(0.5 * pupil_diameter),
+    };
+    Sampler::independent(seed, index as u64, radius)
+}
+
 /// Measures one eye case of any paired source to `precision` (see [`measure_case`]), quietly:
 /// the building block of [`table1`] for tests and tools.
 pub fn measure<S: PairedSource + ?Sized>(

@@ -23,8 +23,15 @@ impl Range {
             source,
             field,
             format!(
-                "must be between {} and {} {}, got {value} (valid ranges: docs/NUMERICS.md)",
-                self.min, self.max, self.unit
+                "must be between {} and {} {}, got {} (valid ranges: docs/NUMERICS.md)",
+                self.min,
+                self.max,
+                self.unit,
+                if value != 0.0 && !(1e-4..1e9).contains(&value.abs()) {
+                    format!("{value:e}")
+                } else {
+                    format!("{value}")
+                }
             ),
         ))
     }

@@ -154,7 +154,15 @@ fn with_embree<T>(scene: &Scene, f: impl FnOnce(Fields<'_>) -> Result<T>) -> Res
     use crate::accel::embree::{BuildQuality, EmbreeIntersector};
     let meshes = scene_meshes(scene);
     let refs: Vec<(u32, &Mesh)> = meshes.iter().map(|(i, m)| (*i, m.as_ref())).collect();
-    let backend = EmbreeIntersector::new(&refs, BuildQuality::Medium)?;
+    // Embree's own errors (out of memory, invalid geometry) name the scene and its objects.
+    let backend = EmbreeIntersector::new(&refs, BuildQuality::Medium).map_err(|e| match e {
+        crate::error::Error::Embree { code, message } => crate::error::Error::invalid(
+            format!("scene `{}`", scene.name),
+            "objects",
+            format!("Embree could not build the scene of {} triangle(s): {code}: {message}", scene.triangle_count()),
+        ),
+        other => other,
+    })?;
     drop(refs);
     drop(meshes);
     let tracer = SceneTracer { scene, backend: &backend };
