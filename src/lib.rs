@@ -10,7 +10,8 @@
 //! Layers, bottom up (a module imports only from layers below it): `error`, `raster`, `progress`
 //! and `ray` (rays, hits, the intersector interface); `optics` (eq. (1)) and `scene`; `accel`
 //! (intersection backends over the scene's data), `metrics` and `io` (file formats); `render`;
-//! `experiment` and `bench`.
+//! `experiment` and `bench`; `overrides` and `settings` (`--set` and the resolved settings of a
+//! run); `sweep`.
 //!
 //! `unsafe` code is denied everywhere except in the Embree wrapper (`accel::embree`).
 
@@ -28,11 +29,14 @@ pub mod io;
 pub mod measure;
 pub mod metrics;
 pub mod optics;
+pub mod overrides;
 pub mod progress;
 pub mod raster;
 pub mod ray;
 pub mod render;
 pub mod scene;
+pub mod settings;
+pub mod sweep;
 pub mod version;
 
 pub use error::{Error, Result};

@@ -15,12 +15,14 @@ use inimtrace::io::scene_file::SceneSpec;
 use inimtrace::io::{load_display, load_scene};
 use inimtrace::metrics::{self, SsimConstants};
 use inimtrace::optics::{Aperture, Display, Eye, Focus, Retina};
+use inimtrace::overrides::Override;
 use inimtrace::progress::Progress;
 use inimtrace::render::retina::simulate;
 use inimtrace::render::{
     ground_truth, render_display_image_with_depth, with_fields, BackendChoice, DisplayRenderSettings, Fields, Method,
 };
 use inimtrace::scene::Scene;
+use inimtrace::settings::{display_with, scene_with, setup_with, Settings};
 
 /// `print!` that returns write errors (a closed pipe) instead of panicking.
 macro_rules! out {
@@ -66,6 +68,11 @@ struct Cli {
     /// before anything is allocated (default: the memory available on this machine).
     #[arg(long, global = true, value_parser = inimtrace::budget::parse_bytes)]
     max_memory: Option<u64>,
+    /// Change one setting of the experiment, scene or display (repeatable): a dotted path into
+    /// the resolved experiment, the value in TOML syntax: eye.pupil_diameter=3,
+    /// eye_cases[1].focus_diopters=2.5, display.lenslets.pitch=1.0, scene.objects[0].center=[0,0,350].
+    #[arg(long = "set", global = true, value_name = "KEY=VALUE")]
+    set: Vec<Override>,
 }
 
 #[derive(Subcommand)]
@@ -154,6 +161,55 @@ enum Command {
         /// Output directory (default: out/bench or out/bench-quick).
         #[arg(long)]
         out: Option<PathBuf>,
+    },
+    /// Run an experiment over the points of a sweep file (axes of --set values) on all cores, or
+    /// as a Slurm job array; resumable. Writes sweep.csv, sweep.json, plots and points/.
+    Sweep {
+        /// Sweep TOML (see sweeps/tiny.toml, sweeps/pupil-focus.toml).
+        sweep: PathBuf,
+        /// Output directory (default: out/<sweep name>).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Run only these points, without collecting: indices and ranges I..J (J excluded), e.g.
+        /// 0..12 or 3,5,8..10. What each Slurm array task runs.
+        #[arg(long, conflicts_with = "slurm")]
+        points: Option<String>,
+        /// Write every point's images and figure too (points/<id>/), as `images = true`.
+        #[arg(long)]
+        images: bool,
+        /// Collect the complete points into sweep.csv, sweep.json and plots, list the missing
+        /// ones; run nothing.
+        #[arg(long, conflicts_with_all = ["slurm", "points"])]
+        collect: bool,
+        /// Submit the missing points to Slurm as a job array instead of running them here.
+        #[arg(long)]
+        slurm: bool,
+        /// Slurm partition.
+        #[arg(long, requires = "slurm")]
+        partition: Option<String>,
+        /// Most array tasks: the missing points are split into at most this many chunks.
+        #[arg(long, requires = "slurm", default_value_t = 100)]
+        array_max: usize,
+        /// Time limit of each array task (Slurm syntax: 30, 2:00:00, 1-0).
+        #[arg(long, requires = "slurm")]
+        time: Option<String>,
+        /// Cores of each array task (it runs that many threads).
+        #[arg(long, requires = "slurm")]
+        cpus_per_task: Option<usize>,
+        /// At most this many array tasks at once.
+        #[arg(long, requires = "slurm")]
+        max_running: Option<usize>,
+        /// Print the sbatch script instead of submitting it.
+        #[arg(long, requires = "slurm")]
+        dry_run: bool,
+        /// Wait for the job array to end, then collect (an error when points are missing).
+        #[arg(long, requires = "slurm")]
+        wait: bool,
+        /// The sweep's id at submission (array tasks refuse to run a changed sweep).
+        #[arg(long, hide = true)]
+        sweep_id: Option<String>,
+        #[command(flatten)]
+        backend: BackendArg,
     },
     /// Describe a display design (central depth plane, eye box, field of view, pixels per
     /// degree, views through the pupil) or a scene (objects, sizes, depth range), and write the
@@ -322,7 +378,10 @@ fn parse_vec3(s: &str) -> std::result::Result<DVec3, String> {
     }
 }
 
-fn load_setup(setup: &Setup) -> Result<(Scene, Display)> {
+fn load_setup(setup: &Setup, set: &[Override]) -> Result<(Scene, Display)> {
+    if !set.is_empty() {
+        return Ok(setup_with(setup.scene.as_deref(), setup.display.as_deref(), set)?);
+    }
     let scene = match &setup.scene {
         Some(p) => load_scene(&p.to_string_lossy(), Path::new(""))?,
         None => Scene::paper(),
@@ -402,6 +461,7 @@ fn run() -> Result<()> {
         inimtrace::budget::set_memory_limit(bytes);
     }
     let quiet = cli.quiet;
+    let set = cli.set;
     let start = Instant::now();
     // `assess` and `bench` print their own total with --timings.
     let mut printed_total = false;
@@ -409,10 +469,24 @@ fn run() -> Result<()> {
         Command::Assess { experiment, out, scene, backend } => {
             let backend = backend.choice()?;
             let mut exp = match &experiment {
+                _ if !set.is_empty() => {
+                    let mut s = match &experiment {
+                        Some(p) => Settings::experiment_file(p)?,
+                        None => Settings::builtin(
+                            &ExperimentSpec::paper_converged(),
+                            "built-in paper-converged experiment",
+                            Path::new("."),
+                        )?,
+                    };
+                    if let Some(p) = &scene {
+                        s.replace_scene(p)?;
+                    }
+                    s.with_overrides(&set).resolve()?.experiment()?
+                }
                 Some(p) => Experiment::load(p)?,
                 None => Experiment::paper_converged(),
             };
-            if let Some(p) = &scene {
+            if let Some(p) = scene.as_ref().filter(|_| set.is_empty()) {
                 exp.scene = load_scene(&p.to_string_lossy(), Path::new(""))?;
                 exp.spec.scene = p.display().to_string();
             }
@@ -445,7 +519,7 @@ fn run() -> Result<()> {
         }
         Command::RenderDisplay { method, setup, samples_per_pixel, reference_plane, eye_position, out, backend } => {
             let backend = backend.choice()?;
-            let (scene, display) = load_setup(&setup)?;
+            let (scene, display) = load_setup(&setup, &set)?;
             announce(&scene, backend, quiet);
             inimtrace::optics::limits::REFERENCE_PLANE_Z.check("command line", "--reference-plane", reference_plane)?;
             check_memory(
@@ -468,7 +542,7 @@ fn run() -> Result<()> {
             write_image(&out, &img, depth.as_deref(), &attrs, cli.exr_compression)?;
         }
         Command::Simulate { display_image, setup, eye, out } => {
-            let (_, display) = load_setup(&setup)?;
+            let (_, display) = load_setup(&setup, &set)?;
             let (eye, retina) = eye.eye()?;
             check_memory("the retinal image", "--retina", retina.resolution * retina.resolution, 24)?;
             let img = inimtrace::io::exr::read_rgb(&display_image)?;
@@ -487,7 +561,7 @@ fn run() -> Result<()> {
         }
         Command::GroundTruth { setup, eye, out, backend } => {
             let backend = backend.choice()?;
-            let (scene, _) = load_setup(&setup)?;
+            let (scene, _) = load_setup(&setup, &set)?;
             let (eye, retina) = eye.eye()?;
             check_memory("the retinal image", "--retina", retina.resolution * retina.resolution, 24)?;
             announce(&scene, backend, quiet);
@@ -501,6 +575,9 @@ fn run() -> Result<()> {
             write_image(&out, &img, None, &attrs, cli.exr_compression)?;
         }
         Command::Compare { a, b, ssim: constants, json } => {
+            if !set.is_empty() {
+                bail!("--set does not apply to compare (it reads no experiment, scene or display)");
+            }
             let ia = inimtrace::io::exr::read_rgb(&a)?;
             let ib = inimtrace::io::exr::read_rgb(&b)?;
             let p =
@@ -541,6 +618,7 @@ fn run() -> Result<()> {
         }
         Command::Bench { quick, scene, out } => {
             let (scene, label) = match &scene {
+                _ if !set.is_empty() => (scene_with(scene.as_deref(), &set)?, "--set".to_string()),
                 Some(p) => (load_scene(&p.to_string_lossy(), Path::new(""))?, p.display().to_string()),
                 None => (Scene::paper(), "builtin:paper".to_string()),
             };
@@ -559,8 +637,54 @@ fn run() -> Result<()> {
                 eprintln!("wrote {}", out.display());
             }
         }
+        Command::Sweep {
+            sweep,
+            out,
+            points,
+            images,
+            collect,
+            slurm,
+            partition,
+            array_max,
+            time,
+            cpus_per_task,
+            max_running,
+            dry_run,
+            wait,
+            sweep_id,
+            backend,
+        } => {
+            let slurm = slurm.then(|| inimtrace::sweep::SlurmOptions {
+                partition,
+                array_max,
+                time,
+                cpus_per_task,
+                max_running,
+                dry_run,
+                ..Default::default()
+            });
+            let cmd = inimtrace::sweep::SweepCommand {
+                sweep,
+                out,
+                overrides: set.clone(),
+                backend: backend.choice()?,
+                quiet,
+                points,
+                images,
+                exr_compression: cli.exr_compression,
+                collect,
+                slurm,
+                wait,
+                sweep_id,
+            };
+            let text = inimtrace::sweep::execute(&cmd, &mut |m| eprintln!("{m}"))?;
+            out!("{text}");
+        }
         Command::Info { display, scene, pupil, json, print } => {
             if let Some(what) = print {
+                if !set.is_empty() {
+                    bail!("--set does not apply to --print (it prints the built-in files as they are)");
+                }
                 let text = match what {
                     PrintTarget::PaperExperiment => ExperimentSpec::paper_converged().to_toml(),
                     PrintTarget::PaperGridExperiment => ExperimentSpec::paper().to_toml(),
@@ -572,7 +696,11 @@ fn run() -> Result<()> {
                 return Ok(());
             }
             if let Some(p) = scene {
-                let summary = inimtrace::info::scene_summary(&load_scene(&p.to_string_lossy(), Path::new(""))?);
+                let scene = match set.is_empty() {
+                    true => load_scene(&p.to_string_lossy(), Path::new(""))?,
+                    false => scene_with(Some(&p), &set)?,
+                };
+                let summary = inimtrace::info::scene_summary(&scene);
                 match json {
                     true => outln!("{}", serde_json::to_string_pretty(&summary)?),
                     false => out!("{}", inimtrace::info::scene_summary_text(&summary)),
@@ -583,6 +711,7 @@ fn run() -> Result<()> {
                 bail!("--pupil must be a positive number of mm, got {pupil}");
             }
             let d = match display {
+                _ if !set.is_empty() => display_with(display.as_deref(), &set)?,
                 Some(p) => load_display(&p.to_string_lossy(), Path::new(""))?,
                 None => Display::paper(),
             };

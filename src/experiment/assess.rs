@@ -9,9 +9,7 @@ use rayon::prelude::*;
 
 use super::metadata;
 use super::report::write_reports;
-use super::stages::{
-    ground_truth_image, pack_display_images, perceived_images, render_display_images, stage_time, table1_scores,
-};
+use super::stages::{pack_display_images, render_display_images, stage_time, table1};
 use super::{AssessReport, Experiment};
 use crate::accel::analytic::AnalyticRects;
 use crate::budget::Estimate;
@@ -140,20 +138,7 @@ fn assess_with<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
     // method, then the scores: the same stage functions `inimtrace bench` times.
     let (displays, depths) = render_display_images(exp, with_depth, opts.quiet, &mut stages)?;
     let stack = pack_display_images(exp, &displays.iter().collect::<Vec<_>>(), &mut stages)?;
-    // The converged estimator (src/measure/) or the grid one.
-    let (gts, sims, scores) = match crate::measure::run::table1(exp, shade, &stack, opts.quiet, &mut stages)? {
-        Some(table) => table,
-        None => {
-            let mut gts = Vec::new();
-            let mut sims = Vec::new();
-            for case in &exp.cases {
-                gts.push(ground_truth_image(exp, case, shade, opts.quiet, &mut stages));
-                sims.push(perceived_images(exp, case, &stack, opts.quiet, &mut stages)?);
-            }
-            let scores = table1_scores(exp, &gts, &sims, &mut stages)?;
-            (gts, sims, scores)
-        }
-    };
+    let (gts, sims, scores) = table1(exp, shade, &stack, opts.quiet, &mut stages)?;
     drop(stack);
 
     // 4. Images: EXR + PNG preview each, written in parallel.

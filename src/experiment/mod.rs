@@ -14,7 +14,8 @@ mod stages;
 pub use assess::{assess, prepare_output_dir, RunOptions, Z_CHANNEL_NOTE};
 pub use report::{table_markdown, AssessReport, Score, StageTime};
 pub use stages::{
-    ground_truth_image, pack_display_images, perceived_images, render_display_images, table1_scores, DisplayImages,
+    ground_truth_image, pack_display_images, perceived_images, render_display_images, table1, table1_scores,
+    DisplayImages, Table1,
 };
 
 use std::path::Path;
@@ -220,24 +221,19 @@ pub struct Experiment {
 impl Experiment {
     /// Resolves a spec; `source` names its file (for errors), `base` resolves relative paths.
     pub fn from_spec(spec: ExperimentSpec, source: &str, base: &Path) -> Result<Self> {
-        // The name becomes the default output folder `out/<name>`: letters, digits, -, _ and .
-        // only, so it can never point outside `out/`.
-        if !crate::io::output::is_plain_name(&spec.name) || spec.name.contains("..") {
-            return Err(Error::invalid(
-                source,
-                "name",
-                format!(
-                    "`{}` must be non-empty, start with a letter or digit and use only letters, digits, -, _ and . \
-                     (it names the output folder)",
-                    spec.name
-                ),
-            ));
-        }
+        check_name(&spec, source)?;
         // Name the experiment file and its field as well as the file that failed.
         let display = load_display(&spec.display, base)
             .map_err(|e| Error::invalid(source, "display", format!("cannot load `{}`: {e}", spec.display)))?;
         let scene = load_scene(&spec.scene, base)
             .map_err(|e| Error::invalid(source, "scene", format!("cannot load `{}`: {e}", spec.scene)))?;
+        Self::from_parts(spec, scene, display, source)
+    }
+
+    /// Resolves a spec whose scene and display are already built (`spec.scene` and
+    /// `spec.display` only label them): the same checks as [`Experiment::from_spec`].
+    pub fn from_parts(spec: ExperimentSpec, scene: Scene, display: Display, source: &str) -> Result<Self> {
+        check_name(&spec, source)?;
         let dr = &spec.display_render;
         let mut methods = Vec::new();
         for (i, m) in spec.methods.iter().enumerate() {
@@ -373,14 +369,29 @@ impl Experiment {
         Self::from_spec(ExperimentSpec::paper(), "built-in paper experiment", Path::new("."))
             .expect("built-in experiment is valid")
     }
-}
 
-impl Experiment {
     /// The paper's experiment measured converged, built in (what `inimtrace assess` runs).
     pub fn paper_converged() -> Self {
         Self::from_spec(ExperimentSpec::paper_converged(), "built-in paper-converged experiment", Path::new("."))
             .expect("built-in experiment is valid")
     }
+}
+
+/// The name becomes the default output folder `out/<name>`: letters, digits, -, _ and . only,
+/// so it can never point outside `out/`.
+fn check_name(spec: &ExperimentSpec, source: &str) -> Result<()> {
+    if !crate::io::output::is_plain_name(&spec.name) || spec.name.contains("..") {
+        return Err(Error::invalid(
+            source,
+            "name",
+            format!(
+                "`{}` must be non-empty, start with a letter or digit and use only letters, digits, -, _ and . \
+                 (it names the output folder)",
+                spec.name
+            ),
+        ));
+    }
+    Ok(())
 }
 
 fn prefix_field(err: Error, prefix: &str) -> Error {

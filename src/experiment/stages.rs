@@ -102,6 +102,34 @@ pub fn perceived_images(
     Ok(sims)
 }
 
+/// The ground truth and perceived images of every eye case and every display image in `stack`,
+/// with their Table 1 scores: stages 2-3 of [`assess`](super::assess()), which `inimtrace sweep`
+/// runs for each point on display images shared between points.
+pub type Table1 = (Vec<RgbImage>, Vec<Vec<RgbImage>>, Vec<Score>);
+
+/// Stages 2-3 of [`assess`](super::assess()): per eye case the ground truth and the perceived
+/// images, then the scores ([`Table1`]), measured by the experiment's estimator: the converged
+/// one (`src/measure/`) or the grid one.
+pub fn table1<S: RadianceField + ?Sized>(
+    exp: &Experiment,
+    shade: &S,
+    stack: &DisplayStack,
+    quiet: bool,
+    stages: &mut Vec<StageTime>,
+) -> Result<Table1> {
+    if let Some(table) = crate::measure::run::table1(exp, shade, stack, quiet, stages)? {
+        return Ok(table);
+    }
+    let mut gts = Vec::new();
+    let mut sims = Vec::new();
+    for case in &exp.cases {
+        gts.push(ground_truth_image(exp, case, shade, quiet, stages));
+        sims.push(perceived_images(exp, case, stack, quiet, stages)?);
+    }
+    let scores = table1_scores(exp, &gts, &sims, stages)?;
+    Ok((gts, sims, scores))
+}
+
 /// Stage 3 of [`assess`](super::assess()), Table 1: PSNR and SSIM of `sims[case][method]` against `gts[case]`,
 /// for every eye case and method of `exp` (`metrics` stage). Scores are ordered by eye case,
 /// then method.

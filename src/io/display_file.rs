@@ -153,14 +153,18 @@ pub fn load_display(spec: &str, base: &Path) -> Result<Display> {
     }
     let path = base.join(spec);
     let text = read_text(&path)?;
-    let is_yaml = text.trim_start().starts_with("%YAML")
-        || matches!(path.extension().and_then(|e| e.to_str()), Some("yaml" | "yml"));
-    if is_yaml {
+    if is_opencv_yaml(&text, &path) {
         parse_opencv_display(&text, &path)
     } else {
         let spec: DisplaySpec = toml::from_str(&text).map_err(|e| toml_error(&path, &text, &e))?;
         spec.to_display(&path.display().to_string())
     }
+}
+
+/// Whether a display file is the framework's OpenCV YAML (first line `%YAML` or extension
+/// .yaml/.yml) rather than our TOML.
+pub fn is_opencv_yaml(text: &str, path: &Path) -> bool {
+    text.trim_start().starts_with("%YAML") || matches!(path.extension().and_then(|e| e.to_str()), Some("yaml" | "yml"))
 }
 
 /// Parses the paper framework's display file (OpenCV FileStorage YAML; keys `lenslettolcd`,

@@ -1,0 +1,192 @@
+//! Collecting a sweep: the records of its points (Table 1's scores, Sec. 4.2, per point) into
+//! `sweep.csv` (one row per point x eye case x method), `sweep.json` (the resolved base, the
+//! axes, every point with its id, values and whether it is complete) and plots of each score
+//! against each numeric axis. Collecting reads only complete records, so it can run at any
+//! time, also while points are still running; it names the points still missing.
+
+use std::path::{Path, PathBuf};
+
+use serde_json::json;
+
+use super::plots::{write_plots, PlotRow};
+use super::store::{PointRecord, Store};
+use super::Sweep;
+use crate::error::{Error, Result};
+use crate::io::output::write_atomic;
+use crate::overrides::value_text;
+use crate::settings::Resolved;
+
+/// What a collection found and wrote.
+#[derive(Clone, Debug, Default)]
+pub struct Collected {
+    pub complete: usize,
+    /// Indices of the points without a record.
+    pub missing: Vec<usize>,
+    /// Rows of `sweep.csv`.
+    pub rows: usize,
+    pub csv: PathBuf,
+    pub json: PathBuf,
+    pub plots: Vec<PathBuf>,
+}
+
+/// Writes `sweep.csv`, `sweep.json` and the plots into the sweep's folder from the records
+/// there. `resolved` are the sweep's points, resolved (see [`Sweep::resolve`]).
+pub fn collect(sweep: &Sweep, resolved: &[Resolved], store: &Store) -> Result<Collected> {
+    let records: Vec<Option<PointRecord>> = resolved.iter().map(|r| store.read(&r.id)).collect();
+    let keys = sweep.spec.keys();
+    let mut out =
+        Collected { csv: store.root().join("sweep.csv"), json: store.root().join("sweep.json"), ..Default::default() };
+
+    let mut csv = String::from("point,id,");
+    for k in &keys {
+        csv.push_str(&csv_field(k));
+        csv.push(',');
+    }
+    csv.push_str("method,eye_case,psnr_db,psnr_ci95_db,ssim,ssim_ci95,seconds\n");
+    let mut plot_rows = Vec::new();
+    for ((point, r), rec) in sweep.points.iter().zip(resolved).zip(&records) {
+        let Some(rec) = rec else {
+            out.missing.push(point.index);
+            continue;
+        };
+        out.complete += 1;
+        let values: Vec<String> = point
+            .values
+            .iter()
+            .map(|(_, v)| match v {
+                toml::Value::String(s) => csv_field(s),
+                other => csv_field(&value_text(other)),
+            })
+            .collect();
+        let xs: Vec<Option<f64>> = point.values.iter().map(|(_, v)| number(v)).collect();
+        for s in &rec.scores {
+            csv.push_str(&format!("{},{},", point.index, r.id));
+            for v in &values {
+                csv.push_str(v);
+                csv.push(',');
+            }
+            csv.push_str(&format!(
+                "{},{},{},{},{},{},{}\n",
+                csv_field(&s.method),
+                csv_field(&s.eye_case),
+                number_text(s.psnr_db),
+                s.psnr_ci95_db.map(number_text).unwrap_or_default(),
+                number_text(s.ssim),
+                s.ssim_ci95.map(number_text).unwrap_or_default(),
+                rec.seconds
+            ));
+            out.rows += 1;
+            plot_rows.push(PlotRow { xs: xs.clone(), score: s.clone() });
+        }
+    }
+    write_text(&out.csv, &csv)?;
+
+    let base = sweep.resolve_base()?;
+    let points: Vec<serde_json::Value> = sweep
+        .points
+        .iter()
+        .zip(resolved)
+        .zip(&records)
+        .map(|((p, r), rec)| {
+            let values: serde_json::Map<String, serde_json::Value> = p
+                .values
+                .iter()
+                .map(|(k, v)| (k.clone(), serde_json::to_value(v).unwrap_or(serde_json::Value::Null)))
+                .collect();
+            json!({
+                "index": p.index,
+                "id": r.id,
+                "values": values,
+                "complete": rec.is_some(),
+                "assess_args": sweep.assess_args(p),
+            })
+        })
+        .collect();
+    let axes: Vec<serde_json::Value> = sweep
+        .spec
+        .axes
+        .iter()
+        .map(|a| {
+            json!(a
+                .keys
+                .iter()
+                .map(|k| json!({ "key": k.key, "values": serde_json::to_value(&k.values).unwrap_or_default() }))
+                .collect::<Vec<_>>())
+        })
+        .collect();
+    let doc = json!({
+        "version": env!("CARGO_PKG_VERSION"),
+        "sweep": sweep.spec.path.display().to_string(),
+        "name": sweep.spec.name,
+        "description": sweep.spec.description,
+        "experiment": sweep.spec.experiment,
+        "experiment_file": if sweep.spec.experiment == "builtin:paper" {
+            sweep.spec.experiment.clone()
+        } else {
+            sweep.spec.base().join(&sweep.spec.experiment).display().to_string()
+        },
+        "set": sweep.spec.set.iter().chain(&sweep.overrides).map(|o| o.to_arg()).collect::<Vec<_>>(),
+        "base": serde_json::to_value(&base.document).unwrap_or_default(),
+        "base_id": base.id,
+        "axes": axes,
+        "point_count": sweep.points.len(),
+        "complete": out.complete,
+        "missing": out.missing,
+        "points": points,
+    });
+    let text = serde_json::to_string_pretty(&doc)
+        .map_err(|e| Error::Unsupported(format!("cannot serialise sweep.json: {e}")))?;
+    write_text(&out.json, &text)?;
+
+    out.plots = write_plots(&store.root().join("plots"), &keys, &plot_rows)?;
+    Ok(out)
+}
+
+fn write_text(path: &Path, text: &str) -> Result<()> {
+    write_atomic(path, |tmp| std::fs::write(tmp, text).map_err(|e| Error::io(tmp, e)))
+}
+
+/// A number in CSV: shortest round-trip form, `inf` for an infinite PSNR.
+fn number_text(v: f64) -> String {
+    if v.is_finite() {
+        format!("{v}")
+    } else if v > 0.0 {
+        "inf".into()
+    } else if v < 0.0 {
+        "-inf".into()
+    } else {
+        "nan".into()
+    }
+}
+
+/// An axis value as a number, if it is one.
+fn number(v: &toml::Value) -> Option<f64> {
+    match v {
+        toml::Value::Integer(i) => Some(*i as f64),
+        toml::Value::Float(f) => Some(*f),
+        _ => None,
+    }
+}
+
+/// A CSV field, quoted when it holds a comma, a quote or a line break.
+fn csv_field(s: &str) -> String {
+    if s.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn csv_fields_are_quoted_only_when_needed() {
+        assert_eq!(csv_field("eye.pupil_diameter"), "eye.pupil_diameter");
+        assert_eq!(csv_field("[0, 0, 350]"), "\"[0, 0, 350]\"");
+        assert_eq!(csv_field("a\"b"), "\"a\"\"b\"");
+        assert_eq!(number_text(f64::INFINITY), "inf");
+        assert_eq!(number_text(2.5), "2.5");
+    }
+}

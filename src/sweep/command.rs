@@ -1,0 +1,153 @@
+//! `inimtrace sweep`: the paper's assessment (Sec. 4) over a sweep file's points, run here
+//! (`--points` for a subset), submitted as a Slurm job array (`--slurm`, `--wait`), or only
+//! collected (`--collect`). The library does not print: messages go to the caller's `log`.
+
+use std::path::PathBuf;
+
+use super::collect::{collect, Collected};
+use super::run::{run_points, validate, LocalOptions};
+use super::slurm::{submit, wait_for, SlurmOptions};
+use super::spec::parse_selection;
+use super::store::Store;
+use super::Sweep;
+use crate::error::{Error, Result};
+use crate::overrides::Override;
+use crate::render::BackendChoice;
+
+/// The command's arguments.
+#[derive(Clone, Debug, Default)]
+pub struct SweepCommand {
+    pub sweep: PathBuf,
+    pub out: Option<PathBuf>,
+    /// `--set`: applied to the base after the file's `[set]`.
+    pub overrides: Vec<Override>,
+    pub backend: BackendChoice,
+    pub quiet: bool,
+    /// Only these points (`0..4`, `3,5,8..10`), and no collection (what an array task runs).
+    pub points: Option<String>,
+    /// Every point's images too (also `images = true` in the file), with this EXR compression.
+    pub images: bool,
+    pub exr_compression: crate::io::exr::ExrCompression,
+    /// Collect what is complete and list what is missing; run nothing.
+    pub collect: bool,
+    /// Submit to Slurm instead of running here.
+    pub slurm: Option<SlurmOptions>,
+    /// With `slurm`: wait for the array, then collect.
+    pub wait: bool,
+    /// The sweep id the points were submitted under (array tasks check it).
+    pub sweep_id: Option<String>,
+}
+
+/// Runs the command; returns what goes to stdout (the script of `--dry-run`, else the
+/// collection summary).
+pub fn execute(cmd: &SweepCommand, log: &mut dyn FnMut(String)) -> Result<String> {
+    let sweep = Sweep::load(&cmd.sweep, &cmd.overrides, cmd.out.as_deref())?;
+    let resolved = sweep.resolve()?;
+    let id = Sweep::id(&resolved)?;
+    if let Some(expected) = &cmd.sweep_id {
+        if *expected != id {
+            return Err(Error::invalid(
+                cmd.sweep.display().to_string(),
+                "axes",
+                "the sweep's points are not the ones submitted (the file or its experiment changed since): submit again",
+            ));
+        }
+    }
+    let store = Store::open(&sweep.out)?;
+    let images = cmd.images || sweep.spec.images;
+    let n = sweep.points.len();
+    let name = format!("sweep `{}`", sweep.spec.name);
+
+    if cmd.collect {
+        let c = collect(&sweep, &resolved, &store)?;
+        return Ok(summary(&sweep, &c));
+    }
+
+    if let Some(slurm) = &cmd.slurm {
+        validate(&resolved)?;
+        let opts = SlurmOptions { images, backend: cmd.backend, exr_compression: cmd.exr_compression, ..slurm.clone() };
+        let sub = submit(&sweep, &resolved, &store, &opts)?;
+        if opts.dry_run {
+            if sub.points.is_empty() {
+                log(format!("{name}: all {n} points are complete; nothing to submit"));
+            }
+            return Ok(sub.script);
+        }
+        let Some(job) = &sub.job_id else {
+            log(format!("{name}: all {n} points are complete; nothing to submit"));
+            let c = collect(&sweep, &resolved, &store)?;
+            return Ok(summary(&sweep, &c));
+        };
+        log(format!(
+            "{name}: submitted job {job}: {} array task(s) for the {} missing of {n} points (script {}, logs in {}/slurm/)",
+            sub.chunks.len(),
+            sub.points.len(),
+            sub.script_path.as_ref().map(|p| p.display().to_string()).unwrap_or_default(),
+            store.root().display()
+        ));
+        if !cmd.wait {
+            return Ok(format!("submitted job {job}\n"));
+        }
+        wait_for(job, &resolved, &sub.points, &store, cmd.quiet)?;
+        let c = collect(&sweep, &resolved, &store)?;
+        let text = summary(&sweep, &c);
+        if !c.missing.is_empty() {
+            return Err(Error::Unsupported(format!(
+                "{text}job {job} ended with {} of {n} points missing (tasks failed, timed out or were cancelled; \
+                 see {}/slurm/): run the same command again to submit only those",
+                c.missing.len(),
+                store.root().display()
+            )));
+        }
+        return Ok(text);
+    }
+
+    let selection = match &cmd.points {
+        Some(text) => parse_selection(text, n).map_err(|e| Error::invalid("command line", "--points", e))?,
+        None => (0..n).collect(),
+    };
+    let values = sweep.value_texts();
+    let opts = LocalOptions { backend: cmd.backend, quiet: cmd.quiet, images, exr_compression: cmd.exr_compression };
+    let run = run_points(&resolved, &values, &selection, &store, opts)?;
+    for w in &run.warnings {
+        log(format!("warning: {w}"));
+    }
+    log(format!(
+        "{name}: {} point(s) asked for, {} already complete, {} run in {:.2} s ({} display image(s) rendered, shared); {} thread(s)",
+        run.selected,
+        run.already_complete,
+        run.ran,
+        run.seconds,
+        run.display_images,
+        rayon::current_num_threads()
+    ));
+    if cmd.points.is_some() {
+        return Ok(String::new());
+    }
+    let c = collect(&sweep, &resolved, &store)?;
+    Ok(summary(&sweep, &c))
+}
+
+/// What a collection wrote and which points are missing.
+fn summary(sweep: &Sweep, c: &Collected) -> String {
+    let mut s = format!(
+        "{} of {} points complete: {} ({} rows), {}, {} plot(s)\n",
+        c.complete,
+        sweep.points.len(),
+        c.csv.display(),
+        c.rows,
+        c.json.display(),
+        c.plots.len()
+    );
+    if !c.missing.is_empty() {
+        s.push_str(&format!("missing {} point(s):\n", c.missing.len()));
+        let values = sweep.value_texts();
+        for &i in c.missing.iter().take(50) {
+            s.push_str(&format!("  point {i}: {}\n", values[i].join(" ")));
+        }
+        if c.missing.len() > 50 {
+            s.push_str(&format!("  ... and {} more (sweep.json lists every point)\n", c.missing.len() - 50));
+        }
+    }
+    s
+}

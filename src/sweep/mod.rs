@@ -1,0 +1,102 @@
+//! Parameter sweeps: the paper's assessment (Sec. 4, Table 1) over ranges of its settings
+//! (pupil, focus, eye position, lenslet pitch, gap, methods, ...). A sweep file names a base
+//! experiment and axes of `--set` overrides ([`spec`]); each point is a fully resolved
+//! experiment identified by the content hash of its settings ([`crate::settings`]). Points run
+//! on all cores sharing display images ([`run`]) or as a Slurm job array ([`slurm`]), are
+//! recorded atomically one by one ([`store`]), and are collected into `sweep.csv`,
+//! `sweep.json` and plots ([`collect`], [`plots`]). A rerun skips recorded points.
+
+mod collect;
+mod command;
+mod fields;
+mod plots;
+mod run;
+mod slurm;
+mod spec;
+mod store;
+
+pub use collect::{collect, Collected};
+pub use command::{execute, SweepCommand};
+pub use run::{run_points, validate, LocalOptions, RunSummary};
+pub use slurm::{submit, wait_for, SlurmOptions, Submission};
+pub use spec::{format_selection, parse_selection, Axis, AxisKey, Point, SweepSpec};
+pub use store::{PointRecord, ScoreRow, Store};
+
+use std::path::{Path, PathBuf};
+
+use crate::error::{Error, Result};
+use crate::experiment::ExperimentSpec;
+use crate::overrides::{value_text, Override};
+use crate::settings::{hash_json, Resolved, Settings};
+
+/// A loaded sweep: its file, the base settings (base experiment, `[set]`, then the command
+/// line's `--set`), its points and where it writes.
+#[derive(Clone, Debug)]
+pub struct Sweep {
+    pub spec: SweepSpec,
+    pub points: Vec<Point>,
+    pub out: PathBuf,
+    /// `--set` overrides from the command line.
+    pub overrides: Vec<Override>,
+    base: Settings,
+}
+
+impl Sweep {
+    /// Loads `path`; `overrides` apply to the base after the file's `[set]`; `out` defaults
+    /// to `out/<name>`.
+    pub fn load(path: &Path, overrides: &[Override], out: Option<&Path>) -> Result<Self> {
+        let spec = SweepSpec::load(path)?;
+        let src = path.display().to_string();
+        let base = if spec.experiment == "builtin:paper" {
+            Settings::builtin(&ExperimentSpec::paper(), "built-in paper experiment", &spec.base())?
+        } else {
+            let file = spec.base().join(&spec.experiment);
+            Settings::experiment_file(&file)
+                .map_err(|e| Error::invalid(&src, "experiment", format!("cannot load `{}`: {e}", spec.experiment)))?
+        };
+        let set: Vec<Override> = spec.set.iter().map(|o| o.clone().from_origin(format!("{src} [set]"))).collect();
+        let base = base.with_overrides(&set).with_overrides(overrides);
+        let out = out.map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("out").join(&spec.name));
+        Ok(Self { points: spec.points(), spec, out, overrides: overrides.to_vec(), base })
+    }
+
+    /// The settings of point `p`: the base, then the point's values.
+    pub fn point_settings(&self, p: &Point) -> Settings {
+        let origin = format!("{} axes", self.spec.path.display());
+        let values: Vec<Override> =
+            self.spec.point_overrides(p).into_iter().map(|o| o.from_origin(origin.clone())).collect();
+        self.base.clone().with_overrides(&values).labelled(format!("{} point {}", self.spec.path.display(), p.index))
+    }
+
+    /// Every point's resolved settings (deserialized and hashed; not yet built).
+    pub fn resolve(&self) -> Result<Vec<Resolved>> {
+        self.points.iter().map(|p| self.point_settings(p).resolve()).collect()
+    }
+
+    /// The base document (before the axes), resolved.
+    pub fn resolve_base(&self) -> Result<Resolved> {
+        self.base.resolve()
+    }
+
+    /// Identifies the sweep's set of points: the hash of every point's id in order. A Slurm
+    /// task checks it, so that a sweep file edited after submission is not run half old, half new.
+    pub fn id(resolved: &[Resolved]) -> Result<String> {
+        hash_json(&resolved.iter().map(|r| r.id.as_str()).collect::<Vec<_>>())
+    }
+
+    /// Each point's values as `KEY=VALUE` texts.
+    pub fn value_texts(&self) -> Vec<Vec<String>> {
+        self.points.iter().map(|p| p.values.iter().map(|(k, v)| format!("{k}={}", value_text(v))).collect()).collect()
+    }
+
+    /// The `--set` arguments that make `inimtrace assess <base experiment>` run point `p`
+    /// by hand: the file's `[set]`, the command line's, then the point's values.
+    pub fn assess_args(&self, p: &Point) -> Vec<String> {
+        let mut args = Vec::new();
+        for o in self.spec.set.iter().chain(&self.overrides).chain(&self.spec.point_overrides(p)) {
+            args.push("--set".to_string());
+            args.push(o.to_arg());
+        }
+        args
+    }
+}

@@ -1,0 +1,236 @@
+//! Running sweep points on this machine: the paper's stages (Sec. 4: display image, ground
+//! truth, perceived image, scores) for every point not yet recorded, on all cores. Points that
+//! render the same display image (same scene, display, method and display-render settings; for
+//! PupilCenter also the same eye position) share it: it is rendered once, and the points that
+//! use it run in parallel on it. Each point is recorded atomically as soon as it is done.
+
+use std::collections::{HashMap, HashSet};
+use std::time::{Duration, Instant};
+
+use rayon::prelude::*;
+
+use super::fields::{with_scene_fields, FieldUser};
+use super::store::{host_name, unix_now, PointRecord, ScoreRow, Store};
+use crate::error::Result;
+use crate::experiment::{self, Experiment, Score};
+use crate::progress::Progress;
+use crate::raster::RgbImage;
+use crate::render::retina::DisplayStack;
+use crate::render::{render_display_image_with_depth, BackendChoice, Method, RadianceField};
+use crate::scene::Scene;
+use crate::settings::{hash_json, Resolved};
+
+/// How points run.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct LocalOptions {
+    pub backend: BackendChoice,
+    pub quiet: bool,
+    /// Write every point's images (a full `assess` output in `points/<id>/`).
+    pub images: bool,
+    /// Compression of those images.
+    pub exr_compression: crate::io::exr::ExrCompression,
+}
+
+/// What a run did.
+#[derive(Clone, Debug, Default)]
+pub struct RunSummary {
+    /// Points asked for, already complete before the run, and run now.
+    pub selected: usize,
+    pub already_complete: usize,
+    pub ran: usize,
+    /// Display images rendered (each shared by the points that use it).
+    pub display_images: usize,
+    pub seconds: f64,
+    /// What loading the scenes noticed.
+    pub warnings: Vec<String>,
+}
+
+/// A point ready to run.
+struct Job {
+    index: usize,
+    id: String,
+    values: Vec<String>,
+    exp: Experiment,
+}
+
+/// The points of one scene, built.
+type SceneJobs = (String, Scene, Vec<Job>);
+
+/// Builds (and so validates) the experiments of the points `todo`, each scene once.
+fn build(resolved: &[Resolved], values: &[Vec<String>], todo: &[usize]) -> Result<(Vec<SceneJobs>, Vec<String>)> {
+    let mut scenes: Vec<SceneJobs> = Vec::new();
+    let mut warnings = Vec::new();
+    for &i in todo {
+        let r = &resolved[i];
+        let slot = match scenes.iter().position(|(key, _, _)| *key == r.scene_key) {
+            Some(s) => s,
+            None => {
+                let scene = r.build_scene()?;
+                warnings.extend(scene.warnings.iter().cloned());
+                scenes.push((r.scene_key.clone(), scene, Vec::new()));
+                scenes.len() - 1
+            }
+        };
+        let exp = r.experiment_with(scenes[slot].1.clone())?;
+        let values = values.get(i).cloned().unwrap_or_default();
+        scenes[slot].2.push(Job { index: i, id: r.id.clone(), values, exp });
+    }
+    Ok((scenes, warnings))
+}
+
+/// Builds every point's experiment, as a run would, and reports the first invalid one (before
+/// a sweep is submitted anywhere).
+pub fn validate(resolved: &[Resolved]) -> Result<()> {
+    let all: Vec<usize> = (0..resolved.len()).collect();
+    build(resolved, &[], &all).map(|_| ())
+}
+
+/// Runs the points `selection` (indices into `resolved`; `values` are their swept values as
+/// `KEY=VALUE`) that `store` has no record of. Every point is built and validated before the
+/// first one runs.
+pub fn run_points(
+    resolved: &[Resolved],
+    values: &[Vec<String>],
+    selection: &[usize],
+    store: &Store,
+    opts: LocalOptions,
+) -> Result<RunSummary> {
+    let start = Instant::now();
+    let mut summary = RunSummary { selected: selection.len(), ..Default::default() };
+    let mut seen = HashSet::new();
+    // Points already recorded are skipped; two points with the same settings (a repeated axis
+    // value) run once.
+    let todo: Vec<usize> = selection
+        .iter()
+        .copied()
+        .filter(|&i| seen.insert(resolved[i].id.clone()) && store.read(&resolved[i].id).is_none())
+        .collect();
+    summary.already_complete = selection.len() - todo.len();
+    let (scenes, warnings) = build(resolved, values, &todo)?;
+    summary.warnings = warnings;
+    let progress = Progress::new(todo.len() as u64, "sweep points", opts.quiet);
+    for (_, scene, jobs) in &scenes {
+        if opts.images {
+            for job in jobs {
+                run_with_images(job, store, opts)?;
+                progress.inc(1);
+            }
+        } else {
+            summary.display_images +=
+                with_scene_fields(scene, opts.backend, SharedDisplays { jobs, store, progress: &progress })?;
+        }
+    }
+    progress.finish();
+    summary.ran = todo.len();
+    summary.seconds = start.elapsed().as_secs_f64();
+    Ok(summary)
+}
+
+/// A full `assess` of one point into `points/<id>/`, then its record.
+fn run_with_images(job: &Job, store: &Store, local: LocalOptions) -> Result<()> {
+    let t = Instant::now();
+    let opts = experiment::RunOptions { quiet: true, backend: local.backend, exr_compression: local.exr_compression };
+    let report = experiment::assess(&job.exp, &store.images_dir(&job.id), opts)?;
+    store.write(&record(job, &report.scores, t.elapsed(), &report.backend))
+}
+
+fn record(job: &Job, scores: &[Score], elapsed: Duration, backend: &str) -> PointRecord {
+    PointRecord {
+        id: job.id.clone(),
+        index: job.index,
+        values: job.values.clone(),
+        scores: scores.iter().map(ScoreRow::from).collect(),
+        seconds: elapsed.as_secs_f64(),
+        backend: backend.to_string(),
+        threads: rayon::current_num_threads(),
+        host: host_name(),
+        finished_unix: unix_now(),
+        version: env!("CARGO_PKG_VERSION").to_string(),
+    }
+}
+
+/// The key of one display image: everything it depends on (display, method, display-render
+/// settings; the eye position only for PupilCenter, the one method that aims at it). Points of
+/// one scene with equal keys share the image.
+fn image_key(exp: &Experiment, method: Method) -> String {
+    let eye = if method == Method::PupilCenter { Some(exp.render.eye_position.to_array()) } else { None };
+    let display = crate::io::display_file::DisplaySpec::from_display(&exp.display);
+    let settings = (&display, format!("{method:?}"), exp.render.samples_per_pixel, exp.render.reference_plane_z, eye);
+    hash_json(&settings).unwrap_or_else(|_| format!("{settings:?}"))
+}
+
+/// Bytes of the images one point holds while it runs: per eye case the ground truth and one
+/// perceived image per method, f32 RGB.
+fn point_bytes(exp: &Experiment) -> u64 {
+    let pixels = (exp.retina.resolution as u64).pow(2);
+    pixels * 12 * (1 + exp.methods.len() as u64) * exp.cases.len() as u64
+}
+
+/// The points of one scene, run on shared display images.
+struct SharedDisplays<'a> {
+    jobs: &'a [Job],
+    store: &'a Store,
+    progress: &'a Progress,
+}
+
+impl FieldUser for SharedDisplays<'_> {
+    /// Display images rendered.
+    type Output = usize;
+
+    fn run<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
+        self,
+        shade: &S,
+        with_depth: &D,
+        name: &str,
+    ) -> Result<usize> {
+        // Points grouped by the display images they need, in order of first appearance.
+        let mut groups: Vec<(Vec<String>, Vec<&Job>)> = Vec::new();
+        for job in self.jobs {
+            let keys: Vec<String> = job.exp.methods.iter().map(|m| image_key(&job.exp, *m)).collect();
+            match groups.iter_mut().find(|(k, _)| *k == keys) {
+                Some((_, members)) => members.push(job),
+                None => groups.push((keys, vec![job])),
+            }
+        }
+        let mut cache: HashMap<String, RgbImage> = HashMap::new();
+        let mut rendered = 0;
+        for (g, (keys, members)) in groups.iter().enumerate() {
+            let first = &members[0].exp;
+            let t = Instant::now();
+            for (method, key) in first.methods.iter().zip(keys) {
+                if !cache.contains_key(key) {
+                    let (image, _) = render_display_image_with_depth(
+                        &first.display,
+                        *method,
+                        &first.render,
+                        with_depth,
+                        &Progress::hidden(),
+                    )?;
+                    cache.insert(key.clone(), image);
+                    rendered += 1;
+                }
+            }
+            let images: Vec<&RgbImage> = keys.iter().map(|k| &cache[k]).collect();
+            let stack = DisplayStack::new(&first.display, &images)?;
+            let shared = t.elapsed() / members.len() as u32;
+            // As many points at once as threads, and as the memory limit allows for their images.
+            let at_once = (crate::budget::memory_limit() / (2 * point_bytes(first)).max(1))
+                .clamp(1, rayon::current_num_threads() as u64) as usize;
+            for batch in members.chunks(at_once) {
+                batch.par_iter().try_for_each(|job| -> Result<()> {
+                    let t = Instant::now();
+                    let mut stages = Vec::new();
+                    let (_, _, scores) = experiment::table1(&job.exp, shade, &stack, true, &mut stages)?;
+                    self.store.write(&record(job, &scores, shared + t.elapsed(), name))?;
+                    self.progress.inc(1);
+                    Ok(())
+                })?;
+            }
+            drop(stack);
+            // Keep only the images a later group still needs.
+            let later: HashSet<&String> = groups[g + 1..].iter().flat_map(|(k, _)| k).collect();
+            cache.retain(|k, _| later.contains(k));
+        }
+        Ok(rendered)
+    }
+}

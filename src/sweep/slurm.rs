@@ -1,0 +1,261 @@
+//! A sweep (the paper's assessment, Sec. 4, over ranges of settings) as a Slurm job array:
+//! the points not yet recorded are split into chunks, one array task per chunk, and each task
+//! runs `inimtrace sweep SWEEP.toml --points I..J` into the shared output folder, recording each
+//! point atomically. A failed, timed-out or cancelled task therefore leaves only complete
+//! points, and submitting again runs only what is missing. Slurm does the distribution; this
+//! file only writes the batch script, calls `sbatch`, and polls `squeue` for `--wait`.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Duration;
+
+use super::spec::format_selection;
+use super::store::Store;
+use super::Sweep;
+use crate::error::{Error, Result};
+use crate::progress::Progress;
+use crate::render::BackendChoice;
+use crate::settings::Resolved;
+
+/// How to submit.
+#[derive(Clone, Debug)]
+pub struct SlurmOptions {
+    /// `#SBATCH --partition`.
+    pub partition: Option<String>,
+    /// Most array tasks: the missing points are split into at most this many chunks.
+    pub array_max: usize,
+    /// `#SBATCH --time` (a Slurm time limit: `30`, `2:00:00`, `1-0`).
+    pub time: Option<String>,
+    /// `#SBATCH --cpus-per-task`; each task then runs that many threads.
+    pub cpus_per_task: Option<usize>,
+    /// At most this many tasks at once (`--array=0-N%M`).
+    pub max_running: Option<usize>,
+    /// Print the script instead of submitting it.
+    pub dry_run: bool,
+    pub backend: BackendChoice,
+    pub images: bool,
+    pub exr_compression: crate::io::exr::ExrCompression,
+}
+
+impl Default for SlurmOptions {
+    fn default() -> Self {
+        Self {
+            partition: None,
+            array_max: 100,
+            time: None,
+            cpus_per_task: None,
+            max_running: None,
+            dry_run: false,
+            backend: BackendChoice::Auto,
+            images: false,
+            exr_compression: Default::default(),
+        }
+    }
+}
+
+/// What was submitted.
+#[derive(Clone, Debug)]
+pub struct Submission {
+    /// Slurm's job id (none for a dry run or when nothing was missing).
+    pub job_id: Option<String>,
+    /// The points submitted, and the `--points` text of each task.
+    pub points: Vec<usize>,
+    pub chunks: Vec<String>,
+    pub script: String,
+    pub script_path: Option<PathBuf>,
+}
+
+/// Writes the batch script for the points of `sweep` that `store` has no record of and, unless
+/// `dry_run`, submits it with `sbatch`. Nothing is submitted when every point is complete.
+pub fn submit(sweep: &Sweep, resolved: &[Resolved], store: &Store, opts: &SlurmOptions) -> Result<Submission> {
+    if opts.array_max == 0 {
+        return Err(Error::invalid("command line", "--array-max", "must be at least 1"));
+    }
+    let mut seen = std::collections::HashSet::new();
+    let missing: Vec<usize> = sweep
+        .points
+        .iter()
+        .map(|p| p.index)
+        .filter(|&i| seen.insert(resolved[i].id.clone()) && store.read(&resolved[i].id).is_none())
+        .collect();
+    let chunks = split(&missing, opts.array_max);
+    let mut sub = Submission { job_id: None, points: missing, chunks, script: String::new(), script_path: None };
+    if sub.points.is_empty() {
+        return Ok(sub);
+    }
+    let id = Sweep::id(resolved)?;
+    sub.script = script(sweep, &sub.chunks, &id, store.root(), opts)?;
+    if opts.dry_run {
+        return Ok(sub);
+    }
+    let dir = store.root().join("slurm");
+    std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
+    let path = dir.join(format!("submit-{}-{}.sbatch", super::store::unix_now(), std::process::id()));
+    std::fs::write(&path, &sub.script).map_err(|e| Error::io(&path, e))?;
+    let out = Command::new("sbatch").arg("--parsable").arg(&path).output().map_err(|e| {
+        Error::Unsupported(format!(
+            "cannot run `sbatch` ({e}): is this a Slurm cluster? (`scripts/slurm-local.sh start` brings up one on this machine)"
+        ))
+    })?;
+    if !out.status.success() {
+        return Err(Error::Unsupported(format!(
+            "sbatch {} failed: {}",
+            path.display(),
+            String::from_utf8_lossy(&out.stderr).trim()
+        )));
+    }
+    let text = String::from_utf8_lossy(&out.stdout);
+    let job = text.trim().split(';').next().unwrap_or("").trim().to_string();
+    if job.is_empty() {
+        return Err(Error::Unsupported(format!("sbatch printed no job id for {}", path.display())));
+    }
+    sub.job_id = Some(job);
+    sub.script_path = Some(path);
+    Ok(sub)
+}
+
+/// Waits until job `job` has no task pending or running, showing the points recorded so far.
+pub fn wait_for(job: &str, resolved: &[Resolved], points: &[usize], store: &Store, quiet: bool) -> Result<()> {
+    let progress = Progress::new(points.len() as u64, &format!("slurm job {job}"), quiet);
+    let mut shown = 0;
+    let mut failures = 0;
+    loop {
+        let done = points.iter().filter(|&&i| store.read(&resolved[i].id).is_some()).count();
+        if done > shown {
+            progress.inc((done - shown) as u64);
+            shown = done;
+        }
+        let out = Command::new("squeue")
+            .args(["-h", "-j", job, "-o", "%T"])
+            .output()
+            .map_err(|e| Error::Unsupported(format!("cannot run `squeue` ({e})")))?;
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        if out.status.success() {
+            failures = 0;
+            if String::from_utf8_lossy(&out.stdout).trim().is_empty() {
+                break;
+            }
+        } else if stderr.contains("Invalid job id") {
+            break; // finished long enough ago that Slurm forgot it
+        } else {
+            failures += 1;
+            if failures >= 30 {
+                return Err(Error::Unsupported(format!("squeue keeps failing for job {job}: {}", stderr.trim())));
+            }
+        }
+        std::thread::sleep(Duration::from_millis(500));
+    }
+    progress.finish();
+    Ok(())
+}
+
+/// Splits sorted point indices into at most `n` contiguous chunks of nearly equal size, each
+/// as `--points` text.
+fn split(points: &[usize], n: usize) -> Vec<String> {
+    let tasks = n.min(points.len());
+    if tasks == 0 {
+        return Vec::new();
+    }
+    let (size, extra) = (points.len() / tasks, points.len() % tasks);
+    let mut out = Vec::new();
+    let mut start = 0;
+    for t in 0..tasks {
+        let len = size + usize::from(t < extra);
+        out.push(format_selection(&points[start..start + len]));
+        start += len;
+    }
+    out
+}
+
+/// A word for bash, single-quoted.
+fn quote(s: &str) -> String {
+    format!("'{}'", s.replace('\'', "'\\''"))
+}
+
+fn absolute(p: &Path) -> Result<PathBuf> {
+    std::path::absolute(p).map_err(|e| Error::io(p, e))
+}
+
+/// The sbatch script of a job array over `chunks`.
+fn script(sweep: &Sweep, chunks: &[String], id: &str, out: &Path, opts: &SlurmOptions) -> Result<String> {
+    let exe = std::env::current_exe().map_err(|e| Error::Unsupported(format!("cannot find this program: {e}")))?;
+    let cwd = std::env::current_dir().map_err(|e| Error::Unsupported(format!("no current directory: {e}")))?;
+    let sweep_file = absolute(&sweep.spec.path)?;
+    let out = absolute(out)?;
+    let mut s = String::from("#!/bin/bash\n");
+    s.push_str(&format!("#SBATCH --job-name=inimtrace-{}\n", sweep.spec.name));
+    let throttle = opts.max_running.map(|m| format!("%{m}")).unwrap_or_default();
+    s.push_str(&format!("#SBATCH --array=0-{}{throttle}\n", chunks.len() - 1));
+    s.push_str(&format!("#SBATCH --output={}/slurm/%A_%a.out\n", out.display()));
+    if let Some(p) = &opts.partition {
+        s.push_str(&format!("#SBATCH --partition={p}\n"));
+    }
+    if let Some(t) = &opts.time {
+        s.push_str(&format!("#SBATCH --time={t}\n"));
+    }
+    if let Some(c) = opts.cpus_per_task {
+        s.push_str(&format!("#SBATCH --cpus-per-task={c}\n"));
+    }
+    let points: usize =
+        chunks.iter().map(|c| super::parse_selection(c, usize::MAX).map(|v| v.len()).unwrap_or(0)).sum();
+    s.push_str(&format!(
+        "#\n# inimtrace sweep {} as a Slurm job array: {points} of its {} points in {} tasks.\n\
+         # Written by `inimtrace sweep --slurm`. Each task runs its points and records each one atomically\n\
+         # in {}/points/, so a failed, timed-out or cancelled task leaves no partial point; submitting\n\
+         # again runs only the missing points. `inimtrace sweep {} --collect` collects at any time.\n",
+        sweep_file.display(),
+        sweep.points.len(),
+        chunks.len(),
+        out.display(),
+        sweep_file.display(),
+    ));
+    s.push_str("set -euo pipefail\nPOINTS=(\n");
+    for c in chunks {
+        s.push_str(&format!("  {}\n", quote(c)));
+    }
+    s.push_str(")\n");
+    s.push_str(&format!("cd {}\n", quote(&cwd.display().to_string())));
+    s.push_str(
+        "THREADS=()\nif [ -n \"${SLURM_CPUS_PER_TASK:-}\" ]; then THREADS=(--threads \"$SLURM_CPUS_PER_TASK\"); fi\n",
+    );
+    let mut lines = vec![
+        format!(
+            "exec {} --quiet \"${{THREADS[@]}}\" sweep {}",
+            quote(&exe.display().to_string()),
+            quote(&sweep_file.display().to_string())
+        ),
+        format!("--out {} --points \"${{POINTS[$SLURM_ARRAY_TASK_ID]}}\"", quote(&out.display().to_string())),
+        format!("--sweep-id {id} --backend {}", opts.backend),
+    ];
+    if opts.images {
+        use clap::ValueEnum;
+        let compression = opts.exr_compression.to_possible_value().map(|v| v.get_name().to_string());
+        lines.push(format!("--images --exr-compression {}", compression.unwrap_or_else(|| "zip".into())));
+    }
+    for o in &sweep.overrides {
+        lines.push(format!("--set {}", quote(&o.to_arg())));
+    }
+    s.push_str(&lines.join(" \\\n  "));
+    s.push('\n');
+    Ok(s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn missing_points_split_into_even_contiguous_chunks() {
+        assert_eq!(split(&(0..12).collect::<Vec<_>>(), 4), ["0..3", "3..6", "6..9", "9..12"]);
+        assert_eq!(split(&[0, 1, 2, 3, 4], 2), ["0..3", "3..5"]);
+        assert_eq!(split(&[3, 4, 5], 4), ["3", "4", "5"]);
+        assert_eq!(split(&[1, 3, 4, 9], 1), ["1,3..5,9"]);
+        assert!(split(&[], 4).is_empty());
+    }
+
+    #[test]
+    fn words_are_quoted_for_bash() {
+        assert_eq!(quote("a b"), "'a b'");
+        assert_eq!(quote("it's"), "'it'\\''s'");
+    }
+}

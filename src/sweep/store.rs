@@ -1,0 +1,236 @@
+//! A sweep's output folder and its point records: `points/<id>.json` holds the Table 1
+//! scores (Sec. 4.2) of one point, named by the content hash of its resolved settings. A
+//! record is written under a temporary name and renamed when complete, so a point is either
+//! recorded whole or missing, whatever stops the process (a kill, a Slurm time limit or
+//! `scancel`); many processes (Slurm array tasks) may write into one folder at once. Images,
+//! when asked for, go to `points/<id>/`; their point counts as complete only once its record
+//! exists.
+
+use std::collections::HashSet;
+use std::fs;
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use crate::experiment::Score;
+use crate::io::output::{write_atomic, TEMP_PREFIX};
+
+/// One score row of a point: a method under an eye case. PSNR in dB (`inf` for identical
+/// images); the 95% half-widths are present when the experiment's measurement gives them.
+/// Scores are stored as decimal text in their shortest round-trip form, so that they read back
+/// bit for bit (and `inf`, which JSON has no number for).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ScoreRow {
+    pub method: String,
+    pub eye_case: String,
+    #[serde(with = "exact")]
+    pub psnr_db: f64,
+    #[serde(default, with = "exact_option", skip_serializing_if = "Option::is_none")]
+    pub psnr_ci95_db: Option<f64>,
+    #[serde(with = "exact")]
+    pub ssim: f64,
+    #[serde(default, with = "exact_option", skip_serializing_if = "Option::is_none")]
+    pub ssim_ci95: Option<f64>,
+}
+
+impl From<&Score> for ScoreRow {
+    fn from(s: &Score) -> Self {
+        Self {
+            method: s.method.clone(),
+            eye_case: s.eye_case.clone(),
+            psnr_db: s.psnr.mean,
+            psnr_ci95_db: s.psnr.ci95,
+            ssim: s.ssim.mean,
+            ssim_ci95: s.ssim.ci95,
+        }
+    }
+}
+
+/// What one point produced.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PointRecord {
+    /// Content hash of the point's resolved settings.
+    pub id: String,
+    /// Index of the point in the sweep when it ran.
+    pub index: usize,
+    /// The swept values, as `KEY=VALUE` in TOML syntax.
+    pub values: Vec<String>,
+    pub scores: Vec<ScoreRow>,
+    /// Wall time of the point: its own stages plus its share of the display images it shared.
+    pub seconds: f64,
+    pub backend: String,
+    pub threads: usize,
+    /// Where and when it ran, and with which inimtrace.
+    pub host: String,
+    pub finished_unix: u64,
+    pub version: String,
+}
+
+/// The folder of a sweep.
+#[derive(Clone, Debug)]
+pub struct Store {
+    root: PathBuf,
+}
+
+impl Store {
+    /// Creates the folder (and `points/`) if needed and checks that it can be written. Never
+    /// removes anything: other processes may be writing points into it.
+    pub fn open(root: &Path) -> Result<Self> {
+        let points = root.join("points");
+        fs::create_dir_all(&points).map_err(|e| Error::io(&points, e))?;
+        let probe = points.join(format!("{TEMP_PREFIX}{}-probe", std::process::id()));
+        fs::write(&probe, b"").map_err(|e| Error::io(&points, e))?;
+        let _ = fs::remove_file(&probe);
+        Ok(Self { root: root.to_path_buf() })
+    }
+
+    pub fn root(&self) -> &Path {
+        &self.root
+    }
+
+    fn record_path(&self, id: &str) -> PathBuf {
+        self.root.join("points").join(format!("{id}.json"))
+    }
+
+    /// The folder of a point's images.
+    pub fn images_dir(&self, id: &str) -> PathBuf {
+        self.root.join("points").join(id)
+    }
+
+    /// The record of point `id`, if it is complete. A record that cannot be read or does not
+    /// belong to `id` counts as missing (the point runs again and replaces it).
+    pub fn read(&self, id: &str) -> Option<PointRecord> {
+        let bytes = fs::read(self.record_path(id)).ok()?;
+        serde_json::from_slice::<PointRecord>(&bytes).ok().filter(|r| r.id == id)
+    }
+
+    /// The ids among `ids` whose points are complete.
+    pub fn complete<'a>(&self, ids: impl IntoIterator<Item = &'a String>) -> HashSet<String> {
+        ids.into_iter().filter(|id| self.read(id).is_some()).cloned().collect()
+    }
+
+    /// Records a point, atomically.
+    pub fn write(&self, record: &PointRecord) -> Result<()> {
+        let json = serde_json::to_vec_pretty(record)
+            .map_err(|e| Error::Unsupported(format!("cannot serialise point {}: {e}", record.id)))?;
+        let path = self.record_path(&record.id);
+        write_atomic(&path, |tmp| fs::write(tmp, &json).map_err(|e| Error::io(tmp, e)))
+    }
+}
+
+/// This machine's name (Slurm runs points on many).
+pub fn host_name() -> String {
+    fs::read_to_string("/proc/sys/kernel/hostname")
+        .map(|s| s.trim().to_string())
+        .ok()
+        .filter(|s| !s.is_empty())
+        .or_else(|| std::env::var("HOSTNAME").ok())
+        .unwrap_or_else(|| "unknown".into())
+}
+
+/// Seconds since 1970.
+pub fn unix_now() -> u64 {
+    std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.as_secs()).unwrap_or(0)
+}
+
+/// An `f64` as JSON text: Rust's shortest round-trip decimal form (`24.928587269627645`,
+/// `inf`), read back with a correctly rounded parse, so a score survives a record bit for bit.
+mod exact {
+    use serde::{de::Error, Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(v: &f64, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(&v.to_string())
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+        let text = String::deserialize(d)?;
+        text.parse().map_err(|_| D::Error::custom(format!("`{text}` is not a number")))
+    }
+}
+
+/// [`exact`] for an optional value.
+mod exact_option {
+    use serde::{de::Error, Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(v: &Option<f64>, s: S) -> Result<S::Ok, S::Error> {
+        match v {
+            Some(v) => s.serialize_str(&v.to_string()),
+            None => s.serialize_none(),
+        }
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+        match Option::<String>::deserialize(d)? {
+            Some(text) => text.parse().map(Some).map_err(|_| D::Error::custom(format!("`{text}` is not a number"))),
+            None => Ok(None),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn record(id: &str) -> PointRecord {
+        PointRecord {
+            id: id.into(),
+            index: 3,
+            values: vec!["eye.pupil_diameter=2".into()],
+            scores: vec![ScoreRow {
+                method: "LC".into(),
+                eye_case: "Eye".into(),
+                psnr_db: f64::INFINITY,
+                psnr_ci95_db: Some(0.01),
+                ssim: 0.9,
+                ssim_ci95: None,
+            }],
+            seconds: 1.5,
+            backend: "analytic".into(),
+            threads: 2,
+            host: host_name(),
+            finished_unix: unix_now(),
+            version: "0".into(),
+        }
+    }
+
+    #[test]
+    fn scores_read_back_bit_for_bit() {
+        // Numbers whose JSON round trip through a fast float parser can lose the last bit.
+        let mut r = record("00000000000000ee");
+        for v in [13.441554971949857, 0.7831291879228122, 13.779903480640753, 1e-300, 5e-324, f64::INFINITY] {
+            r.scores[0].psnr_db = v;
+            r.scores[0].ssim_ci95 = Some(v);
+            let back: PointRecord = serde_json::from_slice(&serde_json::to_vec(&r).unwrap()).unwrap();
+            assert_eq!(back.scores[0].psnr_db.to_bits(), v.to_bits());
+            assert_eq!(back.scores[0].ssim_ci95.map(f64::to_bits), Some(v.to_bits()));
+        }
+    }
+
+    #[test]
+    fn records_round_trip_and_only_complete_ones_count() {
+        let dir = tempfile::tempdir().unwrap();
+        let store = Store::open(dir.path()).unwrap();
+        let r = record("00000000000000aa");
+        store.write(&r).unwrap();
+        assert_eq!(store.read(&r.id), Some(r.clone()));
+        // A half-written record (never under the final name in practice) and one that names
+        // another point both count as missing.
+        fs::write(store.record_path("00000000000000bb"), b"{\"id\": \"000").unwrap();
+        let mut other = record("00000000000000cc");
+        other.id = "elsewhere".into();
+        fs::write(store.record_path("00000000000000cc"), serde_json::to_vec(&other).unwrap()).unwrap();
+        let ids: Vec<String> = ["00000000000000aa", "00000000000000bb", "00000000000000cc", "00000000000000dd"]
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+        let done = store.complete(&ids);
+        assert_eq!(done.len(), 1);
+        assert!(done.contains("00000000000000aa"));
+        let names: Vec<String> = fs::read_dir(dir.path().join("points"))
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .collect();
+        assert!(names.iter().all(|n| !n.starts_with(TEMP_PREFIX)), "{names:?}");
+    }
+}
