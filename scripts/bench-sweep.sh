@@ -1,13 +1,15 @@
 #!/usr/bin/env bash
 # Times sweeps/pupil-focus.toml (the paper's experiment for one eye: 6 pupils x 8 focus
-# distances, 48 points) three ways and prints the sweep's overhead per point:
-#   1. `inimtrace sweep` on all cores of this machine;
-#   2. the same 48 points as bare `inimtrace assess` runs (each point's --set arguments from
-#      sweep.json), whose stage timings give the work the sweep does: the display images once,
-#      then per point the ground truth, the perceived images and the metrics;
-#   3. the sweep through Slurm (`--slurm --wait`) when a cluster answers (scripts/slurm-local.sh).
-# Overhead per point = (sweep wall time - that work) / 48, also as a share of the work.
-# Usage: scripts/bench-sweep.sh [OUT]   (default out/bench-sweep; needs python3)
+# distances, 48 points) and prints the sweep's overhead per point:
+#   1. `inimtrace sweep` on all cores of this machine, and the same 48 points as bare
+#      `inimtrace assess` runs (each point's --set arguments from sweep.json; images included);
+#   2. the overhead: points 0..8 on one thread (`--threads 1`, so that other load and the
+#      scheduling of concurrent points do not blur it) against the same work timed inside
+#      8 one-thread `assess` runs: the display images once, then per point the ground truth,
+#      the perceived images and the metrics;
+#   3. the sweep through Slurm (`--slurm --wait`, 4 tasks of 1 core) when a cluster answers
+#      (scripts/slurm-local.sh), and whether its sweep.csv equals the local one.
+# Usage: scripts/bench-sweep.sh [OUT]   (default out/bench-sweep; needs python3 and bc)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 OUT="${1:-out/bench-sweep}"
@@ -25,32 +27,38 @@ t1=$(now)
 local_s=$(echo "$t1 - $t0" | bc -l)
 printf 'sweep, local:  %7.1f s for 48 points (%.2f s per point)\n' "$local_s" "$(echo "$local_s / 48" | bc -l)"
 
-python3 - "$OUT" "$BIN" <<'EOF'
-import json, subprocess, sys, time, csv, os
-out, binary = sys.argv[1], sys.argv[2]
+python3 - "$OUT" "$BIN" "$SWEEP" <<'EOF'
+import json, subprocess, sys, time, csv
+out, binary, sweep_file = sys.argv[1:4]
 sweep = json.load(open(f"{out}/local/sweep.json"))
-eye_work, display_work, walls = 0.0, None, []
-for p in sweep["points"]:
+
+def assess(p, threads=None):
     d = f"{out}/assess/{p['index']}"
+    cmd = [binary, "--quiet"] + (["--threads", str(threads)] if threads else [])
     t = time.time()
-    subprocess.run([binary, "--quiet", "assess", sweep["experiment_file"], "--out", d] + p["assess_args"],
+    subprocess.run(cmd + ["assess", sweep["experiment_file"], "--out", d] + p["assess_args"],
                    check=True, stdout=subprocess.DEVNULL)
-    walls.append(time.time() - t)
+    wall = time.time() - t
     stages = {}
     for row in csv.DictReader(open(f"{d}/results.csv")):
         if row["record"] == "stage":
             stages[row["stage"]] = stages.get(row["stage"], 0.0) + float(row["seconds"])
-    eye_work += sum(stages.get(s, 0.0) for s in ("ground_truth", "simulate_all_methods", "metrics"))
-    if display_work is None:
-        display_work = stages.get("render_display", 0.0) + stages.get("pack_display_images", 0.0)
     subprocess.run(["rm", "-rf", d])
-work = display_work + eye_work
-local = float(open(f"{out}/local.log").read().split(" run in ")[1].split(" s")[0])
+    eye = sum(stages.get(s, 0.0) for s in ("ground_truth", "simulate_all_methods", "metrics"))
+    return wall, stages.get("render_display", 0.0) + stages.get("pack_display_images", 0.0), eye
+
+walls = [assess(p)[0] for p in sweep["points"]]
 print(f"bare assess:   {sum(walls):7.1f} s for 48 runs ({sum(walls)/48:.2f} s per point, images included)")
-print(f"same work in assess: {work:.1f} s (display images once {display_work:.2f} s + per point ground truth, "
-      f"perceived images, metrics {eye_work/48:.3f} s)")
-print(f"sweep points (its own timer): {local:.1f} s; overhead per point {(local - work)/48*1000:+.1f} ms "
-      f"({(local/work - 1)*100:+.1f}% of the work)")
+
+n = 8
+runs = [assess(p, threads=1) for p in sweep["points"][:n]]
+work = runs[0][1] + sum(r[2] for r in runs)
+log = subprocess.run([binary, "--quiet", "--threads", "1", "sweep", sweep_file, "--out", f"{out}/one-thread",
+                      "--points", f"0..{n}"], check=True, capture_output=True, text=True).stderr
+points = float(log.split(" run in ")[1].split(" s")[0])
+print(f"one thread, points 0..{n}: sweep {points:.2f} s; the same work in assess {work:.2f} s "
+      f"(display images once {runs[0][1]:.2f} s + per point {(work - runs[0][1]) / n:.3f} s)")
+print(f"overhead per point: {(points - work) / n * 1000:+.1f} ms ({(points / work - 1) * 100:+.1f}% of the work)")
 EOF
 
 if scripts/slurm-local.sh status >/dev/null 2>&1 || sinfo >/dev/null 2>&1; then
