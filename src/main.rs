@@ -10,19 +10,20 @@ use glam::DVec3;
 
 use inimtrace::experiment::{self, metadata, Experiment, ExperimentSpec, RunOptions};
 use inimtrace::io::display_file::DisplaySpec;
-use inimtrace::io::exr::{Attributes, ExrCompression};
+use inimtrace::io::exr::ExrCompression;
 use inimtrace::io::scene_file::SceneSpec;
 use inimtrace::io::{load_display, load_scene};
 use inimtrace::metrics::{self, SsimConstants};
-use inimtrace::optics::{Aperture, Display, Eye, Focus, Retina};
+use inimtrace::optics::Display;
 use inimtrace::overrides::Override;
 use inimtrace::progress::Progress;
 use inimtrace::render::retina::simulate;
-use inimtrace::render::{
-    ground_truth, render_display_image_with_depth, with_fields, BackendChoice, DisplayRenderSettings, Fields, Method,
-};
+use inimtrace::render::{ground_truth, render_display_image_with_depth, BackendChoice, DisplayRenderSettings, Method};
 use inimtrace::scene::Scene;
-use inimtrace::settings::{display_with, scene_with, setup_with, Settings};
+use inimtrace::settings::{display_with, scene_with, Settings};
+
+mod cli;
+use cli::{check_memory, error_line, exr_path, load_setup, parse_vec3, with_field, write_image, EyeArgs, Setup};
 
 /// `print!` that returns write errors (a closed pipe) instead of panicking.
 macro_rules! out {
@@ -233,24 +234,6 @@ enum Command {
     },
 }
 
-/// Refuses an image of `pixels` pixels at `bytes_each` bytes that would not fit in the memory
-/// limit (`--max-memory`), naming the setting, before anything is allocated.
-fn check_memory(what: &str, setting: &str, pixels: usize, bytes_each: u64) -> Result<()> {
-    let mut e = inimtrace::budget::Estimate::default();
-    e.add(what, setting, pixels as u64, bytes_each);
-    Ok(e.check_memory(inimtrace::budget::memory_limit(), "command line")?)
-}
-
-/// An output image path: it must end in `.exr` (the PNG preview goes beside it), so that the
-/// preview can never overwrite the EXR.
-fn exr_path(text: &str) -> std::result::Result<PathBuf, String> {
-    let path = PathBuf::from(text);
-    match path.extension().and_then(|e| e.to_str()) {
-        Some(e) if e.eq_ignore_ascii_case("exr") => Ok(path),
-        _ => Err(format!("`{text}` must name an .exr file (a PNG preview is written beside it)")),
-    }
-}
-
 /// `info --print`.
 #[derive(Clone, Copy, ValueEnum)]
 enum PrintTarget {
@@ -296,143 +279,6 @@ fn announce(scene: &Scene, backend: BackendChoice, quiet: bool) {
             scene.triangle_count()
         );
     }
-}
-
-/// Scene and display.
-#[derive(Args)]
-struct Setup {
-    /// Scene TOML (default: the paper's scene).
-    #[arg(long)]
-    scene: Option<PathBuf>,
-    /// Display TOML or OpenCV YAML (default: the paper's display).
-    #[arg(long)]
-    display: Option<PathBuf>,
-}
-
-/// The eye.
-#[derive(Args)]
-struct EyeArgs {
-    /// A pinhole eye (everything in focus).
-    #[arg(long, conflicts_with_all = ["focus_mm", "focus_diopters"])]
-    pinhole: bool,
-    /// Focus distance, mm.
-    #[arg(long)]
-    focus_mm: Option<f64>,
-    /// Focus in diopters (0 = infinity).
-    #[arg(long, conflicts_with = "focus_mm")]
-    focus_diopters: Option<f64>,
-    /// Pupil diameter, mm.
-    #[arg(long, default_value_t = 5.0)]
-    pupil: f64,
-    /// n x n pupil grid, kept inside the circle.
-    #[arg(long, default_value_t = 8)]
-    pupil_grid: usize,
-    /// Retina pixels per side.
-    #[arg(long, default_value_t = 512)]
-    retina: usize,
-    /// Retina half field, as a tangent.
-    #[arg(long, default_value_t = 0.3)]
-    half_tangent: f64,
-    /// k x k samples per retina pixel.
-    #[arg(long, default_value_t = 1)]
-    retina_samples: usize,
-    /// Pupil-to-retina distance v0, mm.
-    #[arg(long, default_value_t = 17.0)]
-    retina_distance: f64,
-    /// Pupil centre, mm.
-    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true, default_value = "0,0,0")]
-    eye_position: DVec3,
-}
-
-impl EyeArgs {
-    fn eye(&self) -> Result<(Eye, Retina)> {
-        let aperture = match (self.pinhole, self.focus_mm, self.focus_diopters) {
-            (true, _, _) => Aperture::Pinhole,
-            (false, Some(mm), None) => Aperture::ThinLens { pupil_diameter: self.pupil, focus: Focus::Millimetres(mm) },
-            (false, None, Some(d)) => Aperture::ThinLens { pupil_diameter: self.pupil, focus: Focus::Diopters(d) },
-            _ => bail!("give --pinhole, --focus-mm or --focus-diopters"),
-        };
-        let eye = Eye {
-            retina_distance: self.retina_distance,
-            aperture,
-            pupil_grid: self.pupil_grid,
-            position: self.eye_position,
-        };
-        eye.validate("command line")?;
-        let retina =
-            Retina { resolution: self.retina, half_tangent: self.half_tangent, samples_per_pixel: self.retina_samples };
-        retina.validate("command line")?;
-        Ok((eye, retina))
-    }
-}
-
-/// `X,Y,Z` (mm) on the command line: three finite numbers.
-fn parse_vec3(s: &str) -> std::result::Result<DVec3, String> {
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|x| x.trim().parse::<f64>().map_err(|_| format!("`{x}` is not a number (expected X,Y,Z in mm)")))
-        .collect::<std::result::Result<_, _>>()?;
-    match v.as_slice() {
-        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(DVec3::new(*x, *y, *z)),
-        _ => Err(format!("expected three finite numbers X,Y,Z in mm, got `{s}`")),
-    }
-}
-
-fn load_setup(setup: &Setup, set: &[Override]) -> Result<(Scene, Display)> {
-    if !set.is_empty() {
-        return Ok(setup_with(setup.scene.as_deref(), setup.display.as_deref(), set)?);
-    }
-    let scene = match &setup.scene {
-        Some(p) => load_scene(&p.to_string_lossy(), Path::new(""))?,
-        None => Scene::paper(),
-    };
-    let display = match &setup.display {
-        Some(p) => load_display(&p.to_string_lossy(), Path::new(""))?,
-        None => Display::paper(),
-    };
-    Ok((scene, display))
-}
-
-/// Runs `f` with the radiance fields of the chosen backend.
-fn with_field<T>(scene: &Scene, backend: BackendChoice, f: impl FnOnce(Fields<'_>) -> Result<T>) -> Result<T> {
-    let mut out = None;
-    with_fields(scene, backend, |fields| {
-        out = Some(f(fields));
-        Ok(())
-    })?;
-    out.expect("with_fields ran the closure")
-}
-
-fn write_image(
-    path: &Path,
-    img: &inimtrace::raster::RgbImage,
-    depth: Option<&[f32]>,
-    attrs: &Attributes,
-    compression: ExrCompression,
-) -> Result<()> {
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    }
-    use inimtrace::io::output::write_atomic;
-    write_atomic(path, |tmp| inimtrace::io::exr::write_rgb_with(tmp, img, depth, attrs, compression))?;
-    write_atomic(&path.with_extension("png"), |tmp| inimtrace::io::png::write_preview(tmp, img))?;
-    Ok(())
-}
-
-/// The error and its causes on one line, leaving out a cause its message already ends with
-/// (an I/O error is both the message's tail and its source).
-fn error_line(e: &anyhow::Error) -> String {
-    let mut line = String::new();
-    for cause in e.chain() {
-        let text = cause.to_string();
-        if !line.ends_with(&text) {
-            if !line.is_empty() {
-                line.push_str(": ");
-            }
-            line.push_str(&text);
-        }
-    }
-    line
 }
 
 fn main() {

@@ -14,10 +14,9 @@
 //!   `TEXCOORD_n` (float or normalised integer `VEC2`; `v` flipped to the OBJ convention) for the
 //!   set the material's base colour texture uses, and `COLOR_0` (float or normalised integer
 //!   `VEC3`/`VEC4`, linear, alpha dropped);
-//! * each primitive's material as a [`FileMaterial`]: `baseColorFactor` (linear) and
-//!   `baseColorTexture` (PNG or JPEG, sRGB, from a file, a `data:` URI or a buffer view) with
-//!   its sampler's magnification filter and `wrapS` (mirrored repeat is read as repeat, with a
-//!   warning).
+//! * each primitive's material as a [`FileMaterial`]: `baseColorFactor` (linear), `baseColorTexture`
+//!   (PNG or JPEG, sRGB; file, `data:` URI or buffer view), sampler filter and `wrapS` (mirrored
+//!   repeat read as repeat, with a warning).
 //!
 //! Everything else (animations, skins, morph targets, cameras, other textures, PBR parameters,
 //! alpha) is ignored; extensions the file uses are named in a warning, and a file that

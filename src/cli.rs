@@ -1,0 +1,175 @@
+//! The command line's shared pieces (the CLI of the paper's pipeline, Sec. 4): the scene and display
+//! arguments, the eye arguments (the experiment file's `[eye]` settings), output checks and writers.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+use clap::Args;
+use glam::DVec3;
+
+use inimtrace::io::exr::{Attributes, ExrCompression};
+use inimtrace::io::{load_display, load_scene};
+use inimtrace::optics::{Aperture, Display, Eye, Focus, Retina};
+use inimtrace::overrides::Override;
+use inimtrace::render::{with_fields, BackendChoice, Fields};
+use inimtrace::scene::Scene;
+use inimtrace::settings::setup_with;
+
+/// Refuses an image of `pixels` pixels at `bytes_each` bytes that would not fit in the memory
+/// limit (`--max-memory`), naming the setting, before anything is allocated.
+pub(crate) fn check_memory(what: &str, setting: &str, pixels: usize, bytes_each: u64) -> Result<()> {
+    let mut e = inimtrace::budget::Estimate::default();
+    e.add(what, setting, pixels as u64, bytes_each);
+    Ok(e.check_memory(inimtrace::budget::memory_limit(), "command line")?)
+}
+
+/// An output image path: it must end in `.exr` (the PNG preview goes beside it), so that the
+/// preview can never overwrite the EXR.
+pub(crate) fn exr_path(text: &str) -> std::result::Result<PathBuf, String> {
+    let path = PathBuf::from(text);
+    match path.extension().and_then(|e| e.to_str()) {
+        Some(e) if e.eq_ignore_ascii_case("exr") => Ok(path),
+        _ => Err(format!("`{text}` must name an .exr file (a PNG preview is written beside it)")),
+    }
+}
+
+/// Scene and display.
+#[derive(Args)]
+pub(crate) struct Setup {
+    /// Scene TOML (default: the paper's scene).
+    #[arg(long)]
+    pub(crate) scene: Option<PathBuf>,
+    /// Display TOML or OpenCV YAML (default: the paper's display).
+    #[arg(long)]
+    pub(crate) display: Option<PathBuf>,
+}
+
+/// The eye.
+#[derive(Args)]
+pub(crate) struct EyeArgs {
+    /// A pinhole eye (everything in focus).
+    #[arg(long, conflicts_with_all = ["focus_mm", "focus_diopters"])]
+    pub(crate) pinhole: bool,
+    /// Focus distance, mm.
+    #[arg(long)]
+    pub(crate) focus_mm: Option<f64>,
+    /// Focus in diopters (0 = infinity).
+    #[arg(long, conflicts_with = "focus_mm")]
+    pub(crate) focus_diopters: Option<f64>,
+    /// Pupil diameter, mm.
+    #[arg(long, default_value_t = 5.0)]
+    pub(crate) pupil: f64,
+    /// n x n pupil grid, kept inside the circle.
+    #[arg(long, default_value_t = 8)]
+    pub(crate) pupil_grid: usize,
+    /// Retina pixels per side.
+    #[arg(long, default_value_t = 512)]
+    pub(crate) retina: usize,
+    /// Retina half field, as a tangent.
+    #[arg(long, default_value_t = 0.3)]
+    pub(crate) half_tangent: f64,
+    /// k x k samples per retina pixel.
+    #[arg(long, default_value_t = 1)]
+    pub(crate) retina_samples: usize,
+    /// Pupil-to-retina distance v0, mm.
+    #[arg(long, default_value_t = 17.0)]
+    pub(crate) retina_distance: f64,
+    /// Pupil centre, mm.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true, default_value = "0,0,0")]
+    pub(crate) eye_position: DVec3,
+}
+
+impl EyeArgs {
+    pub(crate) fn eye(&self) -> Result<(Eye, Retina)> {
+        let aperture = match (self.pinhole, self.focus_mm, self.focus_diopters) {
+            (true, _, _) => Aperture::Pinhole,
+            (false, Some(mm), None) => Aperture::ThinLens { pupil_diameter: self.pupil, focus: Focus::Millimetres(mm) },
+            (false, None, Some(d)) => Aperture::ThinLens { pupil_diameter: self.pupil, focus: Focus::Diopters(d) },
+            _ => bail!("give --pinhole, --focus-mm or --focus-diopters"),
+        };
+        let eye = Eye {
+            retina_distance: self.retina_distance,
+            aperture,
+            pupil_grid: self.pupil_grid,
+            position: self.eye_position,
+        };
+        eye.validate("command line")?;
+        let retina =
+            Retina { resolution: self.retina, half_tangent: self.half_tangent, samples_per_pixel: self.retina_samples };
+        retina.validate("command line")?;
+        Ok((eye, retina))
+    }
+}
+
+/// `X,Y,Z` (mm) on the command line: three finite numbers.
+pub(crate) fn parse_vec3(s: &str) -> std::result::Result<DVec3, String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f64>().map_err(|_| format!("`{x}` is not a number (expected X,Y,Z in mm)")))
+        .collect::<std::result::Result<_, _>>()?;
+    match v.as_slice() {
+        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(DVec3::new(*x, *y, *z)),
+        _ => Err(format!("expected three finite numbers X,Y,Z in mm, got `{s}`")),
+    }
+}
+
+pub(crate) fn load_setup(setup: &Setup, set: &[Override]) -> Result<(Scene, Display)> {
+    if !set.is_empty() {
+        return Ok(setup_with(setup.scene.as_deref(), setup.display.as_deref(), set)?);
+    }
+    let scene = match &setup.scene {
+        Some(p) => load_scene(&p.to_string_lossy(), Path::new(""))?,
+        None => Scene::paper(),
+    };
+    let display = match &setup.display {
+        Some(p) => load_display(&p.to_string_lossy(), Path::new(""))?,
+        None => Display::paper(),
+    };
+    Ok((scene, display))
+}
+
+/// Runs `f` with the radiance fields of the chosen backend.
+pub(crate) fn with_field<T>(
+    scene: &Scene,
+    backend: BackendChoice,
+    f: impl FnOnce(Fields<'_>) -> Result<T>,
+) -> Result<T> {
+    let mut out = None;
+    with_fields(scene, backend, |fields| {
+        out = Some(f(fields));
+        Ok(())
+    })?;
+    out.expect("with_fields ran the closure")
+}
+
+pub(crate) fn write_image(
+    path: &Path,
+    img: &inimtrace::raster::RgbImage,
+    depth: Option<&[f32]>,
+    attrs: &Attributes,
+    compression: ExrCompression,
+) -> Result<()> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    }
+    use inimtrace::io::output::write_atomic;
+    write_atomic(path, |tmp| inimtrace::io::exr::write_rgb_with(tmp, img, depth, attrs, compression))?;
+    write_atomic(&path.with_extension("png"), |tmp| inimtrace::io::png::write_preview(tmp, img))?;
+    Ok(())
+}
+
+/// The error and its causes on one line, leaving out a cause its message already ends with
+/// (an I/O error is both the message's tail and its source).
+pub(crate) fn error_line(e: &anyhow::Error) -> String {
+    let mut line = String::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        if !line.ends_with(&text) {
+            if !line.is_empty() {
+                line.push_str(": ");
+            }
+            line.push_str(&text);
+        }
+    }
+    line
+}
