@@ -7,7 +7,7 @@
 //!
 //! This file parses overrides and applies them to a TOML value. The result is then
 //! deserialized through the same spec types and validation as the files
-//! ([`crate::settings`]), so an unknown key or a wrong type is an error there, naming the key.
+//! (`src/settings.rs`), so an unknown key or a wrong type is an error there, naming the key.
 
 use std::fmt;
 use std::path::PathBuf;

@@ -8,10 +8,10 @@ use std::path::PathBuf;
 
 use glam::{DVec2, DVec3};
 use inimtrace::accel::analytic::AnalyticRects;
+use inimtrace::experiment::converged::{measure, naive_scores};
 use inimtrace::experiment::{Experiment, ExperimentSpec};
 use inimtrace::measure::adaptive::{CaseMeasurement, Precision};
 use inimtrace::measure::estimator::{DisplaySource, EyeSample, EyeToLcd, PairedSource, Replicates};
-use inimtrace::measure::run::{measure, naive_scores};
 use inimtrace::measure::stats::gram_matrices;
 use inimtrace::metrics::{self, SsimConstants};
 use inimtrace::optics::transfer::eye_scene_ray;
@@ -458,7 +458,7 @@ fn replicates_are_nested_and_misses_count_as_black() {
     let source = DisplaySource::new(&c.display, &c.eye, &field, &stack);
     // A field wider than the display: the outer pixels see past the LCD.
     let wide = retina(16, 0.6);
-    let sampler = inimtrace::measure::run::case_sampler(5, 0, &c.eye);
+    let sampler = inimtrace::experiment::converged::case_sampler(5, 0, &c.eye);
     let mut a = Replicates::new(16, 3, 2);
     a.extend(&source, &sampler, &wide, 4, &Progress::hidden());
     a.extend(&source, &sampler, &wide, 8, &Progress::hidden());

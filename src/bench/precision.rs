@@ -32,10 +32,10 @@ use super::pipeline::{display_images, focus_mm, ground_truth_image, perceived_im
 use super::runs::Field;
 use super::summary::capped_psnr;
 use crate::error::Result;
+use crate::experiment::converged::{case_sampler, independent_case_sampler, measure, naive_scores};
 use crate::experiment::{self, Experiment};
 use crate::measure::adaptive::{self, Precision};
 use crate::measure::estimator::{DisplaySource, Replicates};
-use crate::measure::run::{case_sampler, independent_case_sampler, measure, naive_scores};
 use crate::progress::Progress;
 use crate::raster::RgbImage;
 

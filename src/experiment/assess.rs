@@ -155,7 +155,7 @@ fn assess_with<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
         let converged = scores.iter().find(|s| s.eye_case == case.name).and_then(|s| s.samples_per_pixel);
         let measured = |mut a: crate::io::exr::Attributes| {
             if let Some(spp) = converged {
-                crate::measure::run::set_exr_attributes(&mut a, exp, spp);
+                crate::experiment::converged::set_exr_attributes(&mut a, exp, spp);
             }
             a
         };

@@ -7,6 +7,8 @@
 //! is re-exported here.
 
 mod assess;
+pub mod converged;
+pub mod converged_report;
 pub mod metadata;
 mod report;
 mod stages;
@@ -341,7 +343,11 @@ impl Experiment {
         }
         let measurement = spec.measurement.clone().unwrap_or_else(MeasurementSpec::grid);
         measurement.validate(source)?;
-        measurement.check_grid_only(source, e.pupil_grid, e.retina_samples)?;
+        let d = EyeSpec::default();
+        measurement.check_grid_only(
+            source,
+            [("pupil_grid", e.pupil_grid, d.pupil_grid), ("retina_samples", e.retina_samples, d.retina_samples)],
+        )?;
         Ok(Self {
             name: spec.name.clone(),
             source: source.into(),

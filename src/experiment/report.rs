@@ -80,13 +80,13 @@ pub fn table_markdown(report: &AssessReport, exp: &Experiment) -> String {
         s.push_str(&format!("| {} |", case.name));
         let find = |m: &str| report.scores.iter().find(|x| x.method == m && x.eye_case == case.name);
         for m in &methods {
-            let v = find(m).map(crate::measure::report::psnr_cell).unwrap_or_default();
+            let v = find(m).map(crate::experiment::converged_report::psnr_cell).unwrap_or_default();
             s.push_str(&format!(" {v} |"));
         }
         // The framework's 8-bit constants pin SSIM near 1: show enough digits to tell methods apart.
         let digits = if exp.ssim == SsimConstants::Framework8Bit { 5 } else { 3 };
         for m in &methods {
-            let v = find(m).map(|x| crate::measure::report::ssim_cell(x, digits)).unwrap_or_default();
+            let v = find(m).map(|x| crate::experiment::converged_report::ssim_cell(x, digits)).unwrap_or_default();
             s.push_str(&format!(" {v} |"));
         }
         s.push('\n');
@@ -96,7 +96,7 @@ pub fn table_markdown(report: &AssessReport, exp: &Experiment) -> String {
         report.ssim_constants
     ));
     if exp.measurement.estimator == EstimatorKind::Converged {
-        s.push_str(&crate::measure::report::table_note(report, exp));
+        s.push_str(&crate::experiment::converged_report::table_note(report, exp));
     }
     s
 }

@@ -117,7 +117,7 @@ pub fn table1<S: RadianceField + ?Sized>(
     quiet: bool,
     stages: &mut Vec<StageTime>,
 ) -> Result<Table1> {
-    if let Some(table) = crate::measure::run::table1(exp, shade, stack, quiet, stages)? {
+    if let Some(table) = crate::experiment::converged::table1(exp, shade, stack, quiet, stages)? {
         return Ok(table);
     }
     let mut gts = Vec::new();

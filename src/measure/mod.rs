@@ -11,8 +11,6 @@
 
 pub mod adaptive;
 pub mod estimator;
-pub mod report;
-pub mod run;
 pub mod sampler;
 pub mod spec;
 pub mod ssim;

@@ -155,15 +155,12 @@ impl Serialize for MeasurementSpec {
 impl MeasurementSpec {
     /// Refuses grid-only settings under the converged estimator: `eye.pupil_grid` and
     /// `eye.retina_samples` other than their defaults (which the converged estimator ignores).
-    pub fn check_grid_only(&self, source: &str, pupil_grid: usize, retina_samples: usize) -> Result<()> {
+    /// `settings` are `(key, value, default)` of the eye's grid-only settings.
+    pub fn check_grid_only(&self, source: &str, settings: [(&str, usize, usize); 2]) -> Result<()> {
         if self.estimator != EstimatorKind::Converged {
             return Ok(());
         }
-        let defaults = crate::experiment::EyeSpec::default();
-        for (key, value, default) in [
-            ("pupil_grid", pupil_grid, defaults.pupil_grid),
-            ("retina_samples", retina_samples, defaults.retina_samples),
-        ] {
+        for (key, value, default) in settings {
             if value != default {
                 return Err(Error::invalid(
                     source,
@@ -218,11 +215,11 @@ mod tests {
     #[test]
     fn grid_only_settings_are_refused_under_converged() {
         let c = MeasurementSpec::default();
-        let e = c.check_grid_only("e.toml", 16, 1).unwrap_err().to_string();
+        let e = c.check_grid_only("e.toml", [("pupil_grid", 16, 8), ("retina_samples", 1, 1)]).unwrap_err().to_string();
         assert!(e.contains("e.toml") && e.contains("eye.pupil_grid"), "{e}");
-        let e = c.check_grid_only("e.toml", 8, 2).unwrap_err().to_string();
+        let e = c.check_grid_only("e.toml", [("pupil_grid", 8, 8), ("retina_samples", 2, 1)]).unwrap_err().to_string();
         assert!(e.contains("eye.retina_samples"), "{e}");
-        c.check_grid_only("e", 8, 1).unwrap();
-        MeasurementSpec::grid().check_grid_only("e", 16, 4).unwrap();
+        c.check_grid_only("e", [("pupil_grid", 8, 8), ("retina_samples", 1, 1)]).unwrap();
+        MeasurementSpec::grid().check_grid_only("e", [("pupil_grid", 16, 8), ("retina_samples", 4, 1)]).unwrap();
     }
 }

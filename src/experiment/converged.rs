@@ -5,12 +5,12 @@
 use crate::io::exr::{AttrValue, Attributes};
 use std::time::{Duration, Instant};
 
-use super::adaptive::{measure_case, CaseMeasurement, Precision};
-use super::estimator::{DisplaySource, PairedSource};
-use super::sampler::Sampler;
-use super::spec::EstimatorKind;
 use crate::error::Result;
 use crate::experiment::{Experiment, EyeCase, Score, StageTime};
+use crate::measure::adaptive::{measure_case, CaseMeasurement, Precision};
+use crate::measure::estimator::{DisplaySource, PairedSource};
+use crate::measure::sampler::Sampler;
+use crate::measure::spec::EstimatorKind;
 use crate::metrics::{self, Psnr, Ssim, SsimConstants};
 use crate::optics::{Aperture, Eye, Retina};
 use crate::progress::Progress;
@@ -131,7 +131,10 @@ fn case_outputs(exp: &Experiment, case: &EyeCase, measured: &CaseMeasurement) ->
 
 /// The naive scores of a measurement: today's PSNR and SSIM of the replicates' mean images
 /// (biased by the noise left in them). For the negative control and the bench.
-pub fn naive_scores(reps: &super::estimator::Replicates, constants: SsimConstants) -> Result<Vec<(Psnr, Ssim)>> {
+pub fn naive_scores(
+    reps: &crate::measure::estimator::Replicates,
+    constants: SsimConstants,
+) -> Result<Vec<(Psnr, Ssim)>> {
     let reference = reps.mean_image(0);
     (1..reps.images())
         .map(|k| {
