@@ -131,16 +131,21 @@ fn scene(p: &Path) -> Result<(), String> {
 fn mesh(p: &Path) -> Result<(), String> {
     inimtrace::io::load_mesh(p).map(|_| ()).map_err(|e| e.to_string())
 }
+/// A few hundred cases per reader in the ordinary test run; `PROPTEST_CASES` for more.
+fn config() -> ProptestConfig {
+    ProptestConfig {
+        cases: std::env::var("PROPTEST_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(64),
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    }
+}
+
 fn exr(p: &Path) -> Result<(), String> {
     inimtrace::io::exr::read_rgb(p).map(|_| ()).map_err(|e| e.to_string())
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig {
-        cases: std::env::var("PROPTEST_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(64),
-        failure_persistence: None,
-        ..ProptestConfig::default()
-    })]
+    #![proptest_config(config())]
 
     #[test]
     fn fuzz_experiment_toml(m in prop::collection::vec(mutation(), 1..4)) {
@@ -256,11 +261,7 @@ fn regression_gltf_position_accessor_out_of_range() {
 // before allocating: the memory limit is set to 256 MiB here, so an allocation of the claimed
 // size would not pass unnoticed.
 proptest! {
-    #![proptest_config(ProptestConfig {
-        cases: std::env::var("PROPTEST_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(64),
-        failure_persistence: None,
-        ..ProptestConfig::default()
-    })]
+    #![proptest_config(config())]
 
     #[test]
     fn fuzz_exr_header_bombs(w in 1i32..i32::MAX, h in 1i32..i32::MAX, cut in 0usize..400) {
