@@ -44,6 +44,63 @@ impl RgbImage {
     }
 }
 
+/// A read-only view of an RGB image whose pixels lie `stride` floats apart in a larger buffer
+/// (one image of an interleaved stack, see [`crate::render::retina::DisplayStack`]), or
+/// contiguous (an [`RgbImage`]). Writers take views so that an image is never copied to be
+/// written.
+#[derive(Clone, Copy, Debug)]
+pub struct RgbView<'a> {
+    pub width: usize,
+    pub height: usize,
+    values: &'a [f32],
+    stride: usize,
+    offset: usize,
+}
+
+impl<'a> RgbView<'a> {
+    /// Pixel `i` (row-major) is `values[i * stride + offset..][..3]`. `None` when `values` is too
+    /// short for `width x height` pixels or `offset + 3 > stride`.
+    pub fn strided(width: usize, height: usize, values: &'a [f32], stride: usize, offset: usize) -> Option<Self> {
+        let pixels = width.checked_mul(height)?;
+        let needed = pixels.checked_mul(stride)?;
+        (offset + 3 <= stride && values.len() >= needed).then_some(Self { width, height, values, stride, offset })
+    }
+
+    /// Pixel `i`, row-major.
+    #[inline(always)]
+    pub fn pixel(&self, i: usize) -> [f32; 3] {
+        let p = &self.values[i * self.stride + self.offset..][..3];
+        [p[0], p[1], p[2]]
+    }
+
+    /// Number of pixels.
+    pub fn len(&self) -> usize {
+        self.width * self.height
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Whether the buffer holds all `width x height` pixels (always, for [`RgbView::strided`]).
+    pub fn is_complete(&self) -> bool {
+        self.values.len() >= self.len() * self.stride
+    }
+
+    /// A copy as an [`RgbImage`].
+    pub fn to_image(&self) -> RgbImage {
+        RgbImage { width: self.width, height: self.height, pixels: (0..self.len()).map(|i| self.pixel(i)).collect() }
+    }
+}
+
+impl<'a> From<&'a RgbImage> for RgbView<'a> {
+    fn from(img: &'a RgbImage) -> Self {
+        // Writers check `is_complete` (an image whose pixel count disagrees with its size).
+        let values = img.pixels.as_flattened();
+        Self { width: img.width, height: img.height, values, stride: 3, offset: 0 }
+    }
+}
+
 /// Decodes an sRGB-encoded component in `[0, 1]` to linear (IEC 61966-2-1).
 pub fn srgb_to_linear(c: f64) -> f64 {
     if c <= 0.04045 {

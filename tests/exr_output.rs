@@ -191,3 +191,41 @@ fn openexr_python_bindings_read_back_types_values_and_pixels() {
     let ours: Vec<u8> = img.pixels.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
     assert!(bytes == ours, "OpenEXR reads other pixels than inimtrace wrote");
 }
+
+#[test]
+fn an_image_written_from_a_stack_view_equals_the_image_written_alone() {
+    // `assess` writes display images straight from the interleaved stack: the file must hold
+    // the same pixels (and Z) as writing the image itself.
+    use inimtrace::raster::RgbView;
+    let dir = tempfile::tempdir().unwrap();
+    let (img, depth) = image(53, 29);
+    let (other, _) = image(53, 29);
+    // Interleave [other, img, other] per pixel: img is slot 1 of 3.
+    let mut values = Vec::new();
+    for (a, b) in other.pixels.iter().zip(&img.pixels) {
+        values.extend_from_slice(a);
+        values.extend_from_slice(b);
+        values.extend_from_slice(&a.map(|v| v * 0.5));
+    }
+    let view = RgbView::strided(53, 29, &values, 9, 3).unwrap();
+    assert!(RgbView::strided(53, 29, &values, 9, 7).is_none(), "offset + 3 beyond the stride");
+    assert!(RgbView::strided(53, 30, &values, 9, 3).is_none(), "buffer too short");
+    for c in [ExrCompression::None, ExrCompression::Zip, ExrCompression::Piz] {
+        let a = dir.path().join(format!("view-{c}.exr"));
+        let b = dir.path().join(format!("image-{c}.exr"));
+        inimtrace::io::exr::write_view(&a, view, Some(&depth), &typed(), c).unwrap();
+        write_rgb_with(&b, &img, Some(&depth), &typed(), c).unwrap();
+        let (va, za) = read_rgb_depth(&a).unwrap();
+        let (vb, zb) = read_rgb_depth(&b).unwrap();
+        assert!(va == img && vb == img, "{c}");
+        assert!(za.unwrap().iter().zip(zb.unwrap()).all(|(x, y)| x.to_bits() == y.to_bits()), "{c}: Z");
+    }
+    // A non-finite value in the view is refused, naming the pixel.
+    let mut bad = values.clone();
+    bad[(2 * 53 + 5) * 9 + 4] = f32::NAN;
+    let view = RgbView::strided(53, 29, &bad, 9, 3).unwrap();
+    let err = inimtrace::io::exr::write_view(&dir.path().join("bad.exr"), view, None, &typed(), ExrCompression::Zip)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("row 2, col 5"), "{err}");
+}

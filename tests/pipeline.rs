@@ -370,3 +370,53 @@ fn the_reference_plane_moves_ray_starts_along_the_same_lines() {
     let far = render_display_image(&d, Method::LensletCenter, &far_settings, &field, &Progress::hidden()).unwrap();
     assert!(near.pixels.iter().all(|p| *p == [0.0; 3]) && far.pixels.iter().all(|p| *p == [1.0; 3]));
 }
+
+#[test]
+fn rendering_into_the_stack_equals_rendering_then_packing() {
+    // The fast path `assess` uses (each display image rendered in place into the interleaved
+    // stack) against its slow twin (render every image, then pack): bit for bit, for every slot,
+    // with depth, on the fused kernel and the generic tracer, and a tilted lattice.
+    use inimtrace::render::render_display_image_into_stack;
+    use inimtrace::render::render_display_image_with_depth;
+    use inimtrace::render::retina::DisplayStack;
+    let scene = Scene::paper();
+    let backend = AnalyticRects::new(&scene).unwrap();
+    let fast = FacingPlanes::new(&scene, &backend).unwrap();
+    let slow = SceneTracer { scene: &scene, backend: &backend };
+    let s = DisplayRenderSettings { samples_per_pixel: 2, ..DisplayRenderSettings::default() };
+    let methods = [Method::LensletCenter, Method::PupilCenter, Method::LensletAverage { grid: 3 }];
+    let mut tilted = small_display(108);
+    let r = glam::DMat2::from_angle(0.3);
+    let scale = (tilted.eye_to_lenslets + tilted.lenslets_to_lcd) / tilted.eye_to_lenslets;
+    let pitch = glam::DMat2::from_diagonal(DVec2::splat(1.2));
+    tilted.lenslets = inimtrace::optics::Lattice::new(DVec2::ZERO, r * pitch).unwrap();
+    tilted.elemental_images = inimtrace::optics::Lattice::new(DVec2::ZERO, r * pitch * scale).unwrap();
+    for display in [small_display(108), tilted] {
+        for field in [&fast as &dyn inimtrace::render::RadianceField, &slow] {
+            let rendered: Vec<_> = methods
+                .iter()
+                .map(|m| render_display_image_with_depth(&display, *m, &s, field, &Progress::hidden()).unwrap())
+                .collect();
+            let images: Vec<&RgbImage> = rendered.iter().map(|(img, _)| img).collect();
+            let packed = DisplayStack::new(&display, &images).unwrap();
+            let mut stack = DisplayStack::black(&display, methods.len());
+            for (k, m) in methods.iter().enumerate() {
+                let depth =
+                    render_display_image_into_stack(&display, *m, &s, field, &Progress::hidden(), &mut stack, k)
+                        .unwrap();
+                assert_eq!(depth, rendered[k].1, "{m}: depth");
+                assert!(stack.view(k).to_image() == rendered[k].0, "{m}: image in place");
+                assert!(packed.view(k).to_image() == rendered[k].0, "{m}: packed");
+            }
+            for i in 0..display.lcd.pixel_count() {
+                assert_eq!(stack.pixel(i), packed.pixel(i));
+            }
+        }
+    }
+    // A slot the stack does not have is an error, not a panic.
+    let display = small_display(108);
+    let mut stack = DisplayStack::black(&display, 1);
+    let err =
+        render_display_image_into_stack(&display, Method::LensletCenter, &s, &fast, &Progress::hidden(), &mut stack, 1);
+    assert!(err.is_err());
+}

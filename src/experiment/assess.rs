@@ -9,7 +9,7 @@ use rayon::prelude::*;
 
 use super::metadata;
 use super::report::write_reports;
-use super::stages::{pack_display_images, render_display_images, stage_time, table1};
+use super::stages::{render_display_stack, stage_time, table1_each};
 use super::{AssessReport, Experiment};
 use crate::accel::analytic::AnalyticRects;
 use crate::budget::Estimate;
@@ -86,9 +86,10 @@ pub fn estimate(exp: &Experiment) -> Estimate {
     let lcd = exp.display.lcd.pixel_count() as u64;
     let methods = exp.methods.len() as u64;
     let lcd_setting = format!("lcd.resolution = {:?} of display `{}`", exp.display.lcd.resolution, exp.spec.display);
-    // Display images (RGB f32 + depth), and their interleaved copy for the simulation.
-    e.add("the display images and their depth planes", lcd_setting.clone(), lcd * methods, 16);
-    e.add("the display images packed for the simulation", lcd_setting, lcd * methods, 12);
+    // Display images, rendered straight into their interleaved stack, and the depth plane of
+    // the one being written.
+    e.add("the display images packed for the simulation", lcd_setting.clone(), lcd * methods, 12);
+    e.add("a display image's depth plane", lcd_setting, lcd, 4);
     let n = exp.retina.resolution as u64;
     let cases = exp.cases.len() as u64;
     let retina_setting = format!("eye.retina_resolution = {n}");
@@ -117,7 +118,6 @@ pub fn estimate(exp: &Experiment) -> Estimate {
 struct Job<'a> {
     stem: String,
     image: &'a RgbImage,
-    depth: Option<&'a [f32]>,
     attributes: Attributes,
 }
 
@@ -136,59 +136,71 @@ fn assess_with<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
 
     // 1-3. Display images, then per eye case the ground truth and the perceived image of every
     // method, then the scores: the same stage functions `inimtrace bench` times.
-    let (displays, depths) = render_display_images(exp, with_depth, opts.quiet, &mut stages)?;
-    let stack = pack_display_images(exp, &displays.iter().collect::<Vec<_>>(), &mut stages)?;
-    let (gts, sims, scores) = table1(exp, shade, &stack, opts.quiet, &mut stages)?;
-    drop(stack);
-
-    // 4. Images: EXR + PNG preview each, written in parallel.
-    let t = Instant::now();
-    let mut jobs = Vec::new();
+    // Each display image is rendered into the stack the simulation reads and written at once
+    // (EXR + PNG preview), so it is held once and its depth plane only while it is written.
     let name = Some(exp.name.as_str());
-    for ((m, img), depth) in exp.methods.iter().zip(&displays).zip(&depths) {
+    let stack = render_display_stack(exp, with_depth, opts.quiet, &mut stages, |k, image, depth| {
+        let m = exp.methods[k];
         let mut attributes = metadata::common("display image", name);
-        attributes.extend(metadata::display_image(*m, display, &exp.render, backend_name, depth.is_some()));
-        jobs.push(Job { stem: format!("display_{}", m.short_name()), image: img, depth: depth.as_deref(), attributes });
-    }
-    for (c, case) in exp.cases.iter().enumerate() {
+        attributes.extend(metadata::display_image(m, display, &exp.render, backend_name, depth.is_some()));
+        let stem = format!("display_{}", m.short_name());
+        let (exr, png) = rayon::join(
+            || {
+                dir.write_with(&format!("{stem}.exr"), |p| {
+                    crate::io::exr::write_view(p, image, depth, &attributes, opts.exr_compression)
+                })
+            },
+            || dir.write_with(&format!("{stem}.png"), |p| crate::io::png::write_preview_view(p, image)),
+        );
+        exr?;
+        png
+    })?;
+    // 2-3. Per eye case, its retinal images are written (EXR + PNG preview each, in parallel)
+    // as soon as it is measured, and only their figure cells are kept.
+    let mut cells: Vec<Vec<RgbImage>> = Vec::new();
+    let mut scores = Vec::new();
+    let mut write_seconds = Vec::new();
+    table1_each(exp, shade, &stack, opts.quiet, &mut stages, |c, result| {
+        let t = Instant::now();
+        let case = &exp.cases[c];
         // Samples per retina pixel when the eye case was measured converged.
-        let converged = scores.iter().find(|s| s.eye_case == case.name).and_then(|s| s.samples_per_pixel);
+        let converged = result.scores.first().and_then(|s| s.samples_per_pixel);
         let measured = |mut a: crate::io::exr::Attributes| {
             if let Some(spp) = converged {
                 crate::experiment::converged::set_exr_attributes(&mut a, exp, spp);
             }
             a
         };
+        let mut jobs = Vec::new();
         let attributes = measured(metadata::ground_truth(name, Some(&case.name), &case.eye, &exp.retina, backend_name));
-        jobs.push(Job { stem: format!("gt_{}", case.name), image: &gts[c], depth: None, attributes });
-        for (k, m) in exp.methods.iter().enumerate() {
+        jobs.push(Job { stem: format!("gt_{}", case.name), image: &result.ground_truth, attributes });
+        for (m, image) in exp.methods.iter().zip(&result.perceived) {
             let attributes =
                 measured(metadata::perceived(name, Some(*m), Some(&case.name), &case.eye, &exp.retina, display, None));
-            jobs.push(Job {
-                stem: format!("sim_{}_{}", m.short_name(), case.name),
-                image: &sims[c][k],
-                depth: None,
-                attributes,
-            });
+            jobs.push(Job { stem: format!("sim_{}_{}", m.short_name(), case.name), image, attributes });
         }
+        jobs.par_iter().try_for_each(|j| -> Result<()> {
+            dir.write_with(&format!("{}.exr", j.stem), |p| {
+                crate::io::exr::write_rgb_with(p, j.image, None, &j.attributes, opts.exr_compression)
+            })?;
+            dir.write_with(&format!("{}.png", j.stem), |p| crate::io::png::write_preview(p, j.image))
+        })?;
+        let images = std::iter::once(&result.ground_truth).chain(&result.perceived).collect::<Vec<_>>();
+        cells.push(images.par_iter().map(|img| crate::io::figure::cell_image(img)).collect());
+        scores.extend(result.scores);
+        write_seconds.push((case.name.clone(), t.elapsed().as_secs_f64()));
+        Ok(())
+    })?;
+    drop(stack);
+    for (case, seconds) in write_seconds {
+        stages.push(super::StageTime { stage: "write_images".into(), method: None, eye_case: Some(case), seconds });
     }
-    // Biggest first so the two cores finish together.
-    jobs.sort_by_key(|j| std::cmp::Reverse(j.image.pixels.len()));
-    let figure = figure(exp, &gts, &sims, &scores);
-    let (image_result, figure_result) = rayon::join(
-        || {
-            jobs.par_iter().try_for_each(|j| -> Result<()> {
-                dir.write_with(&format!("{}.exr", j.stem), |p| {
-                    crate::io::exr::write_rgb_with(p, j.image, j.depth, &j.attributes, opts.exr_compression)
-                })?;
-                dir.write_with(&format!("{}.png", j.stem), |p| crate::io::png::write_preview(p, j.image))
-            })
-        },
-        || dir.write_with("figure.png", |p| crate::io::figure::write_figure(p, &figure)),
-    );
-    image_result?;
-    figure_result?;
-    stage_time(&mut stages, "write_images", None, None, t);
+
+    // 4. Fig. 3 from the cells.
+    let t = Instant::now();
+    let figure = figure(exp, &cells, &scores);
+    dir.write_with("figure.png", |p| crate::io::figure::write_figure(p, &figure))?;
+    stage_time(&mut stages, "write_figure", None, None, t);
 
     let report = AssessReport {
         tool: crate::version::TOOL,
@@ -209,12 +221,9 @@ fn assess_with<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
 
 /// Fig. 3 as `assess` draws it: a title, one row per eye case labelled with its focus, and each
 /// perceived image captioned with its PSNR and SSIM against the ground truth.
-fn figure<'a>(
-    exp: &Experiment,
-    gts: &'a [RgbImage],
-    sims: &'a [Vec<RgbImage>],
-    scores: &[super::Score],
-) -> crate::io::figure::Figure<'a> {
+/// `cells[case]` holds the figure cells ([`crate::io::figure::cell_image`]) of the ground truth,
+/// then of each method's perceived image.
+fn figure<'a>(exp: &Experiment, cells: &'a [Vec<RgbImage>], scores: &[super::Score]) -> crate::io::figure::Figure<'a> {
     let mut column_labels = vec!["GT".to_string()];
     column_labels.extend(exp.methods.iter().map(|m| m.short_name().to_string()));
     let rows = exp
@@ -228,15 +237,15 @@ fn figure<'a>(
                     format!("{}: focus {:.0} mm ({:.2} D)", case.name, focus.distance_mm(), focus.diopters())
                 }
             };
-            let mut cells = vec![(&gts[c], None)];
+            let mut row = vec![(&cells[c][0], None)];
             for (k, m) in exp.methods.iter().enumerate() {
                 let caption = scores
                     .iter()
                     .find(|s| s.method == m.short_name() && s.eye_case == case.name)
                     .map(|s| format!("PSNR {} dB, SSIM {:.3}", crate::metrics::format_db(s.psnr.mean, 2), s.ssim.mean));
-                cells.push((&sims[c][k], caption));
+                row.push((&cells[c][k + 1], caption));
             }
-            (label, cells)
+            (label, row)
         })
         .collect();
     crate::io::figure::Figure {

@@ -6,7 +6,7 @@ use crate::io::exr::{AttrValue, Attributes};
 use std::time::{Duration, Instant};
 
 use crate::error::Result;
-use crate::experiment::{Experiment, EyeCase, Score, StageTime};
+use crate::experiment::{CaseResult, Experiment, EyeCase, Score, StageTime};
 use crate::measure::adaptive::{measure_case, CaseMeasurement, Precision};
 use crate::measure::estimator::{DisplaySource, PairedSource};
 use crate::measure::sampler::Sampler;
@@ -66,13 +66,33 @@ pub fn table1<F: RadianceField + ?Sized>(
     quiet: bool,
     stages: &mut Vec<StageTime>,
 ) -> Result<Option<Table1>> {
+    let (mut gts, mut sims, mut scores) = (Vec::new(), Vec::new(), Vec::new());
+    let converged = table1_each(exp, field, stack, quiet, stages, &mut |_, case: CaseResult| {
+        gts.push(case.ground_truth);
+        sims.push(case.perceived);
+        scores.extend(case.scores);
+        Ok(())
+    })?;
+    Ok(converged.then_some((gts, sims, scores)))
+}
+
+/// [`table1`] one eye case at a time (see [`crate::experiment::table1_each`]); `false` (and
+/// nothing done) when `exp` uses the grid estimator. Each case's replicates are dropped once
+/// its mean images and scores are taken.
+pub fn table1_each<F: RadianceField + ?Sized>(
+    exp: &Experiment,
+    field: &F,
+    stack: &DisplayStack,
+    quiet: bool,
+    stages: &mut Vec<StageTime>,
+    each: &mut dyn FnMut(usize, CaseResult) -> Result<()>,
+) -> Result<bool> {
     let m = &exp.measurement;
     if m.estimator != EstimatorKind::Converged {
-        return Ok(None);
+        return Ok(false);
     }
     let start = Instant::now();
     let budget = (m.max_seconds.is_finite()).then(|| Duration::from_secs_f64(m.max_seconds));
-    let (mut gts, mut sims, mut scores) = (Vec::new(), Vec::new(), Vec::new());
     for (index, case) in exp.cases.iter().enumerate() {
         let t = Instant::now();
         // What is left of the time budget, shared equally by the eye cases still to measure.
@@ -95,17 +115,16 @@ pub fn table1<F: RadianceField + ?Sized>(
         let measured = measure_case(&source, &sampler, &exp.retina, exp.ssim, &precision, &progress);
         progress.finish();
         let (gt, case_sims, case_scores) = case_outputs(exp, case, &measured);
-        gts.push(gt);
-        sims.push(case_sims);
-        scores.extend(case_scores);
         for (stage, seconds) in [
             ("converged_sampling", measured.rounds.iter().map(|r| r.sample_seconds).sum::<f64>()),
             ("converged_statistics", measured.rounds.iter().map(|r| r.stats_seconds).sum::<f64>()),
         ] {
             stages.push(StageTime { stage: stage.into(), method: None, eye_case: Some(case.name.clone()), seconds });
         }
+        drop(measured);
+        each(index, CaseResult { ground_truth: gt, perceived: case_sims, scores: case_scores })?;
     }
-    Ok(Some((gts, sims, scores)))
+    Ok(true)
 }
 
 fn case_outputs(exp: &Experiment, case: &EyeCase, measured: &CaseMeasurement) -> (RgbImage, Vec<RgbImage>, Vec<Score>) {

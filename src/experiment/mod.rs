@@ -16,8 +16,8 @@ mod stages;
 pub use assess::{assess, prepare_output_dir, RunOptions, Z_CHANNEL_NOTE};
 pub use report::{table_markdown, AssessReport, Score, StageTime};
 pub use stages::{
-    ground_truth_image, pack_display_images, perceived_images, render_display_images, table1, table1_scores,
-    DisplayImages, Table1,
+    ground_truth_image, pack_display_images, perceived_images, render_display_images, render_display_stack, table1,
+    table1_each, table1_scores, CaseResult, DisplayImages, Table1,
 };
 
 use std::path::Path;

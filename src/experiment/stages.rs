@@ -11,9 +11,9 @@ use super::{Experiment, EyeCase, Score, StageTime};
 use crate::error::{Error, Result};
 use crate::metrics;
 use crate::progress::Progress;
-use crate::raster::RgbImage;
+use crate::raster::{RgbImage, RgbView};
 use crate::render::retina::{simulate_stack, DisplayStack};
-use crate::render::{ground_truth, render_display_image_with_depth, RadianceField};
+use crate::render::{ground_truth, render_display_image_into_stack, render_display_image_with_depth, RadianceField};
 
 pub(super) fn stage_time(
     stages: &mut Vec<StageTime>,
@@ -55,6 +55,33 @@ pub fn render_display_images<D: RadianceField + ?Sized>(
         depths.push(depth);
     }
     Ok((displays, depths))
+}
+
+/// Stage 1 as `assess` runs it: every method's display image rendered straight into the stack
+/// the simulation reads (`render_display` stages), each handed to `finished` (method index, the
+/// image in place, its depth plane; timed as `write_display_image`) before the next is
+/// rendered, so no display image is ever held twice. The stack equals [`pack_display_images`] of [`render_display_images`] bit for
+/// bit (tested).
+pub fn render_display_stack<D: RadianceField + ?Sized>(
+    exp: &Experiment,
+    with_depth: &D,
+    quiet: bool,
+    stages: &mut Vec<StageTime>,
+    mut finished: impl FnMut(usize, RgbView<'_>, Option<&[f32]>) -> Result<()>,
+) -> Result<DisplayStack> {
+    let display = &exp.display;
+    let mut stack = DisplayStack::black(display, exp.methods.len());
+    for (k, m) in exp.methods.iter().enumerate() {
+        let t = Instant::now();
+        let p = Progress::new(display.lcd.rows() as u64, &format!("display image {}", m.short_name()), quiet);
+        let depth = render_display_image_into_stack(display, *m, &exp.render, with_depth, &p, &mut stack, k)?;
+        p.finish();
+        stage_time(stages, "render_display", Some(m.short_name()), None, t);
+        let t = Instant::now();
+        finished(k, stack.view(k), depth.as_deref())?;
+        stage_time(stages, "write_display_image", Some(m.short_name()), None, t);
+    }
+    Ok(stack)
 }
 
 /// The display images interleaved for the simulation (`pack_display_images` stage).
@@ -109,7 +136,7 @@ pub type Table1 = (Vec<RgbImage>, Vec<Vec<RgbImage>>, Vec<Score>);
 
 /// Stages 2-3 of [`assess`](super::assess()): per eye case the ground truth and the perceived
 /// images, then the scores ([`Table1`]), measured by the experiment's estimator: the converged
-/// one (`src/measure/`) or the grid one.
+/// one (`src/measure/`) or the grid one. Collects [`table1_each`].
 pub fn table1<S: RadianceField + ?Sized>(
     exp: &Experiment,
     shade: &S,
@@ -117,17 +144,66 @@ pub fn table1<S: RadianceField + ?Sized>(
     quiet: bool,
     stages: &mut Vec<StageTime>,
 ) -> Result<Table1> {
-    if let Some(table) = crate::experiment::converged::table1(exp, shade, stack, quiet, stages)? {
-        return Ok(table);
-    }
-    let mut gts = Vec::new();
-    let mut sims = Vec::new();
-    for case in &exp.cases {
-        gts.push(ground_truth_image(exp, case, shade, quiet, stages));
-        sims.push(perceived_images(exp, case, stack, quiet, stages)?);
-    }
-    let scores = table1_scores(exp, &gts, &sims, stages)?;
+    let (mut gts, mut sims, mut scores) = (Vec::new(), Vec::new(), Vec::new());
+    table1_each(exp, shade, stack, quiet, stages, |_, case| {
+        gts.push(case.ground_truth);
+        sims.push(case.perceived);
+        scores.extend(case.scores);
+        Ok(())
+    })?;
     Ok((gts, sims, scores))
+}
+
+/// One eye case of Table 1: its ground truth, the perceived image of every method (in the
+/// experiment's order) and their scores.
+pub struct CaseResult {
+    pub ground_truth: RgbImage,
+    pub perceived: Vec<RgbImage>,
+    pub scores: Vec<Score>,
+}
+
+/// [`table1`] one eye case at a time: `each(case index, its results)` is called as soon as a
+/// case is measured, so a caller can write and drop its images before the next case (`assess`
+/// does; its peak memory then holds one case's images, not all of them). Grid estimator stages:
+/// `ground_truth`, `simulate_all_methods` and `metrics` per case.
+pub fn table1_each<S: RadianceField + ?Sized>(
+    exp: &Experiment,
+    shade: &S,
+    stack: &DisplayStack,
+    quiet: bool,
+    stages: &mut Vec<StageTime>,
+    mut each: impl FnMut(usize, CaseResult) -> Result<()>,
+) -> Result<()> {
+    if crate::experiment::converged::table1_each(exp, shade, stack, quiet, stages, &mut each)? {
+        return Ok(());
+    }
+    for (c, case) in exp.cases.iter().enumerate() {
+        let gt = ground_truth_image(exp, case, shade, quiet, stages);
+        let sims = perceived_images(exp, case, stack, quiet, stages)?;
+        let t = Instant::now();
+        let scores = case_scores(exp, c, &gt, &sims)?;
+        stage_time(stages, "metrics", None, Some(&case.name), t);
+        each(c, CaseResult { ground_truth: gt, perceived: sims, scores })?;
+    }
+    Ok(())
+}
+
+/// The Table 1 scores of eye case `c`: PSNR and SSIM of every perceived image against `gt`.
+fn case_scores(exp: &Experiment, c: usize, gt: &RgbImage, sims: &[RgbImage]) -> Result<Vec<Score>> {
+    sims.par_iter()
+        .zip(&exp.methods)
+        .map(|(sim, m)| -> Result<Score> {
+            Ok(Score {
+                method: m.short_name().into(),
+                eye_case: exp.cases[c].name.clone(),
+                psnr: metrics::psnr(sim, gt)?.into(),
+                ssim: metrics::ssim(sim, gt, exp.ssim)?.into(),
+                samples_per_pixel: None,
+                replicates: None,
+                target_met: None,
+            })
+        })
+        .collect()
 }
 
 /// Stage 3 of [`assess`](super::assess()), Table 1: PSNR and SSIM of `sims[case][method]` against `gts[case]`,
@@ -148,22 +224,11 @@ pub fn table1_scores<G: Borrow<RgbImage> + Sync>(
             "table1_scores: one ground truth per eye case and one perceived image per method and eye case".into(),
         ));
     }
-    let pairs: Vec<(usize, usize)> =
-        (0..exp.cases.len()).flat_map(|c| (0..exp.methods.len()).map(move |m| (c, m))).collect();
-    let scores: Vec<Score> = pairs
-        .par_iter()
-        .map(|&(c, m)| -> Result<Score> {
-            Ok(Score {
-                method: exp.methods[m].short_name().into(),
-                eye_case: exp.cases[c].name.clone(),
-                psnr: metrics::psnr(&sims[c][m], gts[c].borrow())?.into(),
-                ssim: metrics::ssim(&sims[c][m], gts[c].borrow(), exp.ssim)?.into(),
-                samples_per_pixel: None,
-                replicates: None,
-                target_met: None,
-            })
-        })
+    let per_case: Vec<Vec<Score>> = (0..exp.cases.len())
+        .into_par_iter()
+        .map(|c| case_scores(exp, c, gts[c].borrow(), &sims[c]))
         .collect::<Result<_>>()?;
+    let scores: Vec<Score> = per_case.into_iter().flatten().collect();
     stage_time(stages, "metrics", None, None, t);
     Ok(scores)
 }

@@ -25,15 +25,15 @@
 use std::collections::HashMap;
 use std::path::Path;
 
-use exr::image::{AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer};
+use exr::image::{AnyChannels, Encoding, FlatSamples, Image, Layer, SpecificChannels};
 use exr::math::Vec2;
 use exr::meta::attribute::Text;
 use exr::meta::header::{standard_names, LayerAttributes};
-use exr::prelude::{read, Blocks, Compression, LineOrder, ReadChannels, ReadLayers, SmallVec, WritableImage};
+use exr::prelude::{read, Blocks, Compression, LineOrder, ReadChannels, ReadLayers, WritableImage};
 
 pub use super::exr_attributes::{AttrValue, Attributes};
 use crate::error::{Error, Result};
-use crate::raster::RgbImage;
+use crate::raster::{RgbImage, RgbView};
 
 /// Compression of written files (`--exr-compression`). Every choice but `pxr24` is lossless.
 ///
@@ -131,8 +131,27 @@ pub fn write_rgb_with(
     attributes: &Attributes,
     compression: ExrCompression,
 ) -> Result<()> {
+    if img.pixels.len() != img.width * img.height {
+        return Err(Error::invalid(
+            path.display().to_string(),
+            "pixels",
+            format!("image has {} pixels, expected {}x{}", img.pixels.len(), img.width, img.height),
+        ));
+    }
+    write_view(path, RgbView::from(img), depth, attributes, compression)
+}
+
+/// [`write_rgb_with`] for an image seen through a [`RgbView`] (for example one display image of
+/// an interleaved stack): the pixels are read where they are, never copied into planes first.
+pub fn write_view(
+    path: &Path,
+    img: RgbView<'_>,
+    depth: Option<&[f32]>,
+    attributes: &Attributes,
+    compression: ExrCompression,
+) -> Result<()> {
     let source = path.display().to_string();
-    let n = img.width * img.height;
+    let n = img.len();
     if n == 0 {
         return Err(Error::invalid(
             source,
@@ -140,11 +159,11 @@ pub fn write_rgb_with(
             format!("cannot write an empty {}x{} image", img.width, img.height),
         ));
     }
-    if img.pixels.len() != n {
+    if !img.is_complete() {
         return Err(Error::invalid(
             source,
             "pixels",
-            format!("image has {} pixels, expected {}x{}", img.pixels.len(), img.width, img.height),
+            format!("image buffer holds fewer than {}x{} pixels", img.width, img.height),
         ));
     }
     if let Some(z) = depth {
@@ -157,11 +176,11 @@ pub fn write_rgb_with(
         }
     }
     // The same policy as reading: no NaN or infinite radiance ever leaves inimtrace.
-    if let Some(i) = img.pixels.iter().position(|p| p.iter().any(|v| !v.is_finite())) {
+    if let Some(i) = (0..n).find(|&i| img.pixel(i).iter().any(|v| !v.is_finite())) {
         return Err(Error::invalid(
             source,
             format!("pixel (row {}, col {})", i / img.width, i % img.width),
-            format!("refusing to write a non-finite value {:?} (this is a bug in the renderer)", img.pixels[i]),
+            format!("refusing to write a non-finite value {:?} (this is a bug in the renderer)", img.pixel(i)),
         ));
     }
 
@@ -192,21 +211,39 @@ pub fn write_rgb_with(
     layer_attributes.other = other;
     layer_attributes.software_name = Text::new_or_none(crate::version::software());
 
-    let plane = |c: usize| FlatSamples::F32(img.pixels.iter().map(|p| p[c]).collect());
-    let mut channels =
-        vec![AnyChannel::new("R", plane(0)), AnyChannel::new("G", plane(1)), AnyChannel::new("B", plane(2))];
-    if let Some(z) = depth {
-        channels.push(AnyChannel::new("Z", FlatSamples::F32(z.to_vec())));
-    }
     let encoding =
         Encoding { compression: compression.to_exr(), blocks: Blocks::ScanLines, line_order: LineOrder::Increasing };
-    let layer = Layer::new(
-        Vec2(img.width, img.height),
-        layer_attributes,
-        encoding,
-        AnyChannels::sort(SmallVec::from_vec(channels)),
-    );
-    Image::from_layer(layer).write().to_file(path).map_err(|e| exr_error(path, e))
+    let size = Vec2(img.width, img.height);
+    let width = img.width;
+    // The pixels are read from `img` (and `depth`) block by block as the file is compressed:
+    // no copy of the image is made. The crate sorts the channels by name (B, G, R, Z).
+    let result = match depth {
+        Some(z) => {
+            let channels = SpecificChannels::build()
+                .with_channel::<f32>("R")
+                .with_channel::<f32>("G")
+                .with_channel::<f32>("B")
+                .with_channel::<f32>("Z")
+                .with_pixel_fn(|p: Vec2<usize>| {
+                    let i = p.y() * width + p.x();
+                    let [r, g, b] = img.pixel(i);
+                    (r, g, b, z[i])
+                });
+            Image::from_layer(Layer::new(size, layer_attributes, encoding, channels)).write().to_file(path)
+        }
+        None => {
+            let channels = SpecificChannels::build()
+                .with_channel::<f32>("R")
+                .with_channel::<f32>("G")
+                .with_channel::<f32>("B")
+                .with_pixel_fn(|p: Vec2<usize>| {
+                    let [r, g, b] = img.pixel(p.y() * width + p.x());
+                    (r, g, b)
+                });
+            Image::from_layer(Layer::new(size, layer_attributes, encoding, channels)).write().to_file(path)
+        }
+    };
+    result.map_err(|e| exr_error(path, e))
 }
 
 /// A regular, non-empty file; returns its size.

@@ -165,6 +165,27 @@ fn resample(src: &RgbImage, width: usize, height: usize) -> RgbImage {
     out
 }
 
+/// `img` as one cell of a figure: scaled to fit a [`CELL_SIZE`]² cell with its aspect ratio
+/// kept (area averaging), centred on black. A cell image is its own cell image, so a caller may
+/// shrink its images early (keeping 256² cells instead of full images) and draw the same figure.
+pub fn cell_image(img: &RgbImage) -> RgbImage {
+    let scale = (CELL_SIZE as f64 / img.width as f64).min(CELL_SIZE as f64 / img.height as f64);
+    let w = ((img.width as f64 * scale).round() as usize).clamp(1, CELL_SIZE);
+    let h = ((img.height as f64 * scale).round() as usize).clamp(1, CELL_SIZE);
+    if w == img.width && h == img.height && w == CELL_SIZE && h == CELL_SIZE {
+        return img.clone();
+    }
+    let cell = if w == img.width && h == img.height { img.clone() } else { resample(img, w, h) };
+    let mut padded = RgbImage::new(CELL_SIZE, CELL_SIZE);
+    let (ox, oy) = ((CELL_SIZE - w) / 2, (CELL_SIZE - h) / 2);
+    for y in 0..h {
+        for x in 0..w {
+            padded.set(oy + y, ox + x, cell.get(y, x));
+        }
+    }
+    padded
+}
+
 /// Splits `text` at spaces into lines no wider than `max_width` according to `measure`.
 fn wrap(text: &str, max_width: u32, measure: &dyn Fn(&str) -> Result<u32>) -> Result<Vec<String>> {
     let mut lines: Vec<String> = Vec::new();
@@ -231,17 +252,7 @@ pub fn write_figure(path: &Path, figure: &Figure) -> Result<()> {
     let mut canvas = vec![255u8; width * height * 3];
     for (r, (_, images)) in rows.iter().enumerate() {
         for (c, (img, _)) in images.iter().enumerate() {
-            let scale = (CELL_SIZE as f64 / img.width as f64).min(CELL_SIZE as f64 / img.height as f64);
-            let w = ((img.width as f64 * scale).round() as usize).clamp(1, CELL_SIZE);
-            let h = ((img.height as f64 * scale).round() as usize).clamp(1, CELL_SIZE);
-            let cell = if w == img.width && h == img.height { (*img).clone() } else { resample(img, w, h) };
-            let mut padded = RgbImage::new(CELL_SIZE, CELL_SIZE);
-            let (ox, oy) = ((CELL_SIZE - w) / 2, (CELL_SIZE - h) / 2);
-            for y in 0..h {
-                for x in 0..w {
-                    padded.set(oy + y, ox + x, cell.get(y, x));
-                }
-            }
+            let padded = cell_image(img);
             let bytes = to_srgb8(&padded);
             let (x0, y0) = layout.cell_origin(r, c);
             for y in 0..CELL_SIZE {
@@ -333,6 +344,35 @@ mod tests {
                 assert!((v - dst as f64 / src as f64).abs() < 1e-9, "{src}->{dst}: {v}");
             }
         }
+    }
+
+    #[test]
+    fn a_cell_image_is_its_own_cell_image_and_draws_the_same_figure() {
+        // `assess` keeps only cells: the figure drawn from them must be the figure drawn from
+        // the full images, byte for byte.
+        let mut imgs = Vec::new();
+        for (w, h) in [(512, 512), (300, 200), (256, 256), (97, 131)] {
+            let mut img = RgbImage::new(w, h);
+            for (i, p) in img.pixels.iter_mut().enumerate() {
+                *p = [((i * 7919) % 1000) as f32 / 1000.0, (i % w) as f32 / w as f32, 0.25];
+            }
+            imgs.push(img);
+        }
+        let cells: Vec<RgbImage> = imgs.iter().map(cell_image).collect();
+        for (cell, img) in cells.iter().zip(&imgs) {
+            assert_eq!((cell.width, cell.height), (CELL_SIZE, CELL_SIZE));
+            assert!(cell_image(cell) == *cell, "{}x{}", img.width, img.height);
+        }
+        let dir = tempfile::tempdir().unwrap();
+        let (a, b) = (dir.path().join("a.png"), dir.path().join("b.png"));
+        let labels = ["w", "x", "y", "z"];
+        match write_montage(&a, &[("row", imgs.iter().collect())], &labels) {
+            // No font on this machine: the montage cannot be drawn either way.
+            Err(e) if e.to_string().contains("font") => return,
+            r => r.unwrap(),
+        }
+        write_montage(&b, &[("row", cells.iter().collect())], &labels).unwrap();
+        assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
     }
 
     #[test]

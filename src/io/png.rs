@@ -19,7 +19,7 @@ use image::{ExtendedColorType, ImageEncoder};
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
-use crate::raster::RgbImage;
+use crate::raster::{RgbImage, RgbView};
 use crate::scene::image_texture::{Filter, ImageTexture, Wrap};
 
 /// The 8-bit sRGB code of a linear value: clamp to `[0, 1]` (`NaN` → 0), apply the sRGB
@@ -81,10 +81,16 @@ fn srgb_encode_fast(t: &SrgbTable, v: f32) -> u8 {
 
 /// The image as interleaved 8-bit sRGB RGB bytes, row 0 first.
 pub fn to_srgb8(img: &RgbImage) -> Vec<u8> {
+    view_to_srgb8(RgbView::from(img))
+}
+
+/// [`to_srgb8`] of an image seen through a view (pixels read where they are).
+pub fn view_to_srgb8(img: RgbView<'_>) -> Vec<u8> {
     let t = table();
-    let mut out = vec![0u8; img.pixels.len() * 3];
-    out.par_chunks_mut(3 * 4096).zip(img.pixels.par_chunks(4096)).for_each(|(o, px)| {
-        for (o, p) in o.chunks_exact_mut(3).zip(px) {
+    let mut out = vec![0u8; img.len() * 3];
+    out.par_chunks_mut(3 * 4096).enumerate().for_each(|(chunk, o)| {
+        for (j, o) in o.chunks_exact_mut(3).enumerate() {
+            let p = img.pixel(chunk * 4096 + j);
             for c in 0..3 {
                 o[c] = srgb_encode_fast(t, p[c]);
             }
@@ -128,7 +134,19 @@ pub fn write_preview(path: &Path, img: &RgbImage) -> Result<()> {
             format!("image has {} pixels, expected {}x{}", img.pixels.len(), img.width, img.height),
         ));
     }
-    write_rgb8(path, img.width, img.height, &to_srgb8(img))
+    write_preview_view(path, RgbView::from(img))
+}
+
+/// [`write_preview`] of an image seen through a view (for example one image of a stack).
+pub fn write_preview_view(path: &Path, img: RgbView<'_>) -> Result<()> {
+    if !img.is_complete() {
+        return Err(Error::invalid(
+            path.display().to_string(),
+            "pixels",
+            format!("image buffer holds fewer than {}x{} pixels", img.width, img.height),
+        ));
+    }
+    write_rgb8(path, img.width, img.height, &view_to_srgb8(img))
 }
 
 /// Loads a PNG or JPEG texture (sRGB-encoded) from a regular file; its claimed size is checked

@@ -24,6 +24,7 @@ use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 
 use super::field::{BundleSum, RadianceField, RayBundle, Sample};
+use super::retina::DisplayStack;
 use crate::error::{Error, Result};
 use crate::optics::eye::stratified;
 use crate::optics::transfer::{camera_ray, check_pupil_center, pupil_center_point};
@@ -193,6 +194,50 @@ pub fn render_display_image_with_depth<R: RadianceField + ?Sized>(
     tracer: &R,
     progress: &Progress,
 ) -> Result<(RgbImage, Option<Vec<f32>>)> {
+    let mut image = RgbImage::new(display.lcd.columns(), display.lcd.rows());
+    let depth = render_into(display, method, settings, tracer, progress, image.pixels.as_flattened_mut(), 3, 0)?;
+    Ok((image, depth))
+}
+
+/// [`render_display_image_with_depth`] straight into slot `slot` of `stack` (the display images
+/// interleaved for the simulation), so the image is never held twice; returns its depth plane.
+/// The values are the same bit for bit (tested).
+pub fn render_display_image_into_stack<R: RadianceField + ?Sized>(
+    display: &Display,
+    method: Method,
+    settings: &DisplayRenderSettings,
+    tracer: &R,
+    progress: &Progress,
+    stack: &mut DisplayStack,
+    slot: usize,
+) -> Result<Option<Vec<f32>>> {
+    let lcd = display.lcd;
+    if stack.width != lcd.columns() || stack.height != lcd.rows() || slot >= stack.count {
+        return Err(Error::Unsupported(format!(
+            "display stack of {} images of {} x {} pixels has no slot {slot} for the display's {} x {} LCD",
+            stack.count,
+            stack.width,
+            stack.height,
+            lcd.columns(),
+            lcd.rows()
+        )));
+    }
+    let stride = 3 * stack.count;
+    render_into(display, method, settings, tracer, progress, &mut stack.values, stride, 3 * slot)
+}
+
+/// The display image's pixel `i` (row-major) goes to `dst[i * stride + offset..][..3]`.
+#[allow(clippy::too_many_arguments)]
+fn render_into<R: RadianceField + ?Sized>(
+    display: &Display,
+    method: Method,
+    settings: &DisplayRenderSettings,
+    tracer: &R,
+    progress: &Progress,
+    dst: &mut [f32],
+    stride: usize,
+    offset: usize,
+) -> Result<Option<Vec<f32>>> {
     if method == Method::PupilCenter {
         check_pupil_center(display, settings.eye_position)?;
     }
@@ -232,7 +277,7 @@ pub fn render_display_image_with_depth<R: RadianceField + ?Sized>(
     let inv_count = 1.0 / (pixel_samples.len() * bundle.shifts.len()) as f64;
 
     let per_pixel = pixel_samples.len() * bundle.shifts.len();
-    let mut image = RgbImage::new(nx, ny);
+    debug_assert!(offset + 3 <= stride && dst.len() == nx * ny * stride);
     let mut depth = vec![0f32; nx * ny];
     let depth_known = std::sync::atomic::AtomicBool::new(true);
     // The base ray (LC or PC, or LA's centre) of pixel sample `frac` of pixel (row, col).
@@ -246,17 +291,17 @@ pub fn render_display_image_with_depth<R: RadianceField + ?Sized>(
         };
         camera_ray(display, x3, lenslet_center, p, z_ref)
     };
-    let finish = |acc: BundleSum, px: &mut [f32; 3], z: &mut f32| {
+    let finish = |acc: BundleSum, px: &mut [f32], z: &mut f32| {
         if !acc.depth_known {
             depth_known.store(false, std::sync::atomic::Ordering::Relaxed);
         }
         let v = acc.radiance * inv_count;
-        *px = [v.x as f32, v.y as f32, v.z as f32];
+        px[..3].copy_from_slice(&[v.x as f32, v.y as f32, v.z as f32]);
         *z = if acc.hits > 0 { (acc.depth / acc.hits as f64) as f32 } else { f32::INFINITY };
     };
     if tracer.prefers_batches() {
         // Blocks of a row's pixels, ordered sample-major, so that packets see neighbouring rays.
-        image.pixels.par_chunks_mut(nx).zip(depth.par_chunks_mut(nx)).enumerate().for_each(|(row, (out, zout))| {
+        dst.par_chunks_mut(nx * stride).zip(depth.par_chunks_mut(nx)).enumerate().for_each(|(row, (out, zout))| {
             let mut rays = Vec::with_capacity(per_pixel * BLOCK);
             let mut samples = Vec::with_capacity(per_pixel * BLOCK);
             for col0 in (0..nx).step_by(BLOCK) {
@@ -275,7 +320,10 @@ pub fn render_display_image_with_depth<R: RadianceField + ?Sized>(
                 samples.clear();
                 samples.resize(rays.len(), Sample::default());
                 tracer.sample_many(&rays, &mut samples);
-                let block = out[col0..col0 + cols].iter_mut().zip(zout[col0..col0 + cols].iter_mut());
+                let block = out[col0 * stride..(col0 + cols) * stride]
+                    .chunks_exact_mut(stride)
+                    .map(|p| &mut p[offset..offset + 3])
+                    .zip(zout[col0..col0 + cols].iter_mut());
                 for (c, (px, z)) in block.enumerate() {
                     let mut acc = BundleSum::default();
                     for f in 0..pixel_samples.len() {
@@ -293,8 +341,9 @@ pub fn render_display_image_with_depth<R: RadianceField + ?Sized>(
     } else {
         // Pixel by pixel; each pixel sample's lenslet rays go to the field as one bundle, which
         // fast fields cull as a whole. The sums are in the same order as the batched path.
-        image.pixels.par_chunks_mut(nx).zip(depth.par_chunks_mut(nx)).enumerate().for_each(|(row, (out, zout))| {
-            for (col, (px, z)) in out.iter_mut().zip(zout.iter_mut()).enumerate() {
+        dst.par_chunks_mut(nx * stride).zip(depth.par_chunks_mut(nx)).enumerate().for_each(|(row, (out, zout))| {
+            let out = out.chunks_exact_mut(stride).map(|p| &mut p[offset..offset + 3]);
+            for (col, (px, z)) in out.zip(zout.iter_mut()).enumerate() {
                 let mut acc = BundleSum::default();
                 for frac in &pixel_samples {
                     let base = base_ray(row, col, *frac);
@@ -312,6 +361,5 @@ pub fn render_display_image_with_depth<R: RadianceField + ?Sized>(
             progress.inc(1);
         });
     }
-    let depth = depth_known.into_inner().then_some(depth);
-    Ok((image, depth))
+    Ok(depth_known.into_inner().then_some(depth))
 }

@@ -17,15 +17,15 @@ use crate::error::{Error, Result};
 use crate::optics::transfer::{eye_scene_ray, FastTransfer};
 use crate::optics::{Display, Eye, Retina};
 use crate::progress::Progress;
-use crate::raster::RgbImage;
+use crate::raster::{RgbImage, RgbView};
 
 /// Display images interleaved pixel by pixel, so that one LCD lookup reads every method's
 /// value from one cache line.
 pub struct DisplayStack {
-    count: usize,
-    width: usize,
-    height: usize,
-    values: Vec<f32>,
+    pub(super) count: usize,
+    pub(super) width: usize,
+    pub(super) height: usize,
+    pub(super) values: Vec<f32>,
 }
 
 impl DisplayStack {
@@ -53,6 +53,20 @@ impl DisplayStack {
             });
         }
         Ok(Self { count: images.len(), width: lcd.columns(), height: lcd.rows(), values })
+    }
+
+    /// `count` black display images of the LCD's size, to be rendered in place by
+    /// [`crate::render::render_display_image_into_stack`].
+    pub fn black(display: &Display, count: usize) -> Self {
+        let lcd = display.lcd;
+        Self { count, width: lcd.columns(), height: lcd.rows(), values: vec![0f32; lcd.pixel_count() * 3 * count] }
+    }
+
+    /// Display image `k`, read in place.
+    pub fn view(&self, k: usize) -> RgbView<'_> {
+        assert!(k < self.count, "display stack has {} images, not {}", self.count, k + 1);
+        RgbView::strided(self.width, self.height, &self.values, 3 * self.count, 3 * k)
+            .expect("a stack holds every pixel of each of its images")
     }
 
     /// Number of display images.
