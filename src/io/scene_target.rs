@@ -145,4 +145,15 @@ mod tests {
         case("{ edge = {}, grating = { frequency_cpd = 1 } }", "objects[0].material");
         assert!(load("[[objects]]\ntype = \"rect\"\ncenter = [0, 0, 400]\nsize = [1, 1]\nmaterial = { grating = { frequency_cpd = 1, colour = 2 } }\n").is_err());
     }
+
+    #[test]
+    fn the_example_of_docs_scenes_loads() {
+        let doc = include_str!("../../docs/SCENES.md");
+        let section = &doc[doc.find("## Resolution targets").unwrap()..];
+        let start = section.find("```toml\n").unwrap() + 8;
+        let block = &section[start..start + section[start..].find("```").unwrap()];
+        let s = load(block).unwrap();
+        assert!(matches!(s.objects[0].material, Material::Grating(g) if g.frequency_cpd == 4.0));
+        assert!(matches!(s.objects[1].material, Material::Edge(e) if e.angle_deg == 5.0));
+    }
 }
