@@ -10,7 +10,7 @@
 //! Layers, bottom up (a module imports only from layers below it): `error`, `raster`, `progress`
 //! and `ray` (rays, hits, the intersector interface); `optics` (eq. (1)) and `scene`; `accel`
 //! (intersection backends over the scene's data), `metrics` and `io` (file formats); `render`;
-//! `experiment` and `bench`; `overrides` and `settings` (`--set` and the resolved settings of a
+//! `experiment`, `resolution` (MTF measurements) and `bench`; `overrides` and `settings` (`--set` and the resolved settings of a
 //! run); `sweep`.
 //!
 //! `unsafe` code is denied everywhere except in the Embree wrapper (`accel::embree`).
@@ -34,6 +34,7 @@ pub mod progress;
 pub mod raster;
 pub mod ray;
 pub mod render;
+pub mod resolution;
 pub mod scene;
 pub mod settings;
 pub mod sweep;
