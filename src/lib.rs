@@ -34,6 +34,7 @@ pub mod progress;
 pub mod raster;
 pub mod ray;
 pub mod render;
+pub mod resolution;
 pub mod scene;
 pub mod settings;
 pub mod sweep;
