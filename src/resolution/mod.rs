@@ -7,3 +7,8 @@ pub mod chart;
 pub mod modulation;
 pub mod study;
 pub mod window;
+pub mod limits;
+pub mod report;
+pub mod run;
+pub mod command;
+pub mod plots;
