@@ -42,6 +42,8 @@ pub struct Patch {
     pub rows: usize,
     /// Half-size of the patch (window plus guard), degrees.
     pub half_deg: DVec2,
+    /// The edge's normal `(cos a, sin a)` (the light side is along it); zero for gratings.
+    pub edge_normal: DVec2,
 }
 
 impl Patch {
@@ -115,6 +117,13 @@ impl Chart {
                     cols: (window.x * ppd).round() as usize,
                     rows: (window.y * ppd).round() as usize,
                     half_deg: 0.5 * sizes[i],
+                    edge_normal: match pattern {
+                        Pattern::Edge { angle_deg } => {
+                            let (s, c) = angle_deg.to_radians().sin_cos();
+                            DVec2::new(c, s)
+                        }
+                        Pattern::Grating { .. } => DVec2::ZERO,
+                    },
                 });
             }
             columns.push((x0, col_w, col.clone()));
@@ -144,9 +153,8 @@ impl Chart {
                         Pattern::Grating { frequency_cpd } => {
                             self.mean * (1.0 + self.contrast * (TAU * frequency_cpd * d.x).cos())
                         }
-                        Pattern::Edge { angle_deg } => {
-                            let (s, c) = angle_deg.to_radians().sin_cos();
-                            let side = d.x * c + d.y * s;
+                        Pattern::Edge { .. } => {
+                            let side = d.dot(p.edge_normal);
                             self.mean * (1.0 + if side > 0.0 { self.contrast } else { -self.contrast })
                         }
                     };
@@ -218,6 +226,7 @@ mod tests {
         }
         assert_eq!((c.patches[0].cols, c.patches[0].rows), (128, 16));
         assert_eq!((c.patches[4].cols, c.patches[4].rows), (128, 64));
+        assert!((c.patches[4].edge_normal.x - 5f64.to_radians().cos()).abs() < 1e-15);
     }
 
     #[test]

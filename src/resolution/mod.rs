@@ -4,11 +4,11 @@
 
 pub mod accommodation;
 pub mod chart;
-pub mod modulation;
-pub mod study;
-pub mod window;
+pub mod command;
 pub mod limits;
+pub mod modulation;
+pub mod plots;
 pub mod report;
 pub mod run;
-pub mod command;
-pub mod plots;
+pub mod study;
+pub mod window;

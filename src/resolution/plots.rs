@@ -76,7 +76,10 @@ where
     let s = &r.study;
     let area = area
         .titled(
-            &format!("MTF with the eye focused on the content ({} mm pupil): gratings (lines), slanted edge (x)", s.pupil_diameter_mm),
+            &format!(
+                "MTF with the eye focused on the content ({} mm pupil): gratings (lines), slanted edge (x)",
+                s.pupil_diameter_mm
+            ),
             ("sans-serif", 20),
         )
         .map_err(e2s)?;
@@ -92,13 +95,7 @@ where
             .y_label_area_size(40)
             .build_cartesian_2d(0.0..fmax, 0.0..1.1)
             .map_err(e2s)?;
-        chart
-            .configure_mesh()
-            .max_light_lines(1)
-            .x_desc("cycles per degree")
-            .y_desc("contrast")
-            .draw()
-            .map_err(e2s)?;
+        chart.configure_mesh().max_light_lines(1).x_desc("cycles per degree").y_desc("contrast").draw().map_err(e2s)?;
         if let Some(n) = nyquist {
             chart
                 .draw_series(LineSeries::new([(n, 0.0), (n, 1.1)], RGBColor(150, 150, 150).stroke_width(1)))
@@ -106,10 +103,12 @@ where
         }
         for (k, name) in r.sources.iter().enumerate() {
             let c = color(k);
-            let pts: Vec<(f64, f64)> = s.frequencies_cpd.iter().zip(&r.grating[k][di][fi]).map(|(f, v)| (*f, v.value)).collect();
+            let pts: Vec<(f64, f64)> =
+                s.frequencies_cpd.iter().zip(&r.grating[k][di][fi]).map(|(f, v)| (*f, v.value)).collect();
             let a = chart.draw_series(LineSeries::new(pts.clone(), c.stroke_width(2))).map_err(e2s)?;
             if di == 0 {
-                a.label(name.clone()).legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], c.stroke_width(2)));
+                a.label(name.clone())
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], c.stroke_width(2)));
             }
             chart.draw_series(pts.iter().map(|p| Circle::new(*p, 2, c.filled()))).map_err(e2s)?;
             let edge: Vec<(f64, f64)> = s
@@ -160,23 +159,23 @@ where
             .y_label_area_size(40)
             .build_cartesian_2d(x0..x1.max(x0 + 0.1), 0.0..1.1)
             .map_err(e2s)?;
-        chart
-            .configure_mesh()
-            .max_light_lines(1)
-            .x_desc("eye focus (D)")
-            .y_desc("contrast")
-            .draw()
-            .map_err(e2s)?;
+        chart.configure_mesh().max_light_lines(1).x_desc("eye focus (D)").y_desc("contrast").draw().map_err(e2s)?;
         if let Some(c) = cdp {
-            chart.draw_series(LineSeries::new([(c, 0.0), (c, 1.1)], RGBColor(150, 150, 150).stroke_width(2))).map_err(e2s)?;
+            chart
+                .draw_series(LineSeries::new([(c, 0.0), (c, 1.1)], RGBColor(150, 150, 150).stroke_width(2)))
+                .map_err(e2s)?;
         }
-        chart.draw_series(LineSeries::new([(d.diopters, 0.0), (d.diopters, 1.1)], BLACK.stroke_width(1))).map_err(e2s)?;
+        chart
+            .draw_series(LineSeries::new([(d.diopters, 0.0), (d.diopters, 1.1)], BLACK.stroke_width(1)))
+            .map_err(e2s)?;
         for (k, name) in r.sources.iter().enumerate() {
             let c = color(k);
-            let pts: Vec<(f64, f64)> = s.focus_diopters.iter().zip(&r.grating[k][di]).map(|(x, q)| (*x, q[qi].value)).collect();
+            let pts: Vec<(f64, f64)> =
+                s.focus_diopters.iter().zip(&r.grating[k][di]).map(|(x, q)| (*x, q[qi].value)).collect();
             let a = chart.draw_series(LineSeries::new(pts.clone(), c.stroke_width(2))).map_err(e2s)?;
             if di == 0 {
-                a.label(name.clone()).legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], c.stroke_width(2)));
+                a.label(name.clone())
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], c.stroke_width(2)));
             }
             chart.draw_series(pts.iter().map(|p| Circle::new(*p, 2, c.filled()))).map_err(e2s)?;
         }
@@ -194,7 +193,11 @@ where
     area.present().map_err(e2s)
 }
 
-fn plot_accommodation<DB: DrawingBackend>(area: DrawingArea<DB, Shift>, r: &StudyResults, rows: &[AccommodationRow]) -> PlotResult
+fn plot_accommodation<DB: DrawingBackend>(
+    area: DrawingArea<DB, Shift>,
+    r: &StudyResults,
+    rows: &[AccommodationRow],
+) -> PlotResult
 where
     DB::ErrorType: 'static,
 {

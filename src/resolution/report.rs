@@ -47,7 +47,8 @@ pub fn accommodation_rows(r: &StudyResults) -> Vec<AccommodationRow> {
                 contrast_at_peak: p.value,
             });
             let mtf: Vec<Vec<f64>> = r.grating[k][di].iter().map(|q| q.iter().map(|v| v.value).collect()).collect();
-            let p = area_rule(&s.focus_diopters, &s.frequencies_cpd, &mtf, s.accommodation.area_limit_cpd).unwrap_or(nan);
+            let p =
+                area_rule(&s.focus_diopters, &s.frequencies_cpd, &mtf, s.accommodation.area_limit_cpd).unwrap_or(nan);
             rows.push(AccommodationRow {
                 source: source.clone(),
                 target_diopters: d.diopters,
@@ -75,7 +76,9 @@ fn num(v: f64) -> String {
 /// vertical) at every study frequency.
 pub fn mtf_csv(r: &StudyResults) -> String {
     let s = &r.study;
-    let mut out = String::from("source,target_diopters,focus_diopters,frequency_cpd,orientation_deg,measure,contrast,contrast_ci95\n");
+    let mut out = String::from(
+        "source,target_diopters,focus_diopters,frequency_cpd,orientation_deg,measure,contrast,contrast_ci95\n",
+    );
     let edge_angle = r
         .chart
         .patches
@@ -258,14 +261,23 @@ pub fn display_md(l: &DisplayLimits, study: &Study) -> String {
         study.limits.contrast,
         study.depths.iter().map(|d| format!("{:.3}", d.diopters)).collect::<Vec<_>>().join(", ")
     );
-    let _ = writeln!(s, "| source | frequency (cpd) | longest run of passing depths | every passing depth (D) |\n|---|---:|---|---|");
+    let _ = writeln!(
+        s,
+        "| source | frequency (cpd) | longest run of passing depths | every passing depth (D) |\n|---|---:|---|---|"
+    );
     for r in &l.depth_ranges {
         let run = match (r.range_diopters, r.range_mm) {
             (Some([a, b]), Some([za, zb])) => format!("{a:.3} to {b:.3} D ({za:.0} to {zb:.0} mm)"),
             _ => "none".into(),
         };
         let all = r.passing_diopters.iter().map(|d| format!("{d:.3}")).collect::<Vec<_>>().join(", ");
-        let _ = writeln!(s, "| {} | {} | {run} | {} |", r.source, r.frequency_cpd, if all.is_empty() { "none".into() } else { all });
+        let _ = writeln!(
+            s,
+            "| {} | {} | {run} | {} |",
+            r.source,
+            r.frequency_cpd,
+            if all.is_empty() { "none".into() } else { all }
+        );
     }
     s
 }

@@ -92,7 +92,9 @@ impl StudyResults {
 
 /// Source names of `study`.
 pub fn source_names(study: &Study) -> Vec<String> {
-    std::iter::once("ground_truth".to_string()).chain(study.methods.iter().map(|m| m.short_name().to_string())).collect()
+    std::iter::once("ground_truth".to_string())
+        .chain(study.methods.iter().map(|m| m.short_name().to_string()))
+        .collect()
 }
 
 /// Runs `study`; progress bars on stderr unless `quiet`.
@@ -149,7 +151,8 @@ pub fn run_study(study: &Study, quiet: bool) -> Result<StudyResults> {
                     for (p, w) in chart.patches.iter().zip(&windows) {
                         match p.pattern {
                             Pattern::Grating { frequency_cpd } => {
-                                let qi = study.frequency_index(frequency_cpd).expect("chart frequencies are the study's");
+                                let qi =
+                                    study.frequency_index(frequency_cpd).expect("chart frequencies are the study's");
                                 g[qi] = grating_contrast(w, k, frequency_cpd, ppd, chart.contrast);
                             }
                             Pattern::Edge { .. } => e = edge_mtf(w, k, &study.frequencies_cpd, ppd),
@@ -169,7 +172,12 @@ pub fn run_study(study: &Study, quiet: bool) -> Result<StudyResults> {
     display_bar.finish();
     measure_bar.finish();
     timings.push(Timing {
-        stage: format!("display images ({} x {} LCD pixels, {} per depth)", display.lcd.columns(), display.lcd.rows(), study.methods.len()),
+        stage: format!(
+            "display images ({} x {} LCD pixels, {} per depth)",
+            display.lcd.columns(),
+            display.lcd.rows(),
+            study.methods.len()
+        ),
         seconds: t_display,
     });
     timings.push(Timing { stage: format!("eye rays ({:.0} M)", eye_rays as f64 / 1e6), seconds: t_measure });
