@@ -47,6 +47,15 @@ pub enum Values {
 impl Values {
     /// The values; `field` names the setting in errors.
     fn expand(&self, source: &str, field: &str) -> Result<Vec<f64>> {
+        let v = self.expand_any(source, field)?;
+        if v.is_empty() {
+            return Err(Error::invalid(source, field, "needs at least one value"));
+        }
+        Ok(v)
+    }
+
+    /// [`Values::expand`], an empty list allowed.
+    fn expand_any(&self, source: &str, field: &str) -> Result<Vec<f64>> {
         let v = match *self {
             Values::List(ref v) => v.clone(),
             Values::Range { from, to, step } => {
@@ -64,9 +73,6 @@ impl Values {
                 (0..n).map(|i| round12(from + i as f64 * step)).collect()
             }
         };
-        if v.is_empty() {
-            return Err(Error::invalid(source, field, "needs at least one value"));
-        }
         for (i, x) in v.iter().enumerate() {
             if !x.is_finite() {
                 return Err(Error::invalid(source, format!("{field}[{i}]"), format!("must be finite, got {x}")));
@@ -158,6 +164,7 @@ pub struct StudySpec {
     pub pupil_diameter_mm: f64,
     #[serde(default = "default_retina_distance")]
     pub retina_distance_mm: f64,
+    #[serde(default = "no_values")]
     pub content_diopters: Values,
     #[serde(default)]
     pub content_mm: Vec<f64>,
@@ -168,6 +175,10 @@ pub struct StudySpec {
     pub measurement: SamplingSpec,
     pub accommodation: AccommodationSpec,
     pub limits: LimitsSpec,
+}
+
+fn no_values() -> Values {
+    Values::List(Vec::new())
 }
 
 fn default_retina_distance() -> f64 {
@@ -269,7 +280,7 @@ impl Study {
 
         // Content depths: diopters and mm, merged, far to near.
         let mut depths = Vec::new();
-        for (i, d) in spec.content_diopters.expand(source, "content_diopters")?.into_iter().enumerate() {
+        for (i, d) in spec.content_diopters.expand_any(source, "content_diopters")?.into_iter().enumerate() {
             if !(d > 0.0 && d <= 100.0) {
                 return Err(bad(&format!("content_diopters[{i}]"), format!("must be in (0, 100] D, got {d}")));
             }
@@ -280,6 +291,9 @@ impl Study {
                 return Err(bad(&format!("content_mm[{i}]"), format!("must be finite and at least 10 mm, got {mm}")));
             }
             depths.push(Depth { diopters: 1000.0 / mm, mm });
+        }
+        if depths.is_empty() {
+            return Err(bad("content_diopters", "no content depth: give content_diopters or content_mm".into()));
         }
         depths.sort_by(|a, b| a.diopters.total_cmp(&b.diopters));
         depths.dedup_by(|a, b| (a.diopters - b.diopters).abs() < 1e-9);
