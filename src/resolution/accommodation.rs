@@ -40,7 +40,7 @@ pub fn refined_peak(xs: &[f64], ys: &[f64]) -> Option<Peak> {
     // Newton's divided differences: y = y0 + a (x - x0) + c (x - x0)(x - x1).
     let a = (y1 - y0) / (x1 - x0);
     let c = ((y2 - y1) / (x2 - x1) - a) / (x2 - x0);
-    if !(c < 0.0) {
+    if c.is_nan() || c >= 0.0 {
         return Some(Peak { at: x1, value: y1 });
     }
     // dy/dx = a + c (2x - x0 - x1) = 0.

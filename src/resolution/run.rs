@@ -206,7 +206,7 @@ mod tests {
         let full = Display::paper();
         let half = DVec2::new(0.08, 0.05);
         let crop = crop_display(&full, half, 2.5, 0.004);
-        assert!(crop.lcd.columns() < 1000 && crop.lcd.columns() % 2 == 0, "{:?}", crop.lcd);
+        assert!(crop.lcd.columns() < 1000 && crop.lcd.columns().is_multiple_of(2), "{:?}", crop.lcd);
         assert_eq!(crop.lcd.pixel_pitch(), full.lcd.pixel_pitch());
         // Pixel centres coincide with the full panel's.
         let off = (full.lcd.columns() - crop.lcd.columns()) / 2;
