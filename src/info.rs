@@ -317,6 +317,11 @@ pub fn scene_summary(scene: &Scene) -> SceneSummary {
                 Material::Chart { .. } => "chart".into(),
                 Material::VertexColor => "vertex colours".into(),
                 Material::Texture(t) => format!("texture {} x {}", t.width, t.height),
+                Material::Grating(g) => format!(
+                    "grating {} cpd at {} deg, mean {}, contrast {}",
+                    g.frequency_cpd, g.orientation_deg, g.mean, g.contrast
+                ),
+                Material::Edge(e) => format!("slanted edge at {} deg, {} / {}", e.angle_deg, e.low, e.high),
             };
             ObjectSummary {
                 name: o.name.clone(),

@@ -16,6 +16,7 @@ mod ply;
 pub mod png;
 pub mod scene_file;
 mod scene_mesh;
+pub mod scene_target;
 mod stl;
 pub mod text;
 

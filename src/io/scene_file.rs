@@ -18,6 +18,7 @@ use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
 pub use super::scene_mesh::{FitSpec, DEFAULT_ALBEDO};
+pub use super::scene_target::{EdgeSpec, GratingSpec};
 use super::text::{read_text, toml_error};
 use crate::error::{Error, Result};
 use crate::scene::image_texture::{Filter, Wrap};
@@ -77,6 +78,12 @@ pub struct MaterialSpec {
     /// UVs outside [0, 1]: "repeat" (default) or "clamp".
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub wrap: Option<Wrap>,
+    /// A sinusoidal grating (resolution target), any shape.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub grating: Option<GratingSpec>,
+    /// A slanted edge (resolution target), any shape.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub edge: Option<EdgeSpec>,
 }
 
 impl MaterialSpec {
@@ -417,7 +424,8 @@ impl ObjectInput<'_> {
         Ok(Shape::Mesh(Arc::new(procedural::sphere_grid(center, count, spacing, radius, segments))))
     }
 
-    /// `material`: exactly one of an albedo, vertex colours, an image texture or a chart.
+    /// `material`: exactly one of an albedo, vertex colours, an image texture, a chart, a
+    /// grating or an edge.
     pub(super) fn material(
         &self,
         shape: &Shape,
@@ -428,6 +436,14 @@ impl ObjectInput<'_> {
         let m = &self.spec.material;
         let texture_fields = m.texture.is_some() || m.filter.is_some() || m.wrap.is_some();
         let vertex_color = m.vertex_color.unwrap_or(false);
+        let field = self.field("material");
+        let others = m.albedo.is_some() || m.chart.is_some() || vertex_color || texture_fields;
+        match (&m.grating, &m.edge, others) {
+            (Some(g), None, false) => return g.to_material(src, &field),
+            (None, Some(e), false) => return e.to_material(src, &field),
+            (None, None, _) => {}
+            _ => return Err(Error::invalid(src, field, "a `grating` or `edge` material takes no other material field")),
+        }
         match (&m.albedo, &m.chart, vertex_color, texture_fields) {
             (Some(a), None, false, false) => Ok(Material::Albedo(albedo3(src, &self.field("material.albedo"), *a)?)),
             (None, None, true, false) => self.vertex_color_material(shape),
@@ -437,7 +453,8 @@ impl ObjectInput<'_> {
                 src,
                 self.field("material"),
                 "give exactly one of `albedo = [r, g, b]`, `chart = \"framework\" | \"usaf\" | \"file\"` \
-                 (rects), `vertex_color = true` or `texture = \"file.png\"` (meshes)",
+                 (rects), `vertex_color = true` or `texture = \"file.png\"` (meshes), `grating = { .. }` \
+                 or `edge = { .. }`",
             )),
         }
     }

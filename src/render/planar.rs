@@ -1,5 +1,6 @@
 //! A fused intersection-and-shading kernel for scenes made only of eye-facing, axis-aligned
-//! rectangles with constant or chart materials: the paper's scene (Sec. 4.1). It is the fast
+//! rectangles with constant, chart or target (grating, slanted edge) materials: the paper's
+//! scene (Sec. 4.1) and the resolution targets of issue 13. It is the fast
 //! path of every render of such a scene; the generic path ([`SceneTracer`] over
 //! [`AnalyticRects`]) is its slow twin, and tests check they return identical radiance (the
 //! kernel uses the same arithmetic as `AnalyticRects`' own fast path, so bit for bit).
@@ -12,12 +13,15 @@ use super::field::{BundleSum, RadianceField, RayBundle, Sample};
 use super::tracer::SceneTracer;
 use crate::accel::analytic::AnalyticRects;
 use crate::ray::Ray;
-use crate::scene::{BarChart, Material, Scene, Shape};
+use crate::scene::target::hit_tangent;
+use crate::scene::{BarChart, Grating, Material, Scene, Shape, SlantedEdge};
 
 #[derive(Clone, Debug)]
 enum FlatMaterial {
     Albedo(DVec3),
     Chart { chart: Arc<BarChart>, bar: DVec3, backing: DVec3 },
+    Grating(Grating),
+    Edge(SlantedEdge),
 }
 
 #[derive(Clone, Debug)]
@@ -40,8 +44,8 @@ pub struct FacingPlanes<'a> {
 }
 
 impl<'a> FacingPlanes<'a> {
-    /// `None` when the scene is not made only of eye-facing axis-aligned rectangles with albedo
-    /// or chart materials.
+    /// `None` when the scene is not made only of eye-facing axis-aligned rectangles with albedo,
+    /// chart, grating or edge materials.
     pub fn new(scene: &'a Scene, backend: &'a AnalyticRects) -> Option<Self> {
         if scene.light.is_some() {
             return None; // shading needs normals and shadow rays: the generic path
@@ -57,6 +61,8 @@ impl<'a> FacingPlanes<'a> {
                 Material::Chart { chart, bar, backing } => {
                     FlatMaterial::Chart { chart: chart.clone(), bar: *bar, backing: *backing }
                 }
+                Material::Grating(g) => FlatMaterial::Grating(*g),
+                Material::Edge(e) => FlatMaterial::Edge(*e),
                 Material::VertexColor | Material::Texture(_) => return None,
             };
             rects.push((
@@ -84,9 +90,13 @@ impl<'a> FacingPlanes<'a> {
 }
 
 impl FlatRect {
+    /// Radiance of the hit of `ray` at parameter `t`, rectangle coordinates `u`, `v`. Targets
+    /// locate the hit with [`hit_tangent`], the formula `Scene::radiance` uses (bit for bit).
     #[inline(always)]
-    fn shade(&self, u: f64, v: f64) -> DVec3 {
+    fn shade(&self, ray: &Ray, t: f64, u: f64, v: f64) -> DVec3 {
         match &self.material {
+            FlatMaterial::Grating(g) => g.at(hit_tangent(ray, t)),
+            FlatMaterial::Edge(e) => e.at(hit_tangent(ray, t)),
             FlatMaterial::Albedo(a) => *a,
             FlatMaterial::Chart { chart, bar, backing } => {
                 if chart.is_bar(DVec2::new(u, v)) {
@@ -127,7 +137,7 @@ impl FacingPlanes<'_> {
             let u = (ray.origin.x + t * ray.dir.x - r.cx) * r.inv_hx;
             let v = (ray.origin.y + t * ray.dir.y - r.cy) * r.inv_hy;
             if u.abs() <= 1.0 && v.abs() <= 1.0 {
-                return (r.shade(u, v), Some(t));
+                return (r.shade(ray, t, u, v), Some(t));
             }
         }
         (self.background, None)
@@ -208,7 +218,7 @@ impl RadianceField for FacingPlanes<'_> {
                 let u = (ray.origin.x + t * ray.dir.x - r.cx) * r.inv_hx;
                 let v = (ray.origin.y + t * ray.dir.y - r.cy) * r.inv_hy;
                 if *c == Cover::All || (u.abs() <= 1.0 && v.abs() <= 1.0) {
-                    acc.add(Sample { radiance: r.shade(u, v), depth: distance(&ray, Some(t)) });
+                    acc.add(Sample { radiance: r.shade(&ray, t, u, v), depth: distance(&ray, Some(t)) });
                     continue 'rays;
                 }
             }
@@ -270,6 +280,54 @@ mod tests {
             let base = Ray {
                 origin: DVec3::new(next() * 30.0 - 15.0, next() * 30.0 - 15.0, 0.0),
                 dir: DVec3::new(next() * 0.7 - 0.35, next() * 0.7 - 0.35, 1.0),
+            };
+            assert_eq!(fast.sample_sum(&base, &bundle), slow.sample_sum(&base, &bundle), "{base:?}");
+        }
+    }
+
+    #[test]
+    fn fused_kernel_equals_the_generic_path_on_targets() {
+        use crate::scene::{Object, Rect};
+        let rect = |c: DVec3, w: f64, material| Object {
+            name: "t".into(),
+            shape: Shape::Rect(Rect::facing_eye(c, w, w)),
+            material,
+        };
+        let g = Grating { frequency_cpd: 7.0, orientation_deg: 30.0, mean: 0.4, contrast: 0.9, phase_deg: 10.0 };
+        let e = SlantedEdge { through: DVec2::new(0.01, -0.02), angle_deg: 5.0, low: 0.05, high: 0.95 };
+        let scene = Scene {
+            name: "targets".into(),
+            objects: vec![
+                rect(DVec3::new(-20.0, 0.0, 300.0), 60.0, Material::Grating(g)),
+                rect(DVec3::new(20.0, 10.0, 500.0), 200.0, Material::Edge(e)),
+                rect(DVec3::new(0.0, 0.0, 900.0), 2000.0, Material::Albedo(DVec3::splat(0.3))),
+            ],
+            background: DVec3::ZERO,
+            light: None,
+            warnings: Vec::new(),
+        };
+        let backend = AnalyticRects::new(&scene).unwrap();
+        let fast = FacingPlanes::new(&scene, &backend).unwrap();
+        let slow = SceneTracer { scene: &scene, backend: &backend };
+        let mut rng = crate::fixtures::Lcg(17);
+        let (mut grey, mut lit) = (0, 0);
+        for _ in 0..200_000 {
+            let ray = Ray {
+                origin: DVec3::new(rng.range(-3.0, 3.0), rng.range(-3.0, 3.0), rng.range(-20.0, 20.0)),
+                dir: DVec3::new(rng.range(-0.3, 0.3), rng.range(-0.3, 0.3), if rng.next() < 0.5 { 1.0 } else { rng.range(0.5, 1.5) }),
+            };
+            let a = fast.sample(&ray);
+            assert_eq!(a, slow.sample(&ray), "{ray:?}");
+            grey += (a.radiance.x != 0.3 && a.radiance.x != 0.05 && a.radiance.x != 0.95) as usize;
+            lit += (a.radiance.x == 0.95) as usize;
+        }
+        assert!(grey > 1000 && lit > 1000, "both targets are exercised: {grey} {lit}");
+        let shifts = (0..9).map(|i| (DVec2::new(i as f64 * 0.3 - 1.2, 0.1), DVec2::new(0.001 * i as f64, -0.002))).collect();
+        let bundle = RayBundle::new(shifts);
+        for _ in 0..20_000 {
+            let base = Ray {
+                origin: DVec3::new(rng.range(-10.0, 10.0), rng.range(-10.0, 10.0), 0.0),
+                dir: DVec3::new(rng.range(-0.3, 0.3), rng.range(-0.3, 0.3), 1.0),
             };
             assert_eq!(fast.sample_sum(&base, &bundle), slow.sample_sum(&base, &bundle), "{base:?}");
         }

@@ -74,7 +74,7 @@ impl<I: Intersector + ?Sized> RadianceField for SceneTracer<'_, I> {
 /// along `n` (1e-4 of the hit point's largest coordinate, at least 1e-4 mm) so that
 /// rounding of the hit point (f32 in Embree) does not shadow the surface itself.
 pub fn shade<I: Intersector + ?Sized>(scene: &Scene, ray: &Ray, hit: Option<&Hit>, backend: &I) -> DVec3 {
-    let albedo = scene.radiance(hit);
+    let albedo = scene.radiance(ray, hit);
     let (Some(light), Some(hit)) = (scene.light, hit) else { return albedo };
     let n = scene.normal(ray, hit);
     let to_light = -light.direction;

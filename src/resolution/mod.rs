@@ -1,7 +1,22 @@
-//! Perceived resolution and focus cues (issue 13; the paper's abstract, "perceived spatial
-//! resolution at different focused depths", and its conclusion's Fourier-domain analysis): MTF in
-//! cycles per degree, through-focus contrast and the predicted accommodation response.
+//! Perceived resolution (issue 13; the paper's abstract: comparing rendering methods "in terms
+//! of perceived spatial resolution at different focused depths", and its conclusion's
+//! Fourier-domain analysis): the MTF of the retinal image in cycles per degree.
+//!
+//! - [`defocus`]: the analytic MTF of the eye (defocus blur disk times the retina pixel's box);
+//! - [`grating`]: the modulation of a grating image at the grating's own frequency, without
+//!   noise bias, with a jackknife interval;
+//! - [`edge`]: the ISO 12233 slanted-edge MTF and MTF50, with jackknife intervals;
+//! - [`measure`]: the retinal images of a target, through the converged estimator.
+//!
+//! The targets themselves are scene materials ([`crate::scene::target`]).
 
+pub mod defocus;
+pub mod edge;
+pub mod grating;
+pub mod measure;
+
+// The study (`inimtrace resolution`): its file, chart, measurement over the chart's windows,
+// accommodation, display limits, files and plots.
 pub mod accommodation;
 pub mod chart;
 pub mod command;

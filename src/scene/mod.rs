@@ -12,6 +12,7 @@ pub mod image_texture;
 pub mod mesh;
 pub mod polygon;
 pub mod procedural;
+pub mod target;
 pub mod texture;
 pub mod transform;
 pub mod usaf;
@@ -23,6 +24,7 @@ use glam::{DVec2, DVec3};
 use crate::ray::{Hit, Ray, Surface};
 pub use image_texture::ImageTexture;
 pub use mesh::Mesh;
+pub use target::{Grating, SlantedEdge};
 pub use texture::{Bar, BarChart};
 pub use transform::Transform;
 
@@ -73,6 +75,10 @@ pub enum Material {
     /// An image looked up by the mesh's interpolated texture coordinates (objects without
     /// texture coordinates see the texture's mean colour).
     Texture(Arc<ImageTexture>),
+    /// A sinusoidal grating in tangent coordinates (resolution target, [`target`]).
+    Grating(Grating),
+    /// A slanted edge in tangent coordinates (resolution target, [`target`]).
+    Edge(SlantedEdge),
 }
 
 /// A distant light: parallel light travelling along `direction` (unit), with `radiance` (linear
@@ -196,10 +202,11 @@ impl Scene {
         }
     }
 
-    /// Albedo at the hit: the radiance leaving it toward the ray's origin when the scene has no
-    /// light; the background for a miss.
+    /// Albedo at the hit of `ray`: the radiance leaving it toward the ray's origin when the
+    /// scene has no light; the background for a miss. The ray locates the hit point for the
+    /// targets defined in tangent coordinates ([`target::hit_tangent`]).
     #[inline]
-    pub fn radiance(&self, hit: Option<&Hit>) -> DVec3 {
+    pub fn radiance(&self, ray: &Ray, hit: Option<&Hit>) -> DVec3 {
         let Some(hit) = hit else { return self.background };
         let Some(object) = self.objects.get(hit.object as usize) else { return self.background };
         match &object.material {
@@ -219,6 +226,8 @@ impl Scene {
                 Some(uv) => tex.sample(uv),
                 None => tex.mean,
             },
+            Material::Grating(g) => g.at(target::hit_tangent(ray, hit.t)),
+            Material::Edge(e) => e.at(target::hit_tangent(ray, hit.t)),
         }
     }
 }
