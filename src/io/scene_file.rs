@@ -442,7 +442,9 @@ impl ObjectInput<'_> {
             (Some(g), None, false) => return g.to_material(src, &field),
             (None, Some(e), false) => return e.to_material(src, &field),
             (None, None, _) => {}
-            _ => return Err(Error::invalid(src, field, "a `grating` or `edge` material takes no other material field")),
+            _ => {
+                return Err(Error::invalid(src, field, "a `grating` or `edge` material takes no other material field"))
+            }
         }
         match (&m.albedo, &m.chart, vertex_color, texture_fields) {
             (Some(a), None, false, false) => Ok(Material::Albedo(albedo3(src, &self.field("material.albedo"), *a)?)),

@@ -131,7 +131,8 @@ mod tests {
     #[test]
     fn bad_targets_are_refused_naming_the_field() {
         let case = |material: &str, field: &str| {
-            let text = format!("[[objects]]\ntype = \"rect\"\ncenter = [0, 0, 400]\nsize = [1, 1]\nmaterial = {material}\n");
+            let text =
+                format!("[[objects]]\ntype = \"rect\"\ncenter = [0, 0, 400]\nsize = [1, 1]\nmaterial = {material}\n");
             let e = load(&text).unwrap_err().to_string();
             assert!(e.contains("t.toml") && e.contains(field), "{material}: {e}");
         };

@@ -314,7 +314,11 @@ mod tests {
         for _ in 0..200_000 {
             let ray = Ray {
                 origin: DVec3::new(rng.range(-3.0, 3.0), rng.range(-3.0, 3.0), rng.range(-20.0, 20.0)),
-                dir: DVec3::new(rng.range(-0.3, 0.3), rng.range(-0.3, 0.3), if rng.next() < 0.5 { 1.0 } else { rng.range(0.5, 1.5) }),
+                dir: DVec3::new(
+                    rng.range(-0.3, 0.3),
+                    rng.range(-0.3, 0.3),
+                    if rng.next() < 0.5 { 1.0 } else { rng.range(0.5, 1.5) },
+                ),
             };
             let a = fast.sample(&ray);
             assert_eq!(a, slow.sample(&ray), "{ray:?}");
@@ -322,7 +326,8 @@ mod tests {
             lit += (a.radiance.x == 0.95) as usize;
         }
         assert!(grey > 1000 && lit > 1000, "both targets are exercised: {grey} {lit}");
-        let shifts = (0..9).map(|i| (DVec2::new(i as f64 * 0.3 - 1.2, 0.1), DVec2::new(0.001 * i as f64, -0.002))).collect();
+        let shifts =
+            (0..9).map(|i| (DVec2::new(i as f64 * 0.3 - 1.2, 0.1), DVec2::new(0.001 * i as f64, -0.002))).collect();
         let bundle = RayBundle::new(shifts);
         for _ in 0..20_000 {
             let base = Ray {

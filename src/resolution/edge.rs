@@ -469,7 +469,10 @@ mod tests {
             (mean, sd / (v.len() as f64).sqrt())
         };
         let ((nm, nse), (fm, fse)) = (stats(&naive), stats(&fair));
-        assert!(nm > 4.0 * nse && fm.abs() < 3.0 * fse && fm.abs() < 0.25 * nm, "unbiased {fm} +- {fse}, naive {nm} +- {nse}");
+        assert!(
+            nm > 4.0 * nse && fm.abs() < 3.0 * fse && fm.abs() < 0.25 * nm,
+            "unbiased {fm} +- {fse}, naive {nm} +- {nse}"
+        );
 
         // And the intervals cover the truth at the frequencies that matter.
         let reps = Replicates::from_fn(n, 8, 1, 4, |p, r, _, _| (clean[p] + 0.05 * noise(p, r, 99)) as f32);

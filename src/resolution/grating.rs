@@ -199,7 +199,9 @@ mod tests {
     #[test]
     fn the_fit_recovers_a_sinusoid_at_any_frequency_and_ignores_others() {
         // One period over the image, a fractional number of periods, near Nyquist, oblique.
-        for (f, theta, phase) in [(1.0 / 64.0, 0.0, 30.0), (0.0731, 90.0, -100.0), (0.43, 0.0, 5.0), (0.11, 37.0, 170.0)] {
+        for (f, theta, phase) in
+            [(1.0 / 64.0, 0.0, 30.0), (0.0731, 90.0, -100.0), (0.43, 0.0, 5.0), (0.11, 37.0, 170.0)]
+        {
             let img = sinusoid(64, f, theta, 0.5, 0.2, phase);
             let fit = GratingFit::new(64, 64, f, theta).unwrap();
             let (c, ph) = contrast_of(fit.coefficients(&img));

@@ -254,6 +254,32 @@ mod tests {
     }
 
     #[test]
+    fn the_window_coefficient_agrees_with_the_retina_grating_fit() {
+        // The same square window as WindowSamples and as Replicates: this module's whole-period
+        // Fourier coefficient and resolution::grating's Hann-weighted fit give one contrast.
+        use crate::measure::estimator::Replicates;
+        let (n, reps) = (64, 4);
+        let value = |p: usize, r: usize| {
+            let x = (p % n) as f64 + 0.5;
+            let y = (p / n) as f64;
+            // 4 periods over 64 pixels, contrast 0.3, a little per-replicate noise.
+            0.5 * (1.0 + 0.3 * (TAU * 4.0 * x / 64.0 + 0.7).cos()) + 1e-3 * ((p * 7 + r * 13 + y as usize) % 5) as f64
+        };
+        let w = WindowSamples {
+            cols: n,
+            rows: n,
+            replicates: reps,
+            sources: 1,
+            values: (0..reps).flat_map(|r| (0..n * n).map(move |p| value(p, r) as f32)).collect(),
+        };
+        let ours = grating_contrast(&w, 0, 4.0, 64.0, 1.0);
+        let replicates = Replicates::from_fn(n, reps, 1, 8, |p, r, _, _| value(p, r) as f32);
+        let theirs = crate::resolution::grating::modulation(&replicates, 0, 4.0 / 64.0, 0.0).unwrap();
+        assert!((ours.value - 0.3).abs() < 2e-3, "{ours:?}");
+        assert!((ours.value - theirs.contrast).abs() < 2e-3, "{ours:?} vs {theirs:?}");
+    }
+
+    #[test]
     fn a_sharp_slanted_edge_has_the_pixel_box_mtf() {
         // A pixel-averaged step at 5 degrees: the MTF of the pixel box, |sinc(pi f)| (f in
         // cycles per pixel), within 0.03 up to 0.35 cycles per pixel (0.7 of Nyquist).

@@ -206,11 +206,12 @@ mod tests {
         let full = Display::paper();
         let half = DVec2::new(0.08, 0.05);
         let crop = crop_display(&full, half, 2.5, 0.004);
-        assert!(crop.lcd.columns() < 1000 && crop.lcd.columns().is_multiple_of(2), "{:?}", crop.lcd);
+        // Half-width 2.5 + 0.09 x 20 mm at the lenslets, plus (0.09 + 0.6 / 6.427) x 6.316 mm: 5.46 mm.
+        assert!(crop.lcd.columns() == 1096 && crop.lcd.columns().is_multiple_of(2), "{:?}", crop.lcd);
         assert_eq!(crop.lcd.pixel_pitch(), full.lcd.pixel_pitch());
         // Pixel centres coincide with the full panel's.
-        let off = (full.lcd.columns() - crop.lcd.columns()) / 2;
-        assert!((crop.lcd.pixel_center(0, 0) - full.lcd.pixel_center(off, off)).length() < 1e-12);
+        let (oc, or) = ((full.lcd.columns() - crop.lcd.columns()) / 2, (full.lcd.rows() - crop.lcd.rows()) / 2);
+        assert!((crop.lcd.pixel_center(0, 0) - full.lcd.pixel_center(or, oc)).length() < 1e-12);
         let mut rng = Rng(7);
         for _ in 0..100_000 {
             let focus = rng.range(0.0, 4.0);
