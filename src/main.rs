@@ -212,6 +212,17 @@ enum Command {
         #[command(flatten)]
         backend: BackendArg,
     },
+    /// Perceived resolution and focus cues: grating and slanted-edge MTF in cycles per degree for
+    /// the ground truth and every method, through focus, the predicted accommodation and the
+    /// display's limits (see docs/RESOLUTION.md). Writes mtf.csv, mtf50.csv, accommodation.csv,
+    /// display.md, display.json, plots and study.json.
+    Resolution {
+        /// Study TOML (default: the built-in studies/paper.toml).
+        study: Option<PathBuf>,
+        /// Output directory (default: out/resolution-<study name>).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// Describe a display design (central depth plane, eye box, field of view, pixels per
     /// degree, views through the pupil) or a scene (objects, sizes, depth range), and write the
     /// built-in files.
@@ -525,6 +536,15 @@ fn run() -> Result<()> {
             };
             let text = inimtrace::sweep::execute(&cmd, &mut |m| eprintln!("{m}"))?;
             out!("{text}");
+        }
+        Command::Resolution { study, out } => {
+            let cmd = inimtrace::resolution::command::ResolutionCommand { study, out, overrides: set.clone(), quiet };
+            let run = inimtrace::resolution::command::execute(&cmd)?;
+            if !quiet {
+                eprint!("{}", run.timings_text());
+                eprintln!("wrote {}", run.out.display());
+            }
+            printed_total = true;
         }
         Command::Info { display, scene, pupil, json, print } => {
             if let Some(what) = print {

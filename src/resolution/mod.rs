@@ -14,3 +14,16 @@ pub mod defocus;
 pub mod edge;
 pub mod grating;
 pub mod measure;
+
+// The study (`inimtrace resolution`): its file, chart, measurement over the chart's windows,
+// accommodation, display limits, files and plots.
+pub mod accommodation;
+pub mod chart;
+pub mod command;
+pub mod limits;
+pub mod modulation;
+pub mod plots;
+pub mod report;
+pub mod run;
+pub mod study;
+pub mod window;

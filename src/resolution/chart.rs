@@ -1,0 +1,261 @@
+//! The study's test chart (issue 13's targets, paper Sec. 4.1's planar content): one plane at the
+//! content depth holding a grating patch per frequency and a slanted-edge patch, on a grey of
+//! the gratings' mean, all laid out in tangent coordinates seen from the pupil centre (so a
+//! patch covers the same angles, and a frequency in cycles per degree means the same, at every
+//! depth). Degrees here are tangent units of `pi / 180`, the unit the retina's pixels use.
+//!
+//! Each patch is its measured window plus a guard band on every side in which the pattern goes
+//! on: blur narrower than the guard brings nothing but the patch's own pattern into its window,
+//! and the grey between patches adds no signal at any frequency. Every grating holds a whole
+//! number of periods over its window, so the windowed Fourier coefficients of different
+//! frequencies are orthogonal.
+//!
+//! [`ChartField`] is the chart as a [`RadianceField`] (the plane's radiance along any ray), the
+//! one field that renders the display images and the ground truth alike.
+
+use std::f64::consts::{PI, TAU};
+
+use glam::{DVec2, DVec3};
+
+use super::study::Study;
+use crate::ray::Ray;
+use crate::render::RadianceField;
+
+/// What a patch shows.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Pattern {
+    /// Vertical bars: `mean (1 + contrast cos(2 pi f (x - x_centre)))`, `f` in cycles per degree.
+    Grating { frequency_cpd: f64 },
+    /// A straight edge through the patch centre, `angle_deg` from vertical: dark on the left,
+    /// light on the right.
+    Edge { angle_deg: f64 },
+}
+
+/// A patch: its pattern, its measured window and the guard around it (degrees).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Patch {
+    pub pattern: Pattern,
+    /// Window centre, degrees (x right, y up).
+    pub center_deg: DVec2,
+    /// Window size in retina pixels (columns along x, rows along y).
+    pub cols: usize,
+    pub rows: usize,
+    /// Half-size of the patch (window plus guard), degrees.
+    pub half_deg: DVec2,
+    /// The edge's normal `(cos a, sin a)` (the light side is along it); zero for gratings.
+    pub edge_normal: DVec2,
+}
+
+impl Patch {
+    fn contains(&self, p: DVec2) -> bool {
+        let d = (p - self.center_deg).abs();
+        d.x <= self.half_deg.x && d.y <= self.half_deg.y
+    }
+}
+
+/// The chart: patches, luminances, and the retina pixel pitch the windows are cut in.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Chart {
+    pub patches: Vec<Patch>,
+    pub mean: f64,
+    pub contrast: f64,
+    pub pixels_per_degree: f64,
+    /// Half-extent of all patches, degrees.
+    pub half_extent_deg: DVec2,
+    /// Column layout: left edge and width of each column of patches, degrees.
+    columns: Vec<(f64, f64, Vec<usize>)>,
+}
+
+impl Chart {
+    /// The study's chart: one grating per frequency, then the edge, in columns about the axis.
+    pub fn of_study(study: &Study) -> Self {
+        let r = &study.retina;
+        let ppd = r.pixels_per_degree;
+        let g = r.guard_deg;
+        let mut items: Vec<(Pattern, DVec2)> = study
+            .frequencies_cpd
+            .iter()
+            .map(|&f| (Pattern::Grating { frequency_cpd: f }, DVec2::from(r.window_deg)))
+            .collect();
+        items.push((Pattern::Edge { angle_deg: r.edge_angle_deg }, DVec2::from(r.edge_window_deg)));
+        Self::layout(&items, g, ppd, study.target.mean, study.target.contrast)
+    }
+
+    /// Lays `items` (pattern, window size in degrees) out in columns, choosing the column
+    /// count that makes the chart most nearly square; centred on the axis.
+    pub fn layout(items: &[(Pattern, DVec2)], guard_deg: f64, ppd: f64, mean: f64, contrast: f64) -> Self {
+        let sizes: Vec<DVec2> = items.iter().map(|(_, w)| *w + DVec2::splat(2.0 * guard_deg)).collect();
+        let col_w = sizes.iter().map(|s| s.x).fold(0.0, f64::max);
+        let split = |c: usize| -> Vec<Vec<usize>> {
+            let per = items.len().div_ceil(c);
+            (0..items.len()).collect::<Vec<_>>().chunks(per).map(|ch| ch.to_vec()).collect()
+        };
+        let height =
+            |cols: &[Vec<usize>]| cols.iter().map(|c| c.iter().map(|&i| sizes[i].y).sum::<f64>()).fold(0.0, f64::max);
+        let best = (1..=items.len().max(1))
+            .map(split)
+            .min_by(|a, b| {
+                let ea = (a.len() as f64 * col_w).max(height(a));
+                let eb = (b.len() as f64 * col_w).max(height(b));
+                ea.total_cmp(&eb)
+            })
+            .unwrap_or_default();
+        let total_w = best.len() as f64 * col_w;
+        let total_h = height(&best);
+        let mut patches = vec![None; items.len()];
+        let mut columns = Vec::new();
+        for (ci, col) in best.iter().enumerate() {
+            let x0 = -0.5 * total_w + ci as f64 * col_w;
+            let mut y = 0.5 * total_h;
+            for &i in col {
+                let (pattern, window) = items[i];
+                let cy = y - 0.5 * sizes[i].y;
+                y -= sizes[i].y;
+                patches[i] = Some(Patch {
+                    pattern,
+                    center_deg: DVec2::new(x0 + 0.5 * col_w, cy),
+                    cols: (window.x * ppd).round() as usize,
+                    rows: (window.y * ppd).round() as usize,
+                    half_deg: 0.5 * sizes[i],
+                    edge_normal: match pattern {
+                        Pattern::Edge { angle_deg } => {
+                            let (s, c) = angle_deg.to_radians().sin_cos();
+                            DVec2::new(c, s)
+                        }
+                        Pattern::Grating { .. } => DVec2::ZERO,
+                    },
+                });
+            }
+            columns.push((x0, col_w, col.clone()));
+        }
+        Chart {
+            patches: patches.into_iter().map(|p| p.expect("every patch placed")).collect(),
+            mean,
+            contrast,
+            pixels_per_degree: ppd,
+            half_extent_deg: DVec2::new(0.5 * total_w, 0.5 * total_h),
+            columns,
+        }
+    }
+
+    /// Luminance at direction `deg` (degrees of tangent from the pupil centre).
+    #[inline]
+    pub fn luminance(&self, deg: DVec2) -> f64 {
+        for (x0, w, idx) in &self.columns {
+            if deg.x < *x0 || deg.x > x0 + w {
+                continue;
+            }
+            for &i in idx {
+                let p = &self.patches[i];
+                if p.contains(deg) {
+                    let d = deg - p.center_deg;
+                    return match p.pattern {
+                        Pattern::Grating { frequency_cpd } => {
+                            self.mean * (1.0 + self.contrast * (TAU * frequency_cpd * d.x).cos())
+                        }
+                        Pattern::Edge { .. } => {
+                            let side = d.dot(p.edge_normal);
+                            self.mean * (1.0 + if side > 0.0 { self.contrast } else { -self.contrast })
+                        }
+                    };
+                }
+            }
+        }
+        self.mean
+    }
+
+    /// One retina pixel's pitch in tangent units.
+    pub fn pixel_tangent(&self) -> f64 {
+        PI / 180.0 / self.pixels_per_degree
+    }
+
+    /// Half-extent of the chart in tangent units.
+    pub fn half_extent_tangent(&self) -> DVec2 {
+        self.half_extent_deg * (PI / 180.0)
+    }
+}
+
+/// The chart on the plane `z = depth` (mm from the pupil), as a radiance field: rays that meet
+/// the plane in front of them see the chart at `(x, y) / depth`; others see the grey mean.
+pub struct ChartField<'a> {
+    pub chart: &'a Chart,
+    pub depth: f64,
+}
+
+impl RadianceField for ChartField<'_> {
+    #[inline]
+    fn radiance(&self, ray: &Ray) -> DVec3 {
+        let l = if ray.dir.z > 0.0 {
+            let t = (self.depth - ray.origin.z) / ray.dir.z;
+            if t > 0.0 {
+                let p = ray.origin + t * ray.dir;
+                self.chart.luminance(DVec2::new(p.x, p.y) * (180.0 / PI / self.depth))
+            } else {
+                self.chart.mean
+            }
+        } else {
+            self.chart.mean
+        };
+        DVec3::splat(l)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn chart() -> Chart {
+        let items: Vec<_> = [0.5, 1.0, 2.0, 4.0]
+            .iter()
+            .map(|&f| (Pattern::Grating { frequency_cpd: f }, DVec2::new(2.0, 0.25)))
+            .chain([(Pattern::Edge { angle_deg: 5.0 }, DVec2::new(2.0, 1.0))])
+            .collect();
+        Chart::layout(&items, 0.5, 64.0, 0.5, 0.8)
+    }
+
+    #[test]
+    fn patches_do_not_overlap_and_windows_are_whole_pixels() {
+        let c = chart();
+        assert_eq!(c.patches.len(), 5);
+        for (i, a) in c.patches.iter().enumerate() {
+            for b in &c.patches[i + 1..] {
+                let d = (a.center_deg - b.center_deg).abs();
+                assert!(d.x >= a.half_deg.x + b.half_deg.x - 1e-9 || d.y >= a.half_deg.y + b.half_deg.y - 1e-9);
+            }
+            assert!(a.center_deg.abs().cmple(c.half_extent_deg - a.half_deg + 1e-9).all());
+        }
+        assert_eq!((c.patches[0].cols, c.patches[0].rows), (128, 16));
+        assert_eq!((c.patches[4].cols, c.patches[4].rows), (128, 64));
+        assert!((c.patches[4].edge_normal.x - 5f64.to_radians().cos()).abs() < 1e-15);
+    }
+
+    #[test]
+    fn the_field_shows_each_grating_at_its_frequency_at_any_depth() {
+        let c = chart();
+        let p = c.patches[2]; // 2 cpd
+        for depth in [300.0, 2000.0] {
+            let f = ChartField { chart: &c, depth };
+            let at = |deg: DVec2| {
+                let t = deg * (PI / 180.0);
+                f.radiance(&Ray { origin: DVec3::ZERO, dir: DVec3::new(t.x, t.y, 1.0) }).x
+            };
+            // A peak at the centre, a trough half a period (0.25 degree) away, a peak a period away.
+            assert!((at(p.center_deg) - 0.9).abs() < 1e-12);
+            assert!((at(p.center_deg + DVec2::new(0.25, 0.0)) - 0.1).abs() < 1e-9);
+            assert!((at(p.center_deg + DVec2::new(0.5, 0.1)) - 0.9).abs() < 1e-9);
+            // Outside every patch: the mean.
+            assert_eq!(at(c.half_extent_deg + 1.0), 0.5);
+        }
+        let e = c.patches[4];
+        let f = ChartField { chart: &c, depth: 500.0 };
+        let at = |deg: DVec2| {
+            let t = deg * (PI / 180.0);
+            f.radiance(&Ray { origin: DVec3::ZERO, dir: DVec3::new(t.x, t.y, 1.0) }).x
+        };
+        assert!((at(e.center_deg + DVec2::new(0.1, 0.0)) - 0.9).abs() < 1e-12);
+        assert!((at(e.center_deg - DVec2::new(0.1, 0.0)) - 0.1).abs() < 1e-12);
+        // 5 degrees off vertical: at 0.4 degree up, the edge is 0.035 degree left of the centre line.
+        assert!((at(e.center_deg + DVec2::new(-0.02, 0.4)) - 0.9).abs() < 1e-12);
+        assert!((at(e.center_deg + DVec2::new(-0.05, 0.4)) - 0.1).abs() < 1e-12);
+    }
+}

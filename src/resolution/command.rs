@@ -1,0 +1,87 @@
+//! `inimtrace resolution [STUDY.toml] [--out DIR]` (issue 13): load the study (or the built-in
+//! `studies/paper.toml`), run it, and write every file into an owned output folder, atomically
+//! (`crate::io::output`), `study.json` last. The CLI only parses flags and prints what this
+//! returns.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use super::limits::{depth_ranges, display_limits};
+use super::report::{accommodation_csv, accommodation_rows, display_json, display_md, mtf50_csv, mtf_csv, study_json};
+use super::run::{run_study, StudyResults, Timing};
+use super::study::Study;
+use crate::error::Result;
+use crate::io::output::OutputDir;
+use crate::overrides::Override;
+
+/// What `inimtrace resolution` was asked.
+#[derive(Clone, Debug, Default)]
+pub struct ResolutionCommand {
+    /// The study file (`None`: the built-in `studies/paper.toml`).
+    pub study: Option<PathBuf>,
+    /// Output folder (`None`: `out/resolution-<study name>`).
+    pub out: Option<PathBuf>,
+    pub overrides: Vec<Override>,
+    pub quiet: bool,
+}
+
+/// What a run produced.
+pub struct ResolutionRun {
+    pub out: PathBuf,
+    pub results: StudyResults,
+    /// Every stage, the files last.
+    pub timings: Vec<Timing>,
+}
+
+impl ResolutionRun {
+    /// The stage timings as lines (`--timings` style).
+    pub fn timings_text(&self) -> String {
+        let mut s = String::new();
+        for t in &self.timings {
+            s += &format!("{:>8.3} s  {}\n", t.seconds, t.stage);
+        }
+        s += &format!("{:>8.3} s  total\n", self.timings.iter().map(|t| t.seconds).sum::<f64>());
+        s
+    }
+}
+
+/// Loads the study of `cmd`.
+pub fn load_study(cmd: &ResolutionCommand) -> Result<Study> {
+    match &cmd.study {
+        Some(p) => Study::load(p, &cmd.overrides),
+        None => Study::paper(&cmd.overrides),
+    }
+}
+
+/// Runs the study and writes its files.
+pub fn execute(cmd: &ResolutionCommand) -> Result<ResolutionRun> {
+    let t = Instant::now();
+    let study = load_study(cmd)?;
+    let out = cmd.out.clone().unwrap_or_else(|| Path::new("out").join(format!("resolution-{}", study.name)));
+    let dir = OutputDir::open(&out)?;
+    let setup = t.elapsed().as_secs_f64();
+    let mut results = run_study(&study, cmd.quiet)?;
+    let mut timings = vec![Timing { stage: "study and output folder".into(), seconds: setup }];
+    timings.append(&mut results.timings.clone());
+
+    let t = Instant::now();
+    let accommodation = accommodation_rows(&results);
+    let mut limits = display_limits(&study.display, study.pupil_diameter_mm);
+    limits.depth_ranges = depth_ranges(&results);
+    timings.push(Timing { stage: "accommodation and display limits".into(), seconds: t.elapsed().as_secs_f64() });
+
+    let t = Instant::now();
+    dir.write_bytes("mtf.csv", mtf_csv(&results).as_bytes())?;
+    dir.write_bytes("mtf50.csv", mtf50_csv(&results).as_bytes())?;
+    dir.write_bytes("accommodation.csv", accommodation_csv(&accommodation).as_bytes())?;
+    dir.write_bytes("display.json", display_json(&limits).as_bytes())?;
+    dir.write_bytes("display.md", display_md(&limits, &study).as_bytes())?;
+    timings.push(Timing { stage: "tables".into(), seconds: t.elapsed().as_secs_f64() });
+    let t = Instant::now();
+    super::plots::write_plots(&results, &accommodation, &dir)?;
+    timings.push(Timing { stage: "plots (PNG, SVG)".into(), seconds: t.elapsed().as_secs_f64() });
+    // study.json last: its presence marks a complete run.
+    dir.finish("study.json", |files| Ok(study_json(&results, &timings, files).into_bytes()))?;
+    results.timings = timings.clone();
+    Ok(ResolutionRun { out, results, timings })
+}

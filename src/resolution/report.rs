@@ -1,0 +1,283 @@
+//! The files of a resolution study (issue 13's outputs, exact names and columns): `mtf.csv`,
+//! `mtf50.csv`, `accommodation.csv`, `display.md`, `display.json` and `study.json` (every resolved
+//! setting, the chart's layout, the stage timings), built from [`StudyResults`] as rows and text.
+
+use std::fmt::Write as _;
+
+use serde::Serialize;
+
+use super::accommodation::{area_rule, frequency_rule};
+use super::chart::Pattern;
+use super::limits::DisplayLimits;
+use super::run::{StudyResults, Timing};
+use super::study::Study;
+use crate::io::output::OutputFile;
+
+/// One row of `accommodation.csv`.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct AccommodationRow {
+    pub source: String,
+    pub target_diopters: f64,
+    /// `contrast_at_frequency` or `mtf_area`.
+    pub rule: &'static str,
+    /// The frequency rule's frequency, or the area rule's upper limit.
+    pub frequency_cpd: f64,
+    pub predicted_focus_diopters: f64,
+    /// The frequency rule: the contrast at the peak; the area rule: the mean contrast over the
+    /// band (the area over its width) at the peak.
+    pub contrast_at_peak: f64,
+}
+
+/// Both rules for every source and content depth.
+pub fn accommodation_rows(r: &StudyResults) -> Vec<AccommodationRow> {
+    let s = &r.study;
+    let qf = s.frequency_index(s.accommodation.frequency_cpd).expect("validated");
+    let mut rows = Vec::new();
+    for (k, source) in r.sources.iter().enumerate() {
+        for (di, d) in s.depths.iter().enumerate() {
+            let at_f: Vec<f64> = r.grating[k][di].iter().map(|q| q[qf].value).collect();
+            let nan = super::accommodation::Peak { at: f64::NAN, value: f64::NAN };
+            let p = frequency_rule(&s.focus_diopters, &at_f).unwrap_or(nan);
+            rows.push(AccommodationRow {
+                source: source.clone(),
+                target_diopters: d.diopters,
+                rule: "contrast_at_frequency",
+                frequency_cpd: s.accommodation.frequency_cpd,
+                predicted_focus_diopters: p.at,
+                contrast_at_peak: p.value,
+            });
+            let mtf: Vec<Vec<f64>> = r.grating[k][di].iter().map(|q| q.iter().map(|v| v.value).collect()).collect();
+            let p =
+                area_rule(&s.focus_diopters, &s.frequencies_cpd, &mtf, s.accommodation.area_limit_cpd).unwrap_or(nan);
+            rows.push(AccommodationRow {
+                source: source.clone(),
+                target_diopters: d.diopters,
+                rule: "mtf_area",
+                frequency_cpd: s.accommodation.area_limit_cpd,
+                predicted_focus_diopters: p.at,
+                contrast_at_peak: p.value,
+            });
+        }
+    }
+    rows
+}
+
+/// Numbers in CSV: shortest round-trip form, empty for NaN.
+fn num(v: f64) -> String {
+    if v.is_finite() {
+        format!("{v}")
+    } else {
+        String::new()
+    }
+}
+
+/// `mtf.csv`: source, target_diopters, focus_diopters, frequency_cpd, orientation_deg, measure,
+/// contrast, contrast_ci95. Gratings (vertical bars, 0 degrees) and the edge (its angle from
+/// vertical) at every study frequency.
+pub fn mtf_csv(r: &StudyResults) -> String {
+    let s = &r.study;
+    let mut out = String::from(
+        "source,target_diopters,focus_diopters,frequency_cpd,orientation_deg,measure,contrast,contrast_ci95\n",
+    );
+    let edge_angle = r
+        .chart
+        .patches
+        .iter()
+        .find_map(|p| match p.pattern {
+            Pattern::Edge { angle_deg } => Some(angle_deg),
+            _ => None,
+        })
+        .unwrap_or(f64::NAN);
+    for (k, source) in r.sources.iter().enumerate() {
+        for (di, d) in s.depths.iter().enumerate() {
+            for (fi, f) in s.focus_diopters.iter().enumerate() {
+                for (measure, values, angle) in
+                    [("grating", &r.grating[k][di][fi], 0.0), ("edge", &r.edge[k][di][fi], edge_angle)]
+                {
+                    for (q, v) in s.frequencies_cpd.iter().zip(values) {
+                        let _ = writeln!(
+                            out,
+                            "{source},{},{},{},{},{measure},{},{}",
+                            num(d.diopters),
+                            num(*f),
+                            num(*q),
+                            num(angle),
+                            num(v.value),
+                            num(v.ci95)
+                        );
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+/// `mtf50.csv`: source, target_diopters, focus_diopters, mtf50_cpd, mtf50_ci95 (slanted edge;
+/// empty when the MTF stays above 0.5 up to the retina's Nyquist frequency).
+pub fn mtf50_csv(r: &StudyResults) -> String {
+    let s = &r.study;
+    let mut out = String::from("source,target_diopters,focus_diopters,mtf50_cpd,mtf50_ci95\n");
+    for (k, source) in r.sources.iter().enumerate() {
+        for (di, d) in s.depths.iter().enumerate() {
+            for (fi, f) in s.focus_diopters.iter().enumerate() {
+                let v = r.mtf50[k][di][fi];
+                let _ = writeln!(out, "{source},{},{},{},{}", num(d.diopters), num(*f), num(v.value), num(v.ci95));
+            }
+        }
+    }
+    out
+}
+
+/// `accommodation.csv`.
+pub fn accommodation_csv(rows: &[AccommodationRow]) -> String {
+    let mut out = String::from("source,target_diopters,rule,frequency_cpd,predicted_focus_diopters,contrast_at_peak\n");
+    for a in rows {
+        let _ = writeln!(
+            out,
+            "{},{},{},{},{},{}",
+            a.source,
+            num(a.target_diopters),
+            a.rule,
+            num(a.frequency_cpd),
+            num(a.predicted_focus_diopters),
+            num(a.contrast_at_peak)
+        );
+    }
+    out
+}
+
+/// A chart patch as `study.json` records it.
+#[derive(Serialize)]
+struct PatchRecord {
+    pattern: &'static str,
+    frequency_cpd: Option<f64>,
+    edge_angle_deg: Option<f64>,
+    window_center_deg: [f64; 2],
+    window_pixels: [usize; 2],
+    patch_size_deg: [f64; 2],
+}
+
+/// `study.json`: every resolved setting, the chart, the LCD crop, the stage timings.
+#[derive(Serialize)]
+struct StudyRecord<'a> {
+    inimtrace_version: String,
+    study: &'a Study,
+    central_depth_plane_mm: Option<f64>,
+    central_depth_plane_diopters: Option<f64>,
+    sources: &'a [String],
+    chart: Vec<PatchRecord>,
+    chart_half_extent_deg: [f64; 2],
+    lcd_crop_pixels: [usize; 2],
+    eye_rays: u64,
+    timings: &'a [Timing],
+    total_seconds: f64,
+    /// Every other file of the run, with its size and CRC-32.
+    files: &'a [OutputFile],
+}
+
+pub fn study_json(r: &StudyResults, timings: &[Timing], files: &[OutputFile]) -> String {
+    let cdp = r.study.display.central_depth_plane();
+    let rec = StudyRecord {
+        inimtrace_version: crate::version::software(),
+        study: &r.study,
+        central_depth_plane_mm: cdp,
+        central_depth_plane_diopters: cdp.map(|z| 1000.0 / z),
+        sources: &r.sources,
+        chart: r
+            .chart
+            .patches
+            .iter()
+            .map(|p| PatchRecord {
+                pattern: match p.pattern {
+                    Pattern::Grating { .. } => "grating",
+                    Pattern::Edge { .. } => "edge",
+                },
+                frequency_cpd: match p.pattern {
+                    Pattern::Grating { frequency_cpd } => Some(frequency_cpd),
+                    _ => None,
+                },
+                edge_angle_deg: match p.pattern {
+                    Pattern::Edge { angle_deg } => Some(angle_deg),
+                    _ => None,
+                },
+                window_center_deg: p.center_deg.to_array(),
+                window_pixels: [p.cols, p.rows],
+                patch_size_deg: (2.0 * p.half_deg).to_array(),
+            })
+            .collect(),
+        chart_half_extent_deg: r.chart.half_extent_deg.to_array(),
+        lcd_crop_pixels: r.lcd_crop,
+        eye_rays: r.eye_rays,
+        timings,
+        total_seconds: timings.iter().map(|t| t.seconds).sum(),
+        files,
+    };
+    serde_json::to_string_pretty(&rec).unwrap_or_default() + "\n"
+}
+
+/// `display.json`.
+pub fn display_json(l: &DisplayLimits) -> String {
+    serde_json::to_string_pretty(l).unwrap_or_default() + "\n"
+}
+
+/// `display.md`: the limits as a short report.
+pub fn display_md(l: &DisplayLimits, study: &Study) -> String {
+    let opt2 = |v: Option<[f64; 2]>, d: usize| match v {
+        Some([a, b]) => format!("{a:.d$} x {b:.d$}"),
+        None => "none".into(),
+    };
+    let mut s = String::new();
+    let _ = writeln!(s, "# Display limits: {}\n", l.display.name);
+    let _ = writeln!(s, "Study `{}`, pupil {} mm.\n", study.name, l.pupil_diameter_mm);
+    let _ = writeln!(s, "| quantity | value |\n|---|---|");
+    let _ = writeln!(
+        s,
+        "| central depth plane (CDP) | {} |",
+        match (l.central_depth_plane_mm, l.central_depth_plane_diopters) {
+            (Some(z), Some(d)) => format!("{z:.1} mm ({d:.3} D)"),
+            _ => "at infinity or real".into(),
+        }
+    );
+    let _ = writeln!(s, "| angular pixel pitch at the CDP | {} arcmin |", opt2(l.angular_pixel_pitch_arcmin, 2));
+    let _ = writeln!(s, "| pixels per degree at the CDP | {} |", opt2(l.pixels_per_degree, 2));
+    let _ = writeln!(s, "| Nyquist frequency at the CDP | {} cpd |", opt2(l.nyquist_cpd, 2));
+    let _ = writeln!(s, "| lenslet angular pitch | {} degrees |", opt2(Some(l.lenslet_angular_pitch_deg), 2));
+    let _ = writeln!(
+        s,
+        "| views through the pupil (a point at the CDP) | {} across; {} in the pupil disk |",
+        opt2(l.views_across_pupil, 2),
+        l.views_in_pupil.map_or("none".into(), |n| n.to_string())
+    );
+    let _ = writeln!(s, "| eye box at the eye relief ({} mm) | {} mm |", l.eye_relief_mm, opt2(l.eye_box_mm, 2));
+    let _ = writeln!(s, "| field of view | {} degrees |", opt2(Some(l.field_of_view_deg), 1));
+    if let Some(z) = l.lc_cdp_first_zero_cpd {
+        let _ = writeln!(s, "| LC at the CDP: first zero of the MTF (analytic) | {z:.2} cpd |");
+    }
+    let _ = writeln!(
+        s,
+        "\nContent depths where each source keeps a grating contrast above {} with the eye focused on the \
+         content (measured depths: {} D):\n",
+        study.limits.contrast,
+        study.depths.iter().map(|d| format!("{:.3}", d.diopters)).collect::<Vec<_>>().join(", ")
+    );
+    let _ = writeln!(
+        s,
+        "| source | frequency (cpd) | longest run of passing depths | every passing depth (D) |\n|---|---:|---|---|"
+    );
+    for r in &l.depth_ranges {
+        let run = match (r.range_diopters, r.range_mm) {
+            (Some([a, b]), Some([za, zb])) => format!("{a:.3} to {b:.3} D ({za:.0} to {zb:.0} mm)"),
+            _ => "none".into(),
+        };
+        let all = r.passing_diopters.iter().map(|d| format!("{d:.3}")).collect::<Vec<_>>().join(", ");
+        let _ = writeln!(
+            s,
+            "| {} | {} | {run} | {} |",
+            r.source,
+            r.frequency_cpd,
+            if all.is_empty() { "none".into() } else { all }
+        );
+    }
+    s
+}

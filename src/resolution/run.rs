@@ -1,0 +1,230 @@
+//! Running a study (issue 13): for each content depth, the chart on its plane, each method's
+//! display image rendered once (paper Sec. 3), and for each eye focus the ground truth and every
+//! perceived image measured over the chart's windows by the converged estimator (Sec. 2.3, 4.1),
+//! then each window's grating contrast and slanted-edge MTF with their 95% intervals. Every stage
+//! is timed.
+//!
+//! Display images cover only the part of the LCD that the measured eye rays can reach
+//! ([`crop_display`]): the same pixels as the full panel's (same pitch and grid), so every value
+//! read is the full display image's; pixels no measured ray can reach are not rendered.
+
+use std::time::Instant;
+
+use glam::DVec2;
+use rayon::prelude::*;
+
+use super::chart::{Chart, ChartField, Pattern};
+use super::modulation::{edge_mtf, grating_contrast, Value};
+use super::study::Study;
+use super::window::{measure_windows, progress_steps};
+use crate::error::Result;
+use crate::measure::estimator::DisplaySource;
+use crate::measure::sampler::Sampler;
+use crate::optics::display::Lcd;
+use crate::optics::{Display, Eye, Focus};
+use crate::progress::Progress;
+use crate::raster::RgbImage;
+use crate::render::retina::DisplayStack;
+use crate::render::{render_display_image, DisplayRenderSettings};
+
+/// The smallest centred part of `display`'s LCD, on the full panel's pixel grid, that holds
+/// every LCD point an eye ray can reach for retina tangents within `half_tangent` (per axis),
+/// pupil points within `pupil_radius` and eye focus vergences up to `max_vergence` (1/mm), with
+/// the eye at the origin. The bound (triangle inequality through eq. (1), with the farthest a
+/// lenslet centre can be from a point it is nearest to) errs on the side of a larger crop.
+pub fn crop_display(display: &Display, half_tangent: DVec2, pupil_radius: f64, max_vergence: f64) -> Display {
+    let (v1, v2) = (display.eye_to_lenslets, display.lenslets_to_lcd);
+    let m = display.lenslets.matrix;
+    // A point is at most half the two basis vectors' lengths from its nearest centre.
+    let cell = 0.5 * (m.x_axis.abs() + m.y_axis.abs());
+    let slope = half_tangent + DVec2::splat(pupil_radius * max_vergence.abs());
+    let x2 = DVec2::splat(pupil_radius) + slope * v1;
+    let lcd = x2 + (slope + cell / display.focal_length) * v2;
+    let pitch = display.lcd.pixel_pitch();
+    let res = display.lcd.resolution;
+    let pixels = |i: usize, half: f64| -> usize {
+        let full = res[i];
+        // Pixels either side of the centre, plus two; the parity of the full panel keeps the grid.
+        let mut n = 2 * ((half / pitch[i]).ceil() as usize + 2);
+        if full % 2 == 1 {
+            n += 1;
+        }
+        n.min(full)
+    };
+    let (nx, ny) = (pixels(0, lcd.x), pixels(1, lcd.y));
+    Display {
+        lcd: Lcd { size: DVec2::new(nx as f64 * pitch.x, ny as f64 * pitch.y), resolution: [nx, ny] },
+        ..display.clone()
+    }
+}
+
+/// What one stage took.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Timing {
+    pub stage: String,
+    pub seconds: f64,
+}
+
+/// The measured numbers of a study, indexed `[source][depth][focus]` (then frequency); source 0
+/// is the ground truth, source `1 + m` method `m`.
+#[derive(Clone, Debug)]
+pub struct StudyResults {
+    pub study: Study,
+    /// "ground_truth", then each method's short name.
+    pub sources: Vec<String>,
+    pub chart: Chart,
+    /// The rendered part of the LCD, columns and rows.
+    pub lcd_crop: [usize; 2],
+    pub grating: Vec<Vec<Vec<Vec<Value>>>>,
+    pub edge: Vec<Vec<Vec<Vec<Value>>>>,
+    pub mtf50: Vec<Vec<Vec<Value>>>,
+    pub timings: Vec<Timing>,
+    /// Eye rays traced (each serves every source).
+    pub eye_rays: u64,
+}
+
+impl StudyResults {
+    /// Index of source `name`.
+    pub fn source_index(&self, name: &str) -> Option<usize> {
+        self.sources.iter().position(|s| s == name)
+    }
+}
+
+/// Source names of `study`.
+pub fn source_names(study: &Study) -> Vec<String> {
+    std::iter::once("ground_truth".to_string())
+        .chain(study.methods.iter().map(|m| m.short_name().to_string()))
+        .collect()
+}
+
+/// Runs `study`; progress bars on stderr unless `quiet`.
+pub fn run_study(study: &Study, quiet: bool) -> Result<StudyResults> {
+    let t = Instant::now();
+    let chart = Chart::of_study(study);
+    let half = chart.half_extent_tangent();
+    let max_vergence = study.focus_diopters.iter().map(|d| d / 1000.0).fold(0.0, f64::max);
+    let radius = 0.5 * study.pupil_diameter_mm;
+    let display = crop_display(&study.display, half, radius, max_vergence);
+    let sources = source_names(study);
+    let (nd, nf, nq) = (study.depths.len(), study.focus_diopters.len(), study.frequencies_cpd.len());
+    let ns = sources.len();
+    let mut timings = vec![Timing { stage: "chart and LCD crop".into(), seconds: t.elapsed().as_secs_f64() }];
+
+    let settings = DisplayRenderSettings::default();
+    let display_bar = Progress::new((nd * study.methods.len() * display.lcd.rows()) as u64, "display images", quiet);
+    let measure_bar = Progress::new((nd * nf) as u64 * progress_steps(&chart), "eye rays", quiet);
+    let (mut t_display, mut t_measure, mut t_analysis) = (0.0, 0.0, 0.0);
+    let empty = vec![vec![vec![Value { value: f64::NAN, ci95: f64::NAN }; nq]; nf]; nd];
+    let mut grating = vec![empty.clone(); ns];
+    let mut edge = vec![empty; ns];
+    let mut mtf50 = vec![vec![vec![Value { value: f64::NAN, ci95: f64::NAN }; nf]; nd]; ns];
+    let reps = study.measurement.replicates;
+    let spp = study.measurement.samples_per_pixel;
+    let ppd = study.retina.pixels_per_degree;
+    let mut eye_rays = 0u64;
+    for (di, depth) in study.depths.iter().enumerate() {
+        let field = ChartField { chart: &chart, depth: depth.mm };
+        let t = Instant::now();
+        let images: Vec<RgbImage> = study
+            .methods
+            .iter()
+            .map(|&m| render_display_image(&display, m, &settings, &field, &display_bar))
+            .collect::<Result<_>>()?;
+        let refs: Vec<&RgbImage> = images.iter().collect();
+        let stack = DisplayStack::new(&display, &refs)?;
+        t_display += t.elapsed().as_secs_f64();
+        for (fi, &focus) in study.focus_diopters.iter().enumerate() {
+            let t = Instant::now();
+            let mut eye = Eye::thin_lens(study.pupil_diameter_mm, Focus::Diopters(focus), 8);
+            eye.retina_distance = study.retina_distance_mm;
+            let source = DisplaySource::new(&display, &eye, &field, &stack);
+            let sampler = Sampler::new(study.measurement.seed, (di * nf + fi) as u64, Some(radius));
+            let windows = measure_windows(&source, &sampler, &chart, reps, spp, &measure_bar);
+            eye_rays += windows.iter().map(|w| (w.cols * w.rows * reps) as u64 * u64::from(spp)).sum::<u64>();
+            t_measure += t.elapsed().as_secs_f64();
+            let t = Instant::now();
+            let per_source: Vec<(Vec<Value>, Vec<Value>, Value)> = (0..ns)
+                .into_par_iter()
+                .map(|k| {
+                    let mut g = vec![Value { value: f64::NAN, ci95: f64::NAN }; nq];
+                    let mut e = (g.clone(), Value { value: f64::NAN, ci95: f64::NAN });
+                    for (p, w) in chart.patches.iter().zip(&windows) {
+                        match p.pattern {
+                            Pattern::Grating { frequency_cpd } => {
+                                let qi =
+                                    study.frequency_index(frequency_cpd).expect("chart frequencies are the study's");
+                                g[qi] = grating_contrast(w, k, frequency_cpd, ppd, chart.contrast);
+                            }
+                            Pattern::Edge { .. } => e = edge_mtf(w, k, &study.frequencies_cpd, ppd),
+                        }
+                    }
+                    (g, e.0, e.1)
+                })
+                .collect();
+            for (k, (g, e, m50)) in per_source.into_iter().enumerate() {
+                grating[k][di][fi] = g;
+                edge[k][di][fi] = e;
+                mtf50[k][di][fi] = m50;
+            }
+            t_analysis += t.elapsed().as_secs_f64();
+        }
+    }
+    display_bar.finish();
+    measure_bar.finish();
+    timings.push(Timing {
+        stage: format!(
+            "display images ({} x {} LCD pixels, {} per depth)",
+            display.lcd.columns(),
+            display.lcd.rows(),
+            study.methods.len()
+        ),
+        seconds: t_display,
+    });
+    timings.push(Timing { stage: format!("eye rays ({:.0} M)", eye_rays as f64 / 1e6), seconds: t_measure });
+    timings.push(Timing { stage: "grating and edge analysis".into(), seconds: t_analysis });
+    Ok(StudyResults {
+        study: study.clone(),
+        sources,
+        chart,
+        lcd_crop: display.lcd.resolution,
+        grating,
+        edge,
+        mtf50,
+        timings,
+        eye_rays,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fixtures::Rng;
+    use crate::measure::estimator::EyeToLcd;
+
+    #[test]
+    fn the_crop_holds_every_lcd_point_the_eye_rays_reach_on_the_full_grid() {
+        let full = Display::paper();
+        let half = DVec2::new(0.08, 0.05);
+        let crop = crop_display(&full, half, 2.5, 0.004);
+        // Half-width 2.5 + 0.09 x 20 mm at the lenslets, plus (0.09 + 0.6 / 6.427) x 6.316 mm: 5.46 mm.
+        assert!(crop.lcd.columns() == 1096 && crop.lcd.columns().is_multiple_of(2), "{:?}", crop.lcd);
+        assert_eq!(crop.lcd.pixel_pitch(), full.lcd.pixel_pitch());
+        // Pixel centres coincide with the full panel's.
+        let (oc, or) = ((full.lcd.columns() - crop.lcd.columns()) / 2, (full.lcd.rows() - crop.lcd.rows()) / 2);
+        assert!((crop.lcd.pixel_center(0, 0) - full.lcd.pixel_center(or, oc)).length() < 1e-12);
+        let mut rng = Rng(7);
+        for _ in 0..100_000 {
+            let focus = rng.range(0.0, 4.0);
+            let eye = Eye::thin_lens(5.0, Focus::Diopters(focus), 8);
+            let to = EyeToLcd::new(&crop, &eye);
+            let t = DVec2::new(rng.range(-half.x, half.x), rng.range(-half.y, half.y));
+            let p = loop {
+                let p = DVec2::new(rng.range(-2.5, 2.5), rng.range(-2.5, 2.5));
+                if p.length() <= 2.5 {
+                    break p;
+                }
+            };
+            assert!(to.pixel_index(t, p).is_some(), "tangent {t} pupil {p} focus {focus}");
+        }
+    }
+}

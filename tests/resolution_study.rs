@@ -1,0 +1,188 @@
+//! `inimtrace resolution` end to end (issue 13): the tiny study's files with their exact names
+//! and columns, the ground truth's predicted accommodation against the content depth, and the
+//! analytic property of the display path (LC's contrast for content at the central depth plane).
+
+use std::path::Path;
+use std::process::Command;
+
+use inimtrace::resolution::limits::{display_limits, lc_cdp_contrast};
+use inimtrace::resolution::report::accommodation_rows;
+use inimtrace::resolution::run::run_study;
+use inimtrace::resolution::study::Study;
+
+fn read(dir: &Path, name: &str) -> String {
+    std::fs::read_to_string(dir.join(name)).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+#[test]
+fn the_tiny_study_writes_every_file_with_the_issue_columns() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("r");
+    let st = Command::new(env!("CARGO_BIN_EXE_inimtrace"))
+        .args(["--quiet", "resolution", "studies/tiny.toml", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(st.status.success(), "{}", String::from_utf8_lossy(&st.stderr));
+    for f in [
+        "mtf.csv",
+        "mtf50.csv",
+        "accommodation.csv",
+        "study.json",
+        "display.md",
+        "display.json",
+        "mtf.png",
+        "mtf.svg",
+        "through_focus.png",
+        "through_focus.svg",
+        "accommodation.png",
+        "accommodation.svg",
+    ] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    let mtf = read(&out, "mtf.csv");
+    let mut lines = mtf.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "source,target_diopters,focus_diopters,frequency_cpd,orientation_deg,measure,contrast,contrast_ci95"
+    );
+    // 3 sources x 2 depths x 3 focuses (1, 2, 3 D; 2.5 D added) ... 4 focuses x 3 frequencies x 2 measures.
+    assert_eq!(lines.count(), 3 * 2 * 4 * 3 * 2);
+    assert!(mtf.contains("\nground_truth,1,1,2,0,grating,") && mtf.contains(",edge,"));
+    assert_eq!(
+        read(&out, "mtf50.csv").lines().next().unwrap(),
+        "source,target_diopters,focus_diopters,mtf50_cpd,mtf50_ci95"
+    );
+    let acc = read(&out, "accommodation.csv");
+    assert_eq!(
+        acc.lines().next().unwrap(),
+        "source,target_diopters,rule,frequency_cpd,predicted_focus_diopters,contrast_at_peak"
+    );
+    assert_eq!(acc.lines().count(), 1 + 3 * 2 * 2);
+    let json: serde_json::Value = serde_json::from_str(&read(&out, "study.json")).unwrap();
+    assert_eq!(json["study"]["pupil_diameter_mm"], 5.0);
+    assert_eq!(json["study"]["retina_pixel_deg"], 1.0 / 32.0);
+    assert_eq!(json["sources"], serde_json::json!(["ground_truth", "LC", "PC"]));
+    assert!(json["timings"].as_array().unwrap().len() >= 6);
+    assert!(json["files"].as_array().unwrap().iter().any(|f| f["name"] == "mtf.csv"));
+    let display: serde_json::Value = serde_json::from_str(&read(&out, "display.json")).unwrap();
+    assert!((display["pixels_per_degree"][0].as_f64().unwrap() - 11.63).abs() < 0.01);
+    assert!(read(&out, "display.md").contains("| LC | 1 |"));
+
+    // A bad study names the file and the field, and writes nothing.
+    let bad = tmp.path().join("bad.toml");
+    std::fs::write(&bad, read(Path::new("studies"), "tiny.toml").replace("[1, 2, 4]", "[1, 2, 4.3]")).unwrap();
+    let st = Command::new(env!("CARGO_BIN_EXE_inimtrace"))
+        .args(["--quiet", "resolution"])
+        .arg(&bad)
+        .arg("--out")
+        .arg(tmp.path().join("b"))
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&st.stderr);
+    assert!(!st.status.success() && e.contains("bad.toml") && e.contains("frequencies_cpd[2]"), "{e}");
+}
+
+/// A study of `body` plus the common tables.
+fn study(body: &str) -> Study {
+    let common = r#"
+[target]
+mean = 0.5
+contrast = 0.8
+[measurement]
+samples_per_pixel = 8
+replicates = 4
+seed = 3
+[limits]
+contrast = 0.5
+frequencies_cpd = [1]
+"#;
+    Study::from_text(&format!("{body}\n{common}"), "test study", Path::new("."), &[]).unwrap()
+}
+
+#[test]
+fn the_ground_truth_predicts_focus_at_the_content_depth() {
+    // Issue 13: within 0.05 D at every depth, by both rules.
+    let s = study(
+        r#"
+name = "gt"
+display = "builtin:paper"
+methods = []
+pupil_diameter_mm = 5.0
+content_diopters = [0.5, 1.3, 2.2, 3.5]
+focus_diopters = { from = 0.0, to = 4.0, step = 0.25 }
+frequencies_cpd = [1, 2, 4]
+[retina]
+pixels_per_degree = 64
+window_deg = [1.0, 0.125]
+guard_deg = 0.5
+edge_window_deg = [1.0, 0.25]
+edge_angle_deg = 5.0
+[accommodation]
+frequency_cpd = 2
+area_limit_cpd = 4
+"#,
+    );
+    let r = run_study(&s, true).unwrap();
+    let rows = accommodation_rows(&r);
+    assert_eq!(rows.len(), 4 * 2);
+    for a in &rows {
+        assert!(
+            (a.predicted_focus_diopters - a.target_diopters).abs() < 0.05,
+            "{} at {} D: {} D",
+            a.rule,
+            a.target_diopters,
+            a.predicted_focus_diopters
+        );
+        assert!(a.contrast_at_peak > 0.95, "{a:?}");
+    }
+}
+
+#[test]
+fn lc_at_the_central_depth_plane_has_the_display_pixel_box_mtf() {
+    // The analytic property (src/resolution/limits.rs): content at the CDP, the eye focused
+    // there, LC's contrast at frequency f is |sinc(pi f a) sinc(pi f s)|, a the angular pixel
+    // pitch (first zero at the display's pixels per degree, 11.6 cpd), s the retina pixel. A 3 mm
+    // pupil sees 3 x 3 lenslets, every ray inside its lenslet's own elemental image (at 5 mm the
+    // outermost rays land one pixel past it: crosstalk, which lowers the contrast further).
+    let cdp = inimtrace::optics::Display::paper().central_depth_plane().unwrap();
+    let s = study(&format!(
+        r#"
+name = "cdp"
+display = "builtin:paper"
+methods = ["LC"]
+pupil_diameter_mm = 3.0
+content_diopters = []
+content_mm = [{cdp}]
+focus_diopters = [{}]
+frequencies_cpd = [1, 2, 3, 4, 8, 11.5]
+[retina]
+pixels_per_degree = 64
+window_deg = [2.0, 0.25]
+guard_deg = 0.25
+edge_window_deg = [2.0, 0.5]
+edge_angle_deg = 5.0
+[accommodation]
+frequency_cpd = 2
+area_limit_cpd = 4
+"#,
+        1000.0 / cdp
+    ));
+    let r = run_study(&s, true).unwrap();
+    let l = display_limits(&s.display, 3.0);
+    let ppd = l.pixels_per_degree.unwrap()[0];
+    let lc = &r.grating[1][0][0];
+    for (f, v) in s.frequencies_cpd.iter().zip(lc) {
+        let model = lc_cdp_contrast(*f, 1.0 / ppd, 1.0 / 64.0);
+        eprintln!("{f} cpd: measured {:.4} +- {:.4}, model {model:.4}", v.value, v.ci95);
+    }
+    // Within 0.02 up to 0.7 of the display's Nyquist frequency (5.8 cpd); beyond it, where an
+    // alias can fall within the window's frequency resolution (0.5 cpd) of f, within 0.03; and
+    // at 11.5 cpd, next to the zero, no contrast left.
+    for (f, v) in s.frequencies_cpd.iter().zip(lc) {
+        let model = lc_cdp_contrast(*f, 1.0 / ppd, 1.0 / 64.0);
+        let tol = if *f <= 0.7 * 0.5 * ppd { 0.02 } else { 0.03 };
+        assert!((v.value - model).abs() < tol, "{f} cpd: measured {v:?}, model {model}");
+    }
+    assert!(lc[5].value < 0.02 && (ppd - 11.63).abs() < 0.01);
+}
