@@ -152,7 +152,7 @@ fn a_job_array_of_four_tasks_gives_the_local_table() {
     // Everything is complete: submitting again submits nothing.
     let (ok, _, e) = inimtrace(&["sweep", &tiny(), "--out", remote.to_str().unwrap(), "--slurm", "--wait"]);
     assert!(ok && e.contains("nothing to submit"), "{e}");
-    assert!(start.elapsed() < Duration::from_secs(60), "took {:?}", start.elapsed());
+    assert!(start.elapsed() < Duration::from_secs(600), "took {:?}", start.elapsed());
 }
 
 #[test]
@@ -181,7 +181,7 @@ fn a_cancelled_task_leaves_no_partial_point_and_a_resubmission_runs_only_its_poi
     let ids = point_ids(&out);
     let task1: Vec<&String> = ids[3..6].iter().collect();
     loop {
-        assert!(start.elapsed() < Duration::from_secs(60), "task 1 recorded no point");
+        assert!(start.elapsed() < Duration::from_secs(300), "task 1 recorded no point");
         let done = records(&out);
         let n = task1.iter().filter(|id| done.contains_key(&format!("{id}.json"))).count();
         if n >= 1 {
@@ -193,7 +193,7 @@ fn a_cancelled_task_leaves_no_partial_point_and_a_resubmission_runs_only_its_poi
     let status = Command::new("scancel").arg(format!("{job}_1")).status().unwrap();
     assert!(status.success());
     while job_running(&job) {
-        assert!(start.elapsed() < Duration::from_secs(90), "job {job} does not end");
+        assert!(start.elapsed() < Duration::from_secs(400), "job {job} does not end");
         std::thread::sleep(Duration::from_millis(200));
     }
 
@@ -238,5 +238,5 @@ fn a_cancelled_task_leaves_no_partial_point_and_a_resubmission_runs_only_its_poi
         .flat_map(|sel| inimtrace::sweep::parse_selection(sel, 12).unwrap())
         .collect();
     assert_eq!(listed, missing, "the resubmission runs only the missing points");
-    assert!(start.elapsed() < Duration::from_secs(100), "took {:?}", start.elapsed());
+    assert!(start.elapsed() < Duration::from_secs(600), "took {:?}", start.elapsed());
 }
