@@ -35,8 +35,28 @@ pub struct RunOptions {
     pub exr_compression: ExrCompression,
 }
 
+/// Everything an assessment computed: its report and its images, in the experiment's order.
+pub struct Assessment {
+    pub report: AssessReport,
+    /// The display image of every method.
+    pub displays: Vec<RgbImage>,
+    /// The depth plane of every display image (`None` where the backend knows no depths).
+    pub depths: Vec<Option<Vec<f32>>>,
+    /// The ground truth of every eye case.
+    pub ground_truths: Vec<RgbImage>,
+    /// `perceived[case][method]`: what each eye case perceives of each display image.
+    pub perceived: Vec<Vec<RgbImage>>,
+}
+
 /// Runs an experiment and writes every output into `out`.
 pub fn assess(exp: &Experiment, out: &Path, opts: RunOptions) -> Result<AssessReport> {
+    assess_images(exp, Some(out), opts).map(|a| a.report)
+}
+
+/// Runs an experiment and returns its report and images; with `out`, also writes every output
+/// there exactly as [`assess`] does (the same code path: the images and scores are the same bit
+/// for bit).
+pub fn assess_images(exp: &Experiment, out: Option<&Path>, opts: RunOptions) -> Result<Assessment> {
     let start = Instant::now();
     // Refuse settings that cannot fit in memory before anything is allocated; say so when the
     // run will be long, even when stderr is not a terminal.
@@ -56,7 +76,8 @@ pub fn assess(exp: &Experiment, out: &Path, opts: RunOptions) -> Result<AssessRe
     }
     // The folder is owned by this run (a second run into it fails at once) and every file
     // appears under its final name only when complete; `results.json` comes last.
-    let dir = &OutputDir::open(out)?;
+    let dir = out.map(OutputDir::open).transpose()?;
+    let dir = dir.as_ref();
     // The paper's kind of scene: the fused planar kernel, called directly (no virtual call per
     // ray) for both images and depths. Everything else: the backend chosen by `with_fields`.
     if resolve(&exp.scene, opts.backend) == BackendChoice::Analytic && exp.scene.is_analytic() {
@@ -124,13 +145,13 @@ struct Job<'a> {
 #[allow(clippy::too_many_arguments)]
 fn assess_with<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
     exp: &Experiment,
-    dir: &OutputDir,
+    dir: Option<&OutputDir>,
     opts: RunOptions,
     shade: &S,
     with_depth: &D,
     backend_name: &str,
     start: Instant,
-) -> Result<AssessReport> {
+) -> Result<Assessment> {
     let mut stages = Vec::new();
     let display = &exp.display;
 
@@ -142,10 +163,47 @@ fn assess_with<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
     drop(stack);
 
     // 4. Images: EXR + PNG preview each, written in parallel.
-    let t = Instant::now();
+    if let Some(dir) = dir {
+        let t_images = Instant::now();
+        write_images(exp, dir, opts, backend_name, (&displays, &depths), &gts, &sims, &scores)?;
+        stage_time(&mut stages, "write_images", None, None, t_images);
+    }
+
+    let report = AssessReport {
+        tool: crate::version::TOOL,
+        experiment: exp.name.clone(),
+        ssim_constants: exp.ssim.name().into(),
+        backend: backend_name.into(),
+        threads: rayon::current_num_threads(),
+        display: display.into(),
+        central_depth_plane_mm: display.central_depth_plane(),
+        scores,
+        stages,
+        total_seconds: start.elapsed().as_secs_f64(),
+        settings: exp.spec.clone(),
+    };
+    if let Some(dir) = dir {
+        write_reports(&report, exp, dir)?;
+    }
+    Ok(Assessment { report, displays, depths, ground_truths: gts, perceived: sims })
+}
+
+/// Writes every image of a run into `dir` (EXR + PNG preview each, in parallel) and the figure.
+#[allow(clippy::too_many_arguments)]
+fn write_images(
+    exp: &Experiment,
+    dir: &OutputDir,
+    opts: RunOptions,
+    backend_name: &str,
+    (displays, depths): (&[RgbImage], &[Option<Vec<f32>>]),
+    gts: &[RgbImage],
+    sims: &[Vec<RgbImage>],
+    scores: &[super::Score],
+) -> Result<()> {
+    let display = &exp.display;
     let mut jobs = Vec::new();
     let name = Some(exp.name.as_str());
-    for ((m, img), depth) in exp.methods.iter().zip(&displays).zip(&depths) {
+    for ((m, img), depth) in exp.methods.iter().zip(displays).zip(depths) {
         let mut attributes = metadata::common("display image", name);
         attributes.extend(metadata::display_image(*m, display, &exp.render, backend_name, depth.is_some()));
         jobs.push(Job { stem: format!("display_{}", m.short_name()), image: img, depth: depth.as_deref(), attributes });
@@ -174,7 +232,7 @@ fn assess_with<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
     }
     // Biggest first so the two cores finish together.
     jobs.sort_by_key(|j| std::cmp::Reverse(j.image.pixels.len()));
-    let figure = figure(exp, &gts, &sims, &scores);
+    let figure = figure(exp, gts, sims, scores);
     let (image_result, figure_result) = rayon::join(
         || {
             jobs.par_iter().try_for_each(|j| -> Result<()> {
@@ -187,24 +245,7 @@ fn assess_with<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
         || dir.write_with("figure.png", |p| crate::io::figure::write_figure(p, &figure)),
     );
     image_result?;
-    figure_result?;
-    stage_time(&mut stages, "write_images", None, None, t);
-
-    let report = AssessReport {
-        tool: crate::version::TOOL,
-        experiment: exp.name.clone(),
-        ssim_constants: exp.ssim.name().into(),
-        backend: backend_name.into(),
-        threads: rayon::current_num_threads(),
-        display: display.into(),
-        central_depth_plane_mm: display.central_depth_plane(),
-        scores,
-        stages,
-        total_seconds: start.elapsed().as_secs_f64(),
-        settings: exp.spec.clone(),
-    };
-    write_reports(&report, exp, dir)?;
-    Ok(report)
+    figure_result
 }
 
 /// Fig. 3 as `assess` draws it: a title, one row per eye case labelled with its focus, and each
