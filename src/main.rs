@@ -8,7 +8,7 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use glam::DVec3;
 
-use inimtrace::experiment::{self, metadata, Experiment, ExperimentSpec, RunOptions};
+use inimtrace::experiment::{self, metadata, ExperimentSpec, RunOptions};
 use inimtrace::io::display_file::DisplaySpec;
 use inimtrace::io::exr::ExrCompression;
 use inimtrace::io::scene_file::SceneSpec;
