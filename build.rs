@@ -53,7 +53,11 @@ mod revision {
             (git(&["rev-parse", "--git-common-dir"]), git(&["symbolic-ref", "-q", "HEAD"]))
         {
             println!("cargo::rerun-if-changed={common}/{reference}");
-            println!("cargo::rerun-if-changed={common}/packed-refs");
+            // Only when it exists: Cargo counts a watched file that is missing as changed, which
+            // would rebuild the crate on every build in a repository without packed refs.
+            if std::path::Path::new(&format!("{common}/packed-refs")).exists() {
+                println!("cargo::rerun-if-changed={common}/packed-refs");
+            }
         }
         let revision = std::env::var("INIMTRACE_GIT_REVISION")
             .ok()

@@ -10,7 +10,10 @@
 #   python3-venv                 a venv under target/venv-exr with OpenEXR's Python bindings
 #                                (pip: OpenEXR numpy), with which tests/exr_output.rs checks
 #                                that other tools read our EXR files; skipped with a warning
-#                                when pip cannot reach PyPI (the test then skips too)
+#                                when pip cannot reach PyPI (the test then skips too); and the
+#                                venvs the Python package installs into (`pip install .` builds
+#                                it with maturin from PyPI and this Rust toolchain; no headers
+#                                needed: the module uses CPython's stable ABI, abi3)
 set -eu
 SUDO=""
 if [ "$(id -u)" != 0 ]; then SUDO=sudo; fi

@@ -8,12 +8,11 @@ use clap::Args;
 use glam::DVec3;
 
 use inimtrace::io::exr::{Attributes, ExrCompression};
-use inimtrace::io::{load_display, load_scene};
 use inimtrace::optics::{Aperture, Display, Eye, Focus, Retina};
 use inimtrace::overrides::Override;
 use inimtrace::render::{with_fields, BackendChoice, Fields};
 use inimtrace::scene::Scene;
-use inimtrace::settings::setup_with;
+use inimtrace::settings::{load_display_part, load_scene_part, setup_with};
 
 /// Refuses an image of `pixels` pixels at `bytes_each` bytes that would not fit in the memory
 /// limit (`--max-memory`), naming the setting, before anything is allocated.
@@ -117,14 +116,8 @@ pub(crate) fn load_setup(setup: &Setup, set: &[Override]) -> Result<(Scene, Disp
     if !set.is_empty() {
         return Ok(setup_with(setup.scene.as_deref(), setup.display.as_deref(), set)?);
     }
-    let scene = match &setup.scene {
-        Some(p) => load_scene(&p.to_string_lossy(), Path::new(""))?,
-        None => Scene::paper(),
-    };
-    let display = match &setup.display {
-        Some(p) => load_display(&p.to_string_lossy(), Path::new(""))?,
-        None => Display::paper(),
-    };
+    let scene = load_scene_part(setup.scene.as_deref(), set)?;
+    let display = load_display_part(setup.display.as_deref(), set)?;
     Ok((scene, display))
 }
 

@@ -8,7 +8,7 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use glam::DVec3;
 
-use inimtrace::experiment::{self, metadata, Experiment, ExperimentSpec, RunOptions};
+use inimtrace::experiment::{self, metadata, ExperimentSpec, RunOptions};
 use inimtrace::io::display_file::DisplaySpec;
 use inimtrace::io::exr::ExrCompression;
 use inimtrace::io::scene_file::SceneSpec;
@@ -20,7 +20,7 @@ use inimtrace::progress::Progress;
 use inimtrace::render::retina::simulate;
 use inimtrace::render::{ground_truth, render_display_image_with_depth, BackendChoice, DisplayRenderSettings, Method};
 use inimtrace::scene::Scene;
-use inimtrace::settings::{display_with, scene_with, Settings};
+use inimtrace::settings::{display_with, load_experiment, scene_with};
 
 mod cli;
 use cli::{check_memory, error_line, exr_path, load_setup, parse_vec3, with_field, write_image, EyeArgs, Setup};
@@ -325,28 +325,7 @@ fn run() -> Result<()> {
     match cli.command {
         Command::Assess { experiment, out, scene, backend } => {
             let backend = backend.choice()?;
-            let mut exp = match &experiment {
-                _ if !set.is_empty() => {
-                    let mut s = match &experiment {
-                        Some(p) => Settings::experiment_file(p)?,
-                        None => Settings::builtin(
-                            &ExperimentSpec::paper_converged(),
-                            "built-in paper-converged experiment",
-                            Path::new("."),
-                        )?,
-                    };
-                    if let Some(p) = &scene {
-                        s.replace_scene(p)?;
-                    }
-                    s.with_overrides(&set).resolve()?.experiment()?
-                }
-                Some(p) => Experiment::load(p)?,
-                None => Experiment::paper_converged(),
-            };
-            if let Some(p) = scene.as_ref().filter(|_| set.is_empty()) {
-                exp.scene = load_scene(&p.to_string_lossy(), Path::new(""))?;
-                exp.spec.scene = p.display().to_string();
-            }
+            let exp = load_experiment(experiment.as_deref(), scene.as_deref(), &set)?;
             announce(&exp.scene, backend, quiet);
             let out = out.unwrap_or_else(|| PathBuf::from("out").join(&exp.name));
             if !quiet {

@@ -345,6 +345,55 @@ pub fn setup_with(scene: Option<&Path>, display: Option<&Path>, overrides: &[Ove
     Ok((s.scene()?, s.display()?))
 }
 
+/// A scene as the single-stage commands load it: `path` (`None`: the paper's) with `overrides`
+/// (keys `scene.…`); without overrides the file is read directly, its errors naming it.
+pub fn load_scene_part(path: Option<&Path>, overrides: &[Override]) -> Result<Scene> {
+    match path {
+        _ if !overrides.is_empty() => scene_with(path, overrides),
+        Some(p) => crate::io::load_scene(&p.to_string_lossy(), Path::new("")),
+        None => Ok(Scene::paper()),
+    }
+}
+
+/// A display as the single-stage commands load it: `path` (`None`: the paper's) with
+/// `overrides` (keys `display.…`); without overrides the file is read directly.
+pub fn load_display_part(path: Option<&Path>, overrides: &[Override]) -> Result<Display> {
+    match path {
+        _ if !overrides.is_empty() => display_with(path, overrides),
+        Some(p) => crate::io::load_display(&p.to_string_lossy(), Path::new("")),
+        None => Ok(Display::paper()),
+    }
+}
+
+/// An experiment as `inimtrace assess` loads it: the file at `path` (`None`: the paper's
+/// experiment measured converged), its scene replaced by the file `scene` when given, then
+/// `overrides` applied (through the resolved settings, so errors name the key).
+pub fn load_experiment(path: Option<&Path>, scene: Option<&Path>, overrides: &[Override]) -> Result<Experiment> {
+    if !overrides.is_empty() {
+        let mut s = match path {
+            Some(p) => Settings::experiment_file(p)?,
+            None => Settings::builtin(
+                &ExperimentSpec::paper_converged(),
+                "built-in paper-converged experiment",
+                Path::new("."),
+            )?,
+        };
+        if let Some(p) = scene {
+            s.replace_scene(p)?;
+        }
+        return s.with_overrides(overrides).resolve()?.experiment();
+    }
+    let mut exp = match path {
+        Some(p) => Experiment::load(p)?,
+        None => Experiment::paper_converged(),
+    };
+    if let Some(p) = scene {
+        exp.scene = crate::io::load_scene(&p.to_string_lossy(), Path::new(""))?;
+        exp.spec.scene = p.display().to_string();
+    }
+    Ok(exp)
+}
+
 type ExperimentSpecs = (ExperimentSpec, SceneSpec, DisplaySpec);
 
 fn decode_experiment(root: &toml::Value) -> std::result::Result<ExperimentSpecs, String> {

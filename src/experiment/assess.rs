@@ -35,8 +35,34 @@ pub struct RunOptions {
     pub exr_compression: ExrCompression,
 }
 
-/// Runs an experiment and writes every output into `out`.
+/// Everything an assessment computed: its report and its images, in the experiment's order.
+pub struct Assessment {
+    pub report: AssessReport,
+    /// The display image of every method.
+    pub displays: Vec<RgbImage>,
+    /// The depth plane of every display image (`None` where the backend knows no depths).
+    pub depths: Vec<Option<Vec<f32>>>,
+    /// The ground truth of every eye case.
+    pub ground_truths: Vec<RgbImage>,
+    /// `perceived[case][method]`: what each eye case perceives of each display image.
+    pub perceived: Vec<Vec<RgbImage>>,
+}
+
+/// Runs an experiment and writes every output into `out`. Each image is written as soon as it
+/// is made and then dropped, so the run holds the display images once (in the simulation's
+/// stack) and one eye case's retinal images at a time.
 pub fn assess(exp: &Experiment, out: &Path, opts: RunOptions) -> Result<AssessReport> {
+    run(exp, Some(out), opts, false).map(|a| a.report)
+}
+
+/// Runs an experiment and returns its report and images; with `out`, also writes every output
+/// there exactly as [`assess`] does (the same code path: the images and scores are the same bit
+/// for bit). Keeping the images costs one more copy of the display images.
+pub fn assess_images(exp: &Experiment, out: Option<&Path>, opts: RunOptions) -> Result<Assessment> {
+    run(exp, out, opts, true)
+}
+
+fn run(exp: &Experiment, out: Option<&Path>, opts: RunOptions, keep: bool) -> Result<Assessment> {
     let start = Instant::now();
     // Refuse settings that cannot fit in memory before anything is allocated; say so when the
     // run will be long, even when stderr is not a terminal.
@@ -56,17 +82,18 @@ pub fn assess(exp: &Experiment, out: &Path, opts: RunOptions) -> Result<AssessRe
     }
     // The folder is owned by this run (a second run into it fails at once) and every file
     // appears under its final name only when complete; `results.json` comes last.
-    let dir = &OutputDir::open(out)?;
+    let dir = out.map(OutputDir::open).transpose()?;
+    let dir = dir.as_ref();
     // The paper's kind of scene: the fused planar kernel, called directly (no virtual call per
     // ray) for both images and depths. Everything else: the backend chosen by `with_fields`.
     if resolve(&exp.scene, opts.backend) == BackendChoice::Analytic && exp.scene.is_analytic() {
         let backend = AnalyticRects::new(&exp.scene)?;
         if let Some(fast) = FacingPlanes::new(&exp.scene, &backend) {
-            return assess_with(exp, dir, opts, &fast, &fast, "analytic (fused planar kernel)", start);
+            return assess_with(exp, dir, opts, keep, &fast, &fast, "analytic (fused planar kernel)", start);
         }
     }
     with_fields(&exp.scene, opts.backend, |fields| {
-        assess_with(exp, dir, opts, fields.shade, fields.with_depth, fields.name, start)
+        assess_with(exp, dir, opts, keep, fields.shade, fields.with_depth, fields.name, start)
     })
 }
 
@@ -124,22 +151,29 @@ struct Job<'a> {
 #[allow(clippy::too_many_arguments)]
 fn assess_with<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
     exp: &Experiment,
-    dir: &OutputDir,
+    dir: Option<&OutputDir>,
     opts: RunOptions,
+    keep: bool,
     shade: &S,
     with_depth: &D,
     backend_name: &str,
     start: Instant,
-) -> Result<AssessReport> {
+) -> Result<Assessment> {
     let mut stages = Vec::new();
     let display = &exp.display;
-
-    // 1-3. Display images, then per eye case the ground truth and the perceived image of every
-    // method, then the scores: the same stage functions `inimtrace bench` times.
-    // Each display image is rendered into the stack the simulation reads and written at once
-    // (EXR + PNG preview), so it is held once and its depth plane only while it is written.
     let name = Some(exp.name.as_str());
+    // What `assess_images` hands back (nothing for `assess`).
+    let (mut displays, mut depths, mut ground_truths, mut perceived) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+
+    // 1. Display images, each rendered into the stack the simulation reads and written at once
+    // (EXR + PNG preview), so it is held once and its depth plane only while it is written: the
+    // same stage functions `inimtrace bench` times.
     let stack = render_display_stack(exp, with_depth, opts.quiet, &mut stages, |k, image, depth| {
+        if keep {
+            displays.push(image.to_image());
+            depths.push(depth.map(<[f32]>::to_vec));
+        }
+        let Some(dir) = dir else { return Ok(()) };
         let m = exp.methods[k];
         let mut attributes = metadata::common("display image", name);
         attributes.extend(metadata::display_image(m, display, &exp.render, backend_name, depth.is_some()));
@@ -155,40 +189,26 @@ fn assess_with<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
         exr?;
         png
     })?;
-    // 2-3. Per eye case, its retinal images are written (EXR + PNG preview each, in parallel)
-    // as soon as it is measured, and only their figure cells are kept.
+
+    // 2-3. Per eye case the ground truth, the perceived image of every method and the scores;
+    // its retinal images are written (EXR + PNG preview each, in parallel) as soon as it is
+    // measured, and only their figure cells are kept.
     let mut cells: Vec<Vec<RgbImage>> = Vec::new();
     let mut scores = Vec::new();
     let mut write_seconds = Vec::new();
     table1_each(exp, shade, &stack, opts.quiet, &mut stages, |c, result| {
-        let t = Instant::now();
-        let case = &exp.cases[c];
-        // Samples per retina pixel when the eye case was measured converged.
-        let converged = result.scores.first().and_then(|s| s.samples_per_pixel);
-        let measured = |mut a: crate::io::exr::Attributes| {
-            if let Some(spp) = converged {
-                crate::experiment::converged::set_exr_attributes(&mut a, exp, spp);
-            }
-            a
-        };
-        let mut jobs = Vec::new();
-        let attributes = measured(metadata::ground_truth(name, Some(&case.name), &case.eye, &exp.retina, backend_name));
-        jobs.push(Job { stem: format!("gt_{}", case.name), image: &result.ground_truth, attributes });
-        for (m, image) in exp.methods.iter().zip(&result.perceived) {
-            let attributes =
-                measured(metadata::perceived(name, Some(*m), Some(&case.name), &case.eye, &exp.retina, display, None));
-            jobs.push(Job { stem: format!("sim_{}_{}", m.short_name(), case.name), image, attributes });
+        if let Some(dir) = dir {
+            let t = Instant::now();
+            write_case(exp, dir, opts, backend_name, c, &result)?;
+            let images = std::iter::once(&result.ground_truth).chain(&result.perceived).collect::<Vec<_>>();
+            cells.push(images.par_iter().map(|img| crate::io::figure::cell_image(img)).collect());
+            write_seconds.push((exp.cases[c].name.clone(), t.elapsed().as_secs_f64()));
         }
-        jobs.par_iter().try_for_each(|j| -> Result<()> {
-            dir.write_with(&format!("{}.exr", j.stem), |p| {
-                crate::io::exr::write_rgb_with(p, j.image, None, &j.attributes, opts.exr_compression)
-            })?;
-            dir.write_with(&format!("{}.png", j.stem), |p| crate::io::png::write_preview(p, j.image))
-        })?;
-        let images = std::iter::once(&result.ground_truth).chain(&result.perceived).collect::<Vec<_>>();
-        cells.push(images.par_iter().map(|img| crate::io::figure::cell_image(img)).collect());
         scores.extend(result.scores);
-        write_seconds.push((case.name.clone(), t.elapsed().as_secs_f64()));
+        if keep {
+            ground_truths.push(result.ground_truth);
+            perceived.push(result.perceived);
+        }
         Ok(())
     })?;
     drop(stack);
@@ -197,10 +217,12 @@ fn assess_with<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
     }
 
     // 4. Fig. 3 from the cells.
-    let t = Instant::now();
-    let figure = figure(exp, &cells, &scores);
-    dir.write_with("figure.png", |p| crate::io::figure::write_figure(p, &figure))?;
-    stage_time(&mut stages, "write_figure", None, None, t);
+    if let Some(dir) = dir {
+        let t = Instant::now();
+        let figure = figure(exp, &cells, &scores);
+        dir.write_with("figure.png", |p| crate::io::figure::write_figure(p, &figure))?;
+        stage_time(&mut stages, "write_figure", None, None, t);
+    }
 
     let report = AssessReport {
         tool: crate::version::TOOL,
@@ -215,8 +237,45 @@ fn assess_with<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
         total_seconds: start.elapsed().as_secs_f64(),
         settings: exp.spec.clone(),
     };
-    write_reports(&report, exp, dir)?;
-    Ok(report)
+    if let Some(dir) = dir {
+        write_reports(&report, exp, dir)?;
+    }
+    Ok(Assessment { report, displays, depths, ground_truths, perceived })
+}
+
+/// Writes the retinal images of eye case `c` (EXR + PNG preview each, in parallel).
+fn write_case(
+    exp: &Experiment,
+    dir: &OutputDir,
+    opts: RunOptions,
+    backend_name: &str,
+    c: usize,
+    result: &super::CaseResult,
+) -> Result<()> {
+    let case = &exp.cases[c];
+    let name = Some(exp.name.as_str());
+    // Samples per retina pixel when the eye case was measured converged.
+    let converged = result.scores.first().and_then(|s| s.samples_per_pixel);
+    let measured = |mut a: crate::io::exr::Attributes| {
+        if let Some(spp) = converged {
+            crate::experiment::converged::set_exr_attributes(&mut a, exp, spp);
+        }
+        a
+    };
+    let mut jobs = Vec::new();
+    let attributes = measured(metadata::ground_truth(name, Some(&case.name), &case.eye, &exp.retina, backend_name));
+    jobs.push(Job { stem: format!("gt_{}", case.name), image: &result.ground_truth, attributes });
+    for (m, image) in exp.methods.iter().zip(&result.perceived) {
+        let attributes =
+            measured(metadata::perceived(name, Some(*m), Some(&case.name), &case.eye, &exp.retina, &exp.display, None));
+        jobs.push(Job { stem: format!("sim_{}_{}", m.short_name(), case.name), image, attributes });
+    }
+    jobs.par_iter().try_for_each(|j| -> Result<()> {
+        dir.write_with(&format!("{}.exr", j.stem), |p| {
+            crate::io::exr::write_rgb_with(p, j.image, None, &j.attributes, opts.exr_compression)
+        })?;
+        dir.write_with(&format!("{}.png", j.stem), |p| crate::io::png::write_preview(p, j.image))
+    })
 }
 
 /// Fig. 3 as `assess` draws it: a title, one row per eye case labelled with its focus, and each

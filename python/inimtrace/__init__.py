@@ -1,0 +1,133 @@
+"""inimtrace: how a near-eye integral-imaging light-field display looks to a human eye.
+
+The paper's pipeline (Dorado et al., "A framework for assessing rendering techniques for
+near-eye integral imaging displays") with NumPy arrays in and out. Every function runs the same
+library code as the CLI command of the same name, so its outputs equal the CLI's bit for bit:
+
+    import inimtrace
+    scene, display = inimtrace.Scene.paper(), inimtrace.Display.paper()
+    img = inimtrace.render_display(scene, display, method="LA")        # (2160, 2160, 3) float32
+    eye = inimtrace.Eye(focus_mm=400, pupil=5)
+    sim = inimtrace.simulate(img, display, eye)                        # (512, 512, 3) float32
+    gt = inimtrace.ground_truth(scene, eye)
+    inimtrace.compare(sim, gt)["psnr_db"]["mean"]
+
+    exp = inimtrace.Experiment.load("experiments/paper.toml", set={"eye.pupil_diameter": 3})
+    result = inimtrace.assess(exp)                 # scores, images, stage times
+    pandas.DataFrame(result.scores)
+
+Units are millimetres; images are (rows, columns, 3) float32 arrays of linear radiance, row 0 at
+the top. Rendering releases the GIL; `threads=` sets the worker threads of one call (default:
+all cores); `progress=` takes a callable `progress(stage, done, total)`. Errors raise
+`inimtrace.Error` subclasses with the CLI's messages. See docs/PYTHON.md.
+"""
+
+from dataclasses import dataclass, field
+from os import PathLike
+from typing import Any, Callable, Dict, List, Optional, Union
+
+from ._inimtrace import (
+    ConfigError,
+    Display,
+    Error,
+    Experiment,
+    Eye,
+    ImageError,
+    MeshError,
+    OpticsError,
+    Scene,
+    __version__,
+    _assess,
+    compare,
+    git_revision,
+    ground_truth,
+    has_embree,
+    read_exr,
+    render_display,
+    simulate,
+)
+
+__all__ = [
+    "Assessment",
+    "ConfigError",
+    "Display",
+    "Error",
+    "Experiment",
+    "Eye",
+    "ImageError",
+    "MeshError",
+    "OpticsError",
+    "Scene",
+    "__version__",
+    "assess",
+    "compare",
+    "git_revision",
+    "ground_truth",
+    "has_embree",
+    "read_exr",
+    "render_display",
+    "simulate",
+]
+
+
+@dataclass
+class Assessment:
+    """What `assess` computed.
+
+    scores: one record per method and eye case (a list of dicts that `pandas.DataFrame` takes as
+        it is): `experiment`, `method`, `eye_case`, `psnr_db`, `psnr_ci95_db`, `ssim`, `ssim_ci95`
+        (the mean over R, G, B and the 95% half-width, None for the grid estimator), the same per
+        channel (`psnr_db_R`, `ssim_ci95_G`, ...), and for the converged estimator
+        `samples_per_pixel`, `replicates`, `target_met`. The numbers of `results.json`.
+    images: the images by the stem of the file `inimtrace assess` writes: `display_LA`,
+        `gt_Pin`, `sim_LA_Pin`, ... as (rows, columns, 3) float32 arrays.
+    depths: the display images' `Z` channel by stem (`display_LA`), (rows, columns) float32,
+        or None where the backend knows no depths.
+    stages: the wall time of every stage: records with `stage`, `method`, `eye_case`, `seconds`.
+    report: everything `results.json` holds (tool, settings, display, backend, threads, ...).
+    out: the folder the files were written to, or None.
+    """
+
+    scores: List[Dict[str, Any]]
+    images: Dict[str, Any]
+    depths: Dict[str, Any]
+    stages: List[Dict[str, Any]]
+    report: Dict[str, Any] = field(repr=False)
+    out: Optional[str] = None
+
+    def score(self, method: str, eye_case: str) -> Dict[str, Any]:
+        """The score record of one method under one eye case."""
+        for s in self.scores:
+            if s["method"] == method and s["eye_case"] == eye_case:
+                return s
+        raise KeyError(f"no score for method {method!r} and eye case {eye_case!r}")
+
+
+def assess(
+    experiment: Experiment,
+    out: Union[str, "PathLike[str]", None] = None,
+    backend: str = "auto",
+    *,
+    exr_compression: str = "zip",
+    threads: Optional[int] = None,
+    progress: Optional[Callable[[str, int, int], Any]] = None,
+) -> Assessment:
+    """Runs `experiment` as `inimtrace assess` does, returning its scores, images and stage times.
+
+    With `out`, also writes every file the CLI writes there (EXR + PNG previews, table.md,
+    results.csv, results.json, figure.png); the arrays and scores are the same either way.
+    `backend` is auto, analytic, embree, bvh or brute.
+    """
+    r = _assess(experiment, out, backend, exr_compression=exr_compression, threads=threads, progress=progress)
+    return Assessment(
+        scores=r["scores"],
+        images=r["images"],
+        depths=r["depths"],
+        stages=r["stages"],
+        report=r["report"],
+        out=r["out"],
+    )
+
+
+# The resolution study (`inimtrace resolution`, being built separately) gets its entry point
+# here, next to `assess`, when the library exposes it.

@@ -1,0 +1,153 @@
+//! The Python exceptions of the library's errors (`inimtrace::Error`, which names the file and
+//! field): one class per kind of input that was wrong, each carrying the CLI's message and, as
+//! attributes, the file (`source`) and the field when the error names them.
+
+use pyo3::exceptions::{PyException, PyValueError};
+use pyo3::prelude::*;
+
+use inimtrace::Error as LibError;
+
+pyo3::create_exception!(
+    inimtrace,
+    Error,
+    PyException,
+    "Base class of inimtrace's errors. `str(e)` is the message the CLI prints; `e.source` names the \
+     file (or what stood for one, such as `Eye()`) and `e.field` the field, line or element when the error names them."
+);
+pyo3::create_exception!(
+    inimtrace,
+    ConfigError,
+    Error,
+    "An experiment, scene or display file (TOML, OpenCV YAML), a `set=` override or an argument is wrong."
+);
+pyo3::create_exception!(inimtrace, MeshError, Error, "A mesh file (OBJ/MTL, PLY, STL, glTF/GLB) is wrong.");
+pyo3::create_exception!(
+    inimtrace,
+    ImageError,
+    Error,
+    "An image file (EXR, PNG, JPEG: display images, textures) is wrong or cannot be read or written."
+);
+pyo3::create_exception!(
+    inimtrace,
+    OpticsError,
+    Error,
+    "An optical configuration for which the computation has no answer (e.g. PupilCenter when the lenslet images the pupil centre onto the LCD)."
+);
+
+/// Which exception class an error becomes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Class {
+    Base,
+    Config,
+    Mesh,
+    Image,
+    Optics,
+}
+
+const MESH_EXTENSIONS: [&str; 7] = ["obj", "mtl", "ply", "stl", "gltf", "glb", "bin"];
+const IMAGE_EXTENSIONS: [&str; 4] = ["exr", "png", "jpg", "jpeg"];
+
+/// The kind of file that `path` names, by its extension.
+fn file_class(path: &str) -> Option<Class> {
+    let ext = path.rsplit_once('.')?.1.to_ascii_lowercase();
+    if MESH_EXTENSIONS.contains(&ext.as_str()) {
+        Some(Class::Mesh)
+    } else if IMAGE_EXTENSIONS.contains(&ext.as_str()) {
+        Some(Class::Image)
+    } else {
+        None
+    }
+}
+
+/// The kind of the innermost file an error message names: errors that wrap others read
+/// `outer.toml: field `scene`: cannot load `s.toml`: mesh.obj: line 3: ...`, each file followed
+/// by a colon, so the last `name.ext:` is where the error is.
+fn innermost_file_class(text: &str) -> Option<Class> {
+    let mut class = None;
+    for (i, _) in text.match_indices(':') {
+        let before = &text[..i];
+        let start = before.rfind(|c: char| c.is_whitespace() || c == '`').map_or(0, |k| k + 1);
+        let token = &before[start..];
+        if token.contains('.') {
+            if let Some(c) = file_class(token) {
+                class = Some(c);
+            } else if token.rsplit_once('.').is_some_and(|(_, e)| matches!(e, "toml" | "yaml" | "yml")) {
+                class = Some(Class::Config);
+            }
+        }
+    }
+    class
+}
+
+fn classify(e: &LibError) -> Class {
+    match e {
+        LibError::Singular(_) => Class::Optics,
+        LibError::Embree { .. } => Class::Base,
+        LibError::Unsupported(_) => Class::Config,
+        LibError::Io { path, .. } | LibError::Parse { path, .. } => {
+            file_class(&path.to_string_lossy()).unwrap_or(Class::Config)
+        }
+        LibError::Invalid { message, .. } => {
+            if message.contains("singular") {
+                return Class::Optics;
+            }
+            match innermost_file_class(&e.to_string()) {
+                Some(Class::Config) | None => Class::Config,
+                Some(c) => c,
+            }
+        }
+    }
+}
+
+/// The Python exception of a library error: its class, the CLI's message, and the attributes
+/// `source` and `field` (`None` where the error names none).
+pub fn to_py(e: LibError) -> PyErr {
+    let message = e.to_string();
+    let (source, field): (Option<String>, Option<String>) = match &e {
+        LibError::Io { path, .. } | LibError::Parse { path, .. } => (Some(path.display().to_string()), None),
+        LibError::Invalid { source_name, field, .. } => (Some(source_name.clone()), Some(field.clone())),
+        _ => (None, None),
+    };
+    let err = match classify(&e) {
+        Class::Base => Error::new_err(message),
+        Class::Config => ConfigError::new_err(message),
+        Class::Mesh => MeshError::new_err(message),
+        Class::Image => ImageError::new_err(message),
+        Class::Optics => OpticsError::new_err(message),
+    };
+    Python::attach(|py| {
+        let value = err.value(py);
+        // Setting attributes on a fresh exception object cannot fail short of memory exhaustion;
+        // the exception is raised either way.
+        let _ = value.setattr("source", source);
+        let _ = value.setattr("field", field);
+    });
+    err
+}
+
+/// `Result<T, inimtrace::Error>` into a Python result.
+pub trait IntoPy<T> {
+    fn py_err(self) -> PyResult<T>;
+}
+
+impl<T> IntoPy<T> for inimtrace::Result<T> {
+    fn py_err(self) -> PyResult<T> {
+        self.map_err(to_py)
+    }
+}
+
+/// A `ValueError` for an argument outside a closed set or of the wrong shape.
+pub fn value_error(message: impl Into<String>) -> PyErr {
+    PyValueError::new_err(message.into())
+}
+
+/// Registers the exception classes in the module.
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = m.py();
+    m.add("Error", py.get_type::<Error>())?;
+    m.add("ConfigError", py.get_type::<ConfigError>())?;
+    m.add("MeshError", py.get_type::<MeshError>())?;
+    m.add("ImageError", py.get_type::<ImageError>())?;
+    m.add("OpticsError", py.get_type::<OpticsError>())?;
+    Ok(())
+}

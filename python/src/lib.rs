@@ -1,0 +1,37 @@
+//! `inimtrace._inimtrace`, the extension module of the `inimtrace` Python package: the paper's
+//! pipeline (Dorado et al., Sec. 2-4 and Table 1) with NumPy arrays in and out. Every function
+//! runs the library code of the CLI command of the same name, so its outputs equal the CLI's bit
+//! for bit. `python/inimtrace/__init__.py` is the package's pure-Python part (the `Assessment`
+//! record, docstrings); `python/inimtrace/__init__.pyi` its type stubs.
+//!
+//! One concept per file: `errors.rs` (the exception classes), `convert.rs` (arrays, `set=`,
+//! JSON-like values), `objects.rs` (`Display`, `Eye`, `Scene`, `Experiment`), `run.rs` (the
+//! stages, the GIL, threads and progress).
+
+use pyo3::prelude::*;
+
+mod convert;
+mod errors;
+mod objects;
+mod run;
+
+#[pymodule]
+fn _inimtrace(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    errors::register(m)?;
+    m.add_class::<objects::PyDisplay>()?;
+    m.add_class::<objects::PyEye>()?;
+    m.add_class::<objects::PyScene>()?;
+    m.add_class::<objects::PyExperiment>()?;
+    m.add_function(wrap_pyfunction!(run::render_display, m)?)?;
+    m.add_function(wrap_pyfunction!(run::simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(run::ground_truth, m)?)?;
+    m.add_function(wrap_pyfunction!(run::assess, m)?)?;
+    m.add_function(wrap_pyfunction!(run::compare, m)?)?;
+    m.add_function(wrap_pyfunction!(run::read_exr, m)?)?;
+    // The resolution study (`inimtrace resolution`, being built separately) gets its function
+    // here, in run.rs beside `assess`, once the library exposes it.
+    m.add("__version__", inimtrace::version::TOOL.version)?;
+    m.add("git_revision", inimtrace::version::TOOL.git_revision)?;
+    m.add("has_embree", cfg!(feature = "embree"))?;
+    Ok(())
+}

@@ -1,0 +1,353 @@
+//! The pipeline's stages as Python functions (Sec. 3-4, Table 1): the display image, the
+//! perceived image, the ground truth, a whole assessment, and the comparison of two images.
+//! Each calls the same library functions as the CLI command of the same name, with the GIL
+//! released, on the global thread pool or one of `threads` workers, reporting progress to an
+//! optional Python callable.
+
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
+
+use glam::DVec3;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+
+use inimtrace::experiment::{assess_images, Assessment, RunOptions, Score};
+use inimtrace::io::exr::ExrCompression;
+use inimtrace::metrics::{self, SsimConstants};
+use inimtrace::progress::{with_sink, Progress, ProgressSink};
+use inimtrace::render::retina::simulate as simulate_images;
+use inimtrace::render::{ground_truth as ground_truth_image, render_display_image_with_depth, with_fields};
+use inimtrace::render::{BackendChoice, DisplayRenderSettings, Method};
+
+use crate::convert::{depth_to_numpy, image_to_numpy, numpy_to_image, to_py};
+use crate::errors::{value_error, IntoPy};
+use crate::objects::{PyDisplay, PyExperiment, PyEye, PyScene};
+
+/// The most worker threads `threads=` accepts (as `--threads`).
+const MAX_THREADS: usize = 1024;
+
+/// Reports progress to a Python callable `callback(stage, done, total)`, taking the GIL only for
+/// the call (at most every 0.1 s per stage, see `inimtrace::progress`). The first exception the
+/// callable raises is kept, later reports are dropped, and the exception is raised when the
+/// work ends.
+struct PyProgress {
+    callback: Py<PyAny>,
+    error: Mutex<Option<PyErr>>,
+}
+
+impl ProgressSink for PyProgress {
+    fn update(&self, stage: &str, done: u64, total: u64) {
+        let Ok(mut error) = self.error.lock() else { return };
+        if error.is_some() {
+            return;
+        }
+        Python::attach(|py| {
+            if let Err(e) = self.callback.call1(py, (stage, done, total)) {
+                *error = Some(e);
+            }
+        });
+    }
+}
+
+/// Runs `work` with the GIL released: on a pool of `threads` workers (`None`: the global pool,
+/// all cores), with `progress` receiving the progress of every stage.
+fn detached<T: Send>(
+    py: Python<'_>,
+    threads: Option<usize>,
+    progress: Option<Py<PyAny>>,
+    work: impl FnOnce() -> inimtrace::Result<T> + Send,
+) -> PyResult<T> {
+    let pool = match threads {
+        None => None,
+        Some(n) if n == 0 || n > MAX_THREADS => {
+            return Err(value_error(format!("threads must be between 1 and {MAX_THREADS}, got {n}")))
+        }
+        Some(n) => Some(
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .build()
+                .map_err(|e| value_error(format!("cannot start {n} threads: {e}")))?,
+        ),
+    };
+    if let Some(cb) = progress.as_ref() {
+        if !cb.bind(py).is_callable() {
+            return Err(value_error("progress must be a callable progress(stage, done, total) or None"));
+        }
+    }
+    let sink = progress.map(|callback| Arc::new(PyProgress { callback, error: Mutex::new(None) }));
+    let installed = sink.clone().map(|s| s as Arc<dyn ProgressSink>);
+    let result = py.detach(move || {
+        let run = move || match installed {
+            Some(s) => with_sink(s, work),
+            None => work(),
+        };
+        match pool {
+            Some(pool) => pool.install(run),
+            None => run(),
+        }
+    });
+    if let Some(e) = sink.and_then(|s| s.error.lock().ok().and_then(|mut e| e.take())) {
+        return Err(e);
+    }
+    result.py_err()
+}
+
+fn parse_backend(backend: &str) -> PyResult<BackendChoice> {
+    backend.parse().map_err(value_error)
+}
+
+fn parse_compression(name: &str) -> PyResult<ExrCompression> {
+    use ExrCompression::*;
+    [None, Rle, Zips, Zip, Piz, Pxr24].into_iter().find(|c| c.name().eq_ignore_ascii_case(name.trim())).ok_or_else(
+        || value_error(format!("unknown exr_compression `{name}`: expected none, rle, zips, zip, piz or pxr24")),
+    )
+}
+
+/// Refuses an image that would not fit in memory before anything is allocated (as the CLI).
+fn check_memory(what: &str, setting: &str, pixels: usize, bytes_each: u64, source: &str) -> PyResult<()> {
+    let mut e = inimtrace::budget::Estimate::default();
+    e.add(what, setting, pixels as u64, bytes_each);
+    e.check_memory(inimtrace::budget::memory_limit(), source).py_err()
+}
+
+/// The display image of `scene` on `display` by `method` ("LC", "PC", "LA", "LA<k>"), as
+/// `inimtrace render-display`: a `(rows, columns, 3)` float32 array, and with `depth=True` also
+/// the `(rows, columns)` hit distances (mm; None when the backend knows no depths).
+#[pyfunction]
+#[pyo3(signature = (scene, display, method="LA", backend="auto", *, samples_per_pixel=1, reference_plane=0.0,
+    eye_position=(0.0, 0.0, 0.0), depth=false, threads=None, progress=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn render_display<'py>(
+    py: Python<'py>,
+    scene: &PyScene,
+    display: &PyDisplay,
+    method: &str,
+    backend: &str,
+    samples_per_pixel: usize,
+    reference_plane: f64,
+    eye_position: (f64, f64, f64),
+    depth: bool,
+    threads: Option<usize>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let method: Method = method.parse().map_err(value_error)?;
+    let backend = parse_backend(backend)?;
+    let (scene, display) = (&scene.inner, &display.inner);
+    inimtrace::optics::limits::REFERENCE_PLANE_Z
+        .check("render_display()", "reference_plane", reference_plane)
+        .py_err()?;
+    let eye_position = DVec3::new(eye_position.0, eye_position.1, eye_position.2);
+    if !eye_position.is_finite() {
+        return Err(value_error("eye_position must be three finite numbers (mm)"));
+    }
+    check_memory(
+        "the display image and its depth plane",
+        &format!("lcd.resolution = {:?} of the display", display.lcd.resolution),
+        display.lcd.pixel_count(),
+        28,
+        "render_display()",
+    )?;
+    let settings = DisplayRenderSettings { samples_per_pixel, reference_plane_z: reference_plane, eye_position };
+    let (img, z) = detached(py, threads, progress, || {
+        with_fields(scene, backend, |fields| {
+            let p = Progress::new(display.lcd.rows() as u64, &format!("display image {}", method.short_name()), true);
+            let out = render_display_image_with_depth(display, method, &settings, fields.with_depth, &p)?;
+            p.finish();
+            Ok(out)
+        })
+    })?;
+    let (rows, columns) = (img.height, img.width);
+    let img = image_to_numpy(py, img)?.into_any();
+    if !depth {
+        return Ok(img);
+    }
+    let z = match z {
+        Some(z) => depth_to_numpy(py, z, rows, columns)?.into_any(),
+        None => py.None().into_bound(py),
+    };
+    Ok((img, z).into_pyobject(py)?.into_any())
+}
+
+/// What `eye` perceives of `display_image` (a `(rows, columns, 3)` float32 array of the LCD's
+/// resolution, rendered here or anywhere else), as `inimtrace simulate`: a `(n, n, 3)` array.
+#[pyfunction]
+#[pyo3(signature = (display_image, display, eye, *, threads=None, progress=None))]
+pub fn simulate<'py>(
+    py: Python<'py>,
+    display_image: &Bound<'py, PyAny>,
+    display: &PyDisplay,
+    eye: &PyEye,
+    threads: Option<usize>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let display = &display.inner;
+    let img = numpy_to_image(display_image, "display_image", Some((display.lcd.rows(), display.lcd.columns())))?;
+    let n = eye.retina.resolution;
+    check_memory("the retinal image", "retina", n * n, 24, "simulate()")?;
+    let (e, retina) = (&eye.eye, &eye.retina);
+    let mut sims = detached(py, threads, progress, || {
+        let p = Progress::new(n as u64, "simulate", true);
+        let sims = simulate_images(display, e, retina, &[&img], &p)?;
+        p.finish();
+        Ok(sims)
+    })?;
+    Ok(image_to_numpy(py, sims.remove(0))?.into_any())
+}
+
+/// The ground-truth retinal image of `scene` seen by `eye`, as `inimtrace ground-truth`: a
+/// `(n, n, 3)` float32 array.
+#[pyfunction]
+#[pyo3(signature = (scene, eye, backend="auto", *, threads=None, progress=None))]
+pub fn ground_truth<'py>(
+    py: Python<'py>,
+    scene: &PyScene,
+    eye: &PyEye,
+    backend: &str,
+    threads: Option<usize>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let backend = parse_backend(backend)?;
+    let n = eye.retina.resolution;
+    check_memory("the retinal image", "retina", n * n, 24, "ground_truth()")?;
+    let (scene, e, retina) = (&scene.inner, &eye.eye, &eye.retina);
+    let img = detached(py, threads, progress, || {
+        with_fields(scene, backend, |fields| {
+            let p = Progress::new(n as u64, "ground truth", true);
+            let img = ground_truth_image(e, retina, fields.shade, &p);
+            p.finish();
+            Ok(img)
+        })
+    })?;
+    Ok(image_to_numpy(py, img)?.into_any())
+}
+
+/// One score as a flat record (a row of a `pandas.DataFrame`): the mean over R, G, B and each
+/// channel, with the 95% half-widths (None for the grid estimator).
+fn score_record<'py>(py: Python<'py>, experiment: &str, s: &Score) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("experiment", experiment)?;
+    d.set_item("method", &s.method)?;
+    d.set_item("eye_case", &s.eye_case)?;
+    d.set_item("psnr_db", s.psnr.mean)?;
+    d.set_item("psnr_ci95_db", s.psnr.ci95)?;
+    d.set_item("ssim", s.ssim.mean)?;
+    d.set_item("ssim_ci95", s.ssim.ci95)?;
+    for (c, name) in ["R", "G", "B"].iter().enumerate() {
+        d.set_item(format!("psnr_db_{name}"), s.psnr.channels[c])?;
+        d.set_item(format!("psnr_ci95_db_{name}"), s.psnr.channels_ci95.map(|h| h[c]))?;
+        d.set_item(format!("ssim_{name}"), s.ssim.channels[c])?;
+        d.set_item(format!("ssim_ci95_{name}"), s.ssim.channels_ci95.map(|h| h[c]))?;
+    }
+    d.set_item("samples_per_pixel", s.samples_per_pixel)?;
+    d.set_item("replicates", s.replicates)?;
+    d.set_item("target_met", s.target_met)?;
+    Ok(d)
+}
+
+/// Runs `experiment` as `inimtrace assess` does (the same code path), and with `out` writes the
+/// same files there. Returns a dict: `scores` (records), `stages` (records), `images` and
+/// `depths` (arrays by file stem: `display_LA`, `gt_Pin`, `sim_LA_Pin`), `report` (what
+/// `results.json` holds).
+#[pyfunction]
+#[pyo3(name = "_assess", signature = (experiment, out=None, backend="auto", *, exr_compression="zip", threads=None,
+    progress=None))]
+pub fn assess<'py>(
+    py: Python<'py>,
+    experiment: &PyExperiment,
+    out: Option<PathBuf>,
+    backend: &str,
+    exr_compression: &str,
+    threads: Option<usize>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let backend = parse_backend(backend)?;
+    let exr_compression = parse_compression(exr_compression)?;
+    let exp = &experiment.inner;
+    let options = RunOptions { quiet: true, backend, exr_compression };
+    let Assessment { report, displays, depths, ground_truths, perceived } =
+        detached(py, threads, progress, || assess_images(exp, out.as_deref(), options))?;
+
+    let result = PyDict::new(py);
+    let scores = PyList::empty(py);
+    for s in &report.scores {
+        scores.append(score_record(py, &report.experiment, s)?)?;
+    }
+    result.set_item("scores", scores)?;
+    let stages = PyList::empty(py);
+    for st in &report.stages {
+        let d = PyDict::new(py);
+        d.set_item("stage", &st.stage)?;
+        d.set_item("method", &st.method)?;
+        d.set_item("eye_case", &st.eye_case)?;
+        d.set_item("seconds", st.seconds)?;
+        stages.append(d)?;
+    }
+    result.set_item("stages", stages)?;
+    let images = PyDict::new(py);
+    let depth_planes = PyDict::new(py);
+    for ((m, img), depth) in exp.methods.iter().zip(displays).zip(depths) {
+        let stem = format!("display_{}", m.short_name());
+        let (rows, columns) = (img.height, img.width);
+        images.set_item(&stem, image_to_numpy(py, img)?)?;
+        match depth {
+            Some(z) => depth_planes.set_item(&stem, depth_to_numpy(py, z, rows, columns)?)?,
+            None => depth_planes.set_item(&stem, py.None())?,
+        }
+    }
+    for ((case, gt), sims) in exp.cases.iter().zip(ground_truths).zip(perceived) {
+        images.set_item(format!("gt_{}", case.name), image_to_numpy(py, gt)?)?;
+        for (m, sim) in exp.methods.iter().zip(sims) {
+            images.set_item(format!("sim_{}_{}", m.short_name(), case.name), image_to_numpy(py, sim)?)?;
+        }
+    }
+    result.set_item("images", images)?;
+    result.set_item("depths", depth_planes)?;
+    result.set_item("report", to_py(py, &report)?)?;
+    result.set_item("out", out.map(|p| p.display().to_string()))?;
+    Ok(result)
+}
+
+/// PSNR and SSIM of two `(rows, columns, 3)` float32 arrays of the same shape, as
+/// `inimtrace compare --json` (an infinite PSNR, identical channels, stays `inf`).
+#[pyfunction]
+#[pyo3(signature = (a, b, ssim="wang2004"))]
+pub fn compare<'py>(
+    py: Python<'py>,
+    a: &Bound<'py, PyAny>,
+    b: &Bound<'py, PyAny>,
+    ssim: &str,
+) -> PyResult<Bound<'py, PyDict>> {
+    let constants: SsimConstants = ssim.parse().map_err(|e: inimtrace::Error| value_error(e.to_string()))?;
+    let ia = numpy_to_image(a, "a", None)?;
+    let ib = numpy_to_image(b, "b", Some((ia.height, ia.width)))?;
+    let (p, s) = detached(py, None, None, || Ok((metrics::psnr(&ia, &ib)?, metrics::ssim(&ia, &ib, constants)?)))?;
+    let channels = |v: [f64; 3], mean: f64| -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        for (name, x) in ["R", "G", "B"].iter().zip(v) {
+            d.set_item(*name, x)?;
+        }
+        d.set_item("mean", mean)?;
+        Ok(d)
+    };
+    let out = PyDict::new(py);
+    out.set_item("width", ia.width)?;
+    out.set_item("height", ia.height)?;
+    out.set_item("psnr_db", channels(p.channels, p.mean)?)?;
+    out.set_item("ssim", channels(s.channels, s.mean)?)?;
+    out.set_item("ssim_constants", constants.name())?;
+    Ok(out)
+}
+
+/// Reads an RGB EXR (e.g. a display image the CLI wrote) as a `(rows, columns, 3)` float32
+/// array and its `Z` channel as `(rows, columns)` (None without one).
+#[pyfunction]
+pub fn read_exr<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyAny>> {
+    let (img, z) = detached(py, None, None, || inimtrace::io::exr::read_rgb_depth(&path))?;
+    let (rows, columns) = (img.height, img.width);
+    let img = image_to_numpy(py, img)?.into_any();
+    let z = match z {
+        Some(z) => depth_to_numpy(py, z, rows, columns)?.into_any(),
+        None => py.None().into_bound(py),
+    };
+    Ok((img, z).into_pyobject(py)?.into_any())
+}
