@@ -38,6 +38,7 @@ from ._inimtrace import (
     Scene,
     __version__,
     _assess,
+    _resolution,
     compare,
     git_revision,
     ground_truth,
@@ -66,6 +67,8 @@ __all__ = [
     "has_embree",
     "read_exr",
     "render_display",
+    "Resolution",
+    "resolution",
     "simulate",
 ]
 
@@ -129,5 +132,56 @@ def assess(
     )
 
 
-# The resolution study (`inimtrace resolution`, being built separately) gets its entry point
-# here, next to `assess`, when the library exposes it.
+@dataclass
+class Resolution:
+    """What `resolution` wrote: the output folder and the study's tables as records (lists of
+    dicts that `pandas.DataFrame` accepts as they are; numbers as floats)."""
+
+    out: str
+    mtf: List[Dict[str, Any]]
+    mtf50: List[Dict[str, Any]]
+    accommodation: List[Dict[str, Any]]
+    display: Dict[str, Any]
+    timings: List[Dict[str, Any]] = field(default_factory=list)
+
+
+def _records(path: str) -> List[Dict[str, Any]]:
+    import csv
+
+    def value(v: str) -> Any:
+        try:
+            return float(v)
+        except ValueError:
+            return v
+
+    with open(path, newline="") as f:
+        return [{k: value(v) for k, v in row.items()} for row in csv.DictReader(f)]
+
+
+def resolution(
+    study: Optional[Union[str, "PathLike[str]"]] = None,
+    out: Optional[Union[str, "PathLike[str]"]] = None,
+    set: Optional[Any] = None,
+    *,
+    threads: Optional[int] = None,
+    progress: Optional[Callable[[str, int, int], None]] = None,
+) -> Resolution:
+    """Runs a resolution study exactly as `inimtrace resolution [STUDY] --out OUT` (the same code
+    path and files): MTF in cycles per degree, through-focus contrast, predicted accommodation
+    and the display's limits. `study=None` is the built-in `studies/paper.toml`; `set` takes the
+    same overrides as `--set`. The GIL is released while it runs."""
+    import json
+    import os
+
+    r = _resolution(study, out, set, threads=threads, progress=progress)
+    d = r["out"]
+    with open(os.path.join(d, "display.json")) as f:
+        display = json.load(f)
+    return Resolution(
+        out=d,
+        mtf=_records(os.path.join(d, "mtf.csv")),
+        mtf50=_records(os.path.join(d, "mtf50.csv")),
+        accommodation=_records(os.path.join(d, "accommodation.csv")),
+        display=display,
+        timings=r["timings"],
+    )

@@ -190,3 +190,21 @@ def assess(
     threads: Optional[int] = None,
     progress: _Progress = None,
 ) -> Assessment: ...
+
+@dataclass
+class Resolution:
+    out: str
+    mtf: List[Dict[str, Any]]
+    mtf50: List[Dict[str, Any]]
+    accommodation: List[Dict[str, Any]]
+    display: Dict[str, Any]
+    timings: List[Dict[str, Any]] = ...
+
+def resolution(
+    study: Optional[_Path] = None,
+    out: Optional[_Path] = None,
+    set: _Set = None,
+    *,
+    threads: Optional[int] = None,
+    progress: _Progress = None,
+) -> Resolution: ...

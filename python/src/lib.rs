@@ -26,10 +26,9 @@ fn _inimtrace(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(run::simulate, m)?)?;
     m.add_function(wrap_pyfunction!(run::ground_truth, m)?)?;
     m.add_function(wrap_pyfunction!(run::assess, m)?)?;
+    m.add_function(wrap_pyfunction!(run::resolution, m)?)?;
     m.add_function(wrap_pyfunction!(run::compare, m)?)?;
     m.add_function(wrap_pyfunction!(run::read_exr, m)?)?;
-    // The resolution study (`inimtrace resolution`, being built separately) gets its function
-    // here, in run.rs beside `assess`, once the library exposes it.
     m.add("__version__", inimtrace::version::TOOL.version)?;
     m.add("git_revision", inimtrace::version::TOOL.git_revision)?;
     m.add("has_embree", cfg!(feature = "embree"))?;

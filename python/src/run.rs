@@ -18,8 +18,9 @@ use inimtrace::progress::{with_sink, Progress, ProgressSink};
 use inimtrace::render::retina::simulate as simulate_images;
 use inimtrace::render::{ground_truth as ground_truth_image, render_display_image_with_depth, with_fields};
 use inimtrace::render::{BackendChoice, DisplayRenderSettings, Method};
+use inimtrace::resolution::command::{execute, ResolutionCommand};
 
-use crate::convert::{depth_to_numpy, image_to_numpy, numpy_to_image, to_py};
+use crate::convert::{depth_to_numpy, image_to_numpy, numpy_to_image, overrides, to_py};
 use crate::errors::{value_error, IntoPy};
 use crate::objects::{PyDisplay, PyExperiment, PyEye, PyScene};
 
@@ -350,4 +351,33 @@ pub fn read_exr<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyAn
         None => py.None().into_bound(py),
     };
     Ok((img, z).into_pyobject(py)?.into_any())
+}
+
+/// Runs a resolution study as `inimtrace resolution` does (the same code path) and writes its
+/// files into `out` (default `out/resolution-<study name>`). `study`: a study TOML (`None`: the
+/// built-in `studies/paper.toml`); `set`: the same overrides as `--set`. Returns a dict: `out`
+/// (the folder) and `timings` (records of `stage`, `seconds`).
+#[pyfunction]
+#[pyo3(name = "_resolution", signature = (study=None, out=None, set=None, *, threads=None, progress=None))]
+pub fn resolution<'py>(
+    py: Python<'py>,
+    study: Option<PathBuf>,
+    out: Option<PathBuf>,
+    set: Option<&Bound<'py, PyAny>>,
+    threads: Option<usize>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let cmd = ResolutionCommand { study, out, overrides: overrides(set)?, quiet: true };
+    let run = detached(py, threads, progress, || execute(&cmd))?;
+    let result = PyDict::new(py);
+    result.set_item("out", run.out.display().to_string())?;
+    let timings = PyList::empty(py);
+    for t in &run.timings {
+        let d = PyDict::new(py);
+        d.set_item("stage", &t.stage)?;
+        d.set_item("seconds", t.seconds)?;
+        timings.append(d)?;
+    }
+    result.set_item("timings", timings)?;
+    Ok(result)
 }

@@ -161,7 +161,7 @@ def check_assessment(result, out_dir, experiment_name):
         if stem.startswith("display_"):
             assert same_bits(result.depths[stem], z), stem
     stages = {s["stage"] for s in result.stages}
-    assert {"render_display", "pack_display_images"} <= stages
+    assert {"render_display", "write_display_image"} <= stages
     return report
 
 
