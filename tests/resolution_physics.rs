@@ -11,14 +11,25 @@ use inimtrace::progress::Progress;
 use inimtrace::render::retina::DisplayStack;
 use inimtrace::render::{render_display_image, with_fields, BackendChoice, DisplayRenderSettings, Method};
 use inimtrace::resolution::defocus::{blur_diameter_rad, cpd_to_cycles_per_rad, defocus_first_zero, eye_mtf};
-use inimtrace::resolution::edge::edge_mtf;
-use inimtrace::resolution::grating::modulation;
+use inimtrace::resolution::edge::{self, EdgeMtf};
+use inimtrace::resolution::grating::{self, Modulation};
 use inimtrace::resolution::measure::{
     cycles_per_pixel, measure_image, measure_until, narrow_retina, pixel_rad, target_scene, Sampling, SceneSource,
 };
+use inimtrace::resolution::window::WindowSamples;
 use inimtrace::scene::{Grating, Material, SlantedEdge};
 
 const PUPIL_MM: f64 = 4.0;
+
+/// The study's grating analysis of image `k` of a whole square retina.
+fn modulation(reps: &Replicates, k: usize, cycles_per_pixel: f64, orientation_deg: f64) -> Option<Modulation> {
+    grating::modulation(&WindowSamples::from_replicates(reps), k, cycles_per_pixel, orientation_deg)
+}
+
+/// The study's slanted-edge analysis of image `k` of a whole square retina.
+fn edge_mtf(reps: &Replicates, k: usize) -> inimtrace::Result<EdgeMtf> {
+    edge::edge_mtf(&WindowSamples::from_replicates(reps), k, &[])
+}
 
 fn grating(cpd: f64, orientation_deg: f64) -> Grating {
     Grating { frequency_cpd: cpd, orientation_deg, mean: 0.5, contrast: 0.8, phase_deg: 20.0 }
