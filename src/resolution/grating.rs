@@ -5,22 +5,25 @@
 //! on each grating window of its chart, the physics tests on it and on whole square retinas
 //! (both as [`WindowSamples`]: rectangles of per-replicate grey means, any size and offset).
 //!
-//! **Estimator.** A weighted least-squares fit of `a + b cos(phi) + s sin(phi)`, with
+//! **Estimator.** A least-squares fit of `a + b cos(phi) + s sin(phi)`, with
 //! `phi = 2 pi f (x cos(theta) + y sin(theta))` at the grating's known frequency `f` (cycles per
 //! retina pixel) and orientation `theta` (pixel coordinates from the window's centre, +y up as
-//! in tangent space), under a separable Hann window `sin^2(pi (i + 0.5) / n)` on rows and
-//! columns. The fit is exact for a sinusoid plus a constant at any frequency, whole number of
-//! periods or not (no leakage from the mean, which plain windowed projections suffer at the one
-//! or two periods a narrow field holds at 0.5 cpd); the window keeps other frequencies
-//! (aliases, the lenslet structure) from leaking in. The fit is linear in the image, so each
-//! replicate gives unbiased coefficients. The contrast is `A / a` with `A = sqrt(b^2 + s^2)`
-//! (the same as `2 |c| / mean` for the complex Fourier coefficient `c`).
+//! in tangent space), every pixel weighted alike. The fit is exact for a sinusoid plus a
+//! constant at any frequency, whole number of periods or not (no leakage from the mean, which
+//! plain projections suffer at the one or two periods a narrow field holds at 0.5 cpd). When
+//! the window holds a whole number of periods (the study's chart makes sure of it) the three
+//! functions are orthogonal and the fit is the window's plain Fourier coefficient at `f`, so
+//! that the other frequencies of the window's grid (the chart's other gratings, harmonics) add
+//! nothing. The fit is linear in the image, so each replicate gives unbiased coefficients. The
+//! contrast is `A / a` with `A = sqrt(b^2 + s^2)` (the same as `2 |c| / mean` for the complex
+//! Fourier coefficient `c`).
 //!
-//! Why this fit and not the unweighted Fourier coefficient over a whole number of periods: that
-//! coefficient has a little less noise, but it is exact only for whole periods along x (vertical
-//! bars), it lets frequencies off the window's grid (the display's aliases and lenslet
-//! structure) leak in through the rectangular window's sidelobes, and, taken on the replicates'
-//! mean, it keeps the noise bias below.
+//! Why no taper (a Hann window was tried): the aliases a display makes of a grating near its
+//! sampling limit lie within a fraction of a bin of the grating's frequency (6 cpd on the paper
+//! display aliases to 5.6 cpd, 0.8 bin on a 2 degree window). The untapered window passes 23% of
+//! such a component, a Hann window 65%: on the paper study it read 0.96 instead of 0.72 for PC
+//! at 6 cpd, past the display's 5.8 cpd limit. A taper only helps against components many bins
+//! away, which the untapered window's sidelobes already damp to a few percent.
 //!
 //! **Noise bias.** `A^2` of a noisy image is biased up by the noise. With R independent
 //! replicates, `A^2` is estimated from cross-replicate products only,
@@ -68,10 +71,7 @@ impl GratingFit {
             return None;
         }
         let (sn, cs) = orientation_deg.to_radians().sin_cos();
-        let hann = |i: usize, n: usize| (std::f64::consts::PI * (i as f64 + 0.5) / n as f64).sin().powi(2);
-        let wx: Vec<f64> = (0..width).map(|c| hann(c, width)).collect();
-        let wy: Vec<f64> = (0..height).map(|r| hann(r, height)).collect();
-        let mut basis = vec![[0.0f64; 4]; width * height]; // [1, cos, sin, weight]
+        let mut basis = vec![[0.0f64; 3]; width * height]; // [1, cos, sin]
         let mut m = [[0.0f64; 3]; 3];
         for r in 0..height {
             let y = 0.5 * height as f64 - (r as f64 + 0.5);
@@ -79,19 +79,18 @@ impl GratingFit {
                 let x = c as f64 + 0.5 - 0.5 * width as f64;
                 let phi = TAU * cycles_per_pixel * (x * cs + y * sn);
                 let (s, co) = phi.sin_cos();
-                let w = wx[c] * wy[r];
                 let b = [1.0, co, s];
                 for i in 0..3 {
                     for j in 0..3 {
-                        m[i][j] += w * b[i] * b[j];
+                        m[i][j] += b[i] * b[j];
                     }
                 }
-                basis[r * width + c] = [1.0, co, s, w];
+                basis[r * width + c] = b;
             }
         }
         let inv = invert3(m)?;
         let weights = std::array::from_fn(|k| {
-            basis.iter().map(|b| b[3] * (inv[k][0] * b[0] + inv[k][1] * b[1] + inv[k][2] * b[2])).collect()
+            basis.iter().map(|b| inv[k][0] * b[0] + inv[k][1] * b[1] + inv[k][2] * b[2]).collect()
         });
         Some(Self { weights })
     }
@@ -241,6 +240,14 @@ mod tests {
         for cpd in [0.5, 3.5, 8.0] {
             assert!(at(cpd).contrast < 2e-3, "{cpd}: {:?}", at(cpd));
         }
+        // An alias 0.4 cpd (0.8 of the window's frequency step) from the grating, as a display
+        // makes near its sampling limit: the untapered window passes about sinc(0.8 pi) = 0.23
+        // of it, where a Hann taper would pass 0.65.
+        let alias = window(cols, rows, 3, |_, p| {
+            0.5 + 0.2 * (TAU * 5.6 * ((p % cols) as f64 + 0.5 - 0.5 * cols as f64) / ppd + 0.5).cos()
+        });
+        let leak = modulation(&alias, 0, 6.0 / ppd, 0.0).unwrap().contrast / 0.4;
+        assert!(leak < 0.3, "{leak}");
         // A window too short for its frequency: no fit, not a panic.
         assert!(modulation(&w, 0, 0.0, 0.0).is_none());
     }
