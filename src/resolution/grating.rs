@@ -203,7 +203,7 @@ mod tests {
             let dphase = (ph - phase + 540.0).rem_euclid(360.0) - 180.0;
             assert!(dphase.abs() < 1e-8, "{f} {theta}: phase {ph}");
         }
-        // A second sinusoid far away in frequency barely leaks in (the window).
+        // A second sinusoid far away in frequency barely leaks in (the window's sidelobes).
         let mut img = sinusoid(64, 0.1, 0.0, 0.5, 0.1, 0.0);
         for (v, o) in img.iter_mut().zip(sinusoid(64, 0.3, 20.0, 0.0, 0.2, 40.0)) {
             *v += o;
