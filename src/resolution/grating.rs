@@ -1,18 +1,29 @@
 //! Grating modulation (issue 13, measurement (a); the paper's Sec. 4 comparison "in terms of
 //! perceived spatial resolution", as the field reports it: contrast in cycles per degree): the
 //! contrast of a retinal image at the grating's own frequency, so that contrast aliased into
-//! other frequencies is not counted.
+//! other frequencies is not counted. The one grating analysis: `inimtrace resolution` runs it
+//! on each grating window of its chart, the physics tests on it and on whole square retinas
+//! (both as [`WindowSamples`]: rectangles of per-replicate grey means, any size and offset).
 //!
-//! **Estimator.** A weighted least-squares fit of `a + b cos(phi) + s sin(phi)`, with
+//! **Estimator.** A least-squares fit of `a + b cos(phi) + s sin(phi)`, with
 //! `phi = 2 pi f (x cos(theta) + y sin(theta))` at the grating's known frequency `f` (cycles per
-//! retina pixel) and orientation `theta` (pixel coordinates from the image centre, +y up as in
-//! tangent space), under a separable Hann window `sin^2(pi (i + 0.5) / n)` on rows and columns.
-//! The fit is exact for a sinusoid plus a constant at any frequency, whole number of periods or
-//! not (no leakage from the mean, which plain windowed projections suffer at the one or two
-//! periods a narrow field holds at 0.5 cpd); the window keeps other frequencies (aliases, the
-//! lenslet structure) from leaking in. The fit is linear in the image, so each replicate gives
-//! unbiased coefficients. The contrast is `A / a` with `A = sqrt(b^2 + s^2)` (the same as
-//! `2 |c| / mean` for the complex Fourier coefficient `c`).
+//! retina pixel) and orientation `theta` (pixel coordinates from the window's centre, +y up as
+//! in tangent space), every pixel weighted alike. The fit is exact for a sinusoid plus a
+//! constant at any frequency, whole number of periods or not (no leakage from the mean, which
+//! plain projections suffer at the one or two periods a narrow field holds at 0.5 cpd). When
+//! the window holds a whole number of periods (the study's chart makes sure of it) the three
+//! functions are orthogonal and the fit is the window's plain Fourier coefficient at `f`, so
+//! that the other frequencies of the window's grid (the chart's other gratings, harmonics) add
+//! nothing. The fit is linear in the image, so each replicate gives unbiased coefficients. The
+//! contrast is `A / a` with `A = sqrt(b^2 + s^2)` (the same as `2 |c| / mean` for the complex
+//! Fourier coefficient `c`).
+//!
+//! Why no taper (a Hann window was tried): the aliases a display makes of a grating near its
+//! sampling limit lie within a fraction of a bin of the grating's frequency (6 cpd on the paper
+//! display aliases to 5.6 cpd, 0.8 bin on a 2 degree window). The untapered window passes 23% of
+//! such a component, a Hann window 65%: on the paper study it read 0.96 instead of 0.72 for PC
+//! at 6 cpd, past the display's 5.8 cpd limit. A taper only helps against components many bins
+//! away, which the untapered window's sidelobes already damp to a few percent.
 //!
 //! **Noise bias.** `A^2` of a noisy image is biased up by the noise. With R independent
 //! replicates, `A^2` is estimated from cross-replicate products only,
@@ -23,7 +34,7 @@
 
 use std::f64::consts::TAU;
 
-use crate::measure::estimator::Replicates;
+use super::window::WindowSamples;
 use crate::measure::stats::jackknife_ci95;
 
 /// The modulation of one image at one frequency.
@@ -47,7 +58,6 @@ pub struct Modulation {
 /// The fit's linear functionals: three weight planes whose dot products with an image give
 /// its `a`, `b`, `s`.
 pub struct GratingFit {
-    width: usize,
     weights: [Vec<f64>; 3],
 }
 
@@ -61,10 +71,7 @@ impl GratingFit {
             return None;
         }
         let (sn, cs) = orientation_deg.to_radians().sin_cos();
-        let hann = |i: usize, n: usize| (std::f64::consts::PI * (i as f64 + 0.5) / n as f64).sin().powi(2);
-        let wx: Vec<f64> = (0..width).map(|c| hann(c, width)).collect();
-        let wy: Vec<f64> = (0..height).map(|r| hann(r, height)).collect();
-        let mut basis = vec![[0.0f64; 4]; width * height]; // [1, cos, sin, weight]
+        let mut basis = vec![[0.0f64; 3]; width * height]; // [1, cos, sin]
         let mut m = [[0.0f64; 3]; 3];
         for r in 0..height {
             let y = 0.5 * height as f64 - (r as f64 + 0.5);
@@ -72,32 +79,26 @@ impl GratingFit {
                 let x = c as f64 + 0.5 - 0.5 * width as f64;
                 let phi = TAU * cycles_per_pixel * (x * cs + y * sn);
                 let (s, co) = phi.sin_cos();
-                let w = wx[c] * wy[r];
                 let b = [1.0, co, s];
                 for i in 0..3 {
                     for j in 0..3 {
-                        m[i][j] += w * b[i] * b[j];
+                        m[i][j] += b[i] * b[j];
                     }
                 }
-                basis[r * width + c] = [1.0, co, s, w];
+                basis[r * width + c] = b;
             }
         }
         let inv = invert3(m)?;
         let weights = std::array::from_fn(|k| {
-            basis.iter().map(|b| b[3] * (inv[k][0] * b[0] + inv[k][1] * b[1] + inv[k][2] * b[2])).collect()
+            basis.iter().map(|b| inv[k][0] * b[0] + inv[k][1] * b[1] + inv[k][2] * b[2]).collect()
         });
-        Some(Self { width, weights })
+        Some(Self { weights })
     }
 
     /// The coefficients `[a, b, s]` of a row-major plane of the fit's size.
-    pub fn coefficients(&self, plane: &[f64]) -> [f64; 3] {
+    pub fn coefficients<T: Copy + Into<f64>>(&self, plane: &[T]) -> [f64; 3] {
         debug_assert_eq!(plane.len(), self.weights[0].len());
-        std::array::from_fn(|k| self.weights[k].iter().zip(plane).map(|(w, v)| w * v).sum())
-    }
-
-    /// Image width the fit was made for.
-    pub fn width(&self) -> usize {
-        self.width
+        std::array::from_fn(|k| self.weights[k].iter().zip(plane).map(|(w, v)| w * (*v).into()).sum())
     }
 }
 
@@ -114,12 +115,6 @@ fn invert3(m: [[f64; 3]; 3]) -> Option<[[f64; 3]; 3]> {
         return None;
     }
     Some(std::array::from_fn(|i| std::array::from_fn(|j| c(j, i) / det)))
-}
-
-/// The grey (mean of R, G, B) plane of image `k` in replicate `r`.
-pub fn grey_plane(reps: &Replicates, r: usize, k: usize) -> Vec<f64> {
-    let [pr, pg, pb] = [0, 1, 2].map(|c| reps.plane(r, k, c));
-    pr.iter().zip(pg).zip(pb).map(|((a, b), c)| (f64::from(*a) + f64::from(*b) + f64::from(*c)) / 3.0).collect()
 }
 
 /// Contrast of one image's coefficients `[a, b, s]`, and its phase in degrees.
@@ -156,17 +151,16 @@ fn unbiased_contrast(coef: &[[f64; 3]], keep: impl Fn(usize) -> bool) -> f64 {
     }
 }
 
-/// The modulation of image `k` of `reps` at a grating of `cycles_per_pixel` (retina pixels)
-/// modulated at `orientation_deg`. `None` when the fit is impossible ([`GratingFit::new`]) or
-/// there are fewer than 2 replicates.
-pub fn modulation(reps: &Replicates, k: usize, cycles_per_pixel: f64, orientation_deg: f64) -> Option<Modulation> {
-    let n = reps.resolution();
-    let nr = reps.replicates();
+/// The modulation of source `k` in window `w` at a grating of `cycles_per_pixel` (retina
+/// pixels) modulated at `orientation_deg`, phase at the window's centre. `None` when the fit is
+/// impossible ([`GratingFit::new`]) or there are fewer than 2 replicates.
+pub fn modulation(w: &WindowSamples, k: usize, cycles_per_pixel: f64, orientation_deg: f64) -> Option<Modulation> {
+    let nr = w.replicates;
     if nr < 2 {
         return None;
     }
-    let fit = GratingFit::new(n, n, cycles_per_pixel, orientation_deg)?;
-    let coef: Vec<[f64; 3]> = (0..nr).map(|r| fit.coefficients(&grey_plane(reps, r, k))).collect();
+    let fit = GratingFit::new(w.cols, w.rows, cycles_per_pixel, orientation_deg)?;
+    let coef: Vec<[f64; 3]> = (0..nr).map(|r| fit.coefficients(w.plane(r, k))).collect();
     let mean_coef: [f64; 3] = std::array::from_fn(|j| coef.iter().map(|c| c[j]).sum::<f64>() / nr as f64);
     let (naive_contrast, phase_deg) = contrast_of(mean_coef);
     let contrast = unbiased_contrast(&coef, |_| true);
@@ -209,7 +203,7 @@ mod tests {
             let dphase = (ph - phase + 540.0).rem_euclid(360.0) - 180.0;
             assert!(dphase.abs() < 1e-8, "{f} {theta}: phase {ph}");
         }
-        // A second sinusoid far away in frequency barely leaks in (the window).
+        // A second sinusoid far away in frequency barely leaks in (the window's sidelobes).
         let mut img = sinusoid(64, 0.1, 0.0, 0.5, 0.1, 0.0);
         for (v, o) in img.iter_mut().zip(sinusoid(64, 0.3, 20.0, 0.0, 0.2, 40.0)) {
             *v += o;
@@ -219,18 +213,57 @@ mod tests {
         assert!(GratingFit::new(64, 64, 0.0, 0.0).is_none(), "a zero frequency is the constant itself");
     }
 
+    /// A window of `cols` x `rows` pixels, `reps` replicates, one source: `f(replicate, pixel)`.
+    fn window(cols: usize, rows: usize, reps: usize, f: impl Fn(usize, usize) -> f64) -> WindowSamples {
+        let values = (0..reps).flat_map(|r| (0..cols * rows).map(move |p| (r, p))).map(|(r, p)| f(r, p) as f32);
+        WindowSamples { cols, rows, replicates: reps, sources: 1, values: values.collect() }
+    }
+
+    #[test]
+    fn a_rectangular_window_gives_its_grating_contrast_and_phase_whatever_else_it_holds() {
+        // The study's grating window, 128 x 16 pixels (2 x 0.25 degrees at 64 per degree), with
+        // bars along x: 0.5 + 0.2 cos(2 pi 2 cpd x + 0.3) plus 0.1 cos(2 pi 5 cpd x + 1), x in
+        // degrees from the window's centre; a little noise per replicate.
+        let ppd = 64.0;
+        let (cols, rows) = (128, 16);
+        let w = window(cols, rows, 6, |r, p| {
+            let x = ((p % cols) as f64 + 0.5 - 0.5 * cols as f64) / ppd;
+            0.5 + 0.2 * (TAU * 2.0 * x + 0.3).cos() + 0.1 * (TAU * 5.0 * x + 1.0).cos() + 0.002 * (noise(p, r) - 0.5)
+        });
+        let at = |cpd: f64| modulation(&w, 0, cpd / ppd, 0.0).unwrap();
+        let two = at(2.0);
+        assert!((two.contrast - 0.4).abs() < 1e-3 && two.ci95 < 1e-3, "{two:?}");
+        assert!((two.phase_deg - 0.3f64.to_degrees()).abs() < 0.1, "{two:?}");
+        assert!((two.mean - 0.5).abs() < 1e-4);
+        assert!((at(5.0).contrast - 0.2).abs() < 1e-3, "{:?}", at(5.0));
+        // Frequencies held by neither: nothing (the cross-replicate amplitude of the noise only).
+        for cpd in [0.5, 3.5, 8.0] {
+            assert!(at(cpd).contrast < 2e-3, "{cpd}: {:?}", at(cpd));
+        }
+        // An alias 0.4 cpd (0.8 of the window's frequency step) from the grating, as a display
+        // makes near its sampling limit: the untapered window passes about sinc(0.8 pi) = 0.23
+        // of it, where a Hann taper would pass 0.65.
+        let alias = window(cols, rows, 3, |_, p| {
+            0.5 + 0.2 * (TAU * 5.6 * ((p % cols) as f64 + 0.5 - 0.5 * cols as f64) / ppd + 0.5).cos()
+        });
+        let leak = modulation(&alias, 0, 6.0 / ppd, 0.0).unwrap().contrast / 0.4;
+        assert!(leak < 0.3, "{leak}");
+        // A window too short for its frequency: no fit, not a panic.
+        assert!(modulation(&w, 0, 0.0, 0.0).is_none());
+    }
+
     #[test]
     fn cross_replicate_contrast_removes_the_noise_bias_that_the_naive_one_keeps() {
         // Pure noise around a flat grey: the true amplitude is 0 at every frequency. Over many
         // frequencies, the naive squared amplitude (of the mean image) averages the noise's
         // variance; the cross-replicate one averages 0.
         let (n, nr) = (32, 8);
-        let reps = Replicates::from_fn(n, nr, 1, 4, |p, r, _, _| (0.5 + 0.2 * (noise(p, r) - 0.5)) as f32);
+        let reps = window(n, n, nr, |r, p| 0.5 + 0.2 * (noise(p, r) - 0.5));
         let (mut naive, mut fair, mut covered) = (Vec::new(), Vec::new(), 0);
         for i in 0..40 {
             let f = 0.06 + 0.01 * i as f64;
             let fit = GratingFit::new(n, n, f, 10.0 * i as f64).unwrap();
-            let coef: Vec<[f64; 3]> = (0..nr).map(|r| fit.coefficients(&grey_plane(&reps, r, 0))).collect();
+            let coef: Vec<[f64; 3]> = (0..nr).map(|r| fit.coefficients(reps.plane(r, 0))).collect();
             let m: [f64; 3] = std::array::from_fn(|j| coef.iter().map(|c| c[j]).sum::<f64>() / nr as f64);
             naive.push(m[1] * m[1] + m[2] * m[2]);
             fair.push(unbiased_parts(&coef, |_| true).0);

@@ -3,7 +3,8 @@
 //! finely sampled retina ([`narrow_retina`]), the ground truth alone ([`SceneSource`]) or with
 //! the perceived images of display images ([`crate::measure::estimator::DisplaySource`]), and
 //! the sampling loop ([`measure_image`], [`measure_until`]) that returns the R replicates the
-//! modulation ([`super::grating`]) and edge ([`super::edge`]) measurements need.
+//! modulation ([`super::grating`]) and edge ([`super::edge`]) measurements need (as one window:
+//! [`super::window::WindowSamples::from_replicates`]).
 
 use glam::{DVec2, DVec3};
 

@@ -4,8 +4,9 @@
 //!
 //! - [`defocus`]: the analytic MTF of the eye (defocus blur disk times the retina pixel's box);
 //! - [`grating`]: the modulation of a grating image at the grating's own frequency, without
-//!   noise bias, with a jackknife interval;
-//! - [`edge`]: the ISO 12233 slanted-edge MTF and MTF50, with jackknife intervals;
+//!   noise bias, with a jackknife interval (the one grating analysis, of any window);
+//! - [`edge`]: the ISO 12233 slanted-edge MTF and MTF50, with jackknife intervals (the one
+//!   edge analysis, of any window);
 //! - [`measure`]: the retinal images of a target, through the converged estimator.
 //!
 //! The targets themselves are scene materials ([`crate::scene::target`]).
@@ -16,12 +17,12 @@ pub mod grating;
 pub mod measure;
 
 // The study (`inimtrace resolution`): its file, chart, measurement over the chart's windows,
-// accommodation, display limits, files and plots.
+// accommodation, display limits, files and plots. Its windows are measured by `grating` and
+// `edge` above.
 pub mod accommodation;
 pub mod chart;
 pub mod command;
 pub mod limits;
-pub mod modulation;
 pub mod plots;
 pub mod report;
 pub mod run;

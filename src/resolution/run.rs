@@ -1,8 +1,8 @@
 //! Running a study (issue 13): for each content depth, the chart on its plane, each method's
 //! display image rendered once (paper Sec. 3), and for each eye focus the ground truth and every
 //! perceived image measured over the chart's windows by the converged estimator (Sec. 2.3, 4.1),
-//! then each window's grating contrast and slanted-edge MTF with their 95% intervals. Every stage
-//! is timed.
+//! then each window's grating contrast ([`super::grating`]) and slanted-edge MTF
+//! ([`super::edge`]) with their 95% intervals. Every stage is timed.
 //!
 //! Display images cover only the part of the LCD that the measured eye rays can reach
 //! ([`crop_display`]): the same pixels as the full panel's (same pitch and grid), so every value
@@ -14,9 +14,9 @@ use glam::DVec2;
 use rayon::prelude::*;
 
 use super::chart::{Chart, ChartField, Pattern};
-use super::modulation::{edge_mtf, grating_contrast, Value};
 use super::study::Study;
-use super::window::{measure_windows, progress_steps};
+use super::window::{measure_windows, progress_steps, WindowSamples};
+use super::{edge, grating};
 use crate::error::Result;
 use crate::measure::estimator::DisplaySource;
 use crate::measure::sampler::Sampler;
@@ -56,6 +56,41 @@ pub fn crop_display(display: &Display, half_tangent: DVec2, pupil_radius: f64, m
         lcd: Lcd { size: DVec2::new(nx as f64 * pitch.x, ny as f64 * pitch.y), resolution: [nx, ny] },
         ..display.clone()
     }
+}
+
+/// A measured value with the half-width of its 95% interval (NaN when not measured).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Value {
+    pub value: f64,
+    pub ci95: f64,
+}
+
+impl Value {
+    const NAN: Value = Value { value: f64::NAN, ci95: f64::NAN };
+}
+
+/// Source `k`'s grating contrast in window `w` at `frequency_cpd` (vertical bars, pixels of
+/// `1 / ppd` degrees), over the target's `contrast`: 1 for a perfect eye and display (less the
+/// retina pixel's own box response).
+pub fn grating_value(w: &WindowSamples, k: usize, frequency_cpd: f64, ppd: f64, contrast: f64) -> Value {
+    grating::modulation(w, k, frequency_cpd / ppd, 0.0)
+        .map_or(Value::NAN, |m| Value { value: m.contrast / contrast, ci95: m.ci95 / contrast })
+}
+
+/// Source `k`'s slanted-edge MTF in window `w` at `frequencies_cpd`, and its MTF50 in cpd (NaN
+/// when the MTF stays above 0.5 up to the retina's Nyquist frequency); NaN when the window
+/// shows no edge.
+pub fn edge_values(w: &WindowSamples, k: usize, frequencies_cpd: &[f64], ppd: f64) -> (Vec<Value>, Value) {
+    let at: Vec<f64> = frequencies_cpd.iter().map(|f| f / ppd).collect();
+    let Ok(m) = edge::edge_mtf(w, k, &at) else {
+        return (vec![Value::NAN; at.len()], Value::NAN);
+    };
+    let values = m.at.iter().zip(&m.at_ci95).map(|(&value, &ci95)| Value { value, ci95 }).collect();
+    let mtf50 = match m.curve.mtf50 {
+        Some(f) if f <= 0.5 => Value { value: f * ppd, ci95: m.mtf50_ci95.map_or(f64::NAN, |h| h * ppd) },
+        _ => Value::NAN,
+    };
+    (values, mtf50)
 }
 
 /// What one stage took.
@@ -114,10 +149,10 @@ pub fn run_study(study: &Study, quiet: bool) -> Result<StudyResults> {
     let display_bar = Progress::new((nd * study.methods.len() * display.lcd.rows()) as u64, "display images", quiet);
     let measure_bar = Progress::new((nd * nf) as u64 * progress_steps(&chart), "eye rays", quiet);
     let (mut t_display, mut t_measure, mut t_analysis) = (0.0, 0.0, 0.0);
-    let empty = vec![vec![vec![Value { value: f64::NAN, ci95: f64::NAN }; nq]; nf]; nd];
+    let empty = vec![vec![vec![Value::NAN; nq]; nf]; nd];
     let mut grating = vec![empty.clone(); ns];
     let mut edge = vec![empty; ns];
-    let mut mtf50 = vec![vec![vec![Value { value: f64::NAN, ci95: f64::NAN }; nf]; nd]; ns];
+    let mut mtf50 = vec![vec![vec![Value::NAN; nf]; nd]; ns];
     let reps = study.measurement.replicates;
     let spp = study.measurement.samples_per_pixel;
     let ppd = study.retina.pixels_per_degree;
@@ -146,16 +181,16 @@ pub fn run_study(study: &Study, quiet: bool) -> Result<StudyResults> {
             let per_source: Vec<(Vec<Value>, Vec<Value>, Value)> = (0..ns)
                 .into_par_iter()
                 .map(|k| {
-                    let mut g = vec![Value { value: f64::NAN, ci95: f64::NAN }; nq];
-                    let mut e = (g.clone(), Value { value: f64::NAN, ci95: f64::NAN });
+                    let mut g = vec![Value::NAN; nq];
+                    let mut e = (g.clone(), Value::NAN);
                     for (p, w) in chart.patches.iter().zip(&windows) {
                         match p.pattern {
                             Pattern::Grating { frequency_cpd } => {
                                 let qi =
                                     study.frequency_index(frequency_cpd).expect("chart frequencies are the study's");
-                                g[qi] = grating_contrast(w, k, frequency_cpd, ppd, chart.contrast);
+                                g[qi] = grating_value(w, k, frequency_cpd, ppd, chart.contrast);
                             }
-                            Pattern::Edge { .. } => e = edge_mtf(w, k, &study.frequencies_cpd, ppd),
+                            Pattern::Edge { .. } => e = edge_values(w, k, &study.frequencies_cpd, ppd),
                         }
                     }
                     (g, e.0, e.1)

@@ -14,7 +14,7 @@ use glam::DVec2;
 use rayon::prelude::*;
 
 use super::chart::Chart;
-use crate::measure::estimator::{EyeSample, PairedSource};
+use crate::measure::estimator::{EyeSample, PairedSource, Replicates};
 use crate::measure::sampler::Sampler;
 use crate::progress::Progress;
 
@@ -35,6 +35,26 @@ pub struct WindowSamples {
 }
 
 impl WindowSamples {
+    /// The grey (mean of R, G and B) of every image of a square retina's replicates, as one
+    /// window covering the whole retina.
+    pub fn from_replicates(reps: &Replicates) -> Self {
+        let n = reps.resolution();
+        let (replicates, sources) = (reps.replicates(), reps.images());
+        let mut values = Vec::with_capacity(replicates * sources * n * n);
+        for r in 0..replicates {
+            for k in 0..sources {
+                let [pr, pg, pb] = [0, 1, 2].map(|c| reps.plane(r, k, c));
+                values.extend(
+                    pr.iter()
+                        .zip(pg)
+                        .zip(pb)
+                        .map(|((a, b), c)| ((f64::from(*a) + f64::from(*b) + f64::from(*c)) / 3.0) as f32),
+                );
+            }
+        }
+        Self { cols: n, rows: n, replicates, sources, values }
+    }
+
     /// Source `k`'s pixels in replicate `r`, row-major.
     pub fn plane(&self, r: usize, k: usize) -> &[f32] {
         let n = self.cols * self.rows;
