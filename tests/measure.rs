@@ -1,4 +1,4 @@
-//! The converged measurement (issue 11) against answers known in closed form: a straight edge
+//! The converged measurement against answers known in closed form: a straight edge
 //! seen by the pinhole eye (a pixel's value is the covered fraction of its square) and by a
 //! defocused thin-lens eye (the edge blurred by the uniform pupil disk: a disk segment's area).
 //! Its 95% intervals must cover the exact PSNR and SSIM, be calibrated over many seeds, agree

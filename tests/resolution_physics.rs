@@ -1,4 +1,4 @@
-//! Physics of the resolution measurements (issue 13): the ground truth's grating contrast and
+//! Physics of the resolution measurements: the ground truth's grating contrast and
 //! slanted-edge MTF against the analytic defocus MTF times the retina pixel's box, the two
 //! measurements against each other on the paper's display, interval coverage, the noise-bias
 //! negative control, and the targets through every backend against their direct evaluation.

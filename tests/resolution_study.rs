@@ -1,4 +1,4 @@
-//! `inimtrace resolution` end to end (issue 13): the tiny study's files with their exact names
+//! `inimtrace resolution` end to end: the tiny study's files with their exact names
 //! and columns, the ground truth's predicted accommodation against the content depth, and the
 //! analytic property of the display path (LC's contrast for content at the central depth plane).
 

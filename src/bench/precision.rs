@@ -1,4 +1,4 @@
-//! The cost of precision (issue 11): how many seconds each estimator of the paper's Table 1
+//! The cost of precision: how many seconds each estimator of the paper's Table 1
 //! (Sec. 4.2: PSNR and SSIM of the perceived image against the ground-truth retinal image, per
 //! method and eye case) needs to come within a given distance of the converged Table 1.
 //!

@@ -1,4 +1,4 @@
-//! The resolution targets of a scene file (issue 13; the paper's Sec. 4 "perceived spatial
+//! The resolution targets of a scene file (the paper's Sec. 4 "perceived spatial
 //! resolution"): `material = { grating = { ... } }` and `material = { edge = { ... } }`, read
 //! into [`crate::scene::Grating`] and [`crate::scene::SlantedEdge`] (tangent coordinates seen
 //! from the pupil centre, see [`crate::scene::target`]). Every error names the scene file and

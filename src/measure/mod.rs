@@ -1,4 +1,4 @@
-//! The converged measurement (issue 11): the paper's Table 1 (Sec. 4.2) of the converged
+//! The converged measurement: the paper's Table 1 (Sec. 4.2) of the converged
 //! retinal images, each score with a 95% interval, to a stated precision.
 //!
 //! - [`sampler`]: Owen-scrambled Sobol points over each retina pixel x the pupil disk;

@@ -1,4 +1,4 @@
-//! The randomized quasi-Monte Carlo points of the converged measurement (issue 11; the paper's
+//! The randomized quasi-Monte Carlo points of the converged measurement (the paper's
 //! perceived and ground-truth retinal images of Sec. 2.3 and 4.1, integrated instead of sampled
 //! on grids).
 //!

@@ -1,5 +1,5 @@
 //! Scores without noise bias, with 95% intervals: the statistics of the converged measurement
-//! (issue 11; the paper's Table 1 scores, PSNR and SSIM, of the converged images).
+//! (the paper's Table 1 scores, PSNR and SSIM, of the converged images).
 //!
 //! With R independent replicates, let `X_r` and `Y_r` be a pixel's ground truth and a method's
 //! perceived value in replicate `r` (one channel), and `D_r = Y_r - X_r`. Each `D_r` is an

@@ -1,6 +1,6 @@
 //! A fused intersection-and-shading kernel for scenes made only of eye-facing, axis-aligned
 //! rectangles with constant, chart or target (grating, slanted edge) materials: the paper's
-//! scene (Sec. 4.1) and the resolution targets of issue 13. It is the fast
+//! scene (Sec. 4.1) and the resolution targets. It is the fast
 //! path of every render of such a scene; the generic path ([`SceneTracer`] over
 //! [`AnalyticRects`]) is its slow twin, and tests check they return identical radiance (the
 //! kernel uses the same arithmetic as `AnalyticRects`' own fast path, so bit for bit).

@@ -1,4 +1,4 @@
-//! The predicted accommodation response (issue 13; the focus cues of the paper's Sec. 2.2, which
+//! The predicted accommodation response (the focus cues of the paper's Sec. 2.2, which
 //! an integral-imaging display exists to deliver): where the eye would focus on content at depth
 //! `z`, taken as the focus that makes the retinal image sharpest, by two rules:
 //!

@@ -1,4 +1,4 @@
-//! The study's test chart (issue 13's targets, paper Sec. 4.1's planar content): one plane at the
+//! The study's test chart (gratings and a slanted edge on paper Sec. 4.1's kind of planar content): one plane at the
 //! content depth holding a grating patch per frequency and a slanted-edge patch, on a grey of
 //! the gratings' mean, all laid out in tangent coordinates seen from the pupil centre (so a
 //! patch covers the same angles, and a frequency in cycles per degree means the same, at every

@@ -1,4 +1,4 @@
-//! `inimtrace resolution [STUDY.toml] [--out DIR]` (issue 13): load the study (or the built-in
+//! `inimtrace resolution [STUDY.toml] [--out DIR]`: load the study (or the built-in
 //! `studies/paper.toml`), run it, and write every file into an owned output folder, atomically
 //! (`crate::io::output`), `study.json` last. The CLI only parses flags and prints what this
 //! returns.

@@ -1,4 +1,4 @@
-//! The analytic MTF of the eye's view of a target (issue 13; the paper's thin-lens eye of
+//! The analytic MTF of the eye's view of a target (the paper's thin-lens eye of
 //! Sec. 2.3 and 4.1): the geometric defocus blur of a circular pupil, `|2 J1(pi b v) / (pi b v)|`
 //! for a blur disk of angular diameter `b` (radians) and a frequency `v` (cycles per radian),
 //! times the box response of a square retina pixel. In tangent coordinates both are exact for

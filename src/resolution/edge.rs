@@ -1,4 +1,4 @@
-//! The slanted-edge MTF (issue 13, measurement (b); ISO 12233, after the paper's Sec. 4
+//! The slanted-edge MTF (measurement (b); ISO 12233, after the paper's Sec. 4
 //! comparison of perceived resolution): from the retinal image of a slanted edge, the MTF along
 //! the edge's normal in cycles per pixel, and MTF50. The one edge analysis: `inimtrace
 //! resolution` runs it on its chart's edge window, the physics tests on it and on whole square

@@ -1,4 +1,4 @@
-//! Grating modulation (issue 13, measurement (a); the paper's Sec. 4 comparison "in terms of
+//! Grating modulation (measurement (a); the paper's Sec. 4 comparison "in terms of
 //! perceived spatial resolution", as the field reports it: contrast in cycles per degree): the
 //! contrast of a retinal image at the grating's own frequency, so that contrast aliased into
 //! other frequencies is not counted. The one grating analysis: `inimtrace resolution` runs it

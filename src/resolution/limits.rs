@@ -1,4 +1,4 @@
-//! The display's own limits (issue 13; the paper's conclusion: "to profile the capabilities of
+//! The display's own limits (the paper's conclusion: "to profile the capabilities of
 //! the given display itself"; its Sec. 2.2 trade-off of views through the pupil against spatial
 //! resolution): the design quantities of [`crate::info::display_design`] in the units of the
 //! resolution study (pixels per degree, Nyquist in cpd), the views a point at the central depth

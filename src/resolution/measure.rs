@@ -1,4 +1,4 @@
-//! The retinal images of a resolution target through the converged estimator (issue 13; the
+//! The retinal images of a resolution target through the converged estimator (the
 //! paper's Sec. 4.1 eye looking at the scene, or at the display's rendering of it): a narrow,
 //! finely sampled retina ([`narrow_retina`]), the ground truth alone ([`SceneSource`]) or with
 //! the perceived images of display images ([`crate::measure::estimator::DisplaySource`]), and

@@ -1,4 +1,4 @@
-//! Perceived resolution (issue 13; the paper's abstract: comparing rendering methods "in terms
+//! Perceived resolution (the paper's abstract: comparing rendering methods "in terms
 //! of perceived spatial resolution at different focused depths", and its conclusion's
 //! Fourier-domain analysis): the MTF of the retinal image in cycles per degree.
 //!

@@ -1,4 +1,4 @@
-//! The study's plots, PNG and SVG (plotters), issue 13's three:
+//! The study's plots, PNG and SVG (plotters):
 //! - `mtf`: grating contrast (lines) and slanted-edge MTF (crosses) against frequency per source,
 //!   the eye focused on the content, one panel per content depth, the display's Nyquist marked;
 //! - `through_focus`: contrast at the accommodation frequency against eye focus per source, one

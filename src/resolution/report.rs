@@ -1,4 +1,4 @@
-//! The files of a resolution study (issue 13's outputs, exact names and columns): `mtf.csv`,
+//! The files of a resolution study: `mtf.csv`,
 //! `mtf50.csv`, `accommodation.csv`, `display.md`, `display.json` and `study.json` (every resolved
 //! setting, the chart's layout, the stage timings), built from [`StudyResults`] as rows and text.
 

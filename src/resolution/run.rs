@@ -1,4 +1,4 @@
-//! Running a study (issue 13): for each content depth, the chart on its plane, each method's
+//! Running a study: for each content depth, the chart on its plane, each method's
 //! display image rendered once (paper Sec. 3), and for each eye focus the ground truth and every
 //! perceived image measured over the chart's windows by the converged estimator (Sec. 2.3, 4.1),
 //! then each window's grating contrast ([`super::grating`]) and slanted-edge MTF

@@ -1,4 +1,4 @@
-//! The study file of `inimtrace resolution` (issue 13; the paper's abstract: "perceived spatial
+//! The study file of `inimtrace resolution` (the paper's abstract: "perceived spatial
 //! resolution at different focused depths", and its conclusion's Fourier-domain analysis): which
 //! display and methods, which content depths, eye focuses and spatial frequencies, how the retina
 //! samples them and how precisely. `studies/paper.toml` spells out the default study.

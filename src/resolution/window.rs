@@ -1,4 +1,4 @@
-//! The converged estimator (issue 11) over the chart's windows: for each patch of the study's
+//! The converged estimator over the chart's windows: for each patch of the study's
 //! chart, the perceived retinal image of every source (paper Sec. 2.3, 4.1: the ground truth and
 //! each method's display image seen through eq. (1)) over that patch's window only, as
 //! per-replicate pixel means.

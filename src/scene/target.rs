@@ -1,4 +1,4 @@
-//! Resolution targets (issue 13; the paper's Sec. 4 comparison "in terms of perceived spatial
+//! Resolution targets (the paper's Sec. 4 comparison "in terms of perceived spatial
 //! resolution", and the Fourier-domain analysis its conclusion calls for): a sinusoidal
 //! [`Grating`] and a [`SlantedEdge`] (ISO 12233), both defined in the **tangent coordinates**
 //! of the hit point seen from the origin (the eye's pupil centre by convention):
