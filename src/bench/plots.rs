@@ -7,6 +7,8 @@ use std::path::Path;
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
+
+use crate::io::plot::{e2s, legend};
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::markdown::{estimator_name, secs, series_setting};
@@ -67,10 +69,6 @@ fn significant(v: f64) -> String {
     } else {
         t
     }
-}
-
-fn e2s<E: std::fmt::Display>(e: E) -> String {
-    e.to_string()
 }
 
 fn method_color(method: MethodLabel) -> RGBColor {
@@ -169,14 +167,7 @@ where
             }
         }
         if i == 0 {
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::LowerRight)
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .label_font(("sans-serif", 13))
-                .draw()
-                .map_err(e2s)?;
+            legend(&mut chart, SeriesLabelPosition::LowerRight, Some(13))?;
         }
     }
     area.present().map_err(e2s)
@@ -270,13 +261,7 @@ where
             .label(format!("fit: error ~ N^{p:.2}"))
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], gray.stroke_width(1)));
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::LowerRight)
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .draw()
-        .map_err(e2s)?;
+    legend(&mut chart, SeriesLabelPosition::LowerRight, None)?;
     area.present().map_err(e2s)
 }
 
@@ -339,14 +324,7 @@ where
             )
             .map_err(e2s)?;
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 15))
-        .draw()
-        .map_err(e2s)?;
+    legend(&mut chart, SeriesLabelPosition::UpperRight, Some(15))?;
     area.present().map_err(e2s)
 }
 

@@ -12,6 +12,7 @@ pub mod input;
 pub mod mesh;
 mod obj;
 pub mod output;
+pub mod plot;
 mod ply;
 pub mod png;
 pub mod scene_file;

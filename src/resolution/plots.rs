@@ -9,16 +9,14 @@
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
+use crate::io::plot::{e2s, legend};
+
 use super::report::AccommodationRow;
 use super::run::StudyResults;
 use crate::error::{Error, Result};
 use crate::io::output::OutputDir;
 
 type PlotResult = std::result::Result<(), String>;
-
-fn e2s<E: std::fmt::Display>(e: E) -> String {
-    e.to_string()
-}
 
 /// Ground truth grey, then LC blue, PC red, LA green, further methods in other colours.
 fn color(k: usize) -> RGBColor {
@@ -121,14 +119,7 @@ where
             chart.draw_series(edge.iter().map(|p| Cross::new(*p, 4, c.stroke_width(1)))).map_err(e2s)?;
         }
         if di == 0 {
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::UpperRight)
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .label_font(("sans-serif", 12))
-                .draw()
-                .map_err(e2s)?;
+            legend(&mut chart, SeriesLabelPosition::UpperRight, Some(12))?;
         }
     }
     area.present().map_err(e2s)
@@ -180,14 +171,7 @@ where
             chart.draw_series(pts.iter().map(|p| Circle::new(*p, 2, c.filled()))).map_err(e2s)?;
         }
         if di == 0 {
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::UpperRight)
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .label_font(("sans-serif", 12))
-                .draw()
-                .map_err(e2s)?;
+            legend(&mut chart, SeriesLabelPosition::UpperRight, Some(12))?;
         }
     }
     area.present().map_err(e2s)
@@ -245,13 +229,6 @@ where
         chart.draw_series(f.iter().map(|p| Circle::new(*p, 3, c.filled()))).map_err(e2s)?;
         chart.draw_series(pick("mtf_area").iter().map(|p| Circle::new(*p, 6, c.stroke_width(2)))).map_err(e2s)?;
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperLeft)
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 13))
-        .draw()
-        .map_err(e2s)?;
+    legend(&mut chart, SeriesLabelPosition::UpperLeft, Some(13))?;
     area.present().map_err(e2s)
 }

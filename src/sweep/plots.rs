@@ -8,6 +8,8 @@ use std::path::{Path, PathBuf};
 
 use plotters::prelude::*;
 
+use crate::io::plot::legend;
+
 use super::store::ScoreRow;
 use crate::error::{Error, Result};
 
@@ -186,13 +188,6 @@ where
             )
             .map_err(e2s)?;
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::LowerRight)
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 14))
-        .draw()
-        .map_err(e2s)?;
+    legend(&mut chart, SeriesLabelPosition::LowerRight, Some(14))?;
     area.present().map_err(e2s)
 }
