@@ -261,10 +261,11 @@ fn ssim_value(mx: f64, my: f64, exx: f64, eyy: f64, exy: f64, c1: f64, c2: f64) 
 /// `out.len() == src.len() - 10`. Written per output sample with the taps folded in symmetric
 /// pairs (6 multiplications), which the compiler vectorises across outputs.
 #[inline]
-pub(crate) fn filter_row_valid(src: &[f64], g: &[f64; SSIM_WINDOW], out: &mut [f64]) {
+pub(crate) fn filter_row_valid<T: Copy + Into<f64>>(src: &[T], g: &[f64; SSIM_WINDOW], out: &mut [f64]) {
     debug_assert_eq!(out.len() + SSIM_WINDOW - 1, src.len());
     let [g0, g1, g2, g3, g4, g5, ..] = *g;
     for (o, w) in out.iter_mut().zip(src.windows(SSIM_WINDOW)) {
+        let w: [f64; SSIM_WINDOW] = std::array::from_fn(|i| w[i].into());
         *o = g5 * w[5]
             + g0 * (w[0] + w[10])
             + g1 * (w[1] + w[9])

@@ -405,8 +405,8 @@ fn rendering_into_the_stack_equals_rendering_then_packing() {
                     render_display_image_into_stack(&display, *m, &s, field, &Progress::hidden(), &mut stack, k)
                         .unwrap();
                 assert_eq!(depth, rendered[k].1, "{m}: depth");
-                assert!(stack.view(k).to_image() == rendered[k].0, "{m}: image in place");
-                assert!(packed.view(k).to_image() == rendered[k].0, "{m}: packed");
+                assert!(stack.view(k).unwrap().to_image() == rendered[k].0, "{m}: image in place");
+                assert!(packed.view(k).unwrap().to_image() == rendered[k].0, "{m}: packed");
             }
             for i in 0..display.lcd.pixel_count() {
                 assert_eq!(stack.pixel(i), packed.pixel(i));

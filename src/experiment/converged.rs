@@ -54,7 +54,7 @@ pub fn measure<S: PairedSource + ?Sized>(
     constants: SsimConstants,
     precision: &Precision,
 ) -> CaseMeasurement {
-    measure_case(source, &case_sampler(seed, case_index, eye), retina, constants, precision, &Progress::hidden())
+    measure_case(source, &case_sampler(seed, case_index, eye), retina, constants, precision, &Progress::hidden(), None)
 }
 
 /// The converged Table 1 of `exp` (`None` when it uses the grid estimator): per eye case, the
@@ -77,8 +77,8 @@ pub fn table1<F: RadianceField + ?Sized>(
 }
 
 /// [`table1`] one eye case at a time (see [`crate::experiment::table1_each`]); `false` (and
-/// nothing done) when `exp` uses the grid estimator. Each case's replicates are dropped once
-/// its mean images and scores are taken.
+/// nothing done) when `exp` uses the grid estimator. Each case's replicates are reused by the
+/// next case once its mean images and scores are taken.
 pub fn table1_each<F: RadianceField + ?Sized>(
     exp: &Experiment,
     field: &F,
@@ -93,6 +93,8 @@ pub fn table1_each<F: RadianceField + ?Sized>(
     }
     let start = Instant::now();
     let budget = (m.max_seconds.is_finite()).then(|| Duration::from_secs_f64(m.max_seconds));
+    // One replicate buffer for every eye case: its pages are faulted in once.
+    let mut storage = None;
     for (index, case) in exp.cases.iter().enumerate() {
         let t = Instant::now();
         // What is left of the time budget, shared equally by the eye cases still to measure.
@@ -112,7 +114,7 @@ pub fn table1_each<F: RadianceField + ?Sized>(
         let sampler = case_sampler(m.seed, index, &case.eye);
         let label = format!("measure {}", case.name);
         let progress = Progress::new(exp.retina.resolution as u64, &label, quiet);
-        let measured = measure_case(&source, &sampler, &exp.retina, exp.ssim, &precision, &progress);
+        let measured = measure_case(&source, &sampler, &exp.retina, exp.ssim, &precision, &progress, storage.take());
         progress.finish();
         let (gt, case_sims, case_scores) = case_outputs(exp, case, &measured);
         for (stage, seconds) in [
@@ -121,7 +123,7 @@ pub fn table1_each<F: RadianceField + ?Sized>(
         ] {
             stages.push(StageTime { stage: stage.into(), method: None, eye_case: Some(case.name.clone()), seconds });
         }
-        drop(measured);
+        storage = Some(measured.replicates);
         each(index, CaseResult { ground_truth: gt, perceived: case_sims, scores: case_scores })?;
     }
     Ok(true)

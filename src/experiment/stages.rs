@@ -78,9 +78,14 @@ pub fn render_display_stack<D: RadianceField + ?Sized>(
         p.finish();
         stage_time(stages, "render_display", Some(m.short_name()), None, t);
         let t = Instant::now();
-        finished(k, stack.view(k), depth.as_deref())?;
+        let view = stack.view(k).ok_or_else(|| Error::Unsupported("display stack not dense while rendering".into()))?;
+        finished(k, view, depth.as_deref())?;
         stage_time(stages, "write_display_image", Some(m.short_name()), None, t);
     }
+    // Held from here on as palette indices when the images allow it (same values, less memory).
+    let t = Instant::now();
+    let stack = stack.compact();
+    stage_time(stages, "pack_display_images", None, None, t);
     Ok(stack)
 }
 

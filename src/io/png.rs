@@ -146,8 +146,46 @@ pub fn write_preview_view(path: &Path, img: RgbView<'_>) -> Result<()> {
             format!("image buffer holds fewer than {}x{} pixels", img.width, img.height),
         ));
     }
-    write_rgb8(path, img.width, img.height, &view_to_srgb8(img))
+    let (w, h) = match (u32::try_from(img.width), u32::try_from(img.height)) {
+        (Ok(w), Ok(h)) if w > 0 && h > 0 => (w, h),
+        _ => return Err(Error::invalid(path.display().to_string(), "image size", "empty or too large for PNG")),
+    };
+    let fail = |e: png::EncodingError| match e {
+        png::EncodingError::IoError(e) => Error::io(path, e),
+        other => Error::parse(path, format!("PNG encoding failed: {other}")),
+    };
+    let file = File::create(path).map_err(|e| Error::io(path, e))?;
+    let mut encoder = png::Encoder::new(BufWriter::new(file), w, h);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    encoder.set_compression(png::Compression::Fast);
+    encoder.set_filter(png::Filter::Adaptive);
+    let mut writer = encoder.write_header().map_err(fail)?;
+    let mut stream = writer.stream_writer().map_err(fail)?;
+    // Bands of rows encoded in parallel and streamed: no full 8-bit copy of a large image.
+    let t = table();
+    let row = img.width * 3;
+    let mut band = vec![0u8; PREVIEW_BAND_ROWS * row];
+    for y0 in (0..img.height).step_by(PREVIEW_BAND_ROWS) {
+        let rows = PREVIEW_BAND_ROWS.min(img.height - y0);
+        band[..rows * row].par_chunks_mut(row).enumerate().for_each(|(dy, o)| {
+            let first = (y0 + dy) * img.width;
+            for (x, o) in o.chunks_exact_mut(3).enumerate() {
+                let p = img.pixel(first + x);
+                for c in 0..3 {
+                    o[c] = srgb_encode_fast(t, p[c]);
+                }
+            }
+        });
+        std::io::Write::write_all(&mut stream, &band[..rows * row]).map_err(|e| Error::io(path, e))?;
+    }
+    stream.finish().map_err(fail)?;
+    // The end chunk, then a checked flush of the buffered file.
+    writer.finish().map_err(fail)
 }
+
+/// Rows of a streamed preview ([`write_preview_view`]) converted at once.
+const PREVIEW_BAND_ROWS: usize = 64;
 
 /// Loads a PNG or JPEG texture (sRGB-encoded) from a regular file; its claimed size is checked
 /// against the memory limit before decoding ([`ImageTexture::decode`]). Errors name the file.

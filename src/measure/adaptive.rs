@@ -89,7 +89,8 @@ fn cells(psnr: Vec<Estimate>, ssim: Vec<Estimate>, precision: &Precision) -> Vec
         .collect()
 }
 
-/// Measures one eye case of `source` on `retina` to `precision`.
+/// Measures one eye case of `source` on `retina` to `precision`, in the buffer of `storage`
+/// when given (the replicates of an earlier case, see [`Replicates::recycle`]).
 ///
 /// Each round computes the PSNRs (cheap: Gram matrices); the SSIMs (many filtered planes) only
 /// once every PSNR meets its target, or when sampling must stop.
@@ -100,10 +101,14 @@ pub fn measure_case<S: PairedSource + ?Sized>(
     constants: SsimConstants,
     precision: &Precision,
     progress: &Progress,
+    storage: Option<Replicates>,
 ) -> CaseMeasurement {
     let nr = precision.replicates;
     let max_n = (precision.max_samples_per_pixel / nr as u64).clamp(1, MAX_SAMPLES_PER_REPLICATE) as u32;
-    let mut reps = Replicates::new(retina.resolution, nr, source.images());
+    let mut reps = match storage {
+        Some(old) => old.recycle(retina.resolution, nr, source.images()),
+        None => Replicates::new(retina.resolution, nr, source.images()),
+    };
     let mut n = precision.initial_samples.clamp(1, max_n);
     let mut rounds = Vec::new();
     // Half-widths of every cell's PSNR mean at each round, and of its SSIM mean when computed.

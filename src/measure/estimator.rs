@@ -202,6 +202,20 @@ impl Replicates {
         }
     }
 
+    /// Empty storage for a new measurement that reuses `self`'s buffer when it is large enough
+    /// (no new pages to fault in for every eye case). Like [`Replicates::new`], but the means are
+    /// not zeroed: they are meaningless until the first [`Replicates::extend`], which writes
+    /// every one of them.
+    pub fn recycle(mut self, resolution: usize, replicates: usize, images: usize) -> Self {
+        let len = resolution * resolution * replicates * images * 3;
+        if self.means.capacity() < len {
+            return Self::new(resolution, replicates, images);
+        }
+        self.means.truncate(len);
+        self.means.resize(len, 0.0);
+        Self { resolution, replicates, images, samples: 0, means: self.means }
+    }
+
     /// Replicates whose means are given: `f(pixel, replicate, image, channel)`, as if from
     /// `samples` samples per replicate (for tests and for replicates computed elsewhere).
     pub fn from_fn(
@@ -369,10 +383,19 @@ impl Replicates {
                     }
                     for (j, plane) in planes[r * k * 3..(r + 1) * k * 3].iter_mut().enumerate() {
                         for dr in 0..rows {
-                            for dc in 0..cols {
-                                let d = &mut plane[dr * n + col0 + dc];
-                                let s = sums[(dr * TILE + dc) * k * 3 + j];
-                                *d = ((f64::from(*d) * old_weight + s) * inv_total) as f32;
+                            let dst = &mut plane[dr * n + col0..dr * n + col0 + cols];
+                            let src = sums[dr * TILE * k * 3 + j..].iter().step_by(k * 3);
+                            if old == 0 {
+                                // The first pass writes without reading: the storage may hold
+                                // anything (a recycled case), and a page written before it is
+                                // read is faulted in once, not twice. (0 * 0 + s) * w == s * w.
+                                for (d, &s) in dst.iter_mut().zip(src) {
+                                    *d = (s * inv_total) as f32;
+                                }
+                            } else {
+                                for (d, &s) in dst.iter_mut().zip(src) {
+                                    *d = ((f64::from(*d) * old_weight + s) * inv_total) as f32;
+                                }
                             }
                         }
                     }

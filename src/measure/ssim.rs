@@ -35,7 +35,14 @@ const BAND: usize = 64;
 
 /// 'valid' separable filtering of a `rows x width` plane by the SSIM window into `out`
 /// (`(rows - 10) x (width - 10)`); `tmp` is scratch.
-fn filter_valid(src: &[f64], width: usize, rows: usize, g: &[f64; SSIM_WINDOW], tmp: &mut Vec<f64>, out: &mut [f64]) {
+fn filter_valid<T: Copy + Into<f64>>(
+    src: &[T],
+    width: usize,
+    rows: usize,
+    g: &[f64; SSIM_WINDOW],
+    tmp: &mut Vec<f64>,
+    out: &mut [f64],
+) {
     let wv = width - (SSIM_WINDOW - 1);
     tmp.resize(rows * wv, 0.0);
     for y in 0..rows {
@@ -83,10 +90,19 @@ fn lane_sum(len: usize, f: impl Fn(usize) -> f64) -> f64 {
 
 /// `dst[p] = sum_r f(src[r * len + p])` over the `R` planes of `src`, plane by plane.
 fn sum_planes(src: &[f64], len: usize, f: impl Fn(f64) -> f64, dst: &mut [f64]) {
+    sum_slices(src.chunks_exact(len), f, dst);
+}
+
+/// `dst[p] = sum_r f(planes[r][p])`, plane by plane.
+fn sum_slices<'a, T: Copy + Into<f64> + 'a>(
+    planes: impl IntoIterator<Item = &'a [T]>,
+    f: impl Fn(f64) -> f64,
+    dst: &mut [f64],
+) {
     dst.iter_mut().for_each(|d| *d = 0.0);
-    for plane in src.chunks_exact(len) {
+    for plane in planes {
         for (d, v) in dst.iter_mut().zip(plane) {
-            *d += f(*v);
+            *d += f((*v).into());
         }
     }
 }
@@ -101,27 +117,22 @@ fn band_sums(reps: &Replicates, c: usize, i0: usize, i1: usize, c1: f64, c2: f64
     let (wv, hb) = (n - (SSIM_WINDOW - 1), i1 - i0);
     let (plane, wplane) = (rows * n, hb * wv);
     let mut tmp = Vec::new();
-    let load = |k: usize, r: usize, dst: &mut [f64]| {
-        for (v, m) in dst.iter_mut().zip(&reps.plane(r, k, c)[i0 * n..]) {
-            *v = f64::from(*m);
-        }
-    };
+    // The band's rows of image k in every replicate, read in place (f32 -> f64 is exact).
+    let band = |k: usize| -> Vec<&[f32]> { (0..nr).map(|r| &reps.plane(r, k, c)[i0 * n..i0 * n + plane]).collect() };
     // The reference: its replicates, their windowed means, and S, sum of squares.
-    let mut xs = vec![0.0; nr * plane];
+    let xs = band(0);
     let mut mux = vec![0.0; nr * wplane];
-    for r in 0..nr {
-        load(0, r, &mut xs[r * plane..(r + 1) * plane]);
-        filter_valid(&xs[r * plane..(r + 1) * plane], n, rows, &g, &mut tmp, &mut mux[r * wplane..(r + 1) * wplane]);
+    for (r, x) in xs.iter().enumerate() {
+        filter_valid(x, n, rows, &g, &mut tmp, &mut mux[r * wplane..(r + 1) * wplane]);
     }
     let (mut sx, mut qx) = (vec![0.0; plane], vec![0.0; plane]);
-    sum_planes(&xs, plane, |v| v, &mut sx);
-    sum_planes(&xs, plane, |v| v * v, &mut qx);
+    sum_slices(xs.iter().copied(), |v| v, &mut sx);
+    sum_slices(xs.iter().copied(), |v| v * v, &mut qx);
     // Window sums of the reference's windowed means: a = sum mu_x, axx = sum mu_x^2.
     let (mut a, mut axx) = (vec![0.0; wplane], vec![0.0; wplane]);
     sum_planes(&mux, wplane, |v| v, &mut a);
     sum_planes(&mux, wplane, |v| v * v, &mut axx);
 
-    let mut ys = vec![0.0; nr * plane];
     let mut muy = vec![0.0; nr * wplane];
     let (mut sy, mut q, mut q2) = (vec![0.0; plane], vec![0.0; plane], vec![0.0; plane]);
     let (mut b, mut ayy, mut axy) = (vec![0.0; wplane], vec![0.0; wplane], vec![0.0; wplane]);
@@ -131,22 +142,21 @@ fn band_sums(reps: &Replicates, c: usize, i0: usize, i1: usize, c1: f64, c2: f64
     let loo_pairs = ((nr - 1) * (nr - 2)) as f64;
     let mut out = Vec::with_capacity(ni - 1);
     for k in 1..ni {
-        for r in 0..nr {
-            load(k, r, &mut ys[r * plane..(r + 1) * plane]);
-            let (src, dst) = (&ys[r * plane..(r + 1) * plane], &mut muy[r * wplane..(r + 1) * wplane]);
-            filter_valid(src, n, rows, &g, &mut tmp, dst);
+        let ys = band(k);
+        for (r, y) in ys.iter().enumerate() {
+            filter_valid(y, n, rows, &g, &mut tmp, &mut muy[r * wplane..(r + 1) * wplane]);
         }
-        sum_planes(&ys, plane, |v| v, &mut sy);
+        sum_slices(ys.iter().copied(), |v| v, &mut sy);
         sum_planes(&muy, wplane, |v| v, &mut b);
         sum_planes(&muy, wplane, |v| v * v, &mut ayy);
         axy.iter_mut().for_each(|v| *v = 0.0);
         // Full set: T = (Sx^2 - Qx) + (Sy^2 - Qy), Txy = Sx Sy - Pxy.
-        sum_planes(&ys, plane, |v| v * v, &mut q);
+        sum_slices(ys.iter().copied(), |v| v * v, &mut q);
         q2.iter_mut().for_each(|v| *v = 0.0);
         for r in 0..nr {
-            let (x, y) = (&xs[r * plane..(r + 1) * plane], &ys[r * plane..(r + 1) * plane]);
+            let (x, y) = (xs[r], ys[r]);
             for ((d, u), v) in q2.iter_mut().zip(x).zip(y) {
-                *d += u * v;
+                *d += f64::from(*u) * f64::from(*v);
             }
             let (mx, my) = (&mux[r * wplane..(r + 1) * wplane], &muy[r * wplane..(r + 1) * wplane]);
             for ((d, u), v) in axy.iter_mut().zip(mx).zip(my) {
@@ -163,10 +173,11 @@ fn band_sums(reps: &Replicates, c: usize, i0: usize, i1: usize, c1: f64, c2: f64
             lane_sum(wplane, |w| ssim_value(full_pairs, a[w], b[w], axx[w], ayy[w], axy[w], ft[w], ftxy[w], c1, c2));
         let mut loo = Vec::with_capacity(nr);
         for kk in 0..nr {
-            let (x, y) = (&xs[kk * plane..(kk + 1) * plane], &ys[kk * plane..(kk + 1) * plane]);
+            let (x, y) = (xs[kk], ys[kk]);
             for p in 0..plane {
-                q[p] = x[p] * (sx[p] - x[p]) + y[p] * (sy[p] - y[p]);
-                q2[p] = x[p] * (sy[p] - y[p]) + y[p] * (sx[p] - x[p]);
+                let (x, y) = (f64::from(x[p]), f64::from(y[p]));
+                q[p] = x * (sx[p] - x) + y * (sy[p] - y);
+                q2[p] = x * (sy[p] - y) + y * (sx[p] - x);
             }
             filter_valid(&q, n, rows, &g, &mut tmp, &mut f1);
             filter_valid(&q2, n, rows, &g, &mut tmp, &mut f2);

@@ -212,18 +212,18 @@ pub fn render_display_image_into_stack<R: RadianceField + ?Sized>(
     slot: usize,
 ) -> Result<Option<Vec<f32>>> {
     let lcd = display.lcd;
-    if stack.width != lcd.columns() || stack.height != lcd.rows() || slot >= stack.count {
+    let (count, width, height) = (stack.len(), stack.width(), stack.height());
+    if width != lcd.columns() || height != lcd.rows() || slot >= count {
         return Err(Error::Unsupported(format!(
-            "display stack of {} images of {} x {} pixels has no slot {slot} for the display's {} x {} LCD",
-            stack.count,
-            stack.width,
-            stack.height,
+            "display stack of {count} images of {width} x {height} pixels has no slot {slot} for the display's {} x {} LCD",
             lcd.columns(),
             lcd.rows()
         )));
     }
-    let stride = 3 * stack.count;
-    render_into(display, method, settings, tracer, progress, &mut stack.values, stride, 3 * slot)
+    let Some(values) = stack.dense_mut() else {
+        return Err(Error::Unsupported("a display stack in the palette layout cannot be rendered into".into()));
+    };
+    render_into(display, method, settings, tracer, progress, values, 3 * count, 3 * slot)
 }
 
 /// The display image's pixel `i` (row-major) goes to `dst[i * stride + offset..][..3]`.

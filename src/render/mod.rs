@@ -3,6 +3,7 @@
 
 pub mod backend;
 pub mod display_image;
+pub mod display_stack;
 pub mod field;
 pub mod planar;
 pub mod retina;

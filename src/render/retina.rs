@@ -17,73 +17,9 @@ use crate::error::{Error, Result};
 use crate::optics::transfer::{eye_scene_ray, FastTransfer};
 use crate::optics::{Display, Eye, Retina};
 use crate::progress::Progress;
-use crate::raster::{RgbImage, RgbView};
+use crate::raster::RgbImage;
 
-/// Display images interleaved pixel by pixel, so that one LCD lookup reads every method's
-/// value from one cache line.
-pub struct DisplayStack {
-    pub(super) count: usize,
-    pub(super) width: usize,
-    pub(super) height: usize,
-    pub(super) values: Vec<f32>,
-}
-
-impl DisplayStack {
-    /// Packs display images that must all have the LCD's resolution.
-    pub fn new(display: &Display, images: &[&RgbImage]) -> Result<Self> {
-        let lcd = display.lcd;
-        for (k, img) in images.iter().enumerate() {
-            if img.width != lcd.columns() || img.height != lcd.rows() {
-                return Err(Error::Unsupported(format!(
-                    "display image {k} is {} x {} pixels but the display's LCD is {} x {}",
-                    img.width,
-                    img.height,
-                    lcd.columns(),
-                    lcd.rows()
-                )));
-            }
-        }
-        let stride = 3 * images.len();
-        let mut values = vec![0f32; lcd.pixel_count() * stride];
-        if stride > 0 {
-            values.par_chunks_mut(stride).enumerate().for_each(|(i, dst)| {
-                for (k, img) in images.iter().enumerate() {
-                    dst[3 * k..3 * k + 3].copy_from_slice(&img.pixels[i]);
-                }
-            });
-        }
-        Ok(Self { count: images.len(), width: lcd.columns(), height: lcd.rows(), values })
-    }
-
-    /// `count` black display images of the LCD's size, to be rendered in place by
-    /// [`crate::render::render_display_image_into_stack`].
-    pub fn black(display: &Display, count: usize) -> Self {
-        let lcd = display.lcd;
-        Self { count, width: lcd.columns(), height: lcd.rows(), values: vec![0f32; lcd.pixel_count() * 3 * count] }
-    }
-
-    /// Display image `k`, read in place.
-    pub fn view(&self, k: usize) -> RgbView<'_> {
-        assert!(k < self.count, "display stack has {} images, not {}", self.count, k + 1);
-        RgbView::strided(self.width, self.height, &self.values, 3 * self.count, 3 * k)
-            .expect("a stack holds every pixel of each of its images")
-    }
-
-    /// Number of display images.
-    pub fn len(&self) -> usize {
-        self.count
-    }
-    pub fn is_empty(&self) -> bool {
-        self.count == 0
-    }
-
-    /// Every display image's value at LCD pixel `index` (row-major): `[image][channel]`.
-    #[inline(always)]
-    pub fn pixel(&self, index: usize) -> &[f32] {
-        let stride = 3 * self.count;
-        &self.values[index * stride..(index + 1) * stride]
-    }
-}
+pub use super::display_stack::DisplayStack;
 
 /// Simulates what the eye sees of each display image in `displays` (all with the LCD's
 /// resolution). Convenience wrapper over [`simulate_stack`].
@@ -107,17 +43,16 @@ pub fn simulate_stack(
     stack: &DisplayStack,
     progress: &Progress,
 ) -> Result<Vec<RgbImage>> {
-    if stack.width != display.lcd.columns() || stack.height != display.lcd.rows() {
+    if stack.width() != display.lcd.columns() || stack.height() != display.lcd.rows() {
         return Err(Error::Unsupported("display stack does not match the display's LCD resolution".into()));
     }
-    let m = stack.count;
+    let m = stack.len();
     let stride = 3 * m;
     let n = retina.resolution;
     let pupil = eye.pupil_samples();
     let subpixels = retina.subpixel_offsets();
     let inv_count = 1.0 / (pupil.len() * subpixels.len()) as f64;
     let fast = FastTransfer::new(display, eye, &pupil);
-    let packed = &stack.values;
 
     let mut images: Vec<RgbImage> = (0..m).map(|_| RgbImage::new(n, n)).collect();
     let mut rows = vec![0f32; n * n * stride];
@@ -149,7 +84,7 @@ pub fn simulate_stack(
                             let t = tangents[r * TILE + c];
                             if let Some(idx) = fast.pixel_index(t, k) {
                                 let dst = &mut acc[(r * TILE + c) * stride..(r * TILE + c + 1) * stride];
-                                add_f32(dst, &packed[idx * stride..(idx + 1) * stride]);
+                                add_f32(dst, stack.pixel(idx));
                             }
                         }
                     }
