@@ -25,6 +25,7 @@
 use std::collections::HashMap;
 use std::path::Path;
 
+use exr::image::write::layers::WritableLayers;
 use exr::image::{AnyChannels, Encoding, FlatSamples, Image, Layer, SpecificChannels};
 use exr::math::Vec2;
 use exr::meta::attribute::Text;
@@ -150,6 +151,19 @@ pub fn write_view(
     attributes: &Attributes,
     compression: ExrCompression,
 ) -> Result<()> {
+    write_view_by(path, img, depth, attributes, compression, true)
+}
+
+/// [`write_view`]; with `own_zip` false, ZIP and ZIPS blocks are compressed by the `exr` crate
+/// itself (slower, smaller; the same decoded samples).
+pub(super) fn write_view_by(
+    path: &Path,
+    img: RgbView<'_>,
+    depth: Option<&[f32]>,
+    attributes: &Attributes,
+    compression: ExrCompression,
+    own_zip: bool,
+) -> Result<()> {
     let source = path.display().to_string();
     let n = img.len();
     if n == 0 {
@@ -215,9 +229,12 @@ pub fn write_view(
         Encoding { compression: compression.to_exr(), blocks: Blocks::ScanLines, line_order: LineOrder::Increasing };
     let size = Vec2(img.width, img.height);
     let width = img.width;
+    // ZIP and ZIPS blocks are compressed by `exr_zip` (a faster deflate) unless `own_zip` is
+    // false; the header is the one the crate makes for the same image either way.
+    let zip = (own_zip && matches!(compression, ExrCompression::Zip | ExrCompression::Zips)).then_some((img, depth));
     // The pixels are read from `img` (and `depth`) block by block as the file is compressed:
     // no copy of the image is made. The crate sorts the channels by name (B, G, R, Z).
-    let result = match depth {
+    match depth {
         Some(z) => {
             let channels = SpecificChannels::build()
                 .with_channel::<f32>("R")
@@ -229,7 +246,7 @@ pub fn write_view(
                     let [r, g, b] = img.pixel(i);
                     (r, g, b, z[i])
                 });
-            Image::from_layer(Layer::new(size, layer_attributes, encoding, channels)).write().to_file(path)
+            finish(path, &Image::from_layer(Layer::new(size, layer_attributes, encoding, channels)), zip)
         }
         None => {
             let channels = SpecificChannels::build()
@@ -240,10 +257,23 @@ pub fn write_view(
                     let [r, g, b] = img.pixel(p.y() * width + p.x());
                     (r, g, b)
                 });
-            Image::from_layer(Layer::new(size, layer_attributes, encoding, channels)).write().to_file(path)
+            finish(path, &Image::from_layer(Layer::new(size, layer_attributes, encoding, channels)), zip)
         }
-    };
-    result.map_err(|e| exr_error(path, e))
+    }
+}
+
+/// Writes `image` to `path`: by the `exr` crate, or with the crate's header and the blocks
+/// compressed by [`super::exr_zip`] from `zip`'s pixels and depth (the same as `image`'s).
+fn finish<'i, L: WritableLayers<'i>>(
+    path: &Path,
+    image: &'i Image<L>,
+    zip: Option<(RgbView<'_>, Option<&[f32]>)>,
+) -> Result<()> {
+    let writer = image.write();
+    match zip {
+        Some((img, depth)) => super::exr_zip::write(path, writer.infer_meta_data(), img, depth),
+        None => writer.to_file(path).map_err(|e| exr_error(path, e)),
+    }
 }
 
 /// A regular, non-empty file; returns its size.
