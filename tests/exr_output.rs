@@ -229,3 +229,120 @@ fn an_image_written_from_a_stack_view_equals_the_image_written_alone() {
         .to_string();
     assert!(err.contains("row 2, col 5"), "{err}");
 }
+
+const CHANNEL_DUMPER: &str = r#"
+import json, os, sys
+import numpy as np
+import OpenEXR
+f = OpenEXR.File(sys.argv[1], separate_channels=True)
+h = f.header()
+out = {"compression": str(h["compression"]), "channels": {}}
+for name, ch in f.channels().items():
+    px = ch.pixels
+    out["channels"][name] = [str(px.dtype), list(px.shape)]
+    open(os.path.join(sys.argv[2], name + ".f32"), "wb").write(np.ascontiguousarray(px, dtype="<f4").tobytes())
+for k in ("inimtrace:focus_mm", "inimtrace:pupil_samples", "inimtrace:method"):
+    v = h.get(k)
+    out[k] = float(v[0]) if isinstance(v, np.ndarray) else v
+print(json.dumps(out))
+"#;
+
+#[test]
+fn openexr_python_bindings_read_inimtraces_zip_and_zips_blocks_bit_for_bit() {
+    // inimtrace compresses ZIP and ZIPS blocks itself: OpenEXR's own reader must decode every
+    // channel of them, Z included, to the written bits: odd sizes, heights that are not
+    // multiples of 16, zeros, negatives and huge values, a constant image, incompressible
+    // blocks stored raw.
+    let py = match python_with_openexr() {
+        Ok(p) => p,
+        Err(why) => {
+            assert!(std::env::var_os("INIMTRACE_REQUIRE_OPENEXR").is_none(), "INIMTRACE_REQUIRE_OPENEXR is set: {why}");
+            eprintln!("SKIPPED openexr_python_bindings_read_inimtraces_zip_and_zips_blocks_bit_for_bit: {why}");
+            return;
+        }
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let script = dir.path().join("dump.py");
+    std::fs::write(&script, CHANNEL_DUMPER).unwrap();
+    let mut state = 0x1234_5678_9abc_def0u64;
+    let mut bits = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        let v = f32::from_bits(state as u32);
+        (state, if v.is_finite() { v } else { f32::from_bits(state as u32 ^ 0x4000_0000) })
+    };
+    let mut finite = |k: u64| {
+        let (r, v) = bits();
+        match (k + r) % 6 {
+            0 => 0.0,
+            1 => -1.5 * (r % 100) as f32,
+            2 => f32::MAX,
+            _ => v,
+        }
+    };
+    let mut cases = Vec::new();
+    for (w, h, depth) in [(67, 41, true), (1, 17, true), (130, 16, false), (5, 1, true)] {
+        let mut img = RgbImage::new(w, h);
+        for (k, p) in img.pixels.iter_mut().enumerate() {
+            *p = [finite(k as u64), finite(k as u64 + 1), finite(k as u64 + 2)];
+        }
+        let z = depth.then(|| (0..w * h).map(|k| if k % 7 == 0 { f32::INFINITY } else { finite(k as u64) }).collect());
+        cases.push((format!("random_{w}x{h}"), img, z));
+    }
+    // Random bit patterns do not deflate: these blocks are stored raw.
+    let mut noise = RgbImage::new(40, 20);
+    for p in noise.pixels.iter_mut() {
+        *p = [bits().1, bits().1, bits().1];
+    }
+    cases.push(("noise_40x20".into(), noise, None));
+    let (smooth, smooth_z) = image(53, 29);
+    cases.push(("smooth_53x29".into(), smooth, Some(smooth_z)));
+    let mut flat = RgbImage::new(31, 19);
+    flat.pixels.iter_mut().for_each(|p| *p = [0.25, 0.5, 0.75]);
+    cases.push(("constant_31x19".into(), flat, Some(vec![300.0; 31 * 19])));
+
+    for (name, img, depth) in &cases {
+        for (c, openexr_name) in [(ExrCompression::Zip, "ZIP_COMPRESSION"), (ExrCompression::Zips, "ZIPS_COMPRESSION")]
+        {
+            let path = dir.path().join(format!("{name}-{c}.exr"));
+            write_rgb_with(&path, img, depth.as_deref(), &typed(), c).unwrap();
+            if name.starts_with("noise") {
+                // Stored raw, the file is the uncompressed file (one block per line) less the
+                // offset and the chunk header (8 bytes each) of every line beyond one per block.
+                let none = dir.path().join(format!("{name}-none.exr"));
+                write_rgb_with(&none, img, depth.as_deref(), &typed(), ExrCompression::None).unwrap();
+                let lines = if c == ExrCompression::Zip { 16 } else { 1 };
+                let fewer = (img.height - img.height.div_ceil(lines)) as u64 * 16;
+                let size = |p: &Path| std::fs::metadata(p).unwrap().len();
+                assert_eq!(size(&path), size(&none) - fewer, "{name} {c}: blocks stored raw");
+            }
+            let out_dir = dir.path().join(format!("{name}-{c}"));
+            std::fs::create_dir(&out_dir).unwrap();
+            let out = Command::new(&py).arg(&script).arg(&path).arg(&out_dir).output().unwrap();
+            assert!(out.status.success(), "{name} {c}: {}", String::from_utf8_lossy(&out.stderr));
+            let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+            assert!(v["compression"].as_str().unwrap().ends_with(openexr_name), "{name} {c}: {v}");
+            assert_eq!(v["inimtrace:focus_mm"], serde_json::json!(300.0));
+            assert_eq!(v["inimtrace:pupil_samples"], serde_json::json!(52));
+            assert_eq!(v["inimtrace:method"], serde_json::json!("LA (5x5)"));
+            let mut planes: Vec<(&str, Vec<f32>)> =
+                (0..3).map(|k| (["R", "G", "B"][k], img.pixels.iter().map(|p| p[k]).collect())).collect();
+            if let Some(z) = depth {
+                planes.push(("Z", z.clone()));
+            }
+            let names: Vec<&str> = v["channels"].as_object().unwrap().keys().map(String::as_str).collect();
+            assert_eq!(names.len(), planes.len(), "{name} {c}: channels {names:?}");
+            for (channel, values) in planes {
+                assert_eq!(
+                    v["channels"][channel],
+                    serde_json::json!(["float32", [img.height, img.width]]),
+                    "{name} {c} {channel}"
+                );
+                let bytes = std::fs::read(out_dir.join(format!("{channel}.f32"))).unwrap();
+                let ours: Vec<u8> = values.iter().flat_map(|x| x.to_le_bytes()).collect();
+                assert!(bytes == ours, "{name} {c}: OpenEXR decodes other {channel} samples than inimtrace wrote");
+            }
+        }
+    }
+}

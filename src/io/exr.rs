@@ -1,6 +1,8 @@
 //! OpenEXR files of linear RGB images: the rendered display images (elemental-image arrays) and
 //! the simulated retinal images that the paper compares (its Figures 3–4 and Table 1 are made
-//! from them). Written and read with the `exr` crate.
+//! from them). Written and read with the `exr` crate, except that the pixel blocks of ZIP and
+//! ZIPS files are compressed by `exr_zip.rs` with a faster deflate (the same samples, header
+//! and attributes; files a tenth to a fifth larger than the crate's).
 //!
 //! **Writing** ([`write_rgb_with`], [`write_rgb`]): one layer with `f32` channels `R`, `G`, `B`
 //! and, when a depth plane is given, `Z` (the hit distance per pixel); scan-line blocks in
@@ -25,6 +27,7 @@
 use std::collections::HashMap;
 use std::path::Path;
 
+use exr::image::write::layers::WritableLayers;
 use exr::image::{AnyChannels, Encoding, FlatSamples, Image, Layer, SpecificChannels};
 use exr::math::Vec2;
 use exr::meta::attribute::Text;
@@ -38,9 +41,9 @@ use crate::raster::{RgbImage, RgbView};
 /// Compression of written files (`--exr-compression`). Every choice but `pxr24` is lossless.
 ///
 /// Rendered display images are mostly flat regions and compress well: the paper's 2160 x 2160
-/// display image with its `Z` channel is 74.7 MB uncompressed and 6.7 MB with ZIP; a 512 x 512
-/// retinal image 3.15 MB and 0.35 MB. Fine noise compresses little (2-6 % with ZIP, 22 % with
-/// PIZ) at 2-3 s per 2160 x 2160 image; `none` writes fastest.
+/// display image with its `Z` channel is 74.7 MB uncompressed and 7.8-8.0 MB with ZIP (LA, LC;
+/// 19 MB for PC); a 512 x 512 retinal image 3.15 MB and 0.1-0.4 MB. Fine noise compresses little
+/// with ZIP (22 % with PIZ, at 2-3 s per 2160 x 2160 image); `none` writes fastest.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum ExrCompression {
@@ -150,6 +153,19 @@ pub fn write_view(
     attributes: &Attributes,
     compression: ExrCompression,
 ) -> Result<()> {
+    write_view_by(path, img, depth, attributes, compression, true)
+}
+
+/// [`write_view`]; with `own_zip` false, ZIP and ZIPS blocks are compressed by the `exr` crate
+/// itself (slower, smaller; the same decoded samples).
+pub(super) fn write_view_by(
+    path: &Path,
+    img: RgbView<'_>,
+    depth: Option<&[f32]>,
+    attributes: &Attributes,
+    compression: ExrCompression,
+    own_zip: bool,
+) -> Result<()> {
     let source = path.display().to_string();
     let n = img.len();
     if n == 0 {
@@ -215,9 +231,12 @@ pub fn write_view(
         Encoding { compression: compression.to_exr(), blocks: Blocks::ScanLines, line_order: LineOrder::Increasing };
     let size = Vec2(img.width, img.height);
     let width = img.width;
+    // ZIP and ZIPS blocks are compressed by `exr_zip` (a faster deflate) unless `own_zip` is
+    // false; the header is the one the crate makes for the same image either way.
+    let zip = (own_zip && matches!(compression, ExrCompression::Zip | ExrCompression::Zips)).then_some((img, depth));
     // The pixels are read from `img` (and `depth`) block by block as the file is compressed:
     // no copy of the image is made. The crate sorts the channels by name (B, G, R, Z).
-    let result = match depth {
+    match depth {
         Some(z) => {
             let channels = SpecificChannels::build()
                 .with_channel::<f32>("R")
@@ -229,7 +248,7 @@ pub fn write_view(
                     let [r, g, b] = img.pixel(i);
                     (r, g, b, z[i])
                 });
-            Image::from_layer(Layer::new(size, layer_attributes, encoding, channels)).write().to_file(path)
+            finish(path, &Image::from_layer(Layer::new(size, layer_attributes, encoding, channels)), zip)
         }
         None => {
             let channels = SpecificChannels::build()
@@ -240,10 +259,23 @@ pub fn write_view(
                     let [r, g, b] = img.pixel(p.y() * width + p.x());
                     (r, g, b)
                 });
-            Image::from_layer(Layer::new(size, layer_attributes, encoding, channels)).write().to_file(path)
+            finish(path, &Image::from_layer(Layer::new(size, layer_attributes, encoding, channels)), zip)
         }
-    };
-    result.map_err(|e| exr_error(path, e))
+    }
+}
+
+/// Writes `image` to `path`: by the `exr` crate, or with the crate's header and the blocks
+/// compressed by [`super::exr_zip`] from `zip`'s pixels and depth (the same as `image`'s).
+fn finish<'i, L: WritableLayers<'i>>(
+    path: &Path,
+    image: &'i Image<L>,
+    zip: Option<(RgbView<'_>, Option<&[f32]>)>,
+) -> Result<()> {
+    let writer = image.write();
+    match zip {
+        Some((img, depth)) => super::exr_zip::write(path, writer.infer_meta_data(), img, depth),
+        None => writer.to_file(path).map_err(|e| exr_error(path, e)),
+    }
 }
 
 /// A regular, non-empty file; returns its size.

@@ -6,6 +6,7 @@
 pub mod display_file;
 pub mod exr;
 mod exr_attributes;
+mod exr_zip;
 pub mod figure;
 mod gltf;
 pub mod input;
