@@ -10,7 +10,7 @@ use glam::{DVec2, DVec3};
 use inimtrace::accel::analytic::AnalyticRects;
 use inimtrace::experiment::converged::{measure, naive_scores};
 use inimtrace::experiment::{Experiment, ExperimentSpec};
-use inimtrace::measure::adaptive::{CaseMeasurement, Precision};
+use inimtrace::measure::adaptive::{measure_case, CaseMeasurement, Precision};
 use inimtrace::measure::estimator::{DisplaySource, EyeSample, EyeToLcd, PairedSource, Replicates};
 use inimtrace::measure::stats::gram_matrices;
 use inimtrace::metrics::{self, SsimConstants};
@@ -444,6 +444,34 @@ fn the_same_seed_gives_the_same_bits_at_any_thread_count() {
     assert_eq!(one.cells[0], one.cells[1]);
     let other = measure(&source, 4, 0, &c.eye, &retina, SsimConstants::Wang2004, &to_target(0.05, 0.005));
     assert_ne!(one.cells[0].psnr.mean, other.cells[0].psnr.mean);
+}
+
+#[test]
+fn a_case_measured_in_recycled_storage_gives_the_same_bits() {
+    // `assess` measures every eye case in the replicate buffer of the case before. Whatever that
+    // buffer holds (another case's means, garbage, another size), the result is a fresh run's.
+    let c = corner();
+    let backend = AnalyticRects::new(&c.scene).unwrap();
+    let field = SceneTracer { scene: &c.scene, backend: &backend };
+    let stack = DisplayStack::new(&c.display, &[&c.lc, &c.lc]).unwrap();
+    let source = DisplaySource::new(&c.display, &c.eye, &field, &stack);
+    let (small, large) = (retina(24, 0.02), retina(40, 0.02));
+    let sampler = inimtrace::experiment::converged::case_sampler(7, 1, &c.eye);
+    let target = to_target(0.05, 0.005);
+    let run = |retina: &Retina, storage| {
+        measure_case(&source, &sampler, retina, SsimConstants::Wang2004, &target, &Progress::hidden(), storage)
+    };
+    let fresh = run(&small, None);
+    let after_other_case = run(&large, None).replicates;
+    let garbage =
+        Replicates::from_fn(40, 8, 3, 5, |p, r, k, ch| if (p + r + k + ch) % 3 == 0 { f32::NAN } else { -7.5 });
+    let too_small = Replicates::new(8, 3, 3);
+    for storage in [after_other_case, garbage, too_small] {
+        let again = run(&small, Some(storage));
+        assert!(again.replicates == fresh.replicates, "replicate means differ");
+        assert_eq!(again.cells, fresh.cells);
+        assert_eq!(again.rounds.len(), fresh.rounds.len());
+    }
 }
 
 #[test]

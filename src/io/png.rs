@@ -199,6 +199,21 @@ mod tests {
     use super::*;
 
     #[test]
+    fn a_streamed_preview_holds_the_pixels_of_the_whole_image_conversion() {
+        // Several bands of rows, a last band cut short, and a strided view (one image of three
+        // interleaved, as a display stack holds them).
+        let (w, h) = (131, 2 * PREVIEW_BAND_ROWS + 9);
+        let values: Vec<f32> = (0..w * h * 9).map(|i| ((i * 7919) % 1201) as f32 / 1000.0 - 0.1).collect();
+        let view = RgbView::strided(w, h, &values, 9, 3).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("p.png");
+        write_preview_view(&path, view).unwrap();
+        let decoded = image::open(&path).unwrap().to_rgb8();
+        assert_eq!(decoded.dimensions(), (w as u32, h as u32));
+        assert!(decoded.into_raw() == view_to_srgb8(view));
+    }
+
+    #[test]
     fn table_matches_formula() {
         let t = table();
         // Around every threshold, and a sweep over all floats in [0, 1] with a prime stride.
