@@ -411,6 +411,27 @@ fn rendering_into_the_stack_equals_rendering_then_packing() {
             for i in 0..display.lcd.pixel_count() {
                 assert_eq!(stack.pixel(i), packed.pixel(i));
             }
+            // What `assess` does: one reused image buffer, the stack built image by image.
+            let mut image = RgbImage::new(display.lcd.columns(), display.lcd.rows());
+            let mut builder = inimtrace::render::display_stack::StackBuilder::new(&display, methods.len());
+            for (k, m) in methods.iter().enumerate() {
+                let depth = inimtrace::render::render_display_image_into(
+                    &display,
+                    *m,
+                    &s,
+                    field,
+                    &Progress::hidden(),
+                    &mut image,
+                )
+                .unwrap();
+                assert_eq!(depth, rendered[k].1, "{m}: depth");
+                assert!(image == rendered[k].0, "{m}: image in the reused buffer");
+                builder.push((&image).into()).unwrap();
+            }
+            let built = builder.finish().unwrap();
+            for i in 0..display.lcd.pixel_count() {
+                assert_eq!(built.pixel(i), packed.pixel(i));
+            }
         }
     }
     // A slot the stack does not have is an error, not a panic.
@@ -418,5 +439,15 @@ fn rendering_into_the_stack_equals_rendering_then_packing() {
     let mut stack = DisplayStack::black(&display, 1);
     let err =
         render_display_image_into_stack(&display, Method::LensletCenter, &s, &fast, &Progress::hidden(), &mut stack, 1);
+    assert!(err.is_err());
+    let mut wrong = RgbImage::new(107, 108);
+    let err = inimtrace::render::render_display_image_into(
+        &display,
+        Method::LensletCenter,
+        &s,
+        &fast,
+        &Progress::hidden(),
+        &mut wrong,
+    );
     assert!(err.is_err());
 }

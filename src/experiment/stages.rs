@@ -12,8 +12,9 @@ use crate::error::{Error, Result};
 use crate::metrics;
 use crate::progress::Progress;
 use crate::raster::{RgbImage, RgbView};
+use crate::render::display_stack::StackBuilder;
 use crate::render::retina::{simulate_stack, DisplayStack};
-use crate::render::{ground_truth, render_display_image_into_stack, render_display_image_with_depth, RadianceField};
+use crate::render::{ground_truth, render_display_image_into, render_display_image_with_depth, RadianceField};
 
 pub(super) fn stage_time(
     stages: &mut Vec<StageTime>,
@@ -57,11 +58,12 @@ pub fn render_display_images<D: RadianceField + ?Sized>(
     Ok((displays, depths))
 }
 
-/// Stage 1 as `assess` runs it: every method's display image rendered straight into the stack
-/// the simulation reads (`render_display` stages), each handed to `finished` (method index, the
-/// image in place, its depth plane; timed as `write_display_image`) before the next is
-/// rendered, so no display image is ever held twice. The stack equals [`pack_display_images`] of [`render_display_images`] bit for
-/// bit (tested).
+/// Stage 1 as `assess` runs it: every method's display image rendered into one reused image
+/// buffer (`render_display` stages), handed to `finished` (method index, the image, its depth
+/// plane; timed as `write_display_image`), then added to the stack the simulation reads
+/// (`pack_display_images`: palette indices while the images allow, see
+/// [`crate::render::display_stack`]), before the next is rendered. The stack reads as
+/// [`pack_display_images`] of [`render_display_images`] bit for bit (tested).
 pub fn render_display_stack<D: RadianceField + ?Sized>(
     exp: &Experiment,
     with_depth: &D,
@@ -70,23 +72,23 @@ pub fn render_display_stack<D: RadianceField + ?Sized>(
     mut finished: impl FnMut(usize, RgbView<'_>, Option<&[f32]>) -> Result<()>,
 ) -> Result<DisplayStack> {
     let display = &exp.display;
-    let mut stack = DisplayStack::black(display, exp.methods.len());
+    // One image buffer for every method; the stack keeps palette indices when it can.
+    let mut image = RgbImage::new(display.lcd.columns(), display.lcd.rows());
+    let mut stack = StackBuilder::new(display, exp.methods.len());
     for (k, m) in exp.methods.iter().enumerate() {
         let t = Instant::now();
         let p = Progress::new(display.lcd.rows() as u64, &format!("display image {}", m.short_name()), quiet);
-        let depth = render_display_image_into_stack(display, *m, &exp.render, with_depth, &p, &mut stack, k)?;
+        let depth = render_display_image_into(display, *m, &exp.render, with_depth, &p, &mut image)?;
         p.finish();
         stage_time(stages, "render_display", Some(m.short_name()), None, t);
         let t = Instant::now();
-        let view = stack.view(k).ok_or_else(|| Error::Unsupported("display stack not dense while rendering".into()))?;
-        finished(k, view, depth.as_deref())?;
+        finished(k, RgbView::from(&image), depth.as_deref())?;
         stage_time(stages, "write_display_image", Some(m.short_name()), None, t);
+        let t = Instant::now();
+        stack.push(RgbView::from(&image))?;
+        stage_time(stages, "pack_display_images", Some(m.short_name()), None, t);
     }
-    // Held from here on as palette indices when the images allow it (same values, less memory).
-    let t = Instant::now();
-    let stack = stack.compact();
-    stage_time(stages, "pack_display_images", None, None, t);
-    Ok(stack)
+    stack.finish()
 }
 
 /// The display images interleaved for the simulation (`pack_display_images` stage).

@@ -199,6 +199,29 @@ pub fn render_display_image_with_depth<R: RadianceField + ?Sized>(
     Ok((image, depth))
 }
 
+/// [`render_display_image_with_depth`] into `image` (which must have the LCD's size): one
+/// buffer can serve every method in turn. Returns the depth plane.
+pub fn render_display_image_into<R: RadianceField + ?Sized>(
+    display: &Display,
+    method: Method,
+    settings: &DisplayRenderSettings,
+    tracer: &R,
+    progress: &Progress,
+    image: &mut RgbImage,
+) -> Result<Option<Vec<f32>>> {
+    let lcd = display.lcd;
+    if image.width != lcd.columns() || image.height != lcd.rows() || image.pixels.len() != lcd.pixel_count() {
+        return Err(Error::Unsupported(format!(
+            "a {} x {} image cannot hold a display image of the display's {} x {} LCD",
+            image.width,
+            image.height,
+            lcd.columns(),
+            lcd.rows()
+        )));
+    }
+    render_into(display, method, settings, tracer, progress, image.pixels.as_flattened_mut(), 3, 0)
+}
+
 /// [`render_display_image_with_depth`] straight into slot `slot` of `stack` (the display images
 /// interleaved for the simulation), so the image is never held twice; returns its depth plane.
 /// The values are the same bit for bit (tested).

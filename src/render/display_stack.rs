@@ -11,8 +11,15 @@
 //!   thousand for LC, PC and LA 5 x 5 together), so the stack then takes 2 bytes per pixel
 //!   instead of 36, and the simulation's random reads hit a far smaller working set. Images
 //!   with more than 65,536 distinct tuples (textures, smooth shading) stay dense.
+//!
+//! [`StackBuilder`] takes the display images one at a time, each from one reused image buffer,
+//! and keeps only the palette indices of those pushed so far (switching to the dense layout if
+//! the tuples outgrow the palette), so the dense stack is never held for images that do not
+//! need it.
 
 use std::collections::HashMap;
+
+use rustc_hash::FxHashMap;
 
 use rayon::prelude::*;
 
@@ -163,6 +170,170 @@ impl DisplayStack {
     }
 }
 
+/// Builds a [`DisplayStack`] one display image at a time ([`StackBuilder::push`]), in the palette
+/// layout while the tuples of the images pushed so far fit it, else dense.
+pub struct StackBuilder {
+    count: usize,
+    width: usize,
+    height: usize,
+    pushed: usize,
+    state: Building,
+}
+
+enum Building {
+    /// The tuples of the first `pushed` images: `palette[index[i] * 3 * pushed..][..3 * pushed]`.
+    Palette { index: Vec<u16>, palette: Vec<f32> },
+    /// `3 * count` floats per pixel; slots `0..pushed` filled.
+    Dense(Vec<f32>),
+}
+
+impl StackBuilder {
+    /// A stack of `count` display images of `display`'s LCD, none pushed yet.
+    pub fn new(display: &Display, count: usize) -> Self {
+        let (width, height) = (display.lcd.columns(), display.lcd.rows());
+        // Before the first image every pixel holds the empty tuple, entry 0.
+        let state = Building::Palette { index: vec![0; width * height], palette: Vec::new() };
+        Self { count, width, height, pushed: 0, state }
+    }
+
+    /// Adds the next display image (slot `pushed`), which must have the LCD's size.
+    pub fn push(&mut self, image: RgbView<'_>) -> Result<()> {
+        if self.pushed == self.count || image.width != self.width || image.height != self.height || !image.is_complete()
+        {
+            return Err(Error::Unsupported(format!(
+                "display stack of {} images of {} x {} pixels cannot take a {} x {} image as image {}",
+                self.count,
+                self.width,
+                self.height,
+                image.width,
+                image.height,
+                self.pushed + 1
+            )));
+        }
+        let (k, stride) = (self.pushed, 3 * self.count);
+        match &mut self.state {
+            Building::Palette { index, palette } => match extend_palette(index, palette, k, image) {
+                Some((new_index, new_palette)) => (*index, *palette) = (new_index, new_palette),
+                None => {
+                    // Too many tuples: the images pushed so far, and this one, dense.
+                    let mut values = vec![0f32; self.width * self.height * stride];
+                    let old = 3 * k;
+                    values.par_chunks_mut(stride).zip(index.par_iter()).enumerate().for_each(|(i, (dst, &j))| {
+                        let j = usize::from(j);
+                        dst[..old].copy_from_slice(&palette[j * old..(j + 1) * old]);
+                        dst[old..old + 3].copy_from_slice(&image.pixel(i));
+                    });
+                    self.state = Building::Dense(values);
+                }
+            },
+            Building::Dense(values) => {
+                values.par_chunks_mut(stride).enumerate().for_each(|(i, dst)| {
+                    dst[3 * k..3 * k + 3].copy_from_slice(&image.pixel(i));
+                });
+            }
+        }
+        self.pushed += 1;
+        Ok(())
+    }
+
+    /// The stack, once every image is pushed.
+    pub fn finish(self) -> Result<DisplayStack> {
+        if self.pushed != self.count {
+            return Err(Error::Unsupported(format!(
+                "display stack of {} images finished after {}",
+                self.count, self.pushed
+            )));
+        }
+        let layout = match self.state {
+            Building::Palette { index, palette } => Layout::Palette { index, palette },
+            Building::Dense(values) => Layout::Dense(values),
+        };
+        Ok(DisplayStack { count: self.count, width: self.width, height: self.height, layout })
+    }
+}
+
+/// Pixels per chunk of [`extend_palette`] (a fixed size, so the work does not depend on the
+/// thread count).
+const CHUNK: usize = 1 << 16;
+
+/// A pixel's key while the palette grows: its tuple so far and its RGB in image `k`, as bits.
+type Key = (u16, [u32; 3]);
+
+/// The palette of `k + 1`-tuples from that of the first `k` images (`index`, `palette`, tuples of
+/// `3 * k` floats) and image `k`: every pixel's tuple extended by its RGB, numbered in order of
+/// first appearance. `None` when there are more than [`MAX_PALETTE`] tuples. Chunks of pixels
+/// number their own keys in parallel; merging them in chunk order gives the numbers one pass
+/// over all pixels would.
+fn extend_palette(index: &[u16], palette: &[f32], k: usize, image: RgbView<'_>) -> Option<(Vec<u16>, Vec<f32>)> {
+    let old = 3 * k;
+    let parts: Vec<(Vec<u16>, Vec<Key>)> = index
+        .par_chunks(CHUNK)
+        .enumerate()
+        .map(|(c, ids)| local_keys(ids, |i| image.pixel(c * CHUNK + i).map(f32::to_bits)))
+        .collect::<Option<_>>()?;
+    let mut table: FxHashMap<Key, u16> = FxHashMap::default();
+    let mut next = Vec::new();
+    let mut maps = Vec::with_capacity(parts.len());
+    for (_, keys) in &parts {
+        let mut map = Vec::with_capacity(keys.len());
+        for key in keys {
+            let id = table.len();
+            let id = *table.entry(*key).or_insert_with(|| {
+                let j = usize::from(key.0);
+                next.extend_from_slice(&palette[j * old..(j + 1) * old]);
+                next.extend(key.1.map(f32::from_bits));
+                id as u16
+            });
+            if table.len() > MAX_PALETTE {
+                return None;
+            }
+            map.push(id);
+        }
+        maps.push(map);
+    }
+    let mut out = vec![0u16; index.len()];
+    out.par_chunks_mut(CHUNK).zip(parts.par_iter().zip(&maps)).for_each(|(dst, ((local, _), map))| {
+        for (d, &l) in dst.iter_mut().zip(local) {
+            *d = map[usize::from(l)];
+        }
+    });
+    Some((out, next))
+}
+
+/// One chunk of [`extend_palette`]: each pixel's local number and the distinct keys in order of
+/// first appearance (`rgb(i)`: the bits of the chunk's pixel `i`).
+fn local_keys(ids: &[u16], rgb: impl Fn(usize) -> [u32; 3]) -> Option<(Vec<u16>, Vec<Key>)> {
+    let mut table: FxHashMap<Key, u16> = FxHashMap::default();
+    let mut keys = Vec::new();
+    let mut local = Vec::with_capacity(ids.len());
+    let mut last: Option<(Key, u16)> = None;
+    for (i, &j) in ids.iter().enumerate() {
+        let key = (j, rgb(i));
+        // Neighbouring pixels often hold the same tuple: compare with the last one first.
+        if let Some((prev, id)) = last {
+            if prev == key {
+                local.push(id);
+                continue;
+            }
+        }
+        let id = match table.get(&key) {
+            Some(&id) => id,
+            None => {
+                if table.len() == MAX_PALETTE {
+                    return None;
+                }
+                let id = table.len() as u16;
+                table.insert(key, id);
+                keys.push(key);
+                id
+            }
+        };
+        local.push(id);
+        last = Some((key, id));
+    }
+    Some((local, keys))
+}
+
 /// Pixel tuples of `values` (`stride` floats each) as indices into a table of the distinct
 /// ones, in order of first appearance; `None` when there are more than [`MAX_PALETTE`].
 fn palette_of(values: &[f32], stride: usize) -> Option<(Vec<u16>, Vec<f32>)> {
@@ -243,6 +414,36 @@ mod tests {
             assert!(back.pixels.iter().zip(&img.pixels).all(|(p, q)| (0..3).all(|c| p[c].to_bits() == q[c].to_bits())));
         }
         assert!(packed.view(0).is_none() && dense.view(0).is_some());
+    }
+
+    #[test]
+    fn a_stack_built_image_by_image_reads_as_the_packed_one() {
+        let (nx, ny) = (300, 250);
+        let d = display(nx, ny);
+        let a = image(nx, ny, |r, c| [((r / 3 + c / 5) % 4) as f32 * 0.25, if c % 7 == 0 { -0.0 } else { 0.0 }, 1.0]);
+        let b = image(nx, ny, |r, c| [0.2, 0.7, if (r * c) % 11 == 0 { f32::NAN } else { 0.8 }]);
+        let few = image(nx, ny, |r, c| [(r % 5) as f32 / 25.0, (c % 3) as f32 / 7.0, 0.5]);
+        // 75,000 distinct values: more tuples than the palette holds.
+        let many = image(nx, ny, |r, c| [(r * nx + c) as f32, 0.5, 0.25]);
+        let cases: [(Vec<&RgbImage>, bool); 4] =
+            [(vec![&a, &b, &few], true), (vec![&a, &b], true), (vec![&a, &b, &many], false), (vec![&many, &a], false)];
+        for (imgs, palette) in cases {
+            let dense = DisplayStack::new(&d, &imgs).unwrap();
+            let mut builder = StackBuilder::new(&d, imgs.len());
+            for img in &imgs {
+                builder.push(RgbView::from(*img)).unwrap();
+            }
+            assert!(builder.push(RgbView::from(&a)).is_err(), "one image too many");
+            let built = builder.finish().unwrap();
+            assert_eq!(built.is_palette(), palette, "{} images", imgs.len());
+            for i in 0..nx * ny {
+                let (x, y) = (dense.pixel(i), built.pixel(i));
+                assert!(x.iter().zip(y).all(|(p, q)| p.to_bits() == q.to_bits()), "pixel {i}: {x:?} vs {y:?}");
+            }
+        }
+        assert!(StackBuilder::new(&d, 2).finish().is_err());
+        let wrong = image(nx - 1, ny, |_, _| [0.0; 3]);
+        assert!(StackBuilder::new(&d, 1).push(RgbView::from(&wrong)).is_err());
     }
 
     #[test]
