@@ -113,9 +113,10 @@ pub fn estimate(exp: &Experiment) -> Estimate {
     let lcd = exp.display.lcd.pixel_count() as u64;
     let methods = exp.methods.len() as u64;
     let lcd_setting = format!("lcd.resolution = {:?} of display `{}`", exp.display.lcd.resolution, exp.spec.display);
-    // Display images, rendered straight into their interleaved stack, and the depth plane of
-    // the one being written.
+    // The display image being rendered and written, its depth plane, and the stack the
+    // simulation reads (at most dense: palette indices take far less when the images allow).
     e.add("the display images packed for the simulation", lcd_setting.clone(), lcd * methods, 12);
+    e.add("the display image being rendered", lcd_setting.clone(), lcd, 12);
     e.add("a display image's depth plane", lcd_setting, lcd, 4);
     let n = exp.retina.resolution as u64;
     let cases = exp.cases.len() as u64;

@@ -4,11 +4,11 @@
 //! [`DisplayStack`] interleaves the display images pixel by pixel, so one LCD lookup reads every
 //! method's value from one place. It is held in one of two layouts with the same values, bit for
 //! bit:
-//! - **dense**: `3 * count` `f32` per LCD pixel (what rendering writes into);
-//! - **palette** ([`DisplayStack::compact`]): each LCD pixel a 16-bit index into a table of the
+//! - **dense**: `3 * count` `f32` per LCD pixel ([`DisplayStack::new`], [`DisplayStack::black`]);
+//! - **palette** ([`StackBuilder`]): each LCD pixel a 16-bit index into a table of the
 //!   distinct pixel tuples (every method's RGB at one pixel). Display images of flat-shaded
-//!   scenes, such as the paper's charts on plain backgrounds, hold few distinct tuples (a few
-//!   thousand for LC, PC and LA 5 x 5 together), so the stack then takes 2 bytes per pixel
+//!   scenes, such as the paper's charts on plain backgrounds, hold few distinct tuples (143 for
+//!   the paper's LC, PC and LA 5 x 5 together), so the stack then takes 2 bytes per pixel
 //!   instead of 36, and the simulation's random reads hit a far smaller working set. Images
 //!   with more than 65,536 distinct tuples (textures, smooth shading) stay dense.
 //!
@@ -16,8 +16,6 @@
 //! and keeps only the palette indices of those pushed so far (switching to the dense layout if
 //! the tuples outgrow the palette), so the dense stack is never held for images that do not
 //! need it.
-
-use std::collections::HashMap;
 
 use rustc_hash::FxHashMap;
 
@@ -131,7 +129,7 @@ impl DisplayStack {
         self.count == 0
     }
 
-    /// Whether the stack holds palette indices ([`DisplayStack::compact`]).
+    /// Whether the stack holds palette indices (see [`StackBuilder`]).
     pub fn is_palette(&self) -> bool {
         matches!(self.layout, Layout::Palette { .. })
     }
@@ -155,18 +153,6 @@ impl DisplayStack {
                 &palette[j * stride..(j + 1) * stride]
             }
         }
-    }
-
-    /// The same stack in the palette layout when its images hold at most 65,536 distinct pixel
-    /// tuples (compared bit for bit), else unchanged. The dense values are freed.
-    pub fn compact(self) -> Self {
-        let Layout::Dense(values) = &self.layout else { return self };
-        let stride = 3 * self.count;
-        if stride == 0 {
-            return self;
-        }
-        let Some((index, palette)) = palette_of(values, stride) else { return self };
-        Self { layout: Layout::Palette { index, palette }, ..self }
     }
 }
 
@@ -334,43 +320,6 @@ fn local_keys(ids: &[u16], rgb: impl Fn(usize) -> [u32; 3]) -> Option<(Vec<u16>,
     Some((local, keys))
 }
 
-/// Pixel tuples of `values` (`stride` floats each) as indices into a table of the distinct
-/// ones, in order of first appearance; `None` when there are more than [`MAX_PALETTE`].
-fn palette_of(values: &[f32], stride: usize) -> Option<(Vec<u16>, Vec<f32>)> {
-    let pixels = values.len() / stride;
-    let mut table: HashMap<Box<[u32]>, u16> = HashMap::new();
-    let mut palette = Vec::new();
-    let mut index = Vec::with_capacity(pixels);
-    let mut key: Vec<u32> = Vec::with_capacity(stride);
-    let mut last: Option<(&[f32], u16)> = None;
-    for px in values.chunks_exact(stride) {
-        // Neighbouring pixels often hold the same tuple: compare bits with the last one first.
-        if let Some((prev, j)) = last {
-            if prev.iter().zip(px).all(|(a, b)| a.to_bits() == b.to_bits()) {
-                index.push(j);
-                continue;
-            }
-        }
-        key.clear();
-        key.extend(px.iter().map(|v| v.to_bits()));
-        let j = match table.get(key.as_slice()) {
-            Some(&j) => j,
-            None => {
-                if table.len() == MAX_PALETTE {
-                    return None;
-                }
-                let j = table.len() as u16;
-                table.insert(key.as_slice().into(), j);
-                palette.extend_from_slice(px);
-                j
-            }
-        };
-        index.push(j);
-        last = Some((px, j));
-    }
-    Some((index, palette))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -393,6 +342,15 @@ mod tests {
         img
     }
 
+    /// `images` pushed one by one into a [`StackBuilder`].
+    fn built(d: &Display, images: &[&RgbImage]) -> DisplayStack {
+        let mut b = StackBuilder::new(d, images.len());
+        for img in images {
+            b.push(RgbView::from(*img)).unwrap();
+        }
+        b.finish().unwrap()
+    }
+
     #[test]
     fn the_palette_layout_holds_the_same_values_bit_for_bit() {
         let (nx, ny) = (203, 151);
@@ -403,7 +361,7 @@ mod tests {
         let c3 = image(nx, ny, |r, c| [(r % 5) as f32 / 25.0, (c % 3) as f32 / 7.0, 0.5]);
         let dense = DisplayStack::new(&d, &[&a, &b, &c3]).unwrap();
         let want: Vec<Vec<u32>> = (0..nx * ny).map(|i| dense.pixel(i).iter().map(|v| v.to_bits()).collect()).collect();
-        let packed = DisplayStack::new(&d, &[&a, &b, &c3]).unwrap().compact();
+        let packed = built(&d, &[&a, &b, &c3]);
         assert!(packed.is_palette() && packed.bytes() < dense.bytes() / 4);
         for (i, w) in want.iter().enumerate() {
             let got: Vec<u32> = packed.pixel(i).iter().map(|v| v.to_bits()).collect();
@@ -452,12 +410,12 @@ mod tests {
         let d = display(nx, ny);
         // 75,000 distinct values: more than a 16-bit index can tell apart.
         let a = image(nx, ny, |r, c| [(r * nx + c) as f32, 0.0, 0.0]);
-        let stack = DisplayStack::new(&d, &[&a]).unwrap().compact();
+        let stack = built(&d, &[&a]);
         assert!(!stack.is_palette());
         assert_eq!(stack.pixel(74_999)[0], 74_999.0);
         // Exactly 65,536 distinct tuples still fit.
         let b = image(nx, ny, |r, c| [((r * nx + c) % MAX_PALETTE) as f32, 1.0, 2.0]);
-        let stack = DisplayStack::new(&d, &[&b]).unwrap().compact();
+        let stack = built(&d, &[&b]);
         assert!(stack.is_palette());
         assert_eq!(stack.pixel(MAX_PALETTE + 5), &[5.0, 1.0, 2.0]);
     }
