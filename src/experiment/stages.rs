@@ -59,7 +59,7 @@ pub fn render_display_images<D: RadianceField + ?Sized>(
 }
 
 /// Stage 1 as `assess` runs it: every method's display image rendered into one reused image
-/// buffer (`render_display` stages), handed to `finished` (method index, the image, its depth
+/// buffer and depth plane (`render_display` stages), handed to `finished` (method index, the image, its depth
 /// plane; timed as `write_display_image`), then added to the stack the simulation reads
 /// (`pack_display_images`: palette indices while the images allow, see
 /// [`crate::render::display_stack`]), before the next is rendered. The stack reads as
@@ -73,16 +73,16 @@ pub fn render_display_stack<D: RadianceField + ?Sized>(
 ) -> Result<DisplayStack> {
     let display = &exp.display;
     // One image buffer for every method; the stack keeps palette indices when it can.
-    let mut image = RgbImage::new(display.lcd.columns(), display.lcd.rows());
+    let (mut image, mut depth) = (RgbImage::new(display.lcd.columns(), display.lcd.rows()), Vec::new());
     let mut stack = StackBuilder::new(display, exp.methods.len());
     for (k, m) in exp.methods.iter().enumerate() {
         let t = Instant::now();
         let p = Progress::new(display.lcd.rows() as u64, &format!("display image {}", m.short_name()), quiet);
-        let depth = render_display_image_into(display, *m, &exp.render, with_depth, &p, &mut image)?;
+        let known = render_display_image_into(display, *m, &exp.render, with_depth, &p, &mut image, &mut depth)?;
         p.finish();
         stage_time(stages, "render_display", Some(m.short_name()), None, t);
         let t = Instant::now();
-        finished(k, RgbView::from(&image), depth.as_deref())?;
+        finished(k, RgbView::from(&image), known.then_some(depth.as_slice()))?;
         stage_time(stages, "write_display_image", Some(m.short_name()), None, t);
         let t = Instant::now();
         stack.push(RgbView::from(&image))?;

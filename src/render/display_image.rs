@@ -195,12 +195,14 @@ pub fn render_display_image_with_depth<R: RadianceField + ?Sized>(
     progress: &Progress,
 ) -> Result<(RgbImage, Option<Vec<f32>>)> {
     let mut image = RgbImage::new(display.lcd.columns(), display.lcd.rows());
-    let depth = render_into(display, method, settings, tracer, progress, image.pixels.as_flattened_mut(), 3, 0)?;
-    Ok((image, depth))
+    let (depth, known) =
+        render_into(display, method, settings, tracer, progress, image.pixels.as_flattened_mut(), 3, 0, Vec::new())?;
+    Ok((image, known.then_some(depth)))
 }
 
-/// [`render_display_image_with_depth`] into `image` (which must have the LCD's size): one
-/// buffer can serve every method in turn. Returns the depth plane.
+/// [`render_display_image_with_depth`] into `image` (which must have the LCD's size) and `depth`
+/// (resized to one value per LCD pixel): one pair of buffers can serve every method in turn.
+/// Returns whether the depths are known (see [`render_display_image_with_depth`]).
 pub fn render_display_image_into<R: RadianceField + ?Sized>(
     display: &Display,
     method: Method,
@@ -208,7 +210,8 @@ pub fn render_display_image_into<R: RadianceField + ?Sized>(
     tracer: &R,
     progress: &Progress,
     image: &mut RgbImage,
-) -> Result<Option<Vec<f32>>> {
+    depth: &mut Vec<f32>,
+) -> Result<bool> {
     let lcd = display.lcd;
     if image.width != lcd.columns() || image.height != lcd.rows() || image.pixels.len() != lcd.pixel_count() {
         return Err(Error::Unsupported(format!(
@@ -219,7 +222,10 @@ pub fn render_display_image_into<R: RadianceField + ?Sized>(
             lcd.rows()
         )));
     }
-    render_into(display, method, settings, tracer, progress, image.pixels.as_flattened_mut(), 3, 0)
+    let dst = image.pixels.as_flattened_mut();
+    let (d, known) = render_into(display, method, settings, tracer, progress, dst, 3, 0, std::mem::take(depth))?;
+    *depth = d;
+    Ok(known)
 }
 
 /// [`render_display_image_with_depth`] straight into slot `slot` of `stack` (the display images
@@ -246,10 +252,14 @@ pub fn render_display_image_into_stack<R: RadianceField + ?Sized>(
     let Some(values) = stack.dense_mut() else {
         return Err(Error::Unsupported("a display stack in the palette layout cannot be rendered into".into()));
     };
-    render_into(display, method, settings, tracer, progress, values, 3 * count, 3 * slot)
+    let (depth, known) =
+        render_into(display, method, settings, tracer, progress, values, 3 * count, 3 * slot, Vec::new())?;
+    Ok(known.then_some(depth))
 }
 
-/// The display image's pixel `i` (row-major) goes to `dst[i * stride + offset..][..3]`.
+/// The display image's pixel `i` (row-major) goes to `dst[i * stride + offset..][..3]`, its depth
+/// to `depth[i]` (`depth` is resized, every value written); returns `depth` and whether the
+/// depths are known.
 #[allow(clippy::too_many_arguments)]
 fn render_into<R: RadianceField + ?Sized>(
     display: &Display,
@@ -260,7 +270,8 @@ fn render_into<R: RadianceField + ?Sized>(
     dst: &mut [f32],
     stride: usize,
     offset: usize,
-) -> Result<Option<Vec<f32>>> {
+    mut depth: Vec<f32>,
+) -> Result<(Vec<f32>, bool)> {
     if method == Method::PupilCenter {
         check_pupil_center(display, settings.eye_position)?;
     }
@@ -301,7 +312,7 @@ fn render_into<R: RadianceField + ?Sized>(
 
     let per_pixel = pixel_samples.len() * bundle.shifts.len();
     debug_assert!(offset + 3 <= stride && dst.len() == nx * ny * stride);
-    let mut depth = vec![0f32; nx * ny];
+    depth.resize(nx * ny, 0.0);
     let depth_known = std::sync::atomic::AtomicBool::new(true);
     // The base ray (LC or PC, or LA's centre) of pixel sample `frac` of pixel (row, col).
     let base_ray = |row: usize, col: usize, frac: DVec2| {
@@ -384,5 +395,5 @@ fn render_into<R: RadianceField + ?Sized>(
             progress.inc(1);
         });
     }
-    Ok(depth_known.into_inner().then_some(depth))
+    Ok((depth, depth_known.into_inner()))
 }
