@@ -24,7 +24,6 @@ use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 
 use super::field::{BundleSum, RadianceField, RayBundle, Sample};
-use super::retina::DisplayStack;
 use crate::error::{Error, Result};
 use crate::optics::eye::stratified;
 use crate::optics::transfer::{camera_ray, check_pupil_center, pupil_center_point};
@@ -195,8 +194,7 @@ pub fn render_display_image_with_depth<R: RadianceField + ?Sized>(
     progress: &Progress,
 ) -> Result<(RgbImage, Option<Vec<f32>>)> {
     let mut image = RgbImage::new(display.lcd.columns(), display.lcd.rows());
-    let (depth, known) =
-        render_into(display, method, settings, tracer, progress, image.pixels.as_flattened_mut(), 3, 0, Vec::new())?;
+    let (depth, known) = render_into(display, method, settings, tracer, progress, &mut image.pixels, Vec::new())?;
     Ok((image, known.then_some(depth)))
 }
 
@@ -222,43 +220,13 @@ pub fn render_display_image_into<R: RadianceField + ?Sized>(
             lcd.rows()
         )));
     }
-    let dst = image.pixels.as_flattened_mut();
-    let (d, known) = render_into(display, method, settings, tracer, progress, dst, 3, 0, std::mem::take(depth))?;
+    let (d, known) =
+        render_into(display, method, settings, tracer, progress, &mut image.pixels, std::mem::take(depth))?;
     *depth = d;
     Ok(known)
 }
 
-/// [`render_display_image_with_depth`] straight into slot `slot` of `stack` (the display images
-/// interleaved for the simulation), so the image is never held twice; returns its depth plane.
-/// The values are the same bit for bit (tested).
-pub fn render_display_image_into_stack<R: RadianceField + ?Sized>(
-    display: &Display,
-    method: Method,
-    settings: &DisplayRenderSettings,
-    tracer: &R,
-    progress: &Progress,
-    stack: &mut DisplayStack,
-    slot: usize,
-) -> Result<Option<Vec<f32>>> {
-    let lcd = display.lcd;
-    let (count, width, height) = (stack.len(), stack.width(), stack.height());
-    if width != lcd.columns() || height != lcd.rows() || slot >= count {
-        return Err(Error::Unsupported(format!(
-            "display stack of {count} images of {width} x {height} pixels has no slot {slot} for the display's {} x {} LCD",
-            lcd.columns(),
-            lcd.rows()
-        )));
-    }
-    let Some(values) = stack.dense_mut() else {
-        return Err(Error::Unsupported("a display stack in the palette layout cannot be rendered into".into()));
-    };
-    let (depth, known) =
-        render_into(display, method, settings, tracer, progress, values, 3 * count, 3 * slot, Vec::new())?;
-    Ok(known.then_some(depth))
-}
-
-/// The display image's pixel `i` (row-major) goes to `dst[i * stride + offset..][..3]`, its depth
-/// to `depth[i]` (`depth` is resized, every value written); returns `depth` and whether the
+/// The display image's pixel `i` (row-major) goes to `dst[i]`, its depth to `depth[i]` (`depth` is resized, every value written); returns `depth` and whether the
 /// depths are known.
 #[allow(clippy::too_many_arguments)]
 fn render_into<R: RadianceField + ?Sized>(
@@ -267,9 +235,7 @@ fn render_into<R: RadianceField + ?Sized>(
     settings: &DisplayRenderSettings,
     tracer: &R,
     progress: &Progress,
-    dst: &mut [f32],
-    stride: usize,
-    offset: usize,
+    dst: &mut [[f32; 3]],
     mut depth: Vec<f32>,
 ) -> Result<(Vec<f32>, bool)> {
     if method == Method::PupilCenter {
@@ -311,7 +277,7 @@ fn render_into<R: RadianceField + ?Sized>(
     let inv_count = 1.0 / (pixel_samples.len() * bundle.shifts.len()) as f64;
 
     let per_pixel = pixel_samples.len() * bundle.shifts.len();
-    debug_assert!(offset + 3 <= stride && dst.len() == nx * ny * stride);
+    debug_assert!(dst.len() == nx * ny);
     depth.resize(nx * ny, 0.0);
     let depth_known = std::sync::atomic::AtomicBool::new(true);
     // The base ray (LC or PC, or LA's centre) of pixel sample `frac` of pixel (row, col).
@@ -325,17 +291,17 @@ fn render_into<R: RadianceField + ?Sized>(
         };
         camera_ray(display, x3, lenslet_center, p, z_ref)
     };
-    let finish = |acc: BundleSum, px: &mut [f32], z: &mut f32| {
+    let finish = |acc: BundleSum, px: &mut [f32; 3], z: &mut f32| {
         if !acc.depth_known {
             depth_known.store(false, std::sync::atomic::Ordering::Relaxed);
         }
         let v = acc.radiance * inv_count;
-        px[..3].copy_from_slice(&[v.x as f32, v.y as f32, v.z as f32]);
+        *px = [v.x as f32, v.y as f32, v.z as f32];
         *z = if acc.hits > 0 { (acc.depth / acc.hits as f64) as f32 } else { f32::INFINITY };
     };
     if tracer.prefers_batches() {
         // Blocks of a row's pixels, ordered sample-major, so that packets see neighbouring rays.
-        dst.par_chunks_mut(nx * stride).zip(depth.par_chunks_mut(nx)).enumerate().for_each(|(row, (out, zout))| {
+        dst.par_chunks_mut(nx).zip(depth.par_chunks_mut(nx)).enumerate().for_each(|(row, (out, zout))| {
             let mut rays = Vec::with_capacity(per_pixel * BLOCK);
             let mut samples = Vec::with_capacity(per_pixel * BLOCK);
             for col0 in (0..nx).step_by(BLOCK) {
@@ -354,10 +320,7 @@ fn render_into<R: RadianceField + ?Sized>(
                 samples.clear();
                 samples.resize(rays.len(), Sample::default());
                 tracer.sample_many(&rays, &mut samples);
-                let block = out[col0 * stride..(col0 + cols) * stride]
-                    .chunks_exact_mut(stride)
-                    .map(|p| &mut p[offset..offset + 3])
-                    .zip(zout[col0..col0 + cols].iter_mut());
+                let block = out[col0..col0 + cols].iter_mut().zip(zout[col0..col0 + cols].iter_mut());
                 for (c, (px, z)) in block.enumerate() {
                     let mut acc = BundleSum::default();
                     for f in 0..pixel_samples.len() {
@@ -375,9 +338,8 @@ fn render_into<R: RadianceField + ?Sized>(
     } else {
         // Pixel by pixel; each pixel sample's lenslet rays go to the field as one bundle, which
         // fast fields cull as a whole. The sums are in the same order as the batched path.
-        dst.par_chunks_mut(nx * stride).zip(depth.par_chunks_mut(nx)).enumerate().for_each(|(row, (out, zout))| {
-            let out = out.chunks_exact_mut(stride).map(|p| &mut p[offset..offset + 3]);
-            for (col, (px, z)) in out.zip(zout.iter_mut()).enumerate() {
+        dst.par_chunks_mut(nx).zip(depth.par_chunks_mut(nx)).enumerate().for_each(|(row, (out, zout))| {
+            for (col, (px, z)) in out.iter_mut().zip(zout.iter_mut()).enumerate() {
                 let mut acc = BundleSum::default();
                 for frac in &pixel_samples {
                     let base = base_ray(row, col, *frac);

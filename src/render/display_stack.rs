@@ -4,7 +4,7 @@
 //! [`DisplayStack`] interleaves the display images pixel by pixel, so one LCD lookup reads every
 //! method's value from one place. It is held in one of two layouts with the same values, bit for
 //! bit:
-//! - **dense**: `3 * count` `f32` per LCD pixel ([`DisplayStack::new`], [`DisplayStack::black`]);
+//! - **dense**: `3 * count` `f32` per LCD pixel ([`DisplayStack::new`]);
 //! - **palette** ([`StackBuilder`]): each LCD pixel a 16-bit index into a table of the
 //!   distinct pixel tuples (every method's RGB at one pixel). Display images of flat-shaded
 //!   scenes, such as the paper's charts on plain backgrounds, hold few distinct tuples (143 for
@@ -70,14 +70,6 @@ impl DisplayStack {
         Ok(Self { count: images.len(), width: lcd.columns(), height: lcd.rows(), layout: Layout::Dense(values) })
     }
 
-    /// `count` black display images of the LCD's size (dense layout), to be rendered in place
-    /// by [`crate::render::render_display_image_into_stack`].
-    pub fn black(display: &Display, count: usize) -> Self {
-        let lcd = display.lcd;
-        let values = vec![0f32; lcd.pixel_count() * 3 * count];
-        Self { count, width: lcd.columns(), height: lcd.rows(), layout: Layout::Dense(values) }
-    }
-
     /// LCD pixels per row.
     pub fn width(&self) -> usize {
         self.width
@@ -85,28 +77,6 @@ impl DisplayStack {
     /// LCD pixel rows.
     pub fn height(&self) -> usize {
         self.height
-    }
-
-    /// The dense values to render display image `slot` into: pixel `i`'s RGB goes to
-    /// `[i * stride + 3 * slot..][..3]`, `stride = 3 * len()`. `None` for a palette stack.
-    pub(super) fn dense_mut(&mut self) -> Option<&mut [f32]> {
-        match &mut self.layout {
-            Layout::Dense(values) => Some(values),
-            Layout::Palette { .. } => None,
-        }
-    }
-
-    /// Display image `k`, read in place (`None` once the stack is a palette stack: see
-    /// [`DisplayStack::image`]).
-    pub fn view(&self, k: usize) -> Option<RgbView<'_>> {
-        assert!(k < self.count, "display stack has {} images, not {}", self.count, k + 1);
-        match &self.layout {
-            Layout::Dense(values) => Some(
-                RgbView::strided(self.width, self.height, values, 3 * self.count, 3 * k)
-                    .expect("a stack holds every pixel of each of its images"),
-            ),
-            Layout::Palette { .. } => None,
-        }
     }
 
     /// A copy of display image `k`, in either layout.
@@ -371,7 +341,6 @@ mod tests {
             let back = packed.image(k);
             assert!(back.pixels.iter().zip(&img.pixels).all(|(p, q)| (0..3).all(|c| p[c].to_bits() == q[c].to_bits())));
         }
-        assert!(packed.view(0).is_none() && dense.view(0).is_some());
     }
 
     #[test]

@@ -11,8 +11,7 @@ pub mod tracer;
 
 pub use backend::{with_fields, BackendChoice, Fields};
 pub use display_image::{
-    render_display_image, render_display_image_into, render_display_image_into_stack, render_display_image_with_depth,
-    DisplayRenderSettings, Method,
+    render_display_image, render_display_image_into, render_display_image_with_depth, DisplayRenderSettings, Method,
 };
 pub use field::{BundleSum, RadianceField, RayBundle, Sample};
 pub use planar::FacingPlanes;
