@@ -6,7 +6,7 @@
 
 use std::path::PathBuf;
 
-use glam::{DVec2, DVec3};
+use glam::{DMat2, DVec2, DVec3};
 use inimtrace::accel::analytic::AnalyticRects;
 use inimtrace::experiment::converged::{measure, naive_scores};
 use inimtrace::experiment::{Experiment, ExperimentSpec};
@@ -16,7 +16,7 @@ use inimtrace::measure::stats::gram_matrices;
 use inimtrace::metrics::{self, SsimConstants};
 use inimtrace::optics::transfer::eye_scene_ray;
 use inimtrace::optics::transfer::eye_to_lcd;
-use inimtrace::optics::{Display, Eye, Focus, Retina};
+use inimtrace::optics::{Display, Eye, Focus, Lattice, Retina};
 use inimtrace::progress::Progress;
 use inimtrace::raster::RgbImage;
 use inimtrace::render::retina::{simulate, DisplayStack};
@@ -338,6 +338,44 @@ fn the_eye_to_lcd_transfer_is_eq_1() {
         let pupil = DVec2::new(2.5 * f * (f * 40.0).cos(), 2.5 * f * (f * 40.0).sin());
         let slow = eye_to_lcd(&display, &eye, tangent, pupil).lcd;
         assert!((t.lcd_point(tangent, pupil) - slow).length() < 1e-12, "{tangent} {pupil}");
+    }
+}
+
+#[test]
+fn batched_lcd_pixels_are_the_single_ray_pixels() {
+    // The paper's square lenslets and a tilted lattice (the generic nearest-cell path); rays
+    // that land on lenslet borders, off the LCD, and NaN.
+    let mut tilted = Display::paper();
+    let p = tilted.lenslets.matrix.x_axis.x;
+    tilted.lenslets =
+        Lattice::new(DVec2::new(0.13, -0.07), DMat2::from_angle(0.3) * DMat2::from_diagonal(DVec2::splat(p))).unwrap();
+    for display in [Display::paper(), tilted] {
+        let eye = Eye::thin_lens(5.0, Focus::Millimetres(400.0), 8);
+        let t = EyeToLcd::new(&display, &eye);
+        let mut samples: Vec<EyeSample> = (0..5000)
+            .map(|k| {
+                let f = k as f64 / 5000.0;
+                EyeSample {
+                    tangent: DVec2::new(0.3 * (f * 7.1).sin(), 0.3 * (f * 3.3).cos()),
+                    pupil: DVec2::new(2.5 * f * (f * 40.0).cos(), 2.5 * f * (f * 40.0).sin()),
+                }
+            })
+            .collect();
+        samples.push(EyeSample { tangent: DVec2::new(f64::NAN, 0.0), pupil: DVec2::ZERO });
+        samples.push(EyeSample { tangent: DVec2::splat(10.0), pupil: DVec2::ZERO });
+        let mut batch = vec![0u32; samples.len()];
+        t.pixel_indices(&samples, &mut batch);
+        let (mut on, mut off) = (0, 0);
+        for (s, &b) in samples.iter().zip(&batch) {
+            let one = t.pixel_index(s.tangent, s.pupil).map_or(u32::MAX, |i| i as u32);
+            assert_eq!(b, one, "{s:?}");
+            if one == u32::MAX {
+                off += 1;
+            } else {
+                on += 1;
+            }
+        }
+        assert!(on > 4000 && off >= 2, "{on} on the LCD, {off} off");
     }
 }
 

@@ -90,6 +90,26 @@ impl<'a> EyeToLcd<'a> {
     pub fn pixel_index(&self, tangent: DVec2, pupil: DVec2) -> Option<usize> {
         self.indexer.index(self.lcd_point(tangent, pupil))
     }
+
+    /// [`EyeToLcd::pixel_index`] of every sample (`u32::MAX`: the ray misses the LCD), in
+    /// passes over the batch (lenslet-plane points, their lenslets' centres, the LCD pixels)
+    /// that vectorise; same arithmetic as one ray at a time, so the same pixels (tested).
+    pub fn pixel_indices(&self, samples: &[EyeSample], out: &mut [u32]) {
+        debug_assert_eq!(samples.len(), out.len());
+        let (mut x2, mut w1) = (Vec::with_capacity(samples.len()), Vec::with_capacity(samples.len()));
+        for s in samples {
+            let x1 = s.pupil + self.eye_xy;
+            let w = s.tangent + (s.pupil / self.v0 - s.pupil * self.d1);
+            x2.push(x1 + w * self.to_lenslets);
+            w1.push(w);
+        }
+        let mut c = x2.clone();
+        self.display.lenslets.nearest_centers(&mut c);
+        for (((o, x2), c), w1) in out.iter_mut().zip(&x2).zip(&c).zip(&w1) {
+            let w2 = *w1 - (*x2 - *c) * self.lenslet_power;
+            *o = self.indexer.index(*x2 + w2 * self.v2).map_or(u32::MAX, |i| i as u32);
+        }
+    }
 }
 
 /// The experiment's paired source: image 0 is the ground truth (the eye ray into the scene),
@@ -130,10 +150,8 @@ impl<F: RadianceField + ?Sized> PairedSource for DisplaySource<'_, F> {
         }
         // Where every ray meets the LCD first (independent work the CPU overlaps), then the
         // reads (independent loads).
-        let lcd: Vec<u32> = samples
-            .iter()
-            .map(|s| self.transfer.pixel_index(s.tangent, s.pupil).map_or(u32::MAX, |i| i as u32))
-            .collect();
+        let mut lcd = vec![0u32; samples.len()];
+        self.transfer.pixel_indices(samples, &mut lcd);
         match m {
             1 => self.read_stack::<1>(&lcd, out),
             2 => self.read_stack::<2>(&lcd, out),
@@ -337,7 +355,15 @@ impl Replicates {
             let mut owners = vec![0u32; batch];
             let mut values = vec![[0.0f64; 3]; batch * k];
             let mut sums = vec![0.0f64; TILE * TILE * k * 3];
-            let mut flush = |samples: &[EyeSample], owners: &[u32], sums: &mut [f64]| {
+            let radius = sampler.pupil_radius();
+            let mut pupils = vec![DVec2::ZERO; batch];
+            let mut flush = |samples: &mut [EyeSample], pupils: &mut [DVec2], owners: &[u32], sums: &mut [f64]| {
+                if radius != 0.0 {
+                    super::sampler::concentric_disk_batch(pupils, radius);
+                    for (s, p) in samples.iter_mut().zip(pupils.iter()) {
+                        s.pupil = *p;
+                    }
+                }
                 let vals = &mut values[..samples.len() * k];
                 source.eval(samples, vals);
                 for (v, &o) in vals.chunks_exact(k).zip(owners) {
@@ -362,24 +388,25 @@ impl Replicates {
                             let owner = (dr * TILE + dc) as u32;
                             let mut points = sampler.points((row * n + c) as u64, r as u32, old);
                             for _ in old..total {
-                                let (frac, pupil) = points.next_point();
+                                let (frac, raw) = points.next_point_raw();
                                 // Retina::tangent, with the step hoisted.
                                 let tangent = DVec2::new(
                                     -retina.half_tangent + (c as f64 + frac.x) * step,
                                     retina.half_tangent - (row as f64 + frac.y) * step,
                                 );
-                                samples[filled] = EyeSample { tangent, pupil };
+                                samples[filled] = EyeSample { tangent, pupil: DVec2::ZERO };
+                                pupils[filled] = raw.unwrap_or(DVec2::ZERO);
                                 owners[filled] = owner;
                                 filled += 1;
                                 if filled == batch {
-                                    flush(&samples, &owners, &mut sums);
+                                    flush(&mut samples, &mut pupils, &owners, &mut sums);
                                     filled = 0;
                                 }
                             }
                         }
                     }
                     if filled > 0 {
-                        flush(&samples[..filled], &owners[..filled], &mut sums);
+                        flush(&mut samples[..filled], &mut pupils[..filled], &owners[..filled], &mut sums);
                     }
                     for (j, plane) in planes[r * k * 3..(r + 1) * k * 3].iter_mut().enumerate() {
                         for dr in 0..rows {
