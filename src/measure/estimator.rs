@@ -192,6 +192,32 @@ impl<F: RadianceField + ?Sized> DisplaySource<'_, F> {
     }
 }
 
+/// Adds every sample's `K` images (`vals[i * K..][..K]`) into the sums of its owner pixel
+/// (`sums[o * 3K..][..3K]`), in sample order. A pixel's samples come in runs, so each run is
+/// summed in registers, starting from the pixel's stored sums (the same additions in the same
+/// order as adding into memory sample by sample, without a store-to-load round trip per sample).
+#[inline(always)]
+fn accumulate<const K: usize>(vals: &[[f64; 3]], owners: &[u32], sums: &mut [f64]) {
+    let mut i = 0;
+    while i < owners.len() {
+        let o = owners[i] as usize;
+        let dst: &mut [f64] = &mut sums[o * K * 3..(o + 1) * K * 3];
+        let mut acc: [[f64; 3]; K] = std::array::from_fn(|j| [dst[3 * j], dst[3 * j + 1], dst[3 * j + 2]]);
+        while i < owners.len() && owners[i] as usize == o {
+            let v = &vals[i * K..(i + 1) * K];
+            for j in 0..K {
+                acc[j][0] += v[j][0];
+                acc[j][1] += v[j][1];
+                acc[j][2] += v[j][2];
+            }
+            i += 1;
+        }
+        for j in 0..K {
+            dst[3 * j..3 * j + 3].copy_from_slice(&acc[j]);
+        }
+    }
+}
+
 /// Samples handed to a source at once (per worker).
 const BATCH: usize = 2048;
 /// Side of the square tiles of retina pixels traced together.
@@ -366,12 +392,19 @@ impl Replicates {
                 }
                 let vals = &mut values[..samples.len() * k];
                 source.eval(samples, vals);
-                for (v, &o) in vals.chunks_exact(k).zip(owners) {
-                    let dst = &mut sums[o as usize * k * 3..(o as usize + 1) * k * 3];
-                    for (d, rgb) in dst.chunks_exact_mut(3).zip(v) {
-                        d[0] += rgb[0];
-                        d[1] += rgb[1];
-                        d[2] += rgb[2];
+                match k {
+                    2 => accumulate::<2>(vals, owners, sums),
+                    3 => accumulate::<3>(vals, owners, sums),
+                    4 => accumulate::<4>(vals, owners, sums),
+                    _ => {
+                        for (v, &o) in vals.chunks_exact(k).zip(owners) {
+                            let dst = &mut sums[o as usize * k * 3..(o as usize + 1) * k * 3];
+                            for (d, rgb) in dst.chunks_exact_mut(3).zip(v) {
+                                d[0] += rgb[0];
+                                d[1] += rgb[1];
+                                d[2] += rgb[2];
+                            }
+                        }
                     }
                 }
             };
