@@ -96,18 +96,19 @@ impl<'a> EyeToLcd<'a> {
     /// that vectorise; same arithmetic as one ray at a time, so the same pixels (tested).
     pub fn pixel_indices(&self, samples: &[EyeSample], out: &mut [u32]) {
         debug_assert_eq!(samples.len(), out.len());
-        let (mut x2, mut w1) = (Vec::with_capacity(samples.len()), Vec::with_capacity(samples.len()));
-        for s in samples {
+        let (mut x2, mut w1) = (vec![DVec2::ZERO; samples.len()], vec![DVec2::ZERO; samples.len()]);
+        for ((s, x2), w1) in samples.iter().zip(x2.iter_mut()).zip(w1.iter_mut()) {
             let x1 = s.pupil + self.eye_xy;
-            let w = s.tangent + (s.pupil / self.v0 - s.pupil * self.d1);
-            x2.push(x1 + w * self.to_lenslets);
-            w1.push(w);
+            *w1 = s.tangent + (s.pupil / self.v0 - s.pupil * self.d1);
+            *x2 = x1 + *w1 * self.to_lenslets;
         }
         let mut c = x2.clone();
         self.display.lenslets.nearest_centers(&mut c);
+        let fits = self.indexer.fits_u32();
         for (((o, x2), c), w1) in out.iter_mut().zip(&x2).zip(&c).zip(&w1) {
             let w2 = *w1 - (*x2 - *c) * self.lenslet_power;
-            *o = self.indexer.index(*x2 + w2 * self.v2).map_or(u32::MAX, |i| i as u32);
+            let p = *x2 + w2 * self.v2;
+            *o = if fits { self.indexer.index_u32(p) } else { self.indexer.index(p).map_or(u32::MAX, |i| i as u32) };
         }
     }
 }

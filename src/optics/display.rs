@@ -90,6 +90,31 @@ impl PixelIndexer {
         let r = (fy as u32 as usize).min(self.ny - 1);
         Some(r * self.nx + c)
     }
+
+    /// [`PixelIndexer::index`] as a `u32`, `u32::MAX` for a point off the LCD (or NaN), written
+    /// without branches so that loops over many points vectorise. Needs fewer than `2^31` pixels
+    /// per row and column and in all (checked by the caller, [`PixelIndexer::fits_u32`]): inside
+    /// the LCD the coordinates are below `2^31`, so converting through `i32` truncates as
+    /// through `u32` does.
+    #[inline(always)]
+    pub fn index_u32(&self, p: DVec2) -> u32 {
+        let fx = p.x * self.scale.x + self.half.x;
+        let fy = self.half.y - p.y * self.scale.y;
+        let inside = fx >= 0.0 && fx <= 2.0 * self.half.x && fy >= 0.0 && fy <= 2.0 * self.half.y;
+        let c = (fx as i32 as u32).min(self.nx as u32 - 1);
+        let r = (fy as i32 as u32).min(self.ny as u32 - 1);
+        if inside {
+            r * self.nx as u32 + c
+        } else {
+            u32::MAX
+        }
+    }
+
+    /// Whether every pixel index fits [`PixelIndexer::index_u32`] (below `u32::MAX`, rows and
+    /// columns below `2^31`).
+    pub fn fits_u32(&self) -> bool {
+        self.nx < (1 << 31) && self.ny < (1 << 31) && (self.nx as u64) * (self.ny as u64) < u64::from(u32::MAX)
+    }
 }
 
 /// A near-eye InIm display.
@@ -221,6 +246,35 @@ impl Display {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn branch_free_pixel_index_equals_the_checked_one() {
+        for lcd in [Display::paper().lcd, Lcd { resolution: [7, 3], size: DVec2::new(2.1, 0.9) }] {
+            let ix = PixelIndexer::new(&lcd);
+            assert!(ix.fits_u32());
+            let (hx, hy) = (0.5 * lcd.size.x, 0.5 * lcd.size.y);
+            let mut pts = vec![
+                DVec2::new(-hx, hy),
+                DVec2::new(hx, -hy),
+                DVec2::new(hx, hy),
+                DVec2::new(-hx, -hy),
+                DVec2::new(f64::NAN, 0.0),
+                DVec2::new(0.0, f64::INFINITY),
+                DVec2::new(f64::NEG_INFINITY, 0.0),
+                DVec2::new(1e300, -1e300),
+                DVec2::new(-hx * (1.0 + f64::EPSILON), 0.0),
+                DVec2::new(hx * (1.0 + f64::EPSILON), 0.0),
+            ];
+            for i in 0..=400 {
+                for j in 0..=40 {
+                    pts.push(DVec2::new((i as f64 / 200.0 - 1.0) * hx * 1.1, (j as f64 / 20.0 - 1.0) * hy * 1.1));
+                }
+            }
+            for p in pts {
+                assert_eq!(ix.index_u32(p), ix.index(p).map_or(u32::MAX, |i| i as u32), "{p}");
+            }
+        }
+    }
 
     #[test]
     fn paper_display_central_depth_plane_near_386_mm() {
