@@ -140,6 +140,30 @@ impl<'a> FastTransfer<'a> {
     pub fn pixel_index(&self, tangent: DVec2, k: usize) -> Option<usize> {
         self.indexer.index(self.lcd_point(tangent, k))
     }
+
+    /// [`FastTransfer::pixel_index`] for every tangent through pupil sample `k` (`u32::MAX`: off
+    /// the LCD), in passes over the batch that vectorise (lenslet-plane points, their lenslets'
+    /// centres, the LCD pixels); same arithmetic, so the same pixels (tested). `scratch` is
+    /// reused between calls.
+    pub fn pixel_indices(&self, tangents: &[DVec2], k: usize, scratch: &mut Vec<DVec2>, out: &mut [u32]) {
+        let n = tangents.len();
+        debug_assert_eq!(out.len(), n);
+        let (x1, offset) = self.samples[k];
+        scratch.clear();
+        scratch.resize(2 * n, DVec2::ZERO);
+        let (x2s, centres) = scratch.split_at_mut(n);
+        for ((t, x2), c) in tangents.iter().zip(x2s.iter_mut()).zip(centres.iter_mut()) {
+            *x2 = x1 + (*t + offset) * self.to_lenslets;
+            *c = *x2;
+        }
+        self.display.lenslets.nearest_centers(centres);
+        let fits = self.indexer.fits_u32();
+        for (((o, t), x2), c) in out.iter_mut().zip(tangents).zip(x2s.iter()).zip(centres.iter()) {
+            let w2 = (*t + offset) - (*x2 - *c) * self.lenslet_power;
+            let p = *x2 + w2 * self.v2;
+            *o = if fits { self.indexer.index_u32(p) } else { self.indexer.index(p).map_or(u32::MAX, |i| i as u32) };
+        }
+    }
 }
 
 /// The ray into the scene that leaves the eye lens for retina direction `tangent` through pupil
@@ -289,6 +313,16 @@ mod tests {
                     }
                 }
                 assert!(inside > 0, "some rays must land on the LCD");
+                // The batched pixels are the single-ray pixels, for every pupil sample.
+                let mut tangents: Vec<DVec2> = (0..500).map(|_| rng.point(0.3)).collect();
+                tangents.extend([DVec2::new(f64::NAN, 0.0), DVec2::splat(5.0)]);
+                let (mut out, mut scratch) = (vec![0u32; tangents.len()], Vec::new());
+                for k in 0..pupil.len() {
+                    fast.pixel_indices(&tangents, k, &mut scratch, &mut out);
+                    for (t, o) in tangents.iter().zip(&out) {
+                        assert_eq!(*o, fast.pixel_index(*t, k).map_or(u32::MAX, |i| i as u32), "{t} {k}");
+                    }
+                }
             }
         }
     }

@@ -69,6 +69,7 @@ pub fn simulate_stack(
         let band_rows = out.len() / (n * stride);
         let mut acc = vec![0f64; TILE * TILE * stride];
         let mut tangents = vec![DVec2::ZERO; TILE * TILE];
+        let (mut lcd, mut scratch) = (vec![0u32; TILE * TILE], Vec::new());
         for col0 in (0..n).step_by(TILE) {
             let tile_cols = TILE.min(n - col0);
             acc.iter_mut().for_each(|a| *a = 0.0);
@@ -79,12 +80,14 @@ pub fn simulate_stack(
                     }
                 }
                 for k in 0..pupil.len() {
+                    // Every pixel of the tile (rows past the band's end unused).
+                    fast.pixel_indices(&tangents, k, &mut scratch, &mut lcd);
                     for r in 0..band_rows {
                         for c in 0..tile_cols {
-                            let t = tangents[r * TILE + c];
-                            if let Some(idx) = fast.pixel_index(t, k) {
+                            let idx = lcd[r * TILE + c];
+                            if idx != u32::MAX {
                                 let dst = &mut acc[(r * TILE + c) * stride..(r * TILE + c + 1) * stride];
-                                add_f32(dst, stack.pixel(idx));
+                                add_f32(dst, stack.pixel(idx as usize));
                             }
                         }
                     }
