@@ -19,7 +19,7 @@ use rayon::prelude::*;
 
 use super::sampler::Sampler;
 use crate::optics::display::PixelIndexer;
-use crate::optics::transfer::eye_scene_ray;
+use crate::optics::transfer::{eye_scene_ray, lcd_pixels};
 use crate::optics::{Display, Eye, Retina};
 use crate::progress::Progress;
 use crate::raster::RgbImage;
@@ -92,24 +92,18 @@ impl<'a> EyeToLcd<'a> {
     }
 
     /// [`EyeToLcd::pixel_index`] of every sample (`u32::MAX`: the ray misses the LCD), in
-    /// passes over the batch (lenslet-plane points, their lenslets' centres, the LCD pixels)
-    /// that vectorise; same arithmetic as one ray at a time, so the same pixels (tested).
+    /// passes over the batch ([`lcd_pixels`]); same arithmetic as one ray at a time, so the same
+    /// pixels (tested).
     pub fn pixel_indices(&self, samples: &[EyeSample], out: &mut [u32]) {
-        debug_assert_eq!(samples.len(), out.len());
-        let (mut x2, mut w1) = (vec![DVec2::ZERO; samples.len()], vec![DVec2::ZERO; samples.len()]);
-        for ((s, x2), w1) in samples.iter().zip(x2.iter_mut()).zip(w1.iter_mut()) {
-            let x1 = s.pupil + self.eye_xy;
+        let n = samples.len();
+        let mut scratch = vec![DVec2::ZERO; 3 * n];
+        let (x2s, rest) = scratch.split_at_mut(n);
+        let (w1s, centres) = rest.split_at_mut(n);
+        for ((s, x2), w1) in samples.iter().zip(x2s.iter_mut()).zip(w1s.iter_mut()) {
             *w1 = s.tangent + (s.pupil / self.v0 - s.pupil * self.d1);
-            *x2 = x1 + *w1 * self.to_lenslets;
+            *x2 = (s.pupil + self.eye_xy) + *w1 * self.to_lenslets;
         }
-        let mut c = x2.clone();
-        self.display.lenslets.nearest_centers(&mut c);
-        let fits = self.indexer.fits_u32();
-        for (((o, x2), c), w1) in out.iter_mut().zip(&x2).zip(&c).zip(&w1) {
-            let w2 = *w1 - (*x2 - *c) * self.lenslet_power;
-            let p = *x2 + w2 * self.v2;
-            *o = if fits { self.indexer.index_u32(p) } else { self.indexer.index(p).map_or(u32::MAX, |i| i as u32) };
-        }
+        lcd_pixels(self.display, &self.indexer, x2s, w1s, centres, out);
     }
 }
 
@@ -215,6 +209,19 @@ fn accumulate<const K: usize>(vals: &[[f64; 3]], owners: &[u32], sums: &mut [f64
         }
         for j in 0..K {
             dst[3 * j..3 * j + 3].copy_from_slice(&acc[j]);
+        }
+    }
+}
+
+/// Slow, obviously correct twin of [`accumulate`] for any number of images `k`: each sample
+/// added into its owner's sums in memory, one after the other.
+fn accumulate_each(vals: &[[f64; 3]], k: usize, owners: &[u32], sums: &mut [f64]) {
+    for (v, &o) in vals.chunks_exact(k).zip(owners) {
+        let dst = &mut sums[o as usize * k * 3..(o as usize + 1) * k * 3];
+        for (d, rgb) in dst.chunks_exact_mut(3).zip(v) {
+            d[0] += rgb[0];
+            d[1] += rgb[1];
+            d[2] += rgb[2];
         }
     }
 }
@@ -397,16 +404,7 @@ impl Replicates {
                     2 => accumulate::<2>(vals, owners, sums),
                     3 => accumulate::<3>(vals, owners, sums),
                     4 => accumulate::<4>(vals, owners, sums),
-                    _ => {
-                        for (v, &o) in vals.chunks_exact(k).zip(owners) {
-                            let dst = &mut sums[o as usize * k * 3..(o as usize + 1) * k * 3];
-                            for (d, rgb) in dst.chunks_exact_mut(3).zip(v) {
-                                d[0] += rgb[0];
-                                d[1] += rgb[1];
-                                d[2] += rgb[2];
-                            }
-                        }
-                    }
+                    _ => accumulate_each(vals, k, owners, sums),
                 }
             };
             for col0 in (0..n).step_by(TILE) {
@@ -465,5 +463,39 @@ impl Replicates {
             progress.inc(rows as u64);
         });
         self.samples = total;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn run_sums_in_registers_equal_sample_by_sample_sums_bit_for_bit() {
+        // Owners in runs of uneven length, a pixel coming back after others (as when a batch
+        // boundary splits a pixel's samples), and sums that start non-zero.
+        let owners: Vec<u32> = [0u32, 0, 0, 3, 3, 1, 0, 0, 5, 5, 5, 5, 5, 2, 2, 3].to_vec();
+        for k in [2, 3, 4] {
+            let mut h = 11u64;
+            let vals: Vec<[f64; 3]> = (0..owners.len() * k)
+                .map(|_| {
+                    std::array::from_fn(|_| {
+                        h = super::super::sampler::mix64(h);
+                        (h >> 11) as f64 / (1u64 << 53) as f64 * 3.0 - 1.0
+                    })
+                })
+                .collect();
+            let start: Vec<f64> = (0..6 * k * 3).map(|i| 0.1 * i as f64 + 1e-17).collect();
+            let (mut fast, mut slow) = (start.clone(), start);
+            match k {
+                2 => accumulate::<2>(&vals, &owners, &mut fast),
+                3 => accumulate::<3>(&vals, &owners, &mut fast),
+                _ => accumulate::<4>(&vals, &owners, &mut fast),
+            }
+            accumulate_each(&vals, k, &owners, &mut slow);
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&fast), bits(&slow), "k = {k}");
+            assert_ne!(bits(&fast), bits(&(0..6 * k * 3).map(|i| 0.1 * i as f64 + 1e-17).collect::<Vec<_>>()));
+        }
     }
 }

@@ -70,12 +70,17 @@ pub struct PixelIndexer {
     half: DVec2,
     nx: usize,
     ny: usize,
+    /// Whether [`PixelIndexer::index_u32`] may take its branch-free path (see there).
+    fits_u32: bool,
 }
 
 impl PixelIndexer {
     pub fn new(lcd: &Lcd) -> Self {
         let n = DVec2::new(lcd.resolution[0] as f64, lcd.resolution[1] as f64);
-        Self { scale: n / lcd.size, half: 0.5 * n, nx: lcd.resolution[0], ny: lcd.resolution[1] }
+        let (nx, ny) = (lcd.resolution[0], lcd.resolution[1]);
+        // Rows and columns below 2^31 and every index below u32::MAX.
+        let fits_u32 = nx < (1 << 31) && ny < (1 << 31) && (nx as u64) * (ny as u64) < u64::from(u32::MAX);
+        Self { scale: n / lcd.size, half: 0.5 * n, nx, ny, fits_u32 }
     }
 
     #[inline(always)]
@@ -91,13 +96,16 @@ impl PixelIndexer {
         Some(r * self.nx + c)
     }
 
-    /// [`PixelIndexer::index`] as a `u32`, `u32::MAX` for a point off the LCD (or NaN), written
-    /// without branches so that loops over many points vectorise. Needs fewer than `2^31` pixels
-    /// per row and column and in all (checked by the caller, [`PixelIndexer::fits_u32`]): inside
-    /// the LCD the coordinates are below `2^31`, so converting through `i32` truncates as
-    /// through `u32` does.
+    /// [`PixelIndexer::index`] as a `u32`, `u32::MAX` for a point off the LCD (or NaN). For
+    /// every LCD with fewer than `2^31` pixels per row and column and `u32::MAX` in all (any real
+    /// one; the test is made once, in [`PixelIndexer::new`]) it has no branch, so loops over many
+    /// points vectorise: inside the LCD the coordinates are below `2^31`, so converting through
+    /// `i32` truncates as through `u32` does. Other sizes take the checked path.
     #[inline(always)]
     pub fn index_u32(&self, p: DVec2) -> u32 {
+        if !self.fits_u32 {
+            return self.index(p).map_or(u32::MAX, |i| i as u32);
+        }
         let fx = p.x * self.scale.x + self.half.x;
         let fy = self.half.y - p.y * self.scale.y;
         let inside = fx >= 0.0 && fx <= 2.0 * self.half.x && fy >= 0.0 && fy <= 2.0 * self.half.y;
@@ -108,12 +116,6 @@ impl PixelIndexer {
         } else {
             u32::MAX
         }
-    }
-
-    /// Whether every pixel index fits [`PixelIndexer::index_u32`] (below `u32::MAX`, rows and
-    /// columns below `2^31`).
-    pub fn fits_u32(&self) -> bool {
-        self.nx < (1 << 31) && self.ny < (1 << 31) && (self.nx as u64) * (self.ny as u64) < u64::from(u32::MAX)
     }
 }
 
@@ -251,7 +253,7 @@ mod tests {
     fn branch_free_pixel_index_equals_the_checked_one() {
         for lcd in [Display::paper().lcd, Lcd { resolution: [7, 3], size: DVec2::new(2.1, 0.9) }] {
             let ix = PixelIndexer::new(&lcd);
-            assert!(ix.fits_u32());
+            assert!(ix.fits_u32);
             let (hx, hy) = (0.5 * lcd.size.x, 0.5 * lcd.size.y);
             let mut pts = vec![
                 DVec2::new(-hx, hy),

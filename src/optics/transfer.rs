@@ -142,27 +142,42 @@ impl<'a> FastTransfer<'a> {
     }
 
     /// [`FastTransfer::pixel_index`] for every tangent through pupil sample `k` (`u32::MAX`: off
-    /// the LCD), in passes over the batch that vectorise (lenslet-plane points, their lenslets'
-    /// centres, the LCD pixels); same arithmetic, so the same pixels (tested). `scratch` is
-    /// reused between calls.
+    /// the LCD), in passes over the batch ([`lcd_pixels`]); same arithmetic, so the same pixels
+    /// (tested). `scratch` is reused between calls.
     pub fn pixel_indices(&self, tangents: &[DVec2], k: usize, scratch: &mut Vec<DVec2>, out: &mut [u32]) {
         let n = tangents.len();
-        debug_assert_eq!(out.len(), n);
         let (x1, offset) = self.samples[k];
         scratch.clear();
-        scratch.resize(2 * n, DVec2::ZERO);
-        let (x2s, centres) = scratch.split_at_mut(n);
-        for ((t, x2), c) in tangents.iter().zip(x2s.iter_mut()).zip(centres.iter_mut()) {
-            *x2 = x1 + (*t + offset) * self.to_lenslets;
-            *c = *x2;
+        scratch.resize(3 * n, DVec2::ZERO);
+        let (x2s, rest) = scratch.split_at_mut(n);
+        let (w1s, centres) = rest.split_at_mut(n);
+        for ((t, x2), w1) in tangents.iter().zip(x2s.iter_mut()).zip(w1s.iter_mut()) {
+            *w1 = *t + offset;
+            *x2 = x1 + *w1 * self.to_lenslets;
         }
-        self.display.lenslets.nearest_centers(centres);
-        let fits = self.indexer.fits_u32();
-        for (((o, t), x2), c) in out.iter_mut().zip(tangents).zip(x2s.iter()).zip(centres.iter()) {
-            let w2 = (*t + offset) - (*x2 - *c) * self.lenslet_power;
-            let p = *x2 + w2 * self.v2;
-            *o = if fits { self.indexer.index_u32(p) } else { self.indexer.index(p).map_or(u32::MAX, |i| i as u32) };
-        }
+        lcd_pixels(self.display, &self.indexer, x2s, w1s, centres, out);
+    }
+}
+
+/// The last steps of eq. (1) for a batch of rays, from where each meets the lenslet plane
+/// (`x2`) with its slope there (`w1`): the nearest lenslet's centre, the refracted slope, the LCD
+/// pixel (`u32::MAX`: off the LCD). Each a pass over the batch that vectorises, with the
+/// arithmetic of [`FastTransfer::lcd_point`] per ray. `centres` is scratch of the batch's size.
+pub fn lcd_pixels(
+    display: &Display,
+    indexer: &PixelIndexer,
+    x2: &[DVec2],
+    w1: &[DVec2],
+    centres: &mut [DVec2],
+    out: &mut [u32],
+) {
+    debug_assert!(x2.len() == w1.len() && x2.len() == centres.len() && x2.len() == out.len());
+    centres.copy_from_slice(x2);
+    display.lenslets.nearest_centers(centres);
+    let (power, v2) = (display.lenslet_power(), display.lenslets_to_lcd);
+    for (((o, x2), c), w1) in out.iter_mut().zip(x2).zip(centres.iter()).zip(w1) {
+        let w2 = *w1 - (*x2 - *c) * power;
+        *o = indexer.index_u32(*x2 + w2 * v2);
     }
 }
 
