@@ -226,6 +226,54 @@ pub fn render_display_image_into<R: RadianceField + ?Sized>(
     Ok(known)
 }
 
+/// The base camera ray (LC or PC, or LA's centre ray) of pixel sample `frac` of LCD pixel
+/// (row, col): the one-ray twin of [`RowRays::find`].
+#[inline(always)]
+fn base_ray(display: &Display, method: Method, eye: DVec3, z_ref: f64, row: usize, col: usize, frac: DVec2) -> Ray {
+    let lcd = display.lcd;
+    let center = lcd.pixel_center(row, col);
+    let lenslet_center = display.lenslets.center(display.elemental_image_of(center));
+    let x3 = lcd.pixel_point(row, col, frac);
+    let p = match method {
+        Method::PupilCenter => pupil_center_point(display, x3, lenslet_center, eye),
+        _ => lenslet_center,
+    };
+    camera_ray(display, x3, lenslet_center, p, z_ref)
+}
+
+/// One LCD row's base camera rays and their pixels' running sums (reused row after row).
+#[derive(Default)]
+struct RowRays {
+    x3: Vec<DVec2>,
+    lenslet_centers: Vec<DVec2>,
+    rays: Vec<Ray>,
+    sums: Vec<BundleSum>,
+}
+
+impl RowRays {
+    /// `rays[col]` = [`base_ray`] of every pixel of the row, in passes over the row (the points
+    /// on the LCD; their lenslets' centres, [`crate::optics::Lattice::nearest_centers_in`]; the
+    /// rays), each a loop without data-dependent branches; the same arithmetic, so the same
+    /// bits (tested).
+    #[inline(always)]
+    fn find(&mut self, display: &Display, method: Method, eye: DVec3, z_ref: f64, row: usize, frac: DVec2) {
+        let (lcd, nx) = (display.lcd, display.lcd.columns());
+        self.x3.clear();
+        self.x3.extend((0..nx).map(|col| lcd.pixel_point(row, col, frac)));
+        self.lenslet_centers.clear();
+        self.lenslet_centers.extend((0..nx).map(|col| lcd.pixel_center(row, col)));
+        display.elemental_images.nearest_centers_in(&display.lenslets, &mut self.lenslet_centers);
+        self.rays.clear();
+        let pairs = self.x3.iter().zip(&self.lenslet_centers);
+        match method {
+            Method::PupilCenter => self.rays.extend(
+                pairs.map(|(&x3, &c)| camera_ray(display, x3, c, pupil_center_point(display, x3, c, eye), z_ref)),
+            ),
+            _ => self.rays.extend(pairs.map(|(&x3, &c)| camera_ray(display, x3, c, c, z_ref))),
+        }
+    }
+}
+
 /// The display image's pixel `i` (row-major) goes to `dst[i]`, its depth to `depth[i]` (`depth` is resized, every value written); returns `depth` and whether the
 /// depths are known.
 #[allow(clippy::too_many_arguments)]
@@ -280,17 +328,7 @@ fn render_into<R: RadianceField + ?Sized>(
     debug_assert!(dst.len() == nx * ny);
     depth.resize(nx * ny, 0.0);
     let depth_known = std::sync::atomic::AtomicBool::new(true);
-    // The base ray (LC or PC, or LA's centre) of pixel sample `frac` of pixel (row, col).
-    let base_ray = |row: usize, col: usize, frac: DVec2| {
-        let center = lcd.pixel_center(row, col);
-        let lenslet_center = display.lenslets.center(display.elemental_image_of(center));
-        let x3 = lcd.pixel_point(row, col, frac);
-        let p = match method {
-            Method::PupilCenter => pupil_center_point(display, x3, lenslet_center, eye),
-            _ => lenslet_center,
-        };
-        camera_ray(display, x3, lenslet_center, p, z_ref)
-    };
+    let base_ray = |row: usize, col: usize, frac: DVec2| base_ray(display, method, eye, z_ref, row, col, frac);
     let finish = |acc: BundleSum, px: &mut [f32; 3], z: &mut f32| {
         if !acc.depth_known {
             depth_known.store(false, std::sync::atomic::Ordering::Relaxed);
@@ -336,26 +374,76 @@ fn render_into<R: RadianceField + ?Sized>(
             progress.inc(1);
         });
     } else {
-        // Pixel by pixel; each pixel sample's lenslet rays go to the field as one bundle, which
-        // fast fields cull as a whole. The sums are in the same order as the batched path.
-        dst.par_chunks_mut(nx).zip(depth.par_chunks_mut(nx)).enumerate().for_each(|(row, (out, zout))| {
-            for (col, (px, z)) in out.iter_mut().zip(zout.iter_mut()).enumerate() {
-                let mut acc = BundleSum::default();
+        // Ray by ray; each pixel sample's lenslet rays go to the field as one bundle, which fast
+        // fields cull as a whole. A row's base rays are found in passes over the row
+        // ([`RowRays::find`]); every pixel sums its samples in the same order as the batched path.
+        let single = bundle.shifts.len() == 1;
+        dst.par_chunks_mut(nx).zip(depth.par_chunks_mut(nx)).enumerate().for_each_init(
+            RowRays::default,
+            |s, (row, (out, zout))| {
+                s.sums.clear();
+                s.sums.resize(nx, BundleSum::default());
                 for frac in &pixel_samples {
-                    let base = base_ray(row, col, *frac);
-                    let part = if bundle.shifts.len() == 1 {
-                        let mut one = BundleSum::default();
-                        one.add(tracer.sample(&bundle.ray(&base, 0)));
-                        one
-                    } else {
-                        tracer.sample_sum(&base, &bundle)
-                    };
-                    acc.merge(part);
+                    s.find(display, method, eye, z_ref, row, *frac);
+                    for (acc, base) in s.sums.iter_mut().zip(&s.rays) {
+                        let part = if single {
+                            let mut one = BundleSum::default();
+                            one.add(tracer.sample(&bundle.ray(base, 0)));
+                            one
+                        } else {
+                            tracer.sample_sum(base, &bundle)
+                        };
+                        acc.merge(part);
+                    }
                 }
-                finish(acc, px, z);
-            }
-            progress.inc(1);
-        });
+                for ((acc, px), z) in s.sums.iter().zip(out.iter_mut()).zip(zout.iter_mut()) {
+                    finish(*acc, px, z);
+                }
+                progress.inc(1);
+            },
+        );
     }
     Ok((depth, depth_known.into_inner()))
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DMat2;
+
+    use super::*;
+    use crate::optics::Lattice;
+
+    #[test]
+    fn a_rows_base_rays_are_the_single_pixel_rays_bit_for_bit() {
+        let paper = Display::paper();
+        let mut odd = Display::paper();
+        // Tilted lenslets over hexagonal elemental images: the batch's fallback loop.
+        odd.lenslets =
+            Lattice::new(DVec2::new(0.05, -0.02), DMat2::from_angle(0.3) * DMat2::from_diagonal(DVec2::splat(1.1)))
+                .unwrap();
+        odd.elemental_images =
+            Lattice::new(DVec2::new(-0.01, 0.03), DMat2::from_cols(DVec2::new(1.5, 0.0), DVec2::new(0.75, 1.3)))
+                .unwrap();
+        let mut s = RowRays::default();
+        for display in [paper, odd] {
+            let rows = display.lcd.rows();
+            for method in [Method::LensletCenter, Method::PupilCenter, Method::LensletAverage { grid: 5 }] {
+                for (eye, z_ref) in [(DVec3::ZERO, 0.0), (DVec3::new(0.7, -1.1, 2.0), 5.0)] {
+                    for frac in [DVec2::splat(0.5), DVec2::new(0.125, 0.875)] {
+                        for row in [0, 1, rows / 3, rows / 2, rows - 1] {
+                            s.find(&display, method, eye, z_ref, row, frac);
+                            assert_eq!(s.rays.len(), display.lcd.columns());
+                            for (col, ray) in s.rays.iter().enumerate() {
+                                let want = base_ray(&display, method, eye, z_ref, row, col, frac);
+                                let bits = |r: &Ray| {
+                                    (r.origin.to_array().map(f64::to_bits), r.dir.to_array().map(f64::to_bits))
+                                };
+                                assert_eq!(bits(ray), bits(&want), "{method} row {row} col {col}");
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
 }
