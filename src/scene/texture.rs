@@ -92,20 +92,45 @@ impl BarChart {
         &self.bars
     }
 
-    /// True when `uv` lies on a bar (grid lookup).
+    /// The grid cell [`BarChart::is_bar`] looks `uv` up in; `None` where it answers "no bar"
+    /// without a lookup (below, beyond or NaN).
     #[inline(always)]
-    pub fn is_bar(&self, uv: DVec2) -> bool {
+    fn cell_of(uv: DVec2) -> Option<usize> {
         let fi = (uv.x + 1.0) * (0.5 * GRID as f64);
         let fj = (uv.y + 1.0) * (0.5 * GRID as f64);
         if !(fi >= 0.0 && fj >= 0.0) {
-            return false;
+            return None;
         }
         let i = (fi as i32 as usize).min(GRID - 1);
         let j = (fj as i32 as usize).min(GRID - 1);
         if fi > GRID as f64 + 1.0 || fj > GRID as f64 + 1.0 {
-            return false;
+            return None;
         }
-        match self.cells[j * GRID + i] {
+        Some(j * GRID + i)
+    }
+
+    /// `Some(answer)` when [`BarChart::is_bar`] gives the same answer at every point of the box
+    /// `[lo, hi]` because its corners, and so (the cell index grows with u and v) every point
+    /// between them, fall in one grid cell that is wholly bar or wholly backing; `None` when
+    /// that is not known (the box spans cells, meets a mixed cell, or is not finite).
+    #[inline(always)]
+    pub fn uniform_in(&self, lo: DVec2, hi: DVec2) -> Option<bool> {
+        let cell = Self::cell_of(lo)?;
+        if Self::cell_of(hi)? != cell {
+            return None;
+        }
+        match self.cells[cell] {
+            Cell::Empty => Some(false),
+            Cell::Full => Some(true),
+            Cell::Mixed { .. } => None,
+        }
+    }
+
+    /// True when `uv` lies on a bar (grid lookup).
+    #[inline(always)]
+    pub fn is_bar(&self, uv: DVec2) -> bool {
+        let Some(cell) = Self::cell_of(uv) else { return false };
+        match self.cells[cell] {
             Cell::Empty => false,
             Cell::Full => true,
             Cell::Mixed { start, len } => self.candidates[start as usize..(start + len) as usize]
@@ -160,5 +185,43 @@ mod tests {
             }
         }
         assert!(!chart.is_bar(DVec2::new(f64::NAN, 0.0)));
+    }
+
+    #[test]
+    fn a_box_called_uniform_has_that_answer_at_every_point() {
+        let chart = usaf::framework_chart();
+        let mut s = 777u64;
+        let mut next = || {
+            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (s >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut bar, mut backing, mut unknown) = (0, 0, 0);
+        for _ in 0..200_000 {
+            let lo = DVec2::new(next() * 2.2 - 1.1, next() * 2.2 - 1.1);
+            // Boxes from a tenth of a cell to two cells wide; some on a cell's edge exactly.
+            let size = DVec2::new(next(), next()) * (4.0 / GRID as f64);
+            let lo = if next() < 0.1 { (lo * 64.0).floor() / 64.0 } else { lo };
+            let hi = lo + size;
+            match chart.uniform_in(lo, hi) {
+                Some(answer) => {
+                    for p in [lo, hi, DVec2::new(lo.x, hi.y), DVec2::new(hi.x, lo.y)]
+                        .into_iter()
+                        .chain((0..8).map(|_| lo + DVec2::new(next(), next()) * size))
+                    {
+                        assert_eq!(chart.is_bar_brute_force(p), answer, "{lo} {hi} {p}");
+                        assert_eq!(chart.is_bar(p), answer, "{lo} {hi} {p}");
+                    }
+                    if answer {
+                        bar += 1
+                    } else {
+                        backing += 1
+                    }
+                }
+                None => unknown += 1,
+            }
+        }
+        assert!(bar > 1000 && backing > 1000 && unknown > 1000, "{bar} {backing} {unknown}");
+        assert_eq!(chart.uniform_in(DVec2::new(f64::NAN, 0.0), DVec2::ZERO), None);
+        assert_eq!(chart.uniform_in(DVec2::splat(-0.5), DVec2::splat(f64::NAN)), None);
     }
 }
