@@ -311,16 +311,14 @@ fn render_into<R: RadianceField + ?Sized>(
     let z_ref = settings.reference_plane_z;
     let gain = display.lenslet_power() - 1.0 / display.lenslets_to_lcd;
     let reach = display.lenslet_z() - z_ref;
-    let bundle = RayBundle::new(match method {
-        Method::LensletAverage { grid } => stratified(grid)
-            .into_iter()
-            .map(|f| {
-                let off = display.lenslets.matrix * (f - DVec2::splat(0.5));
-                (off - off * gain * reach, off * gain)
-            })
-            .collect(),
-        _ => vec![(DVec2::ZERO, DVec2::ZERO)],
-    });
+    let bundle = match method {
+        Method::LensletAverage { grid } => {
+            let offsets: Vec<DVec2> =
+                stratified(grid).into_iter().map(|f| display.lenslets.matrix * (f - DVec2::splat(0.5))).collect();
+            RayBundle::lenslet_points(&offsets, gain, reach)
+        }
+        _ => RayBundle::new(vec![(DVec2::ZERO, DVec2::ZERO)]),
+    };
     let eye = settings.eye_position;
     let inv_count = 1.0 / (pixel_samples.len() * bundle.shifts.len()) as f64;
 

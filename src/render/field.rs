@@ -52,6 +52,16 @@ pub trait RadianceField: Sync {
         }
     }
 
+    /// The radiance that every ray of `rays` brings back, when the field can tell that it is one
+    /// value for all of them (they all meet first the same part of the scene, of one colour),
+    /// with the parameter `t` of that hit (`None`: every ray misses). It must then be exactly
+    /// what [`RadianceField::sample`] returns for each ray; `None` when the field cannot tell
+    /// (the default).
+    fn uniform(&self, rays: &AffineRays) -> Option<(DVec3, Option<f64>)> {
+        let _ = rays;
+        None
+    }
+
     /// Sums over the rays of `bundle` around `base`: radiance, hit distance of the rays that
     /// hit, their count, and whether every depth was known. Fields may override this with a
     /// faster path that must return exactly the same sums.
@@ -104,6 +114,51 @@ impl BundleSum {
     }
 }
 
+/// A family of rays, all starting on the plane `z = origin.z` with unit z slope, whose start and
+/// slope move together (in exact arithmetic; the rays themselves may be computed otherwise, with
+/// rounding far below what fields allow for):
+///
+/// ```text
+/// start(q, e) = origin.xy + alpha q,   slope(q, e) = dir + beta q + e,
+/// q in [q_lo, q_hi], e in [e_lo, e_hi] (component-wise)
+/// ```
+///
+/// At `t` past the start plane the rays cover `origin.xy + t dir + (alpha + beta t) q + t e`.
+/// LensletAverage's rays of one pixel are such a family (q: the point in the lenslet cell, eq.
+/// (1b) is affine in it), and so are an eye's rays of one retina pixel (q: the pupil point, e:
+/// the point in the pixel's square; eq. (1a)).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AffineRays {
+    pub origin: DVec3,
+    pub dir: DVec2,
+    pub q_lo: DVec2,
+    pub q_hi: DVec2,
+    pub alpha: f64,
+    pub beta: f64,
+    pub e_lo: DVec2,
+    pub e_hi: DVec2,
+}
+
+impl AffineRays {
+    /// The bounds (component-wise) of the family's points at `t >= 0` past its start plane.
+    #[inline(always)]
+    pub fn bounds_at(&self, t: f64) -> (DVec2, DVec2) {
+        let g = self.alpha + self.beta * t;
+        let (a, b) = (self.q_lo * g, self.q_hi * g);
+        let centre = self.origin.truncate() + self.dir * t;
+        (centre + a.min(b) + self.e_lo * t, centre + a.max(b) + self.e_hi * t)
+    }
+
+    /// A size (per axis) of the numbers from which the rays' points at `t` are computed: their
+    /// rounding errors are a few units of 1e-16 of it.
+    #[inline(always)]
+    pub fn magnitude_at(&self, t: f64) -> DVec2 {
+        let q = self.q_lo.abs().max(self.q_hi.abs());
+        let e = self.e_lo.abs().max(self.e_hi.abs());
+        self.origin.truncate().abs() + (self.dir.abs() + e) * t + q * (self.alpha.abs() + self.beta.abs() * t)
+    }
+}
+
 /// Rays that differ from a base ray by constant shifts of their start (x, y) and slope
 /// (x, y): LensletAverage's samples of one pixel (eq. (1b) is affine in the lenslet point).
 #[derive(Clone, Debug, PartialEq)]
@@ -115,6 +170,10 @@ pub struct RayBundle {
     pub start_max: DVec2,
     pub slope_min: DVec2,
     pub slope_max: DVec2,
+    /// For bundles made by [`RayBundle::lenslet_points`]: the bounds of the points `q` and the
+    /// factors `alpha`, `beta` such that every shift is `(alpha q, beta q)` (see
+    /// [`RayBundle::affine_around`]).
+    affine: Option<(DVec2, DVec2, f64, f64)>,
 }
 
 impl RayBundle {
@@ -127,7 +186,39 @@ impl RayBundle {
             c = c.min(*dw);
             d = d.max(*dw);
         }
-        Self { shifts, start_min: a, start_max: b, slope_min: c, slope_max: d }
+        Self { shifts, start_min: a, start_max: b, slope_min: c, slope_max: d, affine: None }
+    }
+
+    /// LensletAverage's bundle: for each point `q` (offsets from the lenslet centre), the shift
+    /// `(q - q gain reach, q gain)` of a camera ray refracted at the lenslet with `gain = 1/f -
+    /// 1/v2` and started `reach` before the lenslet plane (eq. (1b) is affine in the lenslet
+    /// point). The bundle remembers that its shifts are `(alpha q, beta q)` with `alpha = 1 -
+    /// gain reach`, `beta = gain`.
+    pub fn lenslet_points(points: &[DVec2], gain: f64, reach: f64) -> Self {
+        let mut bundle = Self::new(points.iter().map(|&q| (q - q * gain * reach, q * gain)).collect());
+        let inf = DVec2::splat(f64::INFINITY);
+        let (lo, hi) = points.iter().fold((inf, -inf), |(lo, hi), q| (lo.min(*q), hi.max(*q)));
+        if lo.is_finite() && hi.is_finite() && gain.is_finite() && reach.is_finite() {
+            bundle.affine = Some((lo, hi, 1.0 - gain * reach, gain));
+        }
+        bundle
+    }
+
+    /// The bundle around `base` (which must have unit z slope) as an [`AffineRays`] family, when
+    /// it was made by [`RayBundle::lenslet_points`].
+    #[inline(always)]
+    pub fn affine_around(&self, base: &Ray) -> Option<AffineRays> {
+        let (q_lo, q_hi, alpha, beta) = self.affine?;
+        (base.dir.z == 1.0).then_some(AffineRays {
+            origin: base.origin,
+            dir: base.dir.truncate(),
+            q_lo,
+            q_hi,
+            alpha,
+            beta,
+            e_lo: DVec2::ZERO,
+            e_hi: DVec2::ZERO,
+        })
     }
 
     /// Ray `k` of the bundle around `base` (only x and y are shifted).

@@ -9,7 +9,7 @@ use std::sync::Arc;
 
 use glam::{DVec2, DVec3};
 
-use super::field::{BundleSum, RadianceField, RayBundle, Sample};
+use super::field::{AffineRays, BundleSum, RadianceField, RayBundle, Sample};
 use super::tracer::SceneTracer;
 use crate::accel::analytic::AnalyticRects;
 use crate::ray::Ray;
@@ -173,12 +173,67 @@ impl RadianceField for FacingPlanes<'_> {
         Sample { radiance, depth: distance(ray, t) }
     }
 
+    /// Bounds on the family's footprint on each rectangle, in z order (with margins far above
+    /// the rounding of the rays' own arithmetic): rectangles no ray can hit are passed; the first
+    /// that might be hit must hold the whole footprint, inside one colour (an albedo, or a chart
+    /// grid cell that is all bar or all backing, [`BarChart::uniform_in`]).
+    fn uniform(&self, rays: &AffineRays) -> Option<(DVec3, Option<f64>)> {
+        if !(rays.origin.z < self.min_z) {
+            return None;
+        }
+        let m = BUNDLE_MARGIN;
+        for r in &self.rects {
+            let t = r.z - rays.origin.z;
+            let (lo, hi) = rays.bounds_at(t);
+            let slack = (rays.magnitude_at(t) + DVec2::new(r.cx.abs(), r.cy.abs())) * 1e-12;
+            let (u0, u1) = ((lo.x - slack.x - r.cx) * r.inv_hx, (hi.x + slack.x - r.cx) * r.inv_hx);
+            let (v0, v1) = ((lo.y - slack.y - r.cy) * r.inv_hy, (hi.y + slack.y - r.cy) * r.inv_hy);
+            let (umin, umax) = (u0.min(u1), u0.max(u1));
+            let (vmin, vmax) = (v0.min(v1), v0.max(v1));
+            if umin > 1.0 + m || umax < -1.0 - m || vmin > 1.0 + m || vmax < -1.0 - m {
+                continue; // no ray meets r
+            }
+            if !(umin >= -1.0 + m && umax <= 1.0 - m && vmin >= -1.0 + m && vmax <= 1.0 - m) {
+                return None; // some rays may meet r, others not (or NaN)
+            }
+            let radiance = match &r.material {
+                FlatMaterial::Albedo(a) => *a,
+                FlatMaterial::Chart { chart, bar, backing } => {
+                    let on = chart.uniform_in(DVec2::new(umin - m, vmin - m), DVec2::new(umax + m, vmax + m))?;
+                    if on {
+                        *bar
+                    } else {
+                        *backing
+                    }
+                }
+                FlatMaterial::Grating(_) | FlatMaterial::Edge(_) => return None,
+            };
+            return Some((radiance, Some(t)));
+        }
+        Some((self.background, None))
+    }
+
     /// Bundle culling: bounds on the bundle's footprint on each rectangle (from the bounds of
     /// its start and slope shifts) show which rectangles no ray can hit and which one every ray
     /// hits first; each ray then computes `t`, `u`, `v` exactly as the single-ray path does,
     /// so the sums are the same bit for bit (tested).
     fn sample_sum(&self, base: &Ray, bundle: &RayBundle) -> BundleSum {
         let mut acc = BundleSum::default();
+        if let Some((radiance, t)) = bundle.affine_around(base).and_then(|rays| self.uniform(&rays)) {
+            // Every ray brings back `radiance` from the same plane: only the distances differ,
+            // found in passes that vectorise (their square roots dominate).
+            let mut depths = [0.0; 64];
+            for k0 in (0..bundle.shifts.len()).step_by(depths.len()) {
+                let ks = k0..bundle.shifts.len().min(k0 + depths.len());
+                for (d, k) in depths.iter_mut().zip(ks.clone()) {
+                    *d = distance(&bundle.ray(base, k), t);
+                }
+                for &depth in &depths[..ks.len()] {
+                    acc.add(Sample { radiance, depth });
+                }
+            }
+            return acc;
+        }
         if !(base.dir.z == 1.0 && base.origin.z < self.min_z) || self.rects.len() > 16 {
             for k in 0..bundle.shifts.len() {
                 acc.add(self.sample(&bundle.ray(base, k)));
@@ -187,8 +242,6 @@ impl RadianceField for FacingPlanes<'_> {
         }
         let mut cover = [Cover::None; 16];
         let mut last = self.rects.len();
-        // The bundle's bounds in the coordinates of the rectangle every ray hits, if one does.
-        let mut all_box = None;
         for (i, r) in self.rects.iter().enumerate() {
             let t = r.z - base.origin.z; // > 0: the bundle starts in front of every plane
             let start = DVec2::new(base.origin.x, base.origin.y);
@@ -204,40 +257,9 @@ impl RadianceField for FacingPlanes<'_> {
             } else if umin >= -1.0 + m && umax <= 1.0 - m && vmin >= -1.0 + m && vmax <= 1.0 - m {
                 cover[i] = Cover::All;
                 last = i + 1;
-                all_box = Some((DVec2::new(umin - m, vmin - m), DVec2::new(umax + m, vmax + m)));
                 break;
             } else {
                 cover[i] = Cover::Some;
-            }
-        }
-        if let Some((lo, hi)) = all_box {
-            let r = &self.rects[last - 1];
-            if cover[..last - 1].iter().all(|c| *c == Cover::None) {
-                // Every ray's first hit is `r`, at the same t (the rays share origin.z and dz = 1).
-                // When `r` has one colour over the whole footprint, the rays differ only in their
-                // distances: the same samples as the loop below, without locating each hit.
-                let constant = match &r.material {
-                    FlatMaterial::Albedo(a) => Some(*a),
-                    FlatMaterial::Chart { chart, bar, backing } => {
-                        chart.uniform_in(lo, hi).map(|on| if on { *bar } else { *backing })
-                    }
-                    FlatMaterial::Grating(_) | FlatMaterial::Edge(_) => None,
-                };
-                if let Some(radiance) = constant {
-                    let t = r.z - base.origin.z;
-                    // The distances first, in passes that vectorise (their square roots dominate).
-                    let mut depths = [0.0; 64];
-                    for k0 in (0..bundle.shifts.len()).step_by(depths.len()) {
-                        let ks = k0..bundle.shifts.len().min(k0 + depths.len());
-                        for (d, k) in depths.iter_mut().zip(ks.clone()) {
-                            *d = distance(&bundle.ray(base, k), Some(t));
-                        }
-                        for &depth in &depths[..ks.len()] {
-                            acc.add(Sample { radiance, depth });
-                        }
-                    }
-                    return acc;
-                }
             }
         }
         'rays: for k in 0..bundle.shifts.len() {
@@ -301,19 +323,20 @@ mod tests {
             s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
             (s >> 11) as f64 / (1u64 << 53) as f64
         };
-        // The paper's LA 5 x 5 bundle, one with a tenth of its spread (mostly inside one chart
-        // cell: the uniform path) and a 9 x 9 one (more rays than one pass of distances holds).
+        // The paper's LA 5 x 5 bundle (most footprints inside one chart cell: the uniform path),
+        // the same without its affine form (bounds from the shifts only), one with ten times its
+        // spread, and a 9 x 9 one (more rays than one pass of distances holds).
         let bundle = |k: usize, scale: f64| {
-            let mut shifts = Vec::new();
+            let mut points = Vec::new();
             for j in 0..k {
                 for i in 0..k {
-                    let off = DVec2::new(i as f64 - (k / 2) as f64, j as f64 - (k / 2) as f64) * 0.24 * scale;
-                    shifts.push((off * 1.05, off * -0.0027));
+                    points.push(DVec2::new(i as f64 - (k / 2) as f64, j as f64 - (k / 2) as f64) * 0.24 * scale);
                 }
             }
-            RayBundle::new(shifts)
+            RayBundle::lenslet_points(&points, 1.0 / 6.427 - 1.0 / 6.316, 20.0)
         };
-        for bundle in [bundle(5, 1.0), bundle(5, 0.1), bundle(9, 0.5)] {
+        let plain = RayBundle::new(bundle(5, 1.0).shifts);
+        for bundle in [bundle(5, 1.0), plain, bundle(5, 10.0), bundle(9, 0.5)] {
             for _ in 0..60_000 {
                 let base = Ray {
                     origin: DVec3::new(next() * 30.0 - 15.0, next() * 30.0 - 15.0, 0.0),
