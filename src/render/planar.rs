@@ -178,7 +178,7 @@ impl RadianceField for FacingPlanes<'_> {
     /// that might be hit must hold the whole footprint, inside one colour (an albedo, or a chart
     /// grid cell that is all bar or all backing, [`BarChart::uniform_in`]).
     fn uniform(&self, rays: &AffineRays) -> Option<(DVec3, Option<f64>)> {
-        if !(rays.origin.z < self.min_z) {
+        if rays.origin.z >= self.min_z || rays.origin.z.is_nan() {
             return None;
         }
         let m = BUNDLE_MARGIN;
