@@ -21,7 +21,7 @@ use inimtrace::progress::Progress;
 use inimtrace::raster::RgbImage;
 use inimtrace::render::retina::{simulate, DisplayStack};
 use inimtrace::render::{
-    ground_truth, render_display_image, DisplayRenderSettings, Method, RadianceField, SceneTracer,
+    ground_truth, render_display_image, DisplayRenderSettings, FacingPlanes, Method, RadianceField, SceneTracer,
 };
 use inimtrace::scene::{Material, Object, Rect, Scene, Shape};
 
@@ -734,4 +734,55 @@ fn batched_fields_give_the_same_bits_and_budgets_stop_sampling() {
     assert_eq!((m.stopped_by, m.samples_per_pixel(), m.cells[0].target_met), ("time budget", 32, false));
     let m = measure(&source, 9, 1, &c.eye, &r, SsimConstants::Wang2004, &to_target(1.0, 1.0));
     assert_eq!((m.stopped_by, m.samples_per_pixel(), m.cells[0].target_met), ("target met", 32, true));
+}
+
+#[test]
+fn pixels_whose_ground_truth_is_known_whole_give_the_same_bits_as_tracing_every_ray() {
+    // The fused kernel tells `Replicates::extend` which pixels see one colour through the whole
+    // pupil (`PairedSource::reference_over`); the generic path traces every ray.
+    let c = corner();
+    let backend = AnalyticRects::new(&c.scene).unwrap();
+    let slow = SceneTracer { scene: &c.scene, backend: &backend };
+    let fast = FacingPlanes::new(&c.scene, &backend).unwrap();
+    let stack = DisplayStack::new(&c.display, &[&c.lc]).unwrap();
+    let mut moved = Eye::thin_lens(3.0, Focus::Millimetres(700.0), 8);
+    moved.position = DVec3::new(0.5, -0.8, 1.0);
+    let mut rng = inimtrace::fixtures::Lcg(5);
+    for (eye, half) in [(c.eye.clone(), 0.3), (c.eye.clone(), 0.04), (Eye::pinhole(), 0.1), (moved, 0.08)] {
+        let (n, radius) = (
+            96,
+            match eye.aperture {
+                inimtrace::optics::Aperture::ThinLens { pupil_diameter, .. } => pupil_diameter / 2.0,
+                inimtrace::optics::Aperture::Pinhole => 0.0,
+            },
+        );
+        let r = retina(n, half);
+        let known = DisplaySource::new(&c.display, &eye, &fast, &stack);
+        let traced = DisplaySource::new(&c.display, &eye, &slow, &stack);
+        // Every pixel said to be one colour is that colour along rays through its corners and
+        // the pupil's rim (the extremes of its footprints) and at random.
+        let step = 2.0 * half / n as f64;
+        let mut whole = 0;
+        for p in 0..n * n {
+            let lo = DVec2::new(-half + (p % n) as f64 * step, half - (p / n) as f64 * step);
+            let hi = lo + DVec2::new(step, -step);
+            let Some(value) = known.reference_over((lo, hi), radius) else { continue };
+            whole += 1;
+            let rim = (0..16).map(|a| DVec2::from_angle(a as f64 * std::f64::consts::PI / 8.0) * radius);
+            let corners = [lo, hi, DVec2::new(lo.x, hi.y), DVec2::new(hi.x, lo.y)];
+            let extremes = rim.flat_map(|s| corners.map(|t| (t, s)));
+            let random = (0..16).map(|_| {
+                let t = lo + (hi - lo) * DVec2::new(rng.next(), rng.next());
+                (t, DVec2::from_angle(rng.range(0.0, 6.3)) * radius * rng.next().sqrt())
+            });
+            for (t, s) in extremes.chain(random) {
+                assert_eq!(slow.radiance(&eye_scene_ray(&eye, t, s)).to_array(), value, "pixel {p} {t} {s}");
+            }
+        }
+        assert!(whole > n * n / 20 && whole < n * n * 19 / 20, "both kinds of pixel: {whole} of {}", n * n);
+        let a = measure(&known, 3, 1, &eye, &r, SsimConstants::Wang2004, &fixed_samples(4, 16));
+        let b = measure(&traced, 3, 1, &eye, &r, SsimConstants::Wang2004, &fixed_samples(4, 16));
+        assert!(a.replicates == b.replicates, "{eye:?}");
+        assert_eq!(a.cells, b.cells);
+    }
 }

@@ -23,6 +23,7 @@ use crate::optics::transfer::{eye_scene_ray, lcd_pixels};
 use crate::optics::{Display, Eye, Retina};
 use crate::progress::Progress;
 use crate::raster::RgbImage;
+use crate::render::retina::eye_rays;
 use crate::render::retina::DisplayStack;
 use crate::render::{RadianceField, Sample};
 
@@ -43,6 +44,21 @@ pub trait PairedSource: Sync {
     /// The radiance of every image along every ray: `out[i * images + k]` is image `k`'s RGB
     /// for `samples[i]` (`out.len() == samples.len() * images`).
     fn eval(&self, samples: &[EyeSample], out: &mut [[f64; 3]]);
+
+    /// Image 0's radiance when it is one value along every eye ray of a retina pixel (tangents
+    /// in the box `tangents`, pupil points within `pupil_radius` mm of the pupil centre), exactly
+    /// what [`PairedSource::eval`] gives each of them; `None` when that is not known (the default).
+    fn reference_over(&self, tangents: (DVec2, DVec2), pupil_radius: f64) -> Option<[f64; 3]> {
+        let _ = (tangents, pupil_radius);
+        None
+    }
+
+    /// [`PairedSource::eval`], told image 0 of sample `i` where `known[i]` is `Some` (what
+    /// [`PairedSource::reference_over`] said of its pixel), so it need not trace it. Same values.
+    fn eval_known(&self, samples: &[EyeSample], known: &[Option<[f64; 3]>], out: &mut [[f64; 3]]) {
+        let _ = known;
+        self.eval(samples, out);
+    }
 }
 
 /// Eq. (1) from the eye to the LCD for any retina tangent and pupil point, with the per-eye
@@ -128,10 +144,27 @@ impl<F: RadianceField + ?Sized> PairedSource for DisplaySource<'_, F> {
     }
 
     fn eval(&self, samples: &[EyeSample], out: &mut [[f64; 3]]) {
+        self.eval_known(samples, &[], out);
+    }
+
+    fn reference_over(&self, tangents: (DVec2, DVec2), pupil_radius: f64) -> Option<[f64; 3]> {
+        let pupil = (DVec2::splat(-pupil_radius), DVec2::splat(pupil_radius));
+        self.field.uniform(&eye_rays(self.eye, tangents, pupil)).map(|(c, _)| c.to_array())
+    }
+
+    /// `known` may be empty (nothing known) or hold one entry per sample.
+    fn eval_known(&self, samples: &[EyeSample], known: &[Option<[f64; 3]>], out: &mut [[f64; 3]]) {
         let k = self.images();
         let m = self.stack.len();
         debug_assert_eq!(out.len(), samples.len() * k);
-        if self.field.prefers_batches() {
+        if !known.is_empty() && !self.field.prefers_batches() {
+            for ((o, s), known) in out.chunks_exact_mut(k).zip(samples).zip(known) {
+                o[0] = match known {
+                    Some(v) => *v,
+                    None => self.field.radiance(&eye_scene_ray(self.eye, s.tangent, s.pupil)).to_array(),
+                };
+            }
+        } else if self.field.prefers_batches() {
             let rays: Vec<_> = samples.iter().map(|s| eye_scene_ray(self.eye, s.tangent, s.pupil)).collect();
             let mut hits = vec![Sample::default(); rays.len()];
             self.field.sample_many(&rays, &mut hits);
@@ -391,7 +424,14 @@ impl Replicates {
             let mut sums = vec![0.0f64; TILE * TILE * k * 3];
             let radius = sampler.pupil_radius();
             let mut pupils = vec![DVec2::ZERO; batch];
-            let mut flush = |samples: &mut [EyeSample], pupils: &mut [DVec2], owners: &[u32], sums: &mut [f64]| {
+            // Image 0 of each sample, when known for its whole pixel (`reference_over`).
+            let mut known = vec![None; batch];
+            let mut pixel_known = vec![None; TILE * TILE];
+            let mut flush = |samples: &mut [EyeSample],
+                             pupils: &mut [DVec2],
+                             known: &[Option<[f64; 3]>],
+                             owners: &[u32],
+                             sums: &mut [f64]| {
                 if radius != 0.0 {
                     super::sampler::concentric_disk_batch(pupils, radius);
                     for (s, p) in samples.iter_mut().zip(pupils.iter()) {
@@ -399,7 +439,7 @@ impl Replicates {
                     }
                 }
                 let vals = &mut values[..samples.len() * k];
-                source.eval(samples, vals);
+                source.eval_known(samples, known, vals);
                 match k {
                     2 => accumulate::<2>(vals, owners, sums),
                     3 => accumulate::<3>(vals, owners, sums),
@@ -409,6 +449,19 @@ impl Replicates {
             };
             for col0 in (0..n).step_by(TILE) {
                 let cols = TILE.min(n - col0);
+                for dr in 0..rows {
+                    let row = row0 + dr;
+                    for dc in 0..cols {
+                        // The pixel's square of tangents (Retina::tangent at fractions 0 and 1).
+                        let c = (col0 + dc) as f64;
+                        let lo = DVec2::new(-retina.half_tangent + c * step, retina.half_tangent - row as f64 * step);
+                        let hi = DVec2::new(
+                            -retina.half_tangent + (c + 1.0) * step,
+                            retina.half_tangent - (row as f64 + 1.0) * step,
+                        );
+                        pixel_known[dr * TILE + dc] = source.reference_over((lo, hi), radius);
+                    }
+                }
                 for r in 0..nr {
                     sums.iter_mut().for_each(|s| *s = 0.0);
                     // (pixel, sample) pairs in pixel order, cut into batches anywhere.
@@ -429,16 +482,23 @@ impl Replicates {
                                 samples[filled] = EyeSample { tangent, pupil: DVec2::ZERO };
                                 pupils[filled] = raw.unwrap_or(DVec2::ZERO);
                                 owners[filled] = owner;
+                                known[filled] = pixel_known[owner as usize];
                                 filled += 1;
                                 if filled == batch {
-                                    flush(&mut samples, &mut pupils, &owners, &mut sums);
+                                    flush(&mut samples, &mut pupils, &known, &owners, &mut sums);
                                     filled = 0;
                                 }
                             }
                         }
                     }
                     if filled > 0 {
-                        flush(&mut samples[..filled], &mut pupils[..filled], &owners[..filled], &mut sums);
+                        flush(
+                            &mut samples[..filled],
+                            &mut pupils[..filled],
+                            &known[..filled],
+                            &owners[..filled],
+                            &mut sums,
+                        );
                     }
                     for (j, plane) in planes[r * k * 3..(r + 1) * k * 3].iter_mut().enumerate() {
                         for dr in 0..rows {

@@ -110,20 +110,29 @@ impl BarChart {
     }
 
     /// `Some(answer)` when [`BarChart::is_bar`] gives the same answer at every point of the box
-    /// `[lo, hi]` because its corners, and so (the cell index grows with u and v) every point
-    /// between them, fall in one grid cell that is wholly bar or wholly backing; `None` when
-    /// that is not known (the box spans cells, meets a mixed cell, or is not finite).
+    /// `[lo, hi]`: the grid cells of its corners, and so (the cell index grows with u and v) of
+    /// every point between them, span at most 4 x 4 cells, all wholly bar or all wholly backing.
+    /// `None` when that is not known (more cells, a mixed cell, both kinds, or not finite).
     #[inline(always)]
     pub fn uniform_in(&self, lo: DVec2, hi: DVec2) -> Option<bool> {
-        let cell = Self::cell_of(lo)?;
-        if Self::cell_of(hi)? != cell {
+        let (a, b) = (Self::cell_of(lo)?, Self::cell_of(hi)?);
+        let (i0, j0, i1, j1) = (a % GRID, a / GRID, b % GRID, b / GRID);
+        if i1 < i0 || j1 < j0 || i1 - i0 >= 4 || j1 - j0 >= 4 {
             return None;
         }
-        match self.cells[cell] {
-            Cell::Empty => Some(false),
-            Cell::Full => Some(true),
-            Cell::Mixed { .. } => None,
+        let answer = match self.cells[a] {
+            Cell::Empty => false,
+            Cell::Full => true,
+            Cell::Mixed { .. } => return None,
+        };
+        for j in j0..=j1 {
+            for cell in &self.cells[j * GRID + i0..=j * GRID + i1] {
+                if !matches!((cell, answer), (Cell::Empty, false) | (Cell::Full, true)) {
+                    return None;
+                }
+            }
         }
+        Some(answer)
     }
 
     /// True when `uv` lies on a bar (grid lookup).
@@ -198,8 +207,8 @@ mod tests {
         let (mut bar, mut backing, mut unknown) = (0, 0, 0);
         for _ in 0..200_000 {
             let lo = DVec2::new(next() * 2.2 - 1.1, next() * 2.2 - 1.1);
-            // Boxes from a tenth of a cell to two cells wide; some on a cell's edge exactly.
-            let size = DVec2::new(next(), next()) * (4.0 / GRID as f64);
+            // Boxes from a tenth of a cell to five cells wide; some on a cell's edge exactly.
+            let size = DVec2::new(next(), next()) * (10.0 / GRID as f64);
             let lo = if next() < 0.1 { (lo * 64.0).floor() / 64.0 } else { lo };
             let hi = lo + size;
             match chart.uniform_in(lo, hi) {
