@@ -120,6 +120,36 @@ enum Cover {
     Some,
 }
 
+impl FlatRect {
+    /// Bounds (world x, y) of the points where the rays of `rays` meet this rectangle's plane, at
+    /// `t` past their start, widened by far more than the rounding of the rays' own arithmetic.
+    #[inline(always)]
+    fn footprint(&self, rays: &AffineRays, t: f64) -> (DVec2, DVec2) {
+        let (lo, hi) = rays.bounds_at(t);
+        let slack = (rays.magnitude_at(t) + DVec2::new(self.cx.abs(), self.cy.abs())) * 1e-12;
+        (lo - slack, hi + slack)
+    }
+
+    /// How a footprint `[lo, hi]` (world x, y on this plane) meets the rectangle, with its bounds
+    /// in the rectangle's `[-1, 1]` coordinates (NaN bounds give `Some`).
+    #[inline(always)]
+    fn cover(&self, lo: DVec2, hi: DVec2) -> (Cover, (f64, f64), (f64, f64)) {
+        let (u0, u1) = ((lo.x - self.cx) * self.inv_hx, (hi.x - self.cx) * self.inv_hx);
+        let (v0, v1) = ((lo.y - self.cy) * self.inv_hy, (hi.y - self.cy) * self.inv_hy);
+        let (umin, umax) = (u0.min(u1), u0.max(u1));
+        let (vmin, vmax) = (v0.min(v1), v0.max(v1));
+        let m = BUNDLE_MARGIN;
+        let cover = if umin > 1.0 + m || umax < -1.0 - m || vmin > 1.0 + m || vmax < -1.0 - m {
+            Cover::None
+        } else if umin >= -1.0 + m && umax <= 1.0 - m && vmin >= -1.0 + m && vmax <= 1.0 - m {
+            Cover::All
+        } else {
+            Cover::Some
+        };
+        (cover, (umin, vmin), (umax, vmax))
+    }
+}
+
 /// Margin (in the rectangle's [-1, 1] coordinates) by which a bundle's bounds must clear an
 /// edge before all its rays are declared in or out: far above the rounding of `u`, `v`
 /// (about 1e-13 here), far below a texel of the chart.
@@ -184,17 +214,12 @@ impl RadianceField for FacingPlanes<'_> {
         let m = BUNDLE_MARGIN;
         for r in &self.rects {
             let t = r.z - rays.origin.z;
-            let (lo, hi) = rays.bounds_at(t);
-            let slack = (rays.magnitude_at(t) + DVec2::new(r.cx.abs(), r.cy.abs())) * 1e-12;
-            let (u0, u1) = ((lo.x - slack.x - r.cx) * r.inv_hx, (hi.x + slack.x - r.cx) * r.inv_hx);
-            let (v0, v1) = ((lo.y - slack.y - r.cy) * r.inv_hy, (hi.y + slack.y - r.cy) * r.inv_hy);
-            let (umin, umax) = (u0.min(u1), u0.max(u1));
-            let (vmin, vmax) = (v0.min(v1), v0.max(v1));
-            if umin > 1.0 + m || umax < -1.0 - m || vmin > 1.0 + m || vmax < -1.0 - m {
-                continue; // no ray meets r
-            }
-            if !(umin >= -1.0 + m && umax <= 1.0 - m && vmin >= -1.0 + m && vmax <= 1.0 - m) {
-                return None; // some rays may meet r, others not (or NaN)
+            let (lo, hi) = r.footprint(rays, t);
+            let (cover, (umin, vmin), (umax, vmax)) = r.cover(lo, hi);
+            match cover {
+                Cover::None => continue,    // no ray meets r
+                Cover::Some => return None, // some rays may meet r, others not (or NaN)
+                Cover::All => {}
             }
             let radiance = match &r.material {
                 FlatMaterial::Albedo(a) => *a,
@@ -242,24 +267,23 @@ impl RadianceField for FacingPlanes<'_> {
         }
         let mut cover = [Cover::None; 16];
         let mut last = self.rects.len();
+        let affine = bundle.affine_around(base);
         for (i, r) in self.rects.iter().enumerate() {
             let t = r.z - base.origin.z; // > 0: the bundle starts in front of every plane
-            let start = DVec2::new(base.origin.x, base.origin.y);
-            let lo = start + bundle.start_min + (base.dir.truncate() + bundle.slope_min) * t;
-            let hi = start + bundle.start_max + (base.dir.truncate() + bundle.slope_max) * t;
-            let (u0, u1) = ((lo.x - r.cx) * r.inv_hx, (hi.x - r.cx) * r.inv_hx);
-            let (v0, v1) = ((lo.y - r.cy) * r.inv_hy, (hi.y - r.cy) * r.inv_hy);
-            let (umin, umax) = (u0.min(u1), u0.max(u1));
-            let (vmin, vmax) = (v0.min(v1), v0.max(v1));
-            let m = BUNDLE_MARGIN;
-            if umin > 1.0 + m || umax < -1.0 - m || vmin > 1.0 + m || vmax < -1.0 - m {
-                cover[i] = Cover::None;
-            } else if umin >= -1.0 + m && umax <= 1.0 - m && vmin >= -1.0 + m && vmax <= 1.0 - m {
-                cover[i] = Cover::All;
+            let (lo, hi) = match &affine {
+                // Tight: start and slope shifts move together.
+                Some(rays) => r.footprint(rays, t),
+                None => {
+                    let start = DVec2::new(base.origin.x, base.origin.y);
+                    let lo = start + bundle.start_min + (base.dir.truncate() + bundle.slope_min) * t;
+                    let hi = start + bundle.start_max + (base.dir.truncate() + bundle.slope_max) * t;
+                    (lo, hi)
+                }
+            };
+            cover[i] = r.cover(lo, hi).0;
+            if cover[i] == Cover::All {
                 last = i + 1;
                 break;
-            } else {
-                cover[i] = Cover::Some;
             }
         }
         'rays: for k in 0..bundle.shifts.len() {
