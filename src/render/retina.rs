@@ -67,9 +67,11 @@ pub fn simulate_stack(
     rows.par_chunks_mut(TILE * n * stride).enumerate().for_each(|(band, out)| {
         let row0 = band * TILE;
         let band_rows = out.len() / (n * stride);
-        let mut acc = vec![0f64; TILE * TILE * stride];
-        let mut tangents = vec![DVec2::ZERO; TILE * TILE];
-        let (mut lcd, mut scratch) = (vec![0u32; TILE * TILE], Vec::new());
+        const T2: usize = TILE * TILE;
+        let mut acc = vec![0f64; T2 * stride];
+        let mut tangents = vec![DVec2::ZERO; T2];
+        // lcd[k * T2 + p]: the LCD pixel of tile pixel p through pupil sample k.
+        let (mut lcd, mut scratch) = (vec![0u32; T2 * pupil.len()], Vec::new());
         for col0 in (0..n).step_by(TILE) {
             let tile_cols = TILE.min(n - col0);
             acc.iter_mut().for_each(|a| *a = 0.0);
@@ -79,17 +81,16 @@ pub fn simulate_stack(
                         tangents[r * TILE + c] = retina.tangent(row0 + r, col0 + c, *frac);
                     }
                 }
-                for k in 0..pupil.len() {
-                    // Every pixel of the tile (rows past the band's end unused).
-                    fast.pixel_indices(&tangents, k, &mut scratch, &mut lcd);
-                    for r in 0..band_rows {
-                        for c in 0..tile_cols {
-                            let idx = lcd[r * TILE + c];
-                            if idx != u32::MAX {
-                                let dst = &mut acc[(r * TILE + c) * stride..(r * TILE + c + 1) * stride];
-                                add_f32(dst, stack.pixel(idx as usize));
-                            }
-                        }
+                // Every pixel of the tile (rows past the band's end unused), pupil sample by
+                // pupil sample; then each pixel's samples summed in pupil order.
+                for (k, out) in lcd.chunks_exact_mut(T2).enumerate() {
+                    fast.pixel_indices(&tangents, k, &mut scratch, out);
+                }
+                for r in 0..band_rows {
+                    for c in 0..tile_cols {
+                        let p = r * TILE + c;
+                        let indices = lcd[p..].iter().step_by(T2).copied();
+                        add_samples(&mut acc[p * stride..(p + 1) * stride], indices, stack);
                     }
                 }
             }
@@ -112,21 +113,38 @@ pub fn simulate_stack(
     Ok(images)
 }
 
-/// `dst += src`, unrolled for the common strides (one to three display images).
+/// `dst += stack.pixel(i)` for each LCD pixel `i` of `indices` in turn (`u32::MAX`: off the LCD,
+/// adds nothing). For the common strides (one to three display images) the run is summed in
+/// registers from `dst`: the same additions in the same order, without a store and a load per
+/// sample.
 #[inline(always)]
-fn add_f32(dst: &mut [f64], src: &[f32]) {
+fn add_samples(dst: &mut [f64], indices: impl Iterator<Item = u32>, stack: &DisplayStack) {
     #[inline(always)]
-    fn fixed<const N: usize>(dst: &mut [f64], src: &[f32]) {
-        let (d, s): (&mut [f64; N], &[f32; N]) = (dst.try_into().expect("stride"), src.try_into().expect("stride"));
-        for j in 0..N {
-            d[j] += s[j] as f64;
+    fn fixed<const N: usize>(dst: &mut [f64], indices: impl Iterator<Item = u32>, stack: &DisplayStack) {
+        let d: &mut [f64; N] = dst.try_into().expect("stride");
+        let mut a = *d;
+        for idx in indices {
+            if idx != u32::MAX {
+                let s: &[f32; N] = stack.pixel(idx as usize).try_into().expect("stride");
+                for j in 0..N {
+                    a[j] += s[j] as f64;
+                }
+            }
         }
+        *d = a;
     }
-    match src.len() {
-        3 => fixed::<3>(dst, src),
-        6 => fixed::<6>(dst, src),
-        9 => fixed::<9>(dst, src),
-        _ => dst.iter_mut().zip(src).for_each(|(a, v)| *a += *v as f64),
+    match dst.len() {
+        3 => fixed::<3>(dst, indices, stack),
+        6 => fixed::<6>(dst, indices, stack),
+        9 => fixed::<9>(dst, indices, stack),
+        _ => add_samples_each(dst, indices, stack),
+    }
+}
+
+/// The slow twin of [`add_samples`]: into memory, sample by sample.
+fn add_samples_each(dst: &mut [f64], indices: impl Iterator<Item = u32>, stack: &DisplayStack) {
+    for idx in indices.filter(|&i| i != u32::MAX) {
+        dst.iter_mut().zip(stack.pixel(idx as usize)).for_each(|(a, v)| *a += f64::from(*v));
     }
 }
 
@@ -243,6 +261,81 @@ mod tests {
     use super::*;
     use crate::fixtures::Lcg;
     use crate::optics::Focus;
+    use crate::raster::RgbView;
+    use crate::render::display_stack::StackBuilder;
+
+    /// Sample by sample, ray by ray: the slow twin of [`simulate_stack`].
+    fn simulate_ray_by_ray(display: &Display, eye: &Eye, retina: &Retina, stack: &DisplayStack) -> Vec<RgbImage> {
+        let (pupil, subpixels) = (eye.pupil_samples(), retina.subpixel_offsets());
+        let fast = FastTransfer::new(display, eye, &pupil);
+        let inv_count = 1.0 / (pupil.len() * subpixels.len()) as f64;
+        let n = retina.resolution;
+        let mut images: Vec<RgbImage> = (0..stack.len()).map(|_| RgbImage::new(n, n)).collect();
+        for row in 0..n {
+            for col in 0..n {
+                let mut sum = vec![0.0f64; 3 * stack.len()];
+                for frac in &subpixels {
+                    let t = retina.tangent(row, col, *frac);
+                    for k in 0..pupil.len() {
+                        if let Some(i) = fast.pixel_index(t, k) {
+                            add_samples_each(&mut sum, std::iter::once(i as u32), stack);
+                        }
+                    }
+                }
+                for (m, img) in images.iter_mut().enumerate() {
+                    img.pixels[row * n + col] = std::array::from_fn(|c| (sum[3 * m + c] * inv_count) as f32);
+                }
+            }
+        }
+        images
+    }
+
+    #[test]
+    fn the_tiled_simulation_sums_every_ray_as_the_ray_by_ray_twin() {
+        let mut display = Display::paper();
+        display.lcd.resolution = [300, 240];
+        let (w, h) = (300, 240);
+        let mut rng = Lcg(8);
+        // Few distinct values (the palette layout) and all distinct (dense).
+        let few: Vec<RgbImage> = (0..4)
+            .map(|m| {
+                let mut img = RgbImage::new(w, h);
+                for (i, px) in img.pixels.iter_mut().enumerate() {
+                    *px = [((i / 7 + m) % 3) as f32 * 0.25, 0.5, ((i % 11) % 2) as f32];
+                }
+                img
+            })
+            .collect();
+        let dense: Vec<RgbImage> = (0..3)
+            .map(|_| {
+                let mut img = RgbImage::new(w, h);
+                img.pixels.iter_mut().for_each(|px| *px = std::array::from_fn(|_| rng.next() as f32));
+                img
+            })
+            .collect();
+        let eyes = [Eye::thin_lens(5.0, Focus::Millimetres(350.0), 6), Eye::pinhole()];
+        for eye in &eyes {
+            for samples_per_pixel in [1, 2] {
+                let retina = Retina { resolution: 37, half_tangent: 0.3, samples_per_pixel };
+                for images in [&few[..1], &few[..2], &few[..3], &few[..], &dense[..]] {
+                    let refs: Vec<&RgbImage> = images.iter().collect();
+                    // Packed at once (dense) and image by image (a palette while it fits).
+                    let mut builder = StackBuilder::new(&display, images.len());
+                    for img in images {
+                        builder.push(RgbView::from(img)).unwrap();
+                    }
+                    let built = builder.finish().unwrap();
+                    let is_dense = std::ptr::eq(images.as_ptr(), dense.as_ptr());
+                    assert_eq!(built.is_palette(), !is_dense, "{} images", images.len());
+                    for stack in [DisplayStack::new(&display, &refs).unwrap(), built] {
+                        let tiled = simulate_stack(&display, eye, &retina, &stack, &Progress::hidden()).unwrap();
+                        let twin = simulate_ray_by_ray(&display, eye, &retina, &stack);
+                        assert!(tiled == twin, "{} images, {eye:?}, {samples_per_pixel}", images.len());
+                    }
+                }
+            }
+        }
+    }
 
     #[test]
     fn an_eye_family_holds_every_eye_ray_of_its_boxes() {
