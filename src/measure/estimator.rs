@@ -157,14 +157,7 @@ impl<F: RadianceField + ?Sized> PairedSource for DisplaySource<'_, F> {
         let k = self.images();
         let m = self.stack.len();
         debug_assert_eq!(out.len(), samples.len() * k);
-        if !known.is_empty() && !self.field.prefers_batches() {
-            for ((o, s), known) in out.chunks_exact_mut(k).zip(samples).zip(known) {
-                o[0] = match known {
-                    Some(v) => *v,
-                    None => self.field.radiance(&eye_scene_ray(self.eye, s.tangent, s.pupil)).to_array(),
-                };
-            }
-        } else if self.field.prefers_batches() {
+        if self.field.prefers_batches() {
             let rays: Vec<_> = samples.iter().map(|s| eye_scene_ray(self.eye, s.tangent, s.pupil)).collect();
             let mut hits = vec![Sample::default(); rays.len()];
             self.field.sample_many(&rays, &mut hits);
@@ -172,8 +165,11 @@ impl<F: RadianceField + ?Sized> PairedSource for DisplaySource<'_, F> {
                 o[0] = h.radiance.to_array();
             }
         } else {
-            for (o, s) in out.chunks_exact_mut(k).zip(samples) {
-                o[0] = self.field.radiance(&eye_scene_ray(self.eye, s.tangent, s.pupil)).to_array();
+            for (i, (o, s)) in out.chunks_exact_mut(k).zip(samples).enumerate() {
+                o[0] = match known.get(i) {
+                    Some(Some(v)) => *v,
+                    _ => self.field.radiance(&eye_scene_ray(self.eye, s.tangent, s.pupil)).to_array(),
+                };
             }
         }
         // Where every ray meets the LCD first (independent work the CPU overlaps), then the
@@ -450,16 +446,11 @@ impl Replicates {
             for col0 in (0..n).step_by(TILE) {
                 let cols = TILE.min(n - col0);
                 for dr in 0..rows {
-                    let row = row0 + dr;
                     for dc in 0..cols {
-                        // The pixel's square of tangents (Retina::tangent at fractions 0 and 1).
-                        let c = (col0 + dc) as f64;
-                        let lo = DVec2::new(-retina.half_tangent + c * step, retina.half_tangent - row as f64 * step);
-                        let hi = DVec2::new(
-                            -retina.half_tangent + (c + 1.0) * step,
-                            retina.half_tangent - (row as f64 + 1.0) * step,
-                        );
-                        pixel_known[dr * TILE + dc] = source.reference_over((lo, hi), radius);
+                        // The pixel's square of tangents.
+                        let (row, col) = (row0 + dr, col0 + dc);
+                        let square = (retina.tangent(row, col, DVec2::ZERO), retina.tangent(row, col, DVec2::ONE));
+                        pixel_known[dr * TILE + dc] = source.reference_over(square, radius);
                     }
                 }
                 for r in 0..nr {

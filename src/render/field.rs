@@ -176,17 +176,17 @@ pub struct RayBundle {
     affine: Option<(DVec2, DVec2, f64, f64)>,
 }
 
+/// Component-wise bounds `(low, high)` of `points` (`(+inf, -inf)` for none).
+pub fn bounds(points: impl IntoIterator<Item = DVec2>) -> (DVec2, DVec2) {
+    let inf = DVec2::splat(f64::INFINITY);
+    points.into_iter().fold((inf, -inf), |(lo, hi), p| (lo.min(p), hi.max(p)))
+}
+
 impl RayBundle {
     pub fn new(shifts: Vec<(DVec2, DVec2)>) -> Self {
-        let inf = DVec2::splat(f64::INFINITY);
-        let (mut a, mut b, mut c, mut d) = (inf, -inf, inf, -inf);
-        for (ds, dw) in &shifts {
-            a = a.min(*ds);
-            b = b.max(*ds);
-            c = c.min(*dw);
-            d = d.max(*dw);
-        }
-        Self { shifts, start_min: a, start_max: b, slope_min: c, slope_max: d, affine: None }
+        let (start_min, start_max) = bounds(shifts.iter().map(|s| s.0));
+        let (slope_min, slope_max) = bounds(shifts.iter().map(|s| s.1));
+        Self { shifts, start_min, start_max, slope_min, slope_max, affine: None }
     }
 
     /// LensletAverage's bundle: for each point `q` (offsets from the lenslet centre), the shift
@@ -196,8 +196,7 @@ impl RayBundle {
     /// gain reach`, `beta = gain`.
     pub fn lenslet_points(points: &[DVec2], gain: f64, reach: f64) -> Self {
         let mut bundle = Self::new(points.iter().map(|&q| (q - q * gain * reach, q * gain)).collect());
-        let inf = DVec2::splat(f64::INFINITY);
-        let (lo, hi) = points.iter().fold((inf, -inf), |(lo, hi), q| (lo.min(*q), hi.max(*q)));
+        let (lo, hi) = bounds(points.iter().copied());
         if lo.is_finite() && hi.is_finite() && gain.is_finite() && reach.is_finite() {
             bundle.affine = Some((lo, hi, 1.0 - gain * reach, gain));
         }

@@ -244,7 +244,8 @@ impl RadianceField for FacingPlanes<'_> {
     /// so the sums are the same bit for bit (tested).
     fn sample_sum(&self, base: &Ray, bundle: &RayBundle) -> BundleSum {
         let mut acc = BundleSum::default();
-        if let Some((radiance, t)) = bundle.affine_around(base).and_then(|rays| self.uniform(&rays)) {
+        let affine = bundle.affine_around(base);
+        if let Some((radiance, t)) = affine.as_ref().and_then(|rays| self.uniform(rays)) {
             // Every ray brings back `radiance` from the same plane: only the distances differ,
             // found in passes that vectorise (their square roots dominate).
             let mut depths = [0.0; 64];
@@ -267,7 +268,6 @@ impl RadianceField for FacingPlanes<'_> {
         }
         let mut cover = [Cover::None; 16];
         let mut last = self.rects.len();
-        let affine = bundle.affine_around(base);
         for (i, r) in self.rects.iter().enumerate() {
             let t = r.z - base.origin.z; // > 0: the bundle starts in front of every plane
             let (lo, hi) = match &affine {

@@ -12,7 +12,7 @@
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 
-use super::field::{AffineRays, RadianceField, Sample};
+use super::field::{bounds, AffineRays, RadianceField, Sample};
 use crate::error::{Error, Result};
 use crate::optics::transfer::{eye_scene_ray, FastTransfer};
 use crate::optics::{Display, Eye, Retina};
@@ -148,12 +148,6 @@ fn add_samples_each(dst: &mut [f64], indices: impl Iterator<Item = u32>, stack: 
     }
 }
 
-/// Component-wise bounds of `points`.
-fn bounds(points: &[DVec2]) -> (DVec2, DVec2) {
-    let inf = DVec2::splat(f64::INFINITY);
-    points.iter().fold((inf, -inf), |(lo, hi), p| (lo.min(*p), hi.max(*p)))
-}
-
 /// The family of eye rays [`eye_scene_ray`]`(eye, t, s)` for tangents `t` and pupil points `s`
 /// in the boxes `tangents` and `pupil` (each `(low corner, high corner)`, either way round):
 /// they start at `s` on the pupil plane with slope `t + s (1/v0 - d1)` (eq. (1a) with the eye
@@ -191,19 +185,14 @@ pub fn ground_truth<R: RadianceField + ?Sized>(
     if !tracer.prefers_batches() {
         // One ray at a time, straight to the field's radiance (no depth, no buffers); a pixel
         // whose rays the field knows to bring back one colour adds that colour for each of them.
-        let pupil_box = bounds(&pupil);
-        let frac_box = bounds(&subpixels);
-        let step = retina.tangent(0, 1, DVec2::ZERO) - retina.tangent(1, 0, DVec2::ZERO);
+        let pupil_box = bounds(pupil.iter().copied());
+        let frac_box = bounds(subpixels.iter().copied());
         image.pixels.par_chunks_mut(n).enumerate().for_each(|(row, out)| {
             // (colour, its sum over a pixel's samples): the same additions as adding it ray by ray.
             let mut last_sum = (DVec3::NAN, DVec3::NAN);
             for (col, px) in out.iter_mut().enumerate() {
                 let mut sum = DVec3::ZERO;
-                let corner = retina.tangent(row, col, DVec2::ZERO);
-                let tangents = (
-                    corner + frac_box.0 * step * DVec2::new(1.0, -1.0),
-                    corner + frac_box.1 * step * DVec2::new(1.0, -1.0),
-                );
+                let tangents = (retina.tangent(row, col, frac_box.0), retina.tangent(row, col, frac_box.1));
                 let uniform = if per_pixel >= 4 { tracer.uniform(&eye_rays(eye, tangents, pupil_box)) } else { None };
                 if let Some((c, _)) = uniform {
                     if last_sum.0.to_array().map(f64::to_bits) != c.to_array().map(f64::to_bits) {
