@@ -20,6 +20,7 @@
 pub mod accel;
 pub mod bench;
 pub mod budget;
+pub mod cpu;
 pub mod error;
 pub mod experiment;
 #[doc(hidden)]

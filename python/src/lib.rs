@@ -17,6 +17,9 @@ mod run;
 
 #[pymodule]
 fn _inimtrace(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    if let Some(why) = inimtrace::cpu::unsupported() {
+        return Err(pyo3::exceptions::PyImportError::new_err(why));
+    }
     errors::register(m)?;
     m.add_class::<objects::PyDisplay>()?;
     m.add_class::<objects::PyEye>()?;

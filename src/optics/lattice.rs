@@ -186,7 +186,7 @@ fn round_half_up(x: f64) -> i32 {
     floor_to_i32(f).saturating_add((x - f >= 0.5) as i32)
 }
 
-/// `floor(x)` as an `i32`; `as` saturates and maps NaN to 0. (With x86-64-v2, set in
+/// `floor(x)` as an `i32`; `as` saturates and maps NaN to 0. (With x86-64-v3, set in
 /// `.cargo/config.toml`, `floor` is one `roundsd` instruction.)
 #[inline(always)]
 pub fn floor_to_i32(x: f64) -> i32 {
