@@ -295,10 +295,7 @@ fn announce(scene: &Scene, backend: BackendChoice, quiet: bool) {
 fn main() {
     // Before anything else: a CPU without the instructions this build assumes would otherwise
     // stop with "illegal instruction" somewhere later.
-    if let Some(why) = inimtrace::cpu::unsupported() {
-        eprintln!("error: {why}");
-        std::process::exit(1);
-    }
+    inimtrace::cpu::exit_if_unsupported();
     if let Err(e) = run() {
         // A reader that went away (`inimtrace compare a b | head -1`) ends the program quietly,
         // with the exit status of a process killed by SIGPIPE.

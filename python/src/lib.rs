@@ -17,8 +17,10 @@ mod run;
 
 #[pymodule]
 fn _inimtrace(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    if let Some(why) = inimtrace::cpu::unsupported() {
-        return Err(pyo3::exceptions::PyImportError::new_err(why));
+    // First: a static text (no formatting), so that a CPU without what the build assumes gets
+    // an ImportError rather than "illegal instruction" (see `inimtrace::cpu`).
+    if inimtrace::cpu::lacks_assumed_features() {
+        return Err(pyo3::exceptions::PyImportError::new_err(inimtrace::cpu::UNSUPPORTED));
     }
     errors::register(m)?;
     m.add_class::<objects::PyDisplay>()?;
