@@ -17,7 +17,6 @@
 
 /// A feature the build may assume: its name (as `target_feature` names it), whether the build
 /// assumes it, and where `CPUID` reports it (leaf, register: 1 = EBX, 2 = ECX, bit).
-#[derive(Clone, Copy)]
 struct Feature {
     name: &'static str,
     assumed: bool,
@@ -67,12 +66,11 @@ fn cpuid() -> [[u32; 2]; 3] {
     let max_ext = __cpuid(0x8000_0000).eax;
     let one = __cpuid(1);
     let os_avx = one.ecx >> 27 & 1 == 1;
-    let seven = if max >= 7 { __cpuid_count(7, 0) } else { __cpuid(0) };
-    let ext = if max_ext >= 0x8000_0001 { __cpuid(0x8000_0001) } else { __cpuid(0) };
+    let ebx_ecx = |r: std::arch::x86_64::CpuidResult| [r.ebx, r.ecx];
     [
         [one.ebx, if os_avx { one.ecx } else { one.ecx & !(1 << 28) }],
-        if max >= 7 { [seven.ebx, seven.ecx] } else { [0, 0] },
-        if max_ext >= 0x8000_0001 { [ext.ebx, ext.ecx] } else { [0, 0] },
+        if max >= 7 { ebx_ecx(__cpuid_count(7, 0)) } else { [0, 0] },
+        if max_ext >= 0x8000_0001 { ebx_ecx(__cpuid(0x8000_0001)) } else { [0, 0] },
     ]
 }
 
@@ -81,14 +79,20 @@ fn cpuid() -> [[u32; 2]; 3] {
     [[0; 2]; 3]
 }
 
-/// Whether `regs` (as [`cpuid`] gives them) report `f`.
-fn reported(regs: &[[u32; 2]; 3], f: &Feature) -> bool {
+/// Where `f`'s bit is in [`cpuid`]'s answer: `regs[i][j]`.
+fn word(f: &Feature) -> (usize, usize) {
     let leaf = match f.leaf {
         1 => 0,
         7 => 1,
         _ => 2,
     };
-    regs[leaf][usize::from(f.register - 1)] >> f.bit & 1 == 1
+    (leaf, usize::from(f.register - 1))
+}
+
+/// Whether `regs` (as [`cpuid`] gives them) report `f`.
+fn reported(regs: &[[u32; 2]; 3], f: &Feature) -> bool {
+    let (i, j) = word(f);
+    regs[i][j] >> f.bit & 1 == 1
 }
 
 /// Bit `i` set: the build assumes `FEATURES[i]` and `regs` do not report it.
@@ -108,27 +112,31 @@ pub fn lacks_assumed_features() -> bool {
     missing_mask(&cpuid()) != 0
 }
 
+/// The start of every message: what the build assumes.
+macro_rules! built_for {
+    () => {
+        "this inimtrace was built for x86-64-v3 CPUs (see .cargo/config.toml)"
+    };
+}
+
+/// How to build for this machine, with `$command` (`cargo build --release`, `pip install .`).
+macro_rules! rebuild {
+    ($command:literal) => {
+        concat!("rebuild it for this machine: RUSTFLAGS=\"-C target-cpu=native\" ", $command)
+    };
+}
+
 /// What to say when [`lacks_assumed_features`], without naming the features (a static text).
 pub const UNSUPPORTED: &str =
-    "this inimtrace was built for x86-64-v3 CPUs (AVX2, FMA, BMI1/2; see .cargo/config.toml), \
-    which this CPU is not; rebuild it for this machine: RUSTFLAGS=\"-C target-cpu=native\" pip install .";
+    concat!(built_for!(), ", which this CPU is not (AVX2, FMA, BMI1/2); ", rebuild!("pip install ."));
 
 /// The features this build assumes.
 pub fn assumed() -> Vec<&'static str> {
     FEATURES.iter().filter(|f| f.assumed).map(|f| f.name).collect()
 }
 
-/// The features this build assumes that this CPU lacks (empty: it can run here).
-pub fn missing() -> Vec<&'static str> {
-    names(missing_mask(&cpuid()))
-}
-
-fn names(mask: u32) -> Vec<&'static str> {
-    FEATURES.iter().enumerate().filter(|(i, _)| mask >> i & 1 == 1).map(|(_, f)| f.name).collect()
-}
-
-const HEAD: &str = "this inimtrace was built for x86-64-v3 CPUs (see .cargo/config.toml); this CPU lacks ";
-const TAIL: &str = "; rebuild it for this machine: RUSTFLAGS=\"-C target-cpu=native\" cargo build --release";
+const HEAD: &str = concat!(built_for!(), "; this CPU lacks ");
+const TAIL: &str = concat!("; ", rebuild!("cargo build --release"));
 
 /// Stops the process with one line on stderr (exit status 1) naming what this CPU lacks of what
 /// the build assumes, and how to build for it. Integer code only and no allocation: the standard
@@ -164,11 +172,13 @@ pub fn exit_if_unsupported() {
 mod tests {
     use super::*;
 
-    fn set(regs: &mut [[u32; 2]; 3], name: &str, on: bool) {
-        let f = FEATURES.iter().find(|f| f.name == name).unwrap();
-        let leaf = [1, 7].iter().position(|&l| l == f.leaf).unwrap_or(2);
-        let word = &mut regs[leaf][usize::from(f.register - 1)];
-        *word = if on { *word | 1 << f.bit } else { *word & !(1 << f.bit) };
+    fn names(mask: u32) -> Vec<&'static str> {
+        FEATURES.iter().enumerate().filter(|(i, _)| mask >> i & 1 == 1).map(|(_, f)| f.name).collect()
+    }
+
+    fn clear(regs: &mut [[u32; 2]; 3], f: &Feature) {
+        let (i, j) = word(f);
+        regs[i][j] &= !(1 << f.bit);
     }
 
     #[test]
@@ -190,11 +200,11 @@ mod tests {
         // Each feature is read from its own bit: clearing it alone makes exactly it missing.
         for f in FEATURES.iter().filter(|f| f.assumed) {
             let mut regs = all;
-            set(&mut regs, f.name, false);
+            clear(&mut regs, f);
             assert_eq!(names(missing_mask(&regs)), vec![f.name]);
         }
         // The real CPU: these tests run, so it has everything the build assumes.
-        assert_eq!(missing(), Vec::<&str>::new());
+        assert_eq!(names(missing_mask(&cpuid())), Vec::<&str>::new());
         assert!(!lacks_assumed_features());
         exit_if_unsupported();
     }
