@@ -93,16 +93,16 @@ impl Settings {
     pub fn builtin(spec: &ExperimentSpec, source: &str, base: &Path) -> Result<Self> {
         let root = match to_value(spec)? {
             toml::Value::Table(t) => t,
-            _ => return Err(Error::Unsupported("an experiment serialises to a table".into())),
+            _ => return Err(Error::serialize("express the experiment as TOML", "it is not a table")),
         };
         Self::from_table(root, spec, source, base)
     }
 
     fn from_table(mut root: toml::Table, spec: &ExperimentSpec, source: &str, base: &Path) -> Result<Self> {
-        let (scene, scene_origin) = inline_scene(&spec.scene, base)
-            .map_err(|e| Error::invalid(source, "scene", format!("cannot load `{}`: {e}", spec.scene)))?;
-        let (display, display_origin) = inline_display(&spec.display, base)
-            .map_err(|e| Error::invalid(source, "display", format!("cannot load `{}`: {e}", spec.display)))?;
+        let (scene, scene_origin) =
+            inline_scene(&spec.scene, base).map_err(|e| Error::load(source, "scene", &spec.scene, e))?;
+        let (display, display_origin) =
+            inline_display(&spec.display, base).map_err(|e| Error::load(source, "display", &spec.display, e))?;
         root.insert("scene".into(), scene);
         root.insert("display".into(), display);
         Ok(Self {
@@ -195,8 +195,7 @@ impl Settings {
                 } else {
                     inline_display(&reference, &o.base)
                 };
-                let (v, origin) =
-                    loaded.map_err(|e| Error::invalid(&o.origin, &o.key, format!("cannot load `{reference}`: {e}")))?;
+                let (v, origin) = loaded.map_err(|e| Error::load(&o.origin, &o.key, &reference, e))?;
                 root.as_table_mut().expect("a table").insert(part.into(), v);
                 if part == "scene" {
                     origins.scene = Some(origin);
@@ -250,7 +249,7 @@ impl Settings {
         let ((experiment, scene, display), document, origins) = self.decode(decode_experiment)?;
         let (scene_origin, display_origin) = match (&origins.scene, &origins.display) {
             (Some(s), Some(d)) => (s.clone(), d.clone()),
-            _ => return Err(Error::Unsupported("not an experiment: it has no scene or no display".into())),
+            _ => return Err(Error::Mismatch("not an experiment: it has no scene or no display".into())),
         };
         let mut experiment = experiment;
         experiment.scene = scene_origin.reference.clone();
@@ -283,14 +282,14 @@ impl Settings {
     /// The scene of a parts-only document, built.
     pub fn scene(&self) -> Result<Scene> {
         let (spec, _, origins) = self.decode(|v| decode_part::<SceneSpec>(v, "scene"))?;
-        let o = origins.scene.ok_or_else(|| Error::Unsupported("no scene".into()))?;
+        let o = origins.scene.ok_or_else(|| Error::Mismatch("no scene".into()))?;
         spec.to_scene(&self.label(Some(&o), "scene"), &o.base)
     }
 
     /// The display of a parts-only document, built.
     pub fn display(&self) -> Result<Display> {
         let (spec, _, origins) = self.decode(|v| decode_part::<DisplaySpec>(v, "display"))?;
-        let o = origins.display.ok_or_else(|| Error::Unsupported("no display".into()))?;
+        let o = origins.display.ok_or_else(|| Error::Mismatch("no display".into()))?;
         spec.to_display(&self.label(Some(&o), "display"))
     }
 }
@@ -309,7 +308,10 @@ impl Resolved {
             Error::Invalid { field, message, .. } if o.changed => {
                 Error::invalid(&self.source, format!("{part}.{field}"), message)
             }
-            e => Error::invalid(&self.source, part, format!("cannot load `{}`: {e}", o.reference)),
+            Error::Lattice { field, message, .. } if o.changed => {
+                Error::Lattice { source_name: self.source.clone(), field: format!("{part}.{field}"), message }
+            }
+            e => Error::load(&self.source, part, &o.reference, e),
         }
     }
 
@@ -425,7 +427,7 @@ fn message(e: &toml::de::Error) -> String {
 }
 
 fn to_value<T: Serialize>(v: &T) -> Result<toml::Value> {
-    toml::Value::try_from(v).map_err(|e| Error::Unsupported(format!("cannot express settings as TOML: {e}")))
+    toml::Value::try_from(v).map_err(|e| Error::serialize("express settings as TOML", e))
 }
 
 /// A scene reference (`builtin:paper` or a TOML path relative to `base`) as a TOML table.
@@ -490,7 +492,7 @@ fn content_hash(experiment: &ExperimentSpec, scene: &SceneSpec, display: &Displa
 /// 16 hex digits of the SHA-256 of a value's JSON (struct fields in declaration order, floats
 /// in shortest round-trip form: the same settings always give the same text).
 pub fn hash_json<T: Serialize>(v: &T) -> Result<String> {
-    let text = serde_json::to_string(v).map_err(|e| Error::Unsupported(format!("cannot hash settings: {e}")))?;
+    let text = serde_json::to_string(v).map_err(|e| Error::serialize("hash settings", e))?;
     let digest = Sha256::digest(text.as_bytes());
     Ok(digest.iter().take(8).map(|b| format!("{b:02x}")).collect())
 }

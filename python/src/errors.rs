@@ -59,43 +59,19 @@ fn file_class(path: &str) -> Option<Class> {
     }
 }
 
-/// The kind of the innermost file an error message names: errors that wrap others read
-/// `outer.toml: field `scene`: cannot load `s.toml`: mesh.obj: line 3: ...`, each file followed
-/// by a colon, so the last `name.ext:` is where the error is.
-fn innermost_file_class(text: &str) -> Option<Class> {
-    let mut class = None;
-    for (i, _) in text.match_indices(':') {
-        let before = &text[..i];
-        let start = before.rfind(|c: char| c.is_whitespace() || c == '`').map_or(0, |k| k + 1);
-        let token = &before[start..];
-        if token.contains('.') {
-            if let Some(c) = file_class(token) {
-                class = Some(c);
-            } else if token.rsplit_once('.').is_some_and(|(_, e)| matches!(e, "toml" | "yaml" | "yml")) {
-                class = Some(Class::Config);
-            }
-        }
-    }
-    class
-}
-
+/// The class of an error: that of the innermost error of a chain of files naming files
+/// (`outer.toml: field `scene`: cannot load `s.toml`: mesh.obj: line 3: ...` is a mesh error), by
+/// its variant and the file it names, never by its message.
 fn classify(e: &LibError) -> Class {
-    match e {
-        LibError::Singular(_) => Class::Optics,
-        LibError::Embree { .. } => Class::Base,
-        LibError::Unsupported(_) => Class::Config,
-        LibError::Io { path, .. } | LibError::Parse { path, .. } => {
+    match e.innermost() {
+        LibError::Singular(_) | LibError::Lattice { .. } => Class::Optics,
+        LibError::Embree { .. } | LibError::External { .. } | LibError::Incomplete(_) => Class::Base,
+        LibError::Io { path, .. } | LibError::Parse { path, .. } | LibError::UnknownFormat { path, .. } => {
             file_class(&path.to_string_lossy()).unwrap_or(Class::Config)
         }
-        LibError::Invalid { message, .. } => {
-            if message.contains("singular") {
-                return Class::Optics;
-            }
-            match innermost_file_class(&e.to_string()) {
-                Some(Class::Config) | None => Class::Config,
-                Some(c) => c,
-            }
-        }
+        LibError::Invalid { source_name, .. } => file_class(source_name).unwrap_or(Class::Config),
+        LibError::Draw { .. } => Class::Image,
+        _ => Class::Config,
     }
 }
 
@@ -103,11 +79,7 @@ fn classify(e: &LibError) -> Class {
 /// `source` and `field` (`None` where the error names none).
 pub fn to_py(e: LibError) -> PyErr {
     let message = e.to_string();
-    let (source, field): (Option<String>, Option<String>) = match &e {
-        LibError::Io { path, .. } | LibError::Parse { path, .. } => (Some(path.display().to_string()), None),
-        LibError::Invalid { source_name, field, .. } => (Some(source_name.clone()), Some(field.clone())),
-        _ => (None, None),
-    };
+    let (source, field) = e.source_and_field();
     let err = match classify(&e) {
         Class::Base => Error::new_err(message),
         Class::Config => ConfigError::new_err(message),

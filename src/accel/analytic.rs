@@ -77,10 +77,13 @@ impl AnalyticRects {
         let mut rects = Vec::with_capacity(scene.objects.len());
         for (k, object) in scene.objects.iter().enumerate() {
             let Shape::Rect(r) = &object.shape else {
-                return Err(Error::Unsupported(format!(
-                    "the analytic backend intersects only rectangles; object {k} (`{}`) is a mesh: use --backend embree",
-                    object.name
-                )));
+                return Err(Error::Backend {
+                    scene: scene.name.clone(),
+                    message: format!(
+                        "the analytic backend intersects only rectangles; object {k} (`{}`) is a mesh: use --backend embree",
+                        object.name
+                    ),
+                });
             };
             let n = r.half_u.cross(r.half_v);
             if !(n.length() > 0.0 && n.is_finite() && r.center.is_finite()) {

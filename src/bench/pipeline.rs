@@ -112,7 +112,7 @@ pub fn focused_cases(exp: &Experiment) -> Result<Experiment> {
     let cases: Vec<EyeCase> =
         exp.cases.iter().filter(|c| matches!(c.eye.aperture, Aperture::ThinLens { .. })).cloned().collect();
     if cases.is_empty() {
-        return Err(Error::Unsupported("the paper experiment has no focused eye case".into()));
+        return Err(Error::Mismatch("the paper experiment has no focused eye case".into()));
     }
     Ok(Experiment { cases, ..exp.clone() })
 }

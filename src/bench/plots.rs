@@ -30,7 +30,7 @@ macro_rules! draw_plot {
                 let $area = SVGBackend::new(&path, $size).into_drawing_area();
                 $body
             };
-            res.map_err(|e| Error::Unsupported(format!("{}: cannot draw plot: {e}", path.display())))?;
+            res.map_err(|e| Error::draw(path.display(), "plot", e))?;
         }
     }};
 }

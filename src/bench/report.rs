@@ -98,7 +98,7 @@ pub fn write_reports(report: &BenchReport, out: &Path) -> Result<()> {
 /// `bench.json`, written last: its presence marks a complete run.
 pub fn write_json(report: &BenchReport, out: &Path) -> Result<()> {
     let p = out.join("bench.json");
-    let text = serde_json::to_string_pretty(report).map_err(|e| Error::Unsupported(e.to_string()))?;
+    let text = serde_json::to_string_pretty(report).map_err(|e| Error::serialize("serialise the bench report", e))?;
     std::fs::write(&p, text).map_err(|e| Error::io(&p, e))
 }
 

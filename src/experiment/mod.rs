@@ -225,10 +225,9 @@ impl Experiment {
     pub fn from_spec(spec: ExperimentSpec, source: &str, base: &Path) -> Result<Self> {
         check_name(&spec, source)?;
         // Name the experiment file and its field as well as the file that failed.
-        let display = load_display(&spec.display, base)
-            .map_err(|e| Error::invalid(source, "display", format!("cannot load `{}`: {e}", spec.display)))?;
-        let scene = load_scene(&spec.scene, base)
-            .map_err(|e| Error::invalid(source, "scene", format!("cannot load `{}`: {e}", spec.scene)))?;
+        let display =
+            load_display(&spec.display, base).map_err(|e| Error::load(source, "display", &spec.display, e))?;
+        let scene = load_scene(&spec.scene, base).map_err(|e| Error::load(source, "scene", &spec.scene, e))?;
         Self::from_parts(spec, scene, display, source)
     }
 
@@ -404,6 +403,9 @@ fn prefix_field(err: Error, prefix: &str) -> Error {
     match err {
         Error::Invalid { source_name, field, message } => {
             Error::Invalid { source_name, field: format!("{prefix}{field}"), message }
+        }
+        Error::Lattice { source_name, field, message } => {
+            Error::Lattice { source_name, field: format!("{prefix}{field}"), message }
         }
         other => other,
     }

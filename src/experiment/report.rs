@@ -148,10 +148,9 @@ pub(super) fn write_reports(report: &AssessReport, exp: &Experiment, dir: &Outpu
     // Last: its presence marks a complete run, and it lists every other file of the run with
     // its size and CRC-32 (`files`), so a reader can verify the set.
     dir.finish_report("results.json", |files| {
-        let mut value = serde_json::to_value(report)
-            .map_err(|e| Error::Unsupported(format!("cannot serialise the report: {e}")))?;
-        value["files"] = serde_json::to_value(files).map_err(|e| Error::Unsupported(e.to_string()))?;
-        serde_json::to_vec_pretty(&value).map_err(|e| Error::Unsupported(format!("cannot serialise the report: {e}")))
+        let mut value = serde_json::to_value(report).map_err(|e| Error::serialize("serialise the report", e))?;
+        value["files"] = serde_json::to_value(files).map_err(|e| Error::serialize("serialise the report", e))?;
+        serde_json::to_vec_pretty(&value).map_err(|e| Error::serialize("serialise the report", e))
     })
 }
 

@@ -227,7 +227,7 @@ pub fn table1_scores<G: Borrow<RgbImage> + Sync>(
         || sims.len() != exp.cases.len()
         || sims.iter().any(|s| s.len() != exp.methods.len())
     {
-        return Err(Error::Unsupported(
+        return Err(Error::Mismatch(
             "table1_scores: one ground truth per eye case and one perceived image per method and eye case".into(),
         ));
     }

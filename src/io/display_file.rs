@@ -57,12 +57,10 @@ impl LatticeSpec {
                 ));
             }
         }
-        Lattice::new(DVec2::from_array(self.shift), m).ok_or_else(|| {
-            Error::invalid(
-                source,
-                format!("{field}.pitch"),
-                format!("pitch matrix is singular or not finite (determinant {det}) or shift is not finite"),
-            )
+        Lattice::new(DVec2::from_array(self.shift), m).ok_or_else(|| Error::Lattice {
+            source_name: source.to_string(),
+            field: format!("{field}.pitch"),
+            message: format!("pitch matrix is singular or not finite (determinant {det}) or shift is not finite"),
         })
     }
 
@@ -251,8 +249,11 @@ pub fn parse_opencv_display(text: &str, path: &Path) -> Result<Display> {
     let shift = |k: &str| -> Result<DVec2> { numbers(k, 2).map(|v| DVec2::new(v[0], v[1])) };
     let lattice = |shift_key: &str, key: &str| -> Result<Lattice> {
         let m = numbers(key, 4)?;
-        Lattice::from_row_major(shift(shift_key)?, [m[0], m[1], m[2], m[3]])
-            .ok_or_else(|| Error::invalid(&src, key, format!("pitch matrix {m:?} is singular or not finite")))
+        Lattice::from_row_major(shift(shift_key)?, [m[0], m[1], m[2], m[3]]).ok_or_else(|| Error::Lattice {
+            source_name: src.clone(),
+            field: key.to_string(),
+            message: format!("pitch matrix {m:?} is singular or not finite"),
+        })
     };
     let size = numbers("sizelcd", 2)?;
     let d = Display {

@@ -187,7 +187,12 @@ pub fn cell_image(img: &RgbImage) -> RgbImage {
 }
 
 /// Splits `text` at spaces into lines no wider than `max_width` according to `measure`.
-fn wrap(text: &str, max_width: u32, measure: &dyn Fn(&str) -> Result<u32>) -> Result<Vec<String>> {
+/// `measure`'s error is the font library's message.
+fn wrap(
+    text: &str,
+    max_width: u32,
+    measure: &dyn Fn(&str) -> std::result::Result<u32, String>,
+) -> std::result::Result<Vec<String>, String> {
     let mut lines: Vec<String> = Vec::new();
     let mut current = String::new();
     for word in text.split_whitespace() {
@@ -263,9 +268,11 @@ pub fn write_figure(path: &Path, figure: &Figure) -> Result<()> {
     }
 
     draw_labels(&mut canvas, (width, height), figure, layout).map_err(|message| {
-        Error::Unsupported(format!(
-            "{source}: cannot draw montage labels: {message} (needs fontconfig and a sans-serif font, e.g. Debian package fonts-dejavu-core)"
-        ))
+        Error::draw(
+            source,
+            "montage labels",
+            format!("{message} (needs fontconfig and a sans-serif font, e.g. Debian package fonts-dejavu-core)"),
+        )
     })?;
     write_rgb8(path, width, height, &canvas)
 }
@@ -306,11 +313,11 @@ fn draw_labels(
         }
     }
     let max_width = (ROW_LABEL_WIDTH - 3 * SEPARATOR) as u32;
-    let measure = |s: &str| -> Result<u32> {
-        root.estimate_text_size(s, &row_style).map(|(w, _)| w).map_err(|e| Error::Unsupported(e.to_string()))
+    let measure = |s: &str| -> std::result::Result<u32, String> {
+        root.estimate_text_size(s, &row_style).map(|(w, _)| w).map_err(|e| e.to_string())
     };
     for (r, (label, _)) in rows.iter().enumerate() {
-        let lines = wrap(label, max_width, &measure).map_err(|e| e.to_string())?;
+        let lines = wrap(label, max_width, &measure)?;
         let line_height = (ROW_FONT_SIZE * 1.25) as i32;
         let (_, y0) = layout.cell_origin(r, 0);
         let centre_y = (y0 + CELL_SIZE / 2) as i32;

@@ -126,7 +126,7 @@ impl Loaded {
 /// `.gltf`, `.glb`, any case).
 ///
 /// Errors (all name the file): missing file or directory ([`Error::Io`]); unknown extension
-/// ([`Error::Unsupported`]); malformed content, index out of range, non-finite vertex, or no
+/// ([`Error::UnknownFormat`]); malformed content, index out of range, non-finite vertex, or no
 /// triangles left ([`Error::Parse`], with the line or element).
 pub fn load_mesh(path: &Path) -> Result<MeshLoad> {
     let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
@@ -144,10 +144,11 @@ pub fn load_mesh(path: &Path) -> Result<MeshLoad> {
         Some("stl") => Loaded::plain(load_stl(path, &bytes)?),
         Some("gltf") | Some("glb") => load_gltf(path, &bytes)?,
         _ => {
-            return Err(Error::Unsupported(format!(
-                "{}: unknown mesh format (expected extension .obj, .ply, .stl, .gltf or .glb)",
-                path.display()
-            )))
+            return Err(Error::UnknownFormat {
+                path: path.to_path_buf(),
+                kind: "mesh",
+                expected: "extension .obj, .ply, .stl, .gltf or .glb",
+            })
         }
     };
     let Loaded { mut mesh, parts, texture, warnings } = loaded;

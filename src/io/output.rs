@@ -256,7 +256,7 @@ mod tests {
         out.write_bytes("a.txt", b"hello").unwrap();
         let err = out.write_with("b.txt", |p| {
             fs::write(p, b"half").unwrap();
-            Err(Error::Unsupported("disk full".into()))
+            Err(Error::Mismatch("disk full".into()))
         });
         assert!(err.is_err());
         assert!(!dir.path().join("b.txt").exists(), "a failed write left a final-named file");

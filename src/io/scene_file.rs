@@ -493,7 +493,7 @@ impl ObjectInput<'_> {
             ));
         }
         let tex = crate::io::png::load_texture(&path, m.filter.unwrap_or_default(), m.wrap.unwrap_or_default())
-            .map_err(|e| Error::invalid(src, &field, e.to_string()))?;
+            .map_err(|e| Error::in_field(src, &field, e))?;
         Ok(Material::Texture(Arc::new(tex)))
     }
 

@@ -134,7 +134,7 @@ impl ObjectInput<'_> {
         })?;
         let path = self.base.join(file);
         // Name the scene file and field as well as the mesh file and its line/element.
-        let loaded = load_mesh(&path).map_err(|e| Error::invalid(src, f("file"), e.to_string()))?;
+        let loaded = load_mesh(&path).map_err(|e| Error::in_field(src, f("file"), e))?;
         warnings.extend(loaded.warnings.iter().map(|w| format!("{w} (objects[{i}])")));
         if loaded.dropped_degenerate > 0 {
             warnings.push(format!(

@@ -103,15 +103,18 @@ pub fn scene_meshes(scene: &Scene) -> Vec<(u32, Cow<'_, Mesh>)> {
 ///
 /// Errors: `analytic` on a scene with meshes, `brute` on a scene over
 /// [`BRUTE_MAX_TRIANGLES`], `embree` in a build without the `embree` feature
-/// ([`Error::Unsupported`]), and backend construction errors.
+/// ([`Error::Backend`]), and backend construction errors.
 pub fn with_fields<T>(scene: &Scene, choice: BackendChoice, f: impl FnOnce(Fields<'_>) -> Result<T>) -> Result<T> {
     match resolve(scene, choice) {
         BackendChoice::Analytic | BackendChoice::Auto => {
             if !scene.is_analytic() {
-                return Err(Error::Unsupported(format!(
-                    "scene `{}` has triangle meshes, which the analytic backend cannot intersect: use --backend embree (or auto)",
-                    scene.name
-                )));
+                return Err(Error::Backend {
+                    scene: scene.name.clone(),
+                    message: format!(
+                        "scene `{}` has triangle meshes, which the analytic backend cannot intersect: use --backend embree (or auto)",
+                        scene.name
+                    ),
+                });
             }
             let backend = AnalyticRects::new(scene)?;
             let fused = if scene.light.is_none() { FacingPlanes::new(scene, &backend) } else { None };
@@ -127,10 +130,13 @@ pub fn with_fields<T>(scene: &Scene, choice: BackendChoice, f: impl FnOnce(Field
         BackendChoice::Brute => {
             let n = scene.triangle_count();
             if n > BRUTE_MAX_TRIANGLES {
-                return Err(Error::Unsupported(format!(
-                    "the brute-force backend is for small scenes (at most {BRUTE_MAX_TRIANGLES} triangles); scene `{}` has {n}: use --backend embree",
-                    scene.name
-                )));
+                return Err(Error::Backend {
+                    scene: scene.name.clone(),
+                    message: format!(
+                        "the brute-force backend is for small scenes (at most {BRUTE_MAX_TRIANGLES} triangles); scene `{}` has {n}: use --backend embree",
+                        scene.name
+                    ),
+                });
             }
             let meshes = scene_meshes(scene);
             let refs: Vec<(u32, &Mesh)> = meshes.iter().map(|(i, m)| (*i, m.as_ref())).collect();
@@ -171,8 +177,11 @@ fn with_embree<T>(scene: &Scene, f: impl FnOnce(Fields<'_>) -> Result<T>) -> Res
 
 #[cfg(not(feature = "embree"))]
 fn with_embree<T>(scene: &Scene, _f: impl FnOnce(Fields<'_>) -> Result<T>) -> Result<T> {
-    Err(Error::Unsupported(format!(
-        "scene `{}` needs the Embree backend, but this build has no Embree (rebuild with the default `embree` feature)",
-        scene.name
-    )))
+    Err(Error::Backend {
+        scene: scene.name.clone(),
+        message: format!(
+            "scene `{}` needs the Embree backend, but this build has no Embree (rebuild with the default `embree` feature)",
+            scene.name
+        ),
+    })
 }

@@ -212,7 +212,7 @@ pub fn render_display_image_into<R: RadianceField + ?Sized>(
 ) -> Result<bool> {
     let lcd = display.lcd;
     if image.width != lcd.columns() || image.height != lcd.rows() || image.pixels.len() != lcd.pixel_count() {
-        return Err(Error::Unsupported(format!(
+        return Err(Error::Mismatch(format!(
             "a {} x {} image cannot hold a display image of the display's {} x {} LCD",
             image.width,
             image.height,

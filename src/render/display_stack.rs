@@ -49,7 +49,7 @@ impl DisplayStack {
         let lcd = display.lcd;
         for (k, img) in images.iter().enumerate() {
             if img.width != lcd.columns() || img.height != lcd.rows() {
-                return Err(Error::Unsupported(format!(
+                return Err(Error::Mismatch(format!(
                     "display image {k} is {} x {} pixels but the display's LCD is {} x {}",
                     img.width,
                     img.height,
@@ -156,7 +156,7 @@ impl StackBuilder {
     pub fn push(&mut self, image: RgbView<'_>) -> Result<()> {
         if self.pushed == self.count || image.width != self.width || image.height != self.height || !image.is_complete()
         {
-            return Err(Error::Unsupported(format!(
+            return Err(Error::Mismatch(format!(
                 "display stack of {} images of {} x {} pixels cannot take a {} x {} image as image {}",
                 self.count,
                 self.width,
@@ -195,7 +195,7 @@ impl StackBuilder {
     /// The stack, once every image is pushed.
     pub fn finish(self) -> Result<DisplayStack> {
         if self.pushed != self.count {
-            return Err(Error::Unsupported(format!(
+            return Err(Error::Mismatch(format!(
                 "display stack of {} images finished after {}",
                 self.count, self.pushed
             )));

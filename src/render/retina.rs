@@ -44,7 +44,7 @@ pub fn simulate_stack(
     progress: &Progress,
 ) -> Result<Vec<RgbImage>> {
     if stack.width() != display.lcd.columns() || stack.height() != display.lcd.rows() {
-        return Err(Error::Unsupported("display stack does not match the display's LCD resolution".into()));
+        return Err(Error::Mismatch("display stack does not match the display's LCD resolution".into()));
     }
     let m = stack.len();
     let stride = 3 * m;

@@ -44,7 +44,7 @@ macro_rules! draw_plot {
                     let $area = SVGBackend::new(path, $size).into_drawing_area();
                     $body
                 };
-                res.map_err(|e| Error::Unsupported(format!("{file}: cannot draw plot: {e}")))
+                res.map_err(|e| Error::draw(&file, "plot", e))
             })?;
         }
     }};

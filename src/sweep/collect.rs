@@ -134,8 +134,7 @@ pub fn collect(sweep: &Sweep, resolved: &[Resolved], store: &Store) -> Result<Co
         "missing": out.missing,
         "points": points,
     });
-    let text = serde_json::to_string_pretty(&doc)
-        .map_err(|e| Error::Unsupported(format!("cannot serialise sweep.json: {e}")))?;
+    let text = serde_json::to_string_pretty(&doc).map_err(|e| Error::serialize("serialise sweep.json", e))?;
     write_text(&out.json, &text)?;
 
     out.plots = write_plots(&store.root().join("plots"), &keys, &plot_rows)?;

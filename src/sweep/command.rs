@@ -92,7 +92,7 @@ pub fn execute(cmd: &SweepCommand, log: &mut dyn FnMut(String)) -> Result<String
         let c = collect(&sweep, &resolved, &store)?;
         let text = summary(&sweep, &c);
         if !c.missing.is_empty() {
-            return Err(Error::Unsupported(format!(
+            return Err(Error::Incomplete(format!(
                 "{text}job {job} ended with {} of {n} points missing (tasks failed, timed out or were cancelled; \
                  see {}/slurm/): run the same command again to submit only those",
                 c.missing.len(),

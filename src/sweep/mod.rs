@@ -51,8 +51,7 @@ impl Sweep {
             Settings::builtin(&ExperimentSpec::paper(), "built-in paper experiment", &spec.base())?
         } else {
             let file = spec.base().join(&spec.experiment);
-            Settings::experiment_file(&file)
-                .map_err(|e| Error::invalid(&src, "experiment", format!("cannot load `{}`: {e}", spec.experiment)))?
+            Settings::experiment_file(&file).map_err(|e| Error::load(&src, "experiment", &spec.experiment, e))?
         };
         let set: Vec<Override> = spec.set.iter().map(|o| o.clone().from_origin(format!("{src} [set]"))).collect();
         let base = base.with_overrides(&set).with_overrides(overrides);

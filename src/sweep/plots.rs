@@ -88,7 +88,7 @@ pub fn write_plots(dir: &Path, keys: &[String], rows: &[PlotRow]) -> Result<Vec<
                 } else {
                     draw(SVGBackend::new(&path, size).into_drawing_area(), key, k, rows, metric)
                 };
-                drawn.map_err(|e| Error::Unsupported(format!("{}: cannot draw plot: {e}", path.display())))?;
+                drawn.map_err(|e| Error::draw(path.display(), "plot", e))?;
                 if ext == "png" {
                     written.push(path);
                 }

@@ -93,21 +93,26 @@ pub fn submit(sweep: &Sweep, resolved: &[Resolved], store: &Store, opts: &SlurmO
     let path = dir.join(format!("submit-{}-{}.sbatch", super::store::unix_now(), std::process::id()));
     std::fs::write(&path, &sub.script).map_err(|e| Error::io(&path, e))?;
     let out = Command::new("sbatch").arg("--parsable").arg(&path).output().map_err(|e| {
-        Error::Unsupported(format!(
+        Error::External {
+            program: "sbatch",
+            message: format!(
             "cannot run `sbatch` ({e}): is this a Slurm cluster? (`scripts/slurm-local.sh start` brings up one on this machine)"
-        ))
+        ),
+        }
     })?;
     if !out.status.success() {
-        return Err(Error::Unsupported(format!(
-            "sbatch {} failed: {}",
-            path.display(),
-            String::from_utf8_lossy(&out.stderr).trim()
-        )));
+        return Err(Error::External {
+            program: "sbatch",
+            message: format!("sbatch {} failed: {}", path.display(), String::from_utf8_lossy(&out.stderr).trim()),
+        });
     }
     let text = String::from_utf8_lossy(&out.stdout);
     let job = text.trim().split(';').next().unwrap_or("").trim().to_string();
     if job.is_empty() {
-        return Err(Error::Unsupported(format!("sbatch printed no job id for {}", path.display())));
+        return Err(Error::External {
+            program: "sbatch",
+            message: format!("sbatch printed no job id for {}", path.display()),
+        });
     }
     sub.job_id = Some(job);
     sub.script_path = Some(path);
@@ -128,7 +133,7 @@ pub fn wait_for(job: &str, resolved: &[Resolved], points: &[usize], store: &Stor
         let out = Command::new("squeue")
             .args(["-h", "-j", job, "-o", "%T"])
             .output()
-            .map_err(|e| Error::Unsupported(format!("cannot run `squeue` ({e})")))?;
+            .map_err(|e| Error::External { program: "squeue", message: format!("cannot run `squeue` ({e})") })?;
         let stderr = String::from_utf8_lossy(&out.stderr);
         if out.status.success() {
             failures = 0;
@@ -140,7 +145,10 @@ pub fn wait_for(job: &str, resolved: &[Resolved], points: &[usize], store: &Stor
         } else {
             failures += 1;
             if failures >= 30 {
-                return Err(Error::Unsupported(format!("squeue keeps failing for job {job}: {}", stderr.trim())));
+                return Err(Error::External {
+                    program: "squeue",
+                    message: format!("squeue keeps failing for job {job}: {}", stderr.trim()),
+                });
             }
         }
         std::thread::sleep(Duration::from_millis(500));
@@ -178,8 +186,10 @@ fn absolute(p: &Path) -> Result<PathBuf> {
 
 /// The sbatch script of a job array over `chunks`.
 fn script(sweep: &Sweep, chunks: &[String], id: &str, out: &Path, opts: &SlurmOptions) -> Result<String> {
-    let exe = std::env::current_exe().map_err(|e| Error::Unsupported(format!("cannot find this program: {e}")))?;
-    let cwd = std::env::current_dir().map_err(|e| Error::Unsupported(format!("no current directory: {e}")))?;
+    let exe = std::env::current_exe()
+        .map_err(|e| Error::External { program: "current_exe", message: format!("cannot find this program: {e}") })?;
+    let cwd = std::env::current_dir()
+        .map_err(|e| Error::External { program: "current_dir", message: format!("no current directory: {e}") })?;
     let sweep_file = absolute(&sweep.spec.path)?;
     let out = absolute(out)?;
     let mut s = String::from("#!/bin/bash\n");

@@ -113,7 +113,7 @@ impl Store {
     /// Records a point, atomically.
     pub fn write(&self, record: &PointRecord) -> Result<()> {
         let json = serde_json::to_vec_pretty(record)
-            .map_err(|e| Error::Unsupported(format!("cannot serialise point {}: {e}", record.id)))?;
+            .map_err(|e| Error::serialize(format!("serialise point {}", record.id), e))?;
         let path = self.record_path(&record.id);
         write_atomic(&path, |tmp| fs::write(tmp, &json).map_err(|e| Error::io(tmp, e)))
     }
