@@ -19,7 +19,7 @@ const DISPLAY: &str = "name = \"d\"\neye_to_lenslets = 20.0\nlenslets_to_lcd = 6
 fn experiment(dir: &Path, scene: &str, display: &str) -> std::path::PathBuf {
     let text = format!(
         "name = \"e\"\nscene = \"{scene}\"\ndisplay = \"{display}\"\nmethods = [\"LC\"]\n\
-         [eye]\nretina_resolution = 16\n"
+         [eye]\nretina_resolution = 16\n[[eye_cases]]\nname = \"Pin\"\npinhole = true\n"
     );
     write(dir, "exp.toml", &text);
     dir.join("exp.toml")

@@ -333,11 +333,11 @@ impl Experiment {
             crate::optics::transfer::check_pupil_center(&display, render.eye_position).map_err(|e| {
                 let i = methods.iter().position(|m| *m == Method::PupilCenter).unwrap_or(0);
                 let eye = if dr.eye_position.is_some() { "display_render.eye_position" } else { "eye.position" };
-                Error::invalid(
-                    source,
-                    format!("methods[{i}] (PupilCenter) at {eye}"),
-                    format!("{e} (display `{}`)", spec.display),
-                )
+                let e = match e {
+                    Error::Singular(m) => Error::Singular(format!("{m} (display `{}`)", spec.display)),
+                    e => e,
+                };
+                Error::in_field(source, format!("methods[{i}] (PupilCenter) at {eye}"), e)
             })?;
         }
         let measurement = spec.measurement.clone().unwrap_or_else(MeasurementSpec::grid);
