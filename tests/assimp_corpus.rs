@@ -153,9 +153,9 @@ fn every_obj_ply_stl_and_gltf2_file_renders_or_is_refused_in_one_line() {
     let started = Instant::now();
     let mut files = Vec::new();
     mesh_files(&corpus, &mut files);
-    let (gltf1, files): (Vec<PathBuf>, Vec<PathBuf>) = files.into_iter().partition(|p| {
-        matches!(p.extension().and_then(|e| e.to_str()), Some("gltf" | "glb")) && is_gltf1(p)
-    });
+    let (gltf1, files): (Vec<PathBuf>, Vec<PathBuf>) = files
+        .into_iter()
+        .partition(|p| matches!(p.extension().and_then(|e| e.to_str()), Some("gltf" | "glb")) && is_gltf1(p));
     let tmp = tempfile::tempdir().unwrap();
     let next = AtomicUsize::new(0);
     let results = Mutex::new(Vec::new());
@@ -277,8 +277,5 @@ fn the_spider_renders_with_the_textures_its_mtl_names_windows_style() {
     let s = io::load_scene(&scene.to_string_lossy(), Path::new("")).unwrap();
     let kd = |m: &str| s.objects.iter().find(|o| o.name == format!("spider [{m}]")).map(|o| &o.material);
     assert!(matches!(kd("BeinTex"), Some(Material::Albedo(a)) if a.x == 0.8 && a.y == 0.8 && a.z == 0.8));
-    assert!(
-        matches!(kd("Augentex"), Some(Material::Albedo(a)) if a.x == 0.8),
-        "Augentex shows its Kd 0.8 0.8 0.8"
-    );
+    assert!(matches!(kd("Augentex"), Some(Material::Albedo(a)) if a.x == 0.8), "Augentex shows its Kd 0.8 0.8 0.8");
 }

@@ -166,7 +166,8 @@ fn decode_text(path: &Path, bytes: &[u8], warnings: &mut Vec<String>) -> Result<
                 }
             })
             .collect();
-        String::from_utf16(&units).map_err(|_| Error::parse(path, "not valid UTF-16 text (the file starts with a UTF-16 byte-order mark)"))
+        String::from_utf16(&units)
+            .map_err(|_| Error::parse(path, "not valid UTF-16 text (the file starts with a UTF-16 byte-order mark)"))
     };
     match bytes {
         [0xEF, 0xBB, 0xBF, rest @ ..] => std::str::from_utf8(rest).map(str::to_owned).or_else(|_| {
@@ -208,8 +209,7 @@ fn drop_vertex_colors(text: &str) -> String {
 /// warning: tobj refuses them, Assimp and Blender read "no material".
 fn drop_unnamed_usemtl(path: &Path, text: String, warnings: &mut Vec<String>) -> String {
     let unnamed = |l: &str| l.trim() == "usemtl";
-    let lines: Vec<usize> =
-        text.lines().enumerate().filter(|(_, l)| unnamed(l)).map(|(i, _)| i + 1).collect();
+    let lines: Vec<usize> = text.lines().enumerate().filter(|(_, l)| unnamed(l)).map(|(i, _)| i + 1).collect();
     if lines.is_empty() {
         return text;
     }
@@ -232,12 +232,10 @@ fn drop_unnamed_usemtl(path: &Path, text: String, warnings: &mut Vec<String>) ->
 /// Reads the material library `mtl` named by the OBJ file `obj`. A file that is missing or
 /// cannot be parsed gives a warning naming both, and no materials.
 fn load_mtl(obj: &Path, mtl: &Path, warnings: &mut Vec<String>) -> tobj::MTLLoadResult {
-    let parsed = crate::io::input::read_regular(mtl)
-        .map_err(|e| e.to_string())
-        .and_then(|bytes| {
-            let text = decode_text(mtl, &bytes, warnings).map_err(|e| e.to_string())?;
-            tobj::load_mtl_buf(&mut Cursor::new(text.as_bytes())).map_err(|e| format!("{}: {e}", mtl.display()))
-        });
+    let parsed = crate::io::input::read_regular(mtl).map_err(|e| e.to_string()).and_then(|bytes| {
+        let text = decode_text(mtl, &bytes, warnings).map_err(|e| e.to_string())?;
+        tobj::load_mtl_buf(&mut Cursor::new(text.as_bytes())).map_err(|e| format!("{}: {e}", mtl.display()))
+    });
     parsed.map_err(|why| {
         warnings.push(format!(
             "{}: material library cannot be read ({why}); its materials are ignored (the base colour is used)",

@@ -258,12 +258,9 @@ impl ObjectInput<'_> {
                     None => {
                         let image = match &tex.source {
                             TextureSource::File(p) => crate::io::png::load_texture(p, filter, wrap),
-                            TextureSource::Embedded { name, bytes } => ImageTexture::decode(
-                                bytes,
-                                &format!("{} ({name})", mesh_file.display()),
-                                filter,
-                                wrap,
-                            ),
+                            TextureSource::Embedded { name, bytes } => {
+                                ImageTexture::decode(bytes, &format!("{} ({name})", mesh_file.display()), filter, wrap)
+                            }
                         };
                         // One warning per image, however many parts use it.
                         let image = image.map(Arc::new).map_err(|e| {
