@@ -199,8 +199,11 @@ fn every_obj_ply_stl_and_gltf2_file_renders_or_is_refused_in_one_line() {
     assert!(rendered >= 40, "only {rendered} rendered");
 }
 
+/// An object's name and its texture's size, if it has a texture.
+type ObjectTexture = (String, Option<(usize, usize)>);
+
 /// The textures of the scene's objects, by object name (materials without one: `None`).
-fn textures(scene: &Path) -> (Vec<(String, Option<(usize, usize)>)>, Vec<String>) {
+fn textures(scene: &Path) -> (Vec<ObjectTexture>, Vec<String>) {
     let s = io::load_scene(&scene.to_string_lossy(), Path::new("")).unwrap();
     let objects = s
         .objects

@@ -170,9 +170,9 @@ fn decode_text(path: &Path, bytes: &[u8], warnings: &mut Vec<String>) -> Result<
             .map_err(|_| Error::parse(path, "not valid UTF-16 text (the file starts with a UTF-16 byte-order mark)"))
     };
     match bytes {
-        [0xEF, 0xBB, 0xBF, rest @ ..] => std::str::from_utf8(rest).map(str::to_owned).or_else(|_| {
-            Err(Error::parse(path, "not valid UTF-8 text (the file starts with a UTF-8 byte-order mark)"))
-        }),
+        [0xEF, 0xBB, 0xBF, rest @ ..] => std::str::from_utf8(rest)
+            .map(str::to_owned)
+            .map_err(|_| Error::parse(path, "not valid UTF-8 text (the file starts with a UTF-8 byte-order mark)")),
         [0xFE, 0xFF, ..] => utf16(true),
         [0xFF, 0xFE, ..] => utf16(false),
         _ => match std::str::from_utf8(bytes) {

@@ -387,7 +387,9 @@ fn vertex_layout(path: &Path, element: &Element, warnings: &mut Vec<String>) -> 
         }
     }
     let channels = ["red", "green", "blue"];
-    let scalar_at = |name: &str| -> Option<std::result::Result<(usize, Scalar), ()>> {
+    /// A colour channel's column and type, `Err` when it is a list.
+    type Channel = Option<std::result::Result<(usize, Scalar), ()>>;
+    let scalar_at = |name: &str| -> Channel {
         let i = element.props.iter().position(|p| p.name == name)?;
         Some(match element.props[i].kind {
             PropKind::Scalar(t) => Ok((i, t)),
@@ -399,7 +401,7 @@ fn vertex_layout(path: &Path, element: &Element, warnings: &mut Vec<String>) -> 
         [Some(Ok((r, tr))), Some(Ok((g, tg))), Some(Ok((b, tb)))] => Some(([*r, *g, *b], [*tr, *tg, *tb])),
         [None, None, None] => None,
         _ => {
-            let named = |f: fn(&Option<std::result::Result<(usize, Scalar), ()>>) -> bool| -> Vec<&str> {
+            let named = |f: fn(&Channel) -> bool| -> Vec<&str> {
                 channels.iter().zip(&found).filter(|(_, x)| f(x)).map(|(c, _)| *c).collect()
             };
             let lists = named(|x| matches!(x, Some(Err(()))));

@@ -88,14 +88,19 @@ impl FitSpec {
 /// The textures of one mesh file already read (or found unreadable: `Err`), by source and
 /// sampler: a texture that many parts use is decoded, or warned about, once.
 #[derive(Default)]
-struct TextureCache(Vec<((TextureSource, Filter, Wrap), std::result::Result<Arc<ImageTexture>, ()>)>);
+struct TextureCache(Vec<(TextureKey, CachedTexture)>);
+
+/// An image and how it is sampled.
+type TextureKey = (TextureSource, Filter, Wrap);
+/// A texture read, or `Err` when it could not be (the warning is already given).
+type CachedTexture = std::result::Result<Arc<ImageTexture>, ()>;
 
 impl TextureCache {
-    fn get(&self, key: &(TextureSource, Filter, Wrap)) -> Option<&std::result::Result<Arc<ImageTexture>, ()>> {
+    fn get(&self, key: &TextureKey) -> Option<&CachedTexture> {
         self.0.iter().find(|(k, _)| k == key).map(|(_, v)| v)
     }
 
-    fn push(&mut self, entry: ((TextureSource, Filter, Wrap), std::result::Result<Arc<ImageTexture>, ()>)) {
+    fn push(&mut self, entry: (TextureKey, CachedTexture)) {
         self.0.push(entry);
     }
 }
