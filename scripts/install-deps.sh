@@ -2,6 +2,9 @@
 # Installs the Debian 12 packages inimtrace needs (run as root, or with sudo available).
 #   libembree-dev libclang-dev   Embree backend: bindgen over wrapper.h, libembree3 (+ TBB)
 #   glmark2-data                 the Stanford bunny mesh for scenes/bunny.toml
+#   assimp-testmodels            tests/assimp_corpus.rs: Assimp's test models (a real third-party
+#                                corpus of OBJ, PLY, STL and glTF files) must render or be refused
+#                                in one line
 #   pkg-config libfontconfig1-dev libfreetype-dev fontconfig fonts-dejavu-core
 #                                plotters' text rendering (figure labels, plots)
 #   build-essential              C toolchain for crates that build C
@@ -22,7 +25,7 @@ if [ "$(id -u)" != 0 ]; then SUDO=sudo; fi
 export DEBIAN_FRONTEND=noninteractive
 $SUDO apt-get update
 $SUDO apt-get install -y --no-install-recommends \
-    build-essential pkg-config libembree-dev libclang-dev glmark2-data \
+    build-essential pkg-config libembree-dev libclang-dev glmark2-data assimp-testmodels \
     libfontconfig1-dev libfreetype-dev fontconfig fonts-dejavu-core python3-venv slurm-wlm munge qemu-user
 cd "$(dirname "$0")/.."
 if [ ! -x target/venv-exr/bin/python ] || ! target/venv-exr/bin/python -c "import OpenEXR, numpy" 2>/dev/null; then

@@ -659,42 +659,61 @@ fn file_material(
             let tex = info.texture();
             let image = tex.source();
             let at_img = format!("images[{}]", image.index());
+            // The image's bytes or file; an image that cannot be had loses the texture, with a
+            // warning (the base colour is used), as a missing image file does later.
             let source = match image.source() {
                 gltf::image::Source::View { view, .. } => {
                     let buffer = &r.buffers[view.buffer().index()];
-                    let bytes = buffer.get(view.offset()..view.offset() + view.length()).ok_or_else(|| {
-                        Error::parse(
-                            path,
-                            format!("{at_img}: bufferViews[{}] runs past the end of its buffer", view.index()),
-                        )
-                    })?;
-                    TextureSource::Embedded { name: at_img, bytes: bytes.to_vec() }
+                    match buffer.get(view.offset()..view.offset() + view.length()) {
+                        Some(bytes) => Ok(TextureSource::Embedded { name: at_img.clone(), bytes: bytes.to_vec() }),
+                        None => Err(format!("bufferViews[{}] runs past the end of its buffer", view.index())),
+                    }
                 }
                 gltf::image::Source::Uri { uri, .. } => {
-                    match resolve_uri(path, path.parent().unwrap_or(Path::new("")), &at_img, uri)? {
-                        UriTarget::Data(bytes) => TextureSource::Embedded { name: at_img, bytes },
-                        UriTarget::File(file) => TextureSource::File(file),
+                    match resolve_uri(path, path.parent().unwrap_or(Path::new("")), &at_img, uri) {
+                        Ok(UriTarget::Data(bytes)) => Ok(TextureSource::Embedded { name: at_img.clone(), bytes }),
+                        Ok(UriTarget::File(file)) => Ok(TextureSource::File(file)),
+                        Err(Error::Parse { message, .. }) => Err(message),
+                        Err(e) => Err(e.to_string()),
                     }
                 }
             };
-            let sampler = tex.sampler();
-            let filter = match sampler.mag_filter() {
-                Some(gltf::texture::MagFilter::Nearest) => Filter::Nearest,
-                _ => Filter::Bilinear,
-            };
-            let wrap = match sampler.wrap_s() {
-                gltf::texture::WrappingMode::ClampToEdge => Wrap::Clamp,
-                gltf::texture::WrappingMode::Repeat => Wrap::Repeat,
-                gltf::texture::WrappingMode::MirroredRepeat => {
+            match source {
+                Err(why) => {
                     warnings.push(format!(
-                        "{}: {at_m}: mirrored-repeat texture wrapping is read as repeat",
-                        path.display()
+                        "{}: {at_m}{}: the base colour texture cannot be read ({why}); the base colour is used",
+                        path.display(),
+                        material.name().map(|n| format!(" ('{n}')")).unwrap_or_default()
                     ));
-                    Wrap::Repeat
+                    None
                 }
-            };
-            Some(FileTexture { source, filter: Some(filter), wrap: Some(wrap) })
+                Ok(source) => {
+                    let sampler = tex.sampler();
+                    let filter = match sampler.mag_filter() {
+                        Some(gltf::texture::MagFilter::Nearest) => Filter::Nearest,
+                        _ => Filter::Bilinear,
+                    };
+                    let wrap = match sampler.wrap_s() {
+                        gltf::texture::WrappingMode::ClampToEdge => Wrap::Clamp,
+                        gltf::texture::WrappingMode::Repeat => Wrap::Repeat,
+                        gltf::texture::WrappingMode::MirroredRepeat => {
+                            warnings.push(format!(
+                                "{}: {at_m}: mirrored-repeat texture wrapping is read as repeat",
+                                path.display()
+                            ));
+                            Wrap::Repeat
+                        }
+                    };
+                    Some(FileTexture { source, filter: Some(filter), wrap: Some(wrap) })
+                }
+            }
         }
     };
-    Ok(FileMaterial { name: material.name().map(String::from), base_color: Some(base_color), texture, vertex_colors })
+    Ok(FileMaterial {
+        name: material.name().map(String::from),
+        base_color: Some(base_color),
+        texture,
+        untextured_color: None,
+        vertex_colors,
+    })
 }

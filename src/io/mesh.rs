@@ -27,6 +27,10 @@
 //! * The file's own materials come back as [`MeshPart`]s: consecutive runs of triangles that
 //!   share a [`FileMaterial`] (an OBJ `usemtl`, a glTF primitive's material). A scene object
 //!   without a `material` uses them.
+//! * Files as exporters write them: a `\` in an OBJ/MTL file name is a path separator
+//!   ([`file_name_path`]); a texture that is missing or cannot be read, and vertex colours that
+//!   cannot be used, are warnings (the material's base colour is used instead), as in Assimp and
+//!   Blender. Geometry that cannot be read is still an error.
 
 use std::ops::Range;
 use std::path::{Path, PathBuf};
@@ -74,6 +78,10 @@ pub struct FileMaterial {
     pub base_color: Option<DVec3>,
     /// Base colour texture (MTL `map_Kd`, glTF `baseColorTexture`).
     pub texture: Option<FileTexture>,
+    /// The colour the material shows when its texture cannot be read, where that differs from
+    /// `base_color`: an MTL `Kd` given beside `map_Kd` (which `base_color` leaves out, since
+    /// the texture alone gives the colour). `None`: `base_color` is used.
+    pub untextured_color: Option<DVec3>,
     /// The part's vertices carry colours from the file ([`Mesh::colors`]).
     pub vertex_colors: bool,
 }
@@ -194,3 +202,10 @@ pub(super) fn remove_degenerate_in_parts(mesh: &mut Mesh, parts: &mut Vec<MeshPa
 }
 
 pub(super) use crate::raster::srgb_to_linear;
+
+/// The file a mesh file names (an MTL library, a texture), resolved relative to the folder
+/// `base` of the mesh file: surrounding blanks trimmed, and `\` read as a path separator, as
+/// Assimp and Blender read it (Windows exporters write `map_Kd .\textures\skin.jpg`).
+pub(super) fn file_name_path(base: &Path, name: &str) -> PathBuf {
+    base.join(name.trim().replace('\\', "/"))
+}

@@ -8,6 +8,7 @@
 //! missing `.mtl` file is not an error (no materials). Shared conventions (colours, degenerate
 //! triangles): [`super::mesh`].
 
+use std::cell::RefCell;
 use std::io::Cursor;
 use std::path::Path;
 
@@ -23,11 +24,16 @@ fn tf<F: Into<f64>>(x: F) -> f64 {
 }
 
 pub(super) fn load_obj(path: &Path, bytes: &[u8]) -> Result<Loaded> {
-    let text = std::str::from_utf8(bytes).map_err(|e| {
-        let line = 1 + bytes[..e.valid_up_to()].iter().filter(|&&b| b == b'\n').count();
-        Error::parse(path, format!("line {line}: not valid UTF-8 text"))
-    })?;
-    validate_obj_text(path, text)?;
+    let mut warnings = Vec::new();
+    let text = decode_text(path, bytes, &mut warnings)?;
+    let text = match validate_obj_text(path, &text)? {
+        None => text,
+        Some(why) => {
+            warnings.push(format!("{}: {why}; the mesh is shown without vertex colours", path.display()));
+            drop_vertex_colors(&text)
+        }
+    };
+    let text = drop_unnamed_usemtl(path, text, &mut warnings);
 
     // tobj's optional features ("merging", "reordering") add fields that must stay false.
     #[allow(clippy::needless_update)]
@@ -39,11 +45,15 @@ pub(super) fn load_obj(path: &Path, bytes: &[u8]) -> Result<Loaded> {
         ..Default::default()
     };
     let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    let (models, materials) =
-        tobj::load_obj_buf(&mut Cursor::new(text), &options, |mtl| tobj::load_mtl(base_dir.join(mtl)))
-            .map_err(|e| Error::parse(path, format!("OBJ: {e}")))?;
-    // A missing or broken .mtl only loses the texture.
+    // A missing or broken .mtl loses its materials, with a warning.
+    let mtl_warnings = RefCell::new(Vec::new());
+    let (models, materials) = tobj::load_obj_buf(&mut Cursor::new(text.as_bytes()), &options, |mtl| {
+        load_mtl(path, &super::mesh::file_name_path(&base_dir, &mtl.to_string_lossy()), &mut mtl_warnings.borrow_mut())
+    })
+    .map_err(|e| Error::parse(path, format!("OBJ: {e}")))?;
+    warnings.extend(mtl_warnings.into_inner());
     let materials = materials.unwrap_or_default();
+    let texture_path = |t: &str| super::mesh::file_name_path(&base_dir, texture_file_name(t));
 
     let mut mesh = Mesh::default();
     let (mut normals, mut uvs, mut colors) = (Some(Vec::new()), Some(Vec::new()), Some(Vec::new()));
@@ -56,20 +66,23 @@ pub(super) fn load_obj(path: &Path, bytes: &[u8]) -> Result<Loaded> {
         match parts.last_mut() {
             Some((id, part)) if *id == m.material_id => part.triangles.end = range.end,
             _ => {
-                let material = m.material_id.and_then(|id| materials.get(id)).map(|mat| FileMaterial {
-                    name: Some(mat.name.clone()),
-                    // With a texture, `map_Kd` alone gives the colour (exporters write a
-                    // placeholder `Kd` beside it, e.g. Blender's 0.8).
-                    base_color: mat
-                        .diffuse
-                        .filter(|_| mat.diffuse_texture.is_none())
-                        .map(|d| DVec3::new(tf(d[0]), tf(d[1]), tf(d[2]))),
-                    texture: mat.diffuse_texture.as_deref().map(|t| FileTexture {
-                        source: TextureSource::File(base_dir.join(t.trim())),
+                let material = m.material_id.and_then(|id| materials.get(id)).map(|mat| {
+                    let kd = mat.diffuse.map(|d| DVec3::new(tf(d[0]), tf(d[1]), tf(d[2])));
+                    let texture = mat.diffuse_texture.as_deref().map(|t| FileTexture {
+                        source: TextureSource::File(texture_path(t)),
                         filter: None,
                         wrap: None,
-                    }),
-                    vertex_colors: false,
+                    });
+                    FileMaterial {
+                        name: Some(mat.name.clone()),
+                        // With a texture, `map_Kd` alone gives the colour (exporters write a
+                        // placeholder `Kd` beside it, e.g. Blender's 0.8); `Kd` is the colour
+                        // when the texture cannot be read.
+                        base_color: kd.filter(|_| texture.is_none()),
+                        untextured_color: kd.filter(|_| texture.is_some()),
+                        texture,
+                        vertex_colors: false,
+                    }
                 });
                 parts.push((m.material_id, MeshPart { triangles: range, material: material.unwrap_or_default() }));
             }
@@ -124,7 +137,7 @@ pub(super) fn load_obj(path: &Path, bytes: &[u8]) -> Result<Loaded> {
                 .material_id
                 .and_then(|id| materials.get(id))
                 .and_then(|mat| mat.diffuse_texture.as_deref())
-                .map(|tex| base_dir.join(tex.trim()));
+                .map(texture_path);
         }
     }
     mesh.normals = nonempty(normals);
@@ -134,7 +147,129 @@ pub(super) fn load_obj(path: &Path, bytes: &[u8]) -> Result<Loaded> {
     for p in &mut parts {
         p.material.vertex_colors = mesh.colors.is_some();
     }
-    Ok(Loaded { mesh, parts, texture, warnings: Vec::new() })
+    Ok(Loaded { mesh, parts, texture, warnings })
+}
+
+/// The text of an OBJ or MTL file: UTF-8 (a byte-order mark dropped), UTF-16 with a byte-order
+/// mark, or, when the bytes are not UTF-8, Latin-1 with a warning (old Windows exporters write
+/// material names that way; numbers are ASCII in every case).
+fn decode_text(path: &Path, bytes: &[u8], warnings: &mut Vec<String>) -> Result<String> {
+    let utf16 = |big_endian: bool| -> Result<String> {
+        let units: Vec<u16> = bytes[2..]
+            .chunks(2)
+            .map(|c| {
+                let pair = [c[0], c.get(1).copied().unwrap_or(0)];
+                if big_endian {
+                    u16::from_be_bytes(pair)
+                } else {
+                    u16::from_le_bytes(pair)
+                }
+            })
+            .collect();
+        String::from_utf16(&units)
+            .map_err(|_| Error::parse(path, "not valid UTF-16 text (the file starts with a UTF-16 byte-order mark)"))
+    };
+    match bytes {
+        [0xEF, 0xBB, 0xBF, rest @ ..] => std::str::from_utf8(rest)
+            .map(str::to_owned)
+            .map_err(|_| Error::parse(path, "not valid UTF-8 text (the file starts with a UTF-8 byte-order mark)")),
+        [0xFE, 0xFF, ..] => utf16(true),
+        [0xFF, 0xFE, ..] => utf16(false),
+        _ => match std::str::from_utf8(bytes) {
+            Ok(text) => Ok(text.to_owned()),
+            Err(e) => {
+                let line = 1 + bytes[..e.valid_up_to()].iter().filter(|&&b| b == b'\n').count();
+                warnings.push(format!(
+                    "{}: line {line}: not UTF-8 text; the file is read as Latin-1 (names may show other characters)",
+                    path.display()
+                ));
+                Ok(bytes.iter().map(|&b| char::from(b)).collect())
+            }
+        },
+    }
+}
+
+/// The OBJ text with the colours of `v x y z r g b` lines left out (`v x y z`); every line
+/// stays where it was, so line numbers do not change.
+fn drop_vertex_colors(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for l in text.split_inclusive('\n') {
+        let words: Vec<&str> = l.split_whitespace().collect();
+        if words.len() == 7 && words[0] == "v" {
+            out.push_str(&words[..4].join(" "));
+            out.push('\n');
+        } else {
+            out.push_str(l);
+        }
+    }
+    out
+}
+
+/// Turns `usemtl` lines without a material name (Blender 2.61 wrote them) into comments, with a
+/// warning: tobj refuses them, Assimp and Blender read "no material".
+fn drop_unnamed_usemtl(path: &Path, text: String, warnings: &mut Vec<String>) -> String {
+    let unnamed = |l: &str| l.trim() == "usemtl";
+    let lines: Vec<usize> = text.lines().enumerate().filter(|(_, l)| unnamed(l)).map(|(i, _)| i + 1).collect();
+    if lines.is_empty() {
+        return text;
+    }
+    warnings.push(format!(
+        "{}: line {}: `usemtl` without a material name; read as no material{}",
+        path.display(),
+        lines[0],
+        if lines.len() > 1 { format!(" (and {} more such line(s))", lines.len() - 1) } else { String::new() }
+    ));
+    let mut out = String::with_capacity(text.len() + lines.len());
+    for l in text.split_inclusive('\n') {
+        if unnamed(l) {
+            out.push('#');
+        }
+        out.push_str(l);
+    }
+    out
+}
+
+/// Reads the material library `mtl` named by the OBJ file `obj`. A file that is missing or
+/// cannot be parsed gives a warning naming both, and no materials.
+fn load_mtl(obj: &Path, mtl: &Path, warnings: &mut Vec<String>) -> tobj::MTLLoadResult {
+    let parsed = crate::io::input::read_regular(mtl).map_err(|e| e.to_string()).and_then(|bytes| {
+        let text = decode_text(mtl, &bytes, warnings).map_err(|e| e.to_string())?;
+        tobj::load_mtl_buf(&mut Cursor::new(text.as_bytes())).map_err(|e| format!("{}: {e}", mtl.display()))
+    });
+    parsed.map_err(|why| {
+        warnings.push(format!(
+            "{}: material library cannot be read ({why}); its materials are ignored (the base colour is used)",
+            obj.display()
+        ));
+        tobj::LoadError::OpenFileFailed
+    })
+}
+
+/// The file name of an MTL texture statement (`map_Kd [options] file`): the options of the MTL
+/// specification (`-blendu on`, `-s 1 1 1`, `-mm 0 1`, ...) before the name are skipped.
+fn texture_file_name(spec: &str) -> &str {
+    let mut rest = spec.trim();
+    while let Some(opt) = rest.strip_prefix('-') {
+        let name_end = opt.find(char::is_whitespace).unwrap_or(opt.len());
+        let (values_min, values_max) = match &opt[..name_end] {
+            "blendu" | "blendv" | "bm" | "boost" | "cc" | "clamp" | "imfchan" | "texres" | "type" => (1, 1),
+            "mm" => (2, 2),
+            "o" | "s" | "t" => (1, 3),
+            _ => break, // not an option: a file name that starts with '-'
+        };
+        let mut after = opt[name_end..].trim_start();
+        for k in 0..values_max {
+            let end = after.find(char::is_whitespace).unwrap_or(after.len());
+            let word = &after[..end];
+            let numeric = word.parse::<f64>().is_ok();
+            if word.is_empty() || (k >= values_min && !numeric) {
+                break;
+            }
+            after = after[end..].trim_start();
+        }
+        rest = after;
+    }
+    rest
 }
 
 /// `None` for an absent or empty attribute.
@@ -145,7 +280,9 @@ fn nonempty<T>(v: Option<Vec<T>>) -> Option<Vec<T>> {
 /// Checks an OBJ file line by line before tobj reads it, so that errors carry line numbers:
 /// numbers in `v`/`vt`/`vn` lines, finite vertex positions, and face indices (`v`, `v/vt`,
 /// `v//vn`, `v/vt/vn`; negative = relative to the count so far) within the counts in the file.
-fn validate_obj_text(path: &Path, text: &str) -> Result<()> {
+/// Vertex colours that cannot be used (given for some vertices only, or not finite) are not an
+/// error: the answer is `Some(why)`, and the caller drops the colours.
+fn validate_obj_text(path: &Path, text: &str) -> Result<Option<String>> {
     let err = |line: usize, msg: String| Error::parse(path, format!("line {line}: {msg}"));
     let parse_numbers = |line: usize, what: &str, words: std::str::SplitWhitespace| -> Result<Vec<f64>> {
         words.map(|w| w.parse::<f64>().map_err(|_| err(line, format!("bad number '{w}' in {what}")))).collect()
@@ -153,6 +290,7 @@ fn validate_obj_text(path: &Path, text: &str) -> Result<()> {
     // Pass 1: attribute lines; counts of positions, texcoords, normals.
     let (mut nv, mut nvt, mut nvn) = (0usize, 0usize, 0usize);
     let mut colored: Option<bool> = None;
+    let mut color_problem: Option<String> = None;
     for (i, raw) in text.lines().enumerate() {
         let line = i + 1;
         let mut words = raw.split_whitespace();
@@ -176,17 +314,18 @@ fn validate_obj_text(path: &Path, text: &str) -> Result<()> {
                 nv += 1;
                 match colored {
                     None => colored = Some(has_color),
-                    Some(c) if c != has_color => {
-                        return Err(err(
-                            line,
-                            format!(
-                                "vertex {nv} {} a colour but the first vertex {}: colours must be given for all vertices or none",
-                                if has_color { "has" } else { "lacks" },
-                                if c { "has one" } else { "does not" }
-                            ),
+                    Some(c) if c != has_color && color_problem.is_none() => {
+                        color_problem = Some(format!(
+                            "line {line}: vertex {nv} {} a colour but the first vertex {}: colours must be given for \
+                             all vertices or none",
+                            if has_color { "has" } else { "lacks" },
+                            if c { "has one" } else { "does not" }
                         ))
                     }
                     Some(_) => {}
+                }
+                if has_color && color_problem.is_none() && vals[3..].iter().any(|v| !v.is_finite()) {
+                    color_problem = Some(format!("line {line}: vertex {nv} has a non-finite colour"));
                 }
                 if p.iter().any(|v| !v.is_finite()) {
                     return Err(err(
@@ -255,5 +394,5 @@ fn validate_obj_text(path: &Path, text: &str) -> Result<()> {
             _ => {}
         }
     }
-    Ok(())
+    Ok(color_problem)
 }

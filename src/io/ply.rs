@@ -349,10 +349,14 @@ struct VertexLayout {
     xyz: [usize; 3],
     normal: Option<[usize; 3]>,
     uv: Option<[usize; 2]>,
-    color: Option<([usize; 3], Scalar)>,
+    /// Columns of red, green, blue and the type of each (integers are divided by their type's
+    /// maximum).
+    color: Option<([usize; 3], [Scalar; 3])>,
 }
 
-fn vertex_layout(path: &Path, element: &Element) -> Result<VertexLayout> {
+/// Where the vertex element's properties are. Vertex colours that cannot be used (some of
+/// `red green blue` missing, or given as lists) are a warning, and the mesh has no colours.
+fn vertex_layout(path: &Path, element: &Element, warnings: &mut Vec<String>) -> Result<VertexLayout> {
     let find = |name: &str| -> Result<Option<usize>> {
         match element.props.iter().position(|p| p.name == name) {
             None => Ok(None),
@@ -382,13 +386,38 @@ fn vertex_layout(path: &Path, element: &Element) -> Result<VertexLayout> {
             break;
         }
     }
-    let color = triple("red", "green", "blue")?.map(|idx| {
-        let ty = match element.props[idx[0]].kind {
-            PropKind::Scalar(t) => t,
-            PropKind::List { .. } => Scalar::F64, // unreachable: `find` rejects lists
-        };
-        (idx, ty)
-    });
+    let channels = ["red", "green", "blue"];
+    /// A colour channel's column and type, `Err` when it is a list.
+    type Channel = Option<std::result::Result<(usize, Scalar), ()>>;
+    let scalar_at = |name: &str| -> Channel {
+        let i = element.props.iter().position(|p| p.name == name)?;
+        Some(match element.props[i].kind {
+            PropKind::Scalar(t) => Ok((i, t)),
+            PropKind::List { .. } => Err(()),
+        })
+    };
+    let found: Vec<_> = channels.iter().map(|c| scalar_at(c)).collect();
+    let color = match found.as_slice() {
+        [Some(Ok((r, tr))), Some(Ok((g, tg))), Some(Ok((b, tb)))] => Some(([*r, *g, *b], [*tr, *tg, *tb])),
+        [None, None, None] => None,
+        _ => {
+            let named = |f: fn(&Channel) -> bool| -> Vec<&str> {
+                channels.iter().zip(&found).filter(|(_, x)| f(x)).map(|(c, _)| *c).collect()
+            };
+            let lists = named(|x| matches!(x, Some(Err(()))));
+            let missing = named(|x| x.is_none());
+            let why = if !lists.is_empty() {
+                format!("{} given as a list", lists.join(", "))
+            } else {
+                format!("no {}", missing.join(", "))
+            };
+            warnings.push(format!(
+                "{}: vertex colours cannot be used ({why}); the mesh is shown without them",
+                path.display()
+            ));
+            None
+        }
+    };
     Ok(VertexLayout { xyz, normal, uv, color })
 }
 
@@ -398,7 +427,8 @@ pub(super) fn load_ply(path: &Path, bytes: &[u8]) -> Result<Loaded> {
     let Some(vertex_el) = vertex_el else {
         return Err(Error::parse(path, "bad PLY header: no 'vertex' element"));
     };
-    let layout = vertex_layout(path, vertex_el)?;
+    let mut warnings = header.warnings.clone();
+    let layout = vertex_layout(path, vertex_el, &mut warnings)?;
     let face_el = header.elements.iter().find(|e| e.name == "face");
     let face_prop = match face_el {
         None => return Err(Error::parse(path, "contains no triangles (no 'face' element)")),
@@ -424,16 +454,16 @@ pub(super) fn load_ply(path: &Path, bytes: &[u8]) -> Result<Loaded> {
                 line: header.header_lines,
                 words: "".split_whitespace(),
             };
-            read_ply_body(path, &header.elements, &layout, face_prop, &mut reader)?
+            read_ply_body(path, &header.elements, &layout, face_prop, &mut reader, &mut warnings)?
         }
         PlyFormat::BinaryLe | PlyFormat::BinaryBe => {
             let mut reader = BinaryBody { bytes: body, pos: 0, big_endian: header.format == PlyFormat::BinaryBe };
-            read_ply_body(path, &header.elements, &layout, face_prop, &mut reader)?
+            read_ply_body(path, &header.elements, &layout, face_prop, &mut reader, &mut warnings)?
         }
     };
     let vertex_colors = mesh.colors.is_some();
     let mut loaded = Loaded::plain(mesh);
-    loaded.warnings = header.warnings;
+    loaded.warnings = warnings;
     if vertex_colors {
         let material = super::mesh::FileMaterial { vertex_colors: true, ..Default::default() };
         loaded.parts = vec![super::mesh::MeshPart { triangles: 0..loaded.mesh.triangles.len(), material }];
@@ -487,6 +517,7 @@ fn read_ply_body(
     layout: &VertexLayout,
     face_prop: usize,
     body: &mut dyn PlyBody,
+    warnings: &mut Vec<String>,
 ) -> Result<Mesh> {
     let mut mesh = Mesh::default();
     let mut normals = Vec::new();
@@ -559,12 +590,11 @@ fn read_ply_body(
                 if let Some([i, j]) = layout.uv {
                     uvs.push(DVec2::new(scalars[i], scalars[j]));
                 }
-                if let Some(([i, j, k], ty)) = layout.color {
-                    let m = ty.int_max();
+                if let Some(([i, j, k], [ti, tj, tk])) = layout.color {
                     colors.push(DVec3::new(
-                        srgb_to_linear(scalars[i] / m),
-                        srgb_to_linear(scalars[j] / m),
-                        srgb_to_linear(scalars[k] / m),
+                        srgb_to_linear(scalars[i] / ti.int_max()),
+                        srgb_to_linear(scalars[j] / tj.int_max()),
+                        srgb_to_linear(scalars[k] / tk.int_max()),
                     ));
                 }
             }
@@ -603,7 +633,11 @@ fn read_ply_body(
         return Err(Error::parse(path, format!("vertex {i}: non-finite texture coordinate")));
     }
     if let Some(i) = mesh.colors.iter().flatten().position(|c| !c.is_finite()) {
-        return Err(Error::parse(path, format!("vertex {i}: non-finite colour")));
+        warnings.push(format!(
+            "{}: vertex {i}: non-finite colour; the mesh is shown without its vertex colours",
+            path.display()
+        ));
+        mesh.colors = None;
     }
     Ok(mesh)
 }

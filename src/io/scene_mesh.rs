@@ -2,7 +2,8 @@
 //! [`super::mesh::load_mesh`], placed in the eye's frame (Sec. 4.1's world, mm) by a
 //! `transform` or a `fit`, and given a material: the scene file's `material` when it has one,
 //! else the file's own materials ([`super::mesh::MeshPart`]), one scene object per material,
-//! else a neutral grey ([`DEFAULT_ALBEDO`]).
+//! else a neutral grey ([`DEFAULT_ALBEDO`]). A file material's texture that is missing or
+//! unreadable is a warning, and the material's base colour is used.
 //!
 //! `fit = { size = 100.0, center = [0, 0, 400], rotation_deg = [0, 0, 0] }` rotates the mesh
 //! (optional, as in [`Transform`]), then scales it uniformly so that the largest side of its
@@ -18,7 +19,7 @@ use serde::{Deserialize, Serialize};
 use super::mesh::{load_mesh, remove_degenerate_in_parts, FileMaterial, MeshPart, TextureSource};
 use super::scene_file::ObjectInput;
 use crate::error::{Error, Result};
-use crate::scene::image_texture::ImageTexture;
+use crate::scene::image_texture::{Filter, ImageTexture, Wrap};
 use crate::scene::{BarChart, Material, Mesh, Object, Shape, Transform};
 
 /// Albedo of objects without a material of their own: a neutral 0.8 grey.
@@ -81,6 +82,26 @@ impl FitSpec {
             rotation_deg,
             translation: DVec3::from_array(self.center) - s * 0.5 * (lo + hi),
         })
+    }
+}
+
+/// The textures of one mesh file already read (or found unreadable: `Err`), by source and
+/// sampler: a texture that many parts use is decoded, or warned about, once.
+#[derive(Default)]
+struct TextureCache(Vec<(TextureKey, CachedTexture)>);
+
+/// An image and how it is sampled.
+type TextureKey = (TextureSource, Filter, Wrap);
+/// A texture read, or `Err` when it could not be (the warning is already given).
+type CachedTexture = std::result::Result<Arc<ImageTexture>, ()>;
+
+impl TextureCache {
+    fn get(&self, key: &TextureKey) -> Option<&CachedTexture> {
+        self.0.iter().find(|(k, _)| k == key).map(|(_, v)| v)
+    }
+
+    fn push(&mut self, entry: (TextureKey, CachedTexture)) {
+        self.0.push(entry);
     }
 }
 
@@ -205,9 +226,10 @@ impl ObjectInput<'_> {
         }
         let single = parts.len() == 1;
         let mut objects = Vec::with_capacity(parts.len());
+        let mut textures = TextureCache::default();
         for (k, MeshPart { triangles, material }) in parts.into_iter().enumerate() {
             let mut sub = if single { std::mem::take(&mut mesh) } else { submesh(&mesh, triangles) };
-            let m = self.file_material(&material, &mut sub, warnings)?;
+            let m = self.file_material(&material, &mut sub, &mut textures, warnings)?;
             let name = match (single, &material.name) {
                 (true, _) => name.clone(),
                 (false, Some(mat)) => format!("{name} [{mat}]"),
@@ -220,30 +242,57 @@ impl ObjectInput<'_> {
 
     /// The material a mesh file gives a part: its texture (times the base colour), else its
     /// vertex colours (times the base colour), else its base colour, else [`DEFAULT_ALBEDO`].
-    fn file_material(&self, fm: &FileMaterial, mesh: &mut Mesh, warnings: &mut Vec<String>) -> Result<Material> {
+    /// A texture that is missing or cannot be decoded is a warning naming the mesh file, the
+    /// material and the image; the part then shows what it would without the texture.
+    fn file_material(
+        &self,
+        fm: &FileMaterial,
+        mesh: &mut Mesh,
+        textures: &mut TextureCache,
+        warnings: &mut Vec<String>,
+    ) -> Result<Material> {
         let (src, i) = (self.src, self.index);
         let factor = fm.base_color.unwrap_or(DVec3::ONE);
+        let mesh_file = self.base.join(self.spec.file.as_deref().unwrap_or(Path::new("?")));
         if let Some(tex) = &fm.texture {
             if mesh.uvs.is_some() {
                 let (filter, wrap) = (tex.filter.unwrap_or_default(), tex.wrap.unwrap_or_default());
-                let image = match &tex.source {
-                    TextureSource::File(p) => crate::io::png::load_texture(p, filter, wrap),
-                    TextureSource::Embedded { name, bytes } => {
-                        let file = self.spec.file.as_deref().unwrap_or(Path::new("?"));
-                        ImageTexture::decode(
-                            bytes,
-                            &format!("{} ({name})", self.base.join(file).display()),
-                            filter,
-                            wrap,
-                        )
+                let key = (tex.source.clone(), filter, wrap);
+                let image = match textures.get(&key) {
+                    Some(image) => image.clone(),
+                    None => {
+                        let image = match &tex.source {
+                            TextureSource::File(p) => crate::io::png::load_texture(p, filter, wrap),
+                            TextureSource::Embedded { name, bytes } => {
+                                ImageTexture::decode(bytes, &format!("{} ({name})", mesh_file.display()), filter, wrap)
+                            }
+                        };
+                        // One warning per image, however many parts use it.
+                        let image = image.map(Arc::new).map_err(|e| {
+                            let material = fm.name.as_deref().map(|n| format!("material '{n}'"));
+                            warnings.push(format!(
+                                "{}: {}: texture {e}; the material's base colour is used instead (objects[{i}])",
+                                mesh_file.display(),
+                                material.as_deref().unwrap_or("the material"),
+                            ));
+                        });
+                        textures.push((key, image.clone()));
+                        image
+                    }
+                };
+                match image {
+                    Ok(image) if factor == DVec3::ONE => return Ok(Material::Texture(image)),
+                    Ok(image) => return Ok(Material::Texture(Arc::new((*image).clone().scaled(factor)))),
+                    Err(()) => {
+                        let untextured = FileMaterial {
+                            texture: None,
+                            base_color: fm.untextured_color.or(fm.base_color),
+                            untextured_color: None,
+                            ..fm.clone()
+                        };
+                        return self.file_material(&untextured, mesh, textures, warnings);
                     }
                 }
-                .map_err(|e| Error::invalid(src, self.field("file"), format!("texture: {e}")))?;
-                return Ok(Material::Texture(Arc::new(if factor == DVec3::ONE {
-                    image
-                } else {
-                    image.scaled(factor)
-                })));
             }
             warnings.push(format!(
                 "{src}: objects[{i}]: the file's texture is ignored: the mesh has no texture coordinates"
