@@ -27,6 +27,11 @@ pub enum Error {
     #[error("Embree error {code}: {message}")]
     Embree { code: String, message: String },
 
+    /// A large buffer the system would not allocate (the memory budget let it through, but the
+    /// memory was not there): what it was for and its size.
+    #[error("{0}")]
+    Alloc(String),
+
     /// A scene that the chosen backend cannot render, or similar mismatch of request and data.
     #[error("{0}")]
     Unsupported(String),

@@ -82,7 +82,7 @@ fn innermost_file_class(text: &str) -> Option<Class> {
 fn classify(e: &LibError) -> Class {
     match e {
         LibError::Singular(_) => Class::Optics,
-        LibError::Embree { .. } => Class::Base,
+        LibError::Embree { .. } | LibError::Alloc(_) => Class::Base,
         LibError::Unsupported(_) => Class::Config,
         LibError::Io { path, .. } | LibError::Parse { path, .. } => {
             file_class(&path.to_string_lossy()).unwrap_or(Class::Config)
