@@ -48,9 +48,9 @@ enum Texels {
     Linear(Vec<DVec3>),
     /// sRGB-encoded samples as decoded, `channels` a texel (1 grey, 2 grey and alpha, 3 RGB, 4
     /// RGBA; alpha is ignored), each `bytes` bytes (1: `u8`, 2: native-endian `u16`, 4:
-    /// native-endian `f32`). 8- and 16-bit samples are linearised through a table, floats by
+    /// native-endian `f32`). 8- and 16-bit samples are linearised through `table`, floats by
     /// [`srgb_to_linear`] at each lookup.
-    Encoded { data: Vec<u8>, channels: usize, bytes: usize },
+    Encoded { data: Vec<u8>, channels: usize, bytes: usize, table: Option<&'static [f64]> },
 }
 
 /// An image texture: linear RGB when sampled, stored at the precision of its file (8-bit
@@ -70,26 +70,32 @@ pub struct ImageTexture {
     _held: Option<crate::budget::Held>,
 }
 
-/// The linear value of each 8-bit (256 entries) or 16-bit (65536 entries) sample: the sample as
-/// `image` converts it to `f32`, linearised in `f64` (what decoding to RGB `f32` and then
-/// linearising each texel gives, bit for bit).
-fn table(bits16: bool) -> &'static [f64] {
+/// The linear value of each 8-bit (256 entries) or 16-bit (65536 entries) sample of an image of
+/// colour type `color`: the sample as `image` converts that colour type to RGB `f32`,
+/// linearised in `f64` (what decoding to RGB `f32` and then linearising each texel gives, bit
+/// for bit; `image` converts some colour types by division and others by multiplication, so
+/// each has its own table). `None` for float samples.
+fn table(color: image::ColorType) -> Option<&'static [f64]> {
+    use image::{ColorType as C, DynamicImage as D, ImageBuffer};
     use std::sync::OnceLock;
-    static U8: OnceLock<Vec<f64>> = OnceLock::new();
-    static U16: OnceLock<Vec<f64>> = OnceLock::new();
-    let build = |n: u32| {
-        let img = if n == 256 {
-            image::DynamicImage::ImageLuma8(image::GrayImage::from_fn(n, 1, |x, _| image::Luma([x as u8])))
-        } else {
-            image::DynamicImage::ImageLuma16(image::ImageBuffer::from_fn(n, 1, |x, _| image::Luma([x as u16])))
+    static TABLES: [OnceLock<Vec<f64>>; 8] = [const { OnceLock::new() }; 8];
+    let slot =
+        [C::L8, C::La8, C::Rgb8, C::Rgba8, C::L16, C::La16, C::Rgb16, C::Rgba16].iter().position(|c| *c == color)?;
+    let t = TABLES[slot].get_or_init(|| {
+        let (n8, n16) = (256u32, 65536u32);
+        let img = match color {
+            C::L8 => D::ImageLuma8(ImageBuffer::from_fn(n8, 1, |x, _| image::Luma([x as u8]))),
+            C::La8 => D::ImageLumaA8(ImageBuffer::from_fn(n8, 1, |x, _| image::LumaA([x as u8; 2]))),
+            C::Rgb8 => D::ImageRgb8(ImageBuffer::from_fn(n8, 1, |x, _| image::Rgb([x as u8; 3]))),
+            C::Rgba8 => D::ImageRgba8(ImageBuffer::from_fn(n8, 1, |x, _| image::Rgba([x as u8; 4]))),
+            C::L16 => D::ImageLuma16(ImageBuffer::from_fn(n16, 1, |x, _| image::Luma([x as u16]))),
+            C::La16 => D::ImageLumaA16(ImageBuffer::from_fn(n16, 1, |x, _| image::LumaA([x as u16; 2]))),
+            C::Rgb16 => D::ImageRgb16(ImageBuffer::from_fn(n16, 1, |x, _| image::Rgb([x as u16; 3]))),
+            _ => D::ImageRgba16(ImageBuffer::from_fn(n16, 1, |x, _| image::Rgba([x as u16; 4]))),
         };
         img.to_rgb32f().pixels().map(|p| srgb_to_linear(p[0] as f64)).collect()
-    };
-    if bits16 {
-        U16.get_or_init(|| build(65536))
-    } else {
-        U8.get_or_init(|| build(256))
-    }
+    });
+    Some(t)
 }
 
 impl ImageTexture {
@@ -155,8 +161,7 @@ impl ImageTexture {
         }
         let mut data = crate::budget::try_vec(need as usize, 0u8, &format!("the texture {source} ({w} x {h})"))?;
         decoder.read_image(&mut data).map_err(not_readable)?;
-        let (channels, sample) = (color.channel_count() as usize, color.bytes_per_pixel() as usize);
-        Self::from_samples(w as usize, h as usize, data, channels, sample / channels, filter, wrap).ok_or_else(|| {
+        Self::from_samples(w as usize, h as usize, data, color, filter, wrap).ok_or_else(|| {
             Error::parse(source, format!("texture image is empty or of an unsupported kind ({color:?})"))
         })
     }
@@ -166,17 +171,20 @@ impl ImageTexture {
         width: usize,
         height: usize,
         data: Vec<u8>,
-        channels: usize,
-        bytes: usize,
+        color: image::ColorType,
         filter: Filter,
         wrap: Wrap,
     ) -> Option<Self> {
+        let channels = color.channel_count() as usize;
+        let bytes = color.bytes_per_pixel() as usize / channels;
+        let table = table(color);
+        let float = matches!(color, image::ColorType::Rgb32F | image::ColorType::Rgba32F);
         let fits = width.checked_mul(height)?.checked_mul(channels * bytes)? == data.len();
-        if width == 0 || height == 0 || !(1..=4).contains(&channels) || ![1, 2, 4].contains(&bytes) || !fits {
+        if width == 0 || height == 0 || !(table.is_some() || float) || !fits {
             return None;
         }
         let held = data.len() as u64;
-        Some(Self::with(width, height, Texels::Encoded { data, channels, bytes }, filter, wrap, Some(held)))
+        Some(Self::with(width, height, Texels::Encoded { data, channels, bytes, table }, filter, wrap, Some(held)))
     }
 
     /// The texture with every texel multiplied by `factor` (a glTF `baseColorFactor` or MTL
@@ -198,14 +206,14 @@ impl ImageTexture {
     fn unscaled(&self, k: usize) -> DVec3 {
         match &self.texels {
             Texels::Linear(t) => t[k],
-            Texels::Encoded { data, channels, bytes } => {
+            Texels::Encoded { data, channels, bytes, table } => {
                 let (c, b) = (*channels, *bytes);
                 let at = k * c * b;
                 let sample = |ch: usize| -> f64 {
                     let o = at + ch * b;
-                    match b {
-                        1 => table(false)[data[o] as usize],
-                        2 => table(true)[u16::from_ne_bytes([data[o], data[o + 1]]) as usize],
+                    match (b, table) {
+                        (1, Some(t)) => t[data[o] as usize],
+                        (2, Some(t)) => t[u16::from_ne_bytes([data[o], data[o + 1]]) as usize],
                         _ => {
                             srgb_to_linear(f32::from_ne_bytes([data[o], data[o + 1], data[o + 2], data[o + 3]]) as f64)
                         }
@@ -387,14 +395,17 @@ mod tests {
             };
             let data: Vec<u8> = img.as_bytes().to_vec();
             let stored =
-                ImageTexture::from_samples(w as usize, h as usize, data, channels, 4, Filter::Bilinear, Wrap::Repeat)
+                ImageTexture::from_samples(w as usize, h as usize, data, img.color(), Filter::Bilinear, Wrap::Repeat)
                     .unwrap();
             assert_same(&stored, &twin(&img, Filter::Bilinear, Wrap::Repeat), "float");
         }
         // Sizes that do not add up are refused.
-        assert!(ImageTexture::from_samples(2, 2, vec![0; 11], 3, 1, Filter::Nearest, Wrap::Repeat).is_none());
-        assert!(ImageTexture::from_samples(2, 2, vec![0; 24], 3, 2, Filter::Nearest, Wrap::Repeat).is_some());
-        assert!(ImageTexture::from_samples(2, 2, vec![0; 8], 2, 1, Filter::Nearest, Wrap::Repeat).is_some());
+        use image::ColorType as C;
+        let (n, r) = (Filter::Nearest, Wrap::Repeat);
+        assert!(ImageTexture::from_samples(2, 2, vec![0; 11], C::Rgb8, n, r).is_none());
+        assert!(ImageTexture::from_samples(2, 2, vec![0; 24], C::Rgb16, n, r).is_some());
+        assert!(ImageTexture::from_samples(2, 2, vec![0; 8], C::La8, n, r).is_some());
+        assert!(ImageTexture::from_samples(0, 2, vec![], C::L8, n, r).is_none());
     }
 
     #[test]
