@@ -12,6 +12,8 @@
 #                                a single-node Slurm cluster on this machine
 #   qemu-user                    tests/cpu.rs and python/tests: the binary and the Python module
 #                                on emulated older CPUs say what they lack (no "illegal instruction")
+#   time util-linux              tests/memory_limits.rs: /usr/bin/time -v measures a run's peak
+#                                memory, prlimit caps its address space
 #   python3-venv                 a venv under target/venv-exr with OpenEXR's Python bindings
 #                                (pip: OpenEXR numpy), with which tests/exr_output.rs checks
 #                                that other tools read our EXR files; skipped with a warning
@@ -26,7 +28,8 @@ export DEBIAN_FRONTEND=noninteractive
 $SUDO apt-get update
 $SUDO apt-get install -y --no-install-recommends \
     build-essential pkg-config libembree-dev libclang-dev glmark2-data assimp-testmodels \
-    libfontconfig1-dev libfreetype-dev fontconfig fonts-dejavu-core python3-venv slurm-wlm munge qemu-user
+    libfontconfig1-dev libfreetype-dev fontconfig fonts-dejavu-core python3-venv slurm-wlm munge qemu-user \
+    time util-linux
 cd "$(dirname "$0")/.."
 if [ ! -x target/venv-exr/bin/python ] || ! target/venv-exr/bin/python -c "import OpenEXR, numpy" 2>/dev/null; then
     mkdir -p target

@@ -15,11 +15,9 @@ use inimtrace::scene::Scene;
 use inimtrace::settings::{load_display_part, load_scene_part, setup_with};
 
 /// Refuses an image of `pixels` pixels at `bytes_each` bytes that would not fit in the memory
-/// limit (`--max-memory`), naming the setting, before anything is allocated.
+/// budget ([`inimtrace::budget::memory_budget`]), naming the setting, before anything is allocated.
 pub(crate) fn check_memory(what: &str, setting: &str, pixels: usize, bytes_each: u64) -> Result<()> {
-    let mut e = inimtrace::budget::Estimate::default();
-    e.add(what, setting, pixels as u64, bytes_each);
-    Ok(e.check_memory(inimtrace::budget::memory_limit(), "command line")?)
+    Ok(inimtrace::budget::check_buffer(what, setting, pixels, bytes_each, "command line")?)
 }
 
 /// An output image path: it must end in `.exr` (the PNG preview goes beside it), so that the

@@ -92,6 +92,11 @@ pub enum Error {
         message: String,
     },
 
+    /// A large buffer the system would not allocate (the memory budget let it through, but the
+    /// memory was not there): what it was for and its size.
+    #[error("{0}")]
+    Alloc(String),
+
     /// A scene that the chosen intersection backend cannot render (`--backend`).
     #[error("{message}")]
     Backend {

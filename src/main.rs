@@ -41,9 +41,6 @@ macro_rules! outln {
     }};
 }
 
-/// The most worker threads `--threads` accepts.
-const MAX_THREADS: usize = 1024;
-
 #[derive(Parser)]
 #[command(
     name = "inimtrace",
@@ -66,7 +63,8 @@ struct Cli {
     #[arg(long, global = true, value_enum, default_value_t = ExrCompression::Zip)]
     exr_compression: ExrCompression,
     /// Memory limit (e.g. 4G, 512M): settings or input files that would need more are refused
-    /// before anything is allocated (default: the memory available on this machine).
+    /// before anything is allocated. The system's limits still apply (the smallest wins):
+    /// MemAvailable, RLIMIT_AS / RLIMIT_DATA and the process's cgroup memory limit.
     #[arg(long, global = true, value_parser = inimtrace::budget::parse_bytes)]
     max_memory: Option<u64>,
     /// Change one setting of the experiment, scene or display (repeatable): a dotted path into
@@ -312,9 +310,7 @@ fn main() {
 fn run() -> Result<()> {
     let cli = Cli::parse();
     if let Some(n) = cli.threads {
-        if n == 0 || n > MAX_THREADS {
-            bail!("--threads must be between 1 and {MAX_THREADS}, got {n}");
-        }
+        inimtrace::budget::check_threads("--threads", n).map_err(anyhow::Error::msg)?;
         rayon::ThreadPoolBuilder::new().num_threads(n).build_global().context("cannot start the thread pool")?;
     }
     if let Some(bytes) = cli.max_memory {

@@ -17,6 +17,13 @@ impl RgbImage {
         Self { width, height, pixels: vec![[0.0; 3]; width * height] }
     }
 
+    /// A black image allocated fallibly: a refused allocation is an error naming `what` and its
+    /// size (one line), not an abort.
+    pub fn try_new(width: usize, height: usize, what: &str) -> crate::Result<Self> {
+        let pixels = crate::budget::try_vec(width.saturating_mul(height), [0.0; 3], what)?;
+        Ok(Self { width, height, pixels })
+    }
+
     /// An image with every pixel set to `value`.
     pub fn filled(width: usize, height: usize, value: [f32; 3]) -> Self {
         Self { width, height, pixels: vec![value; width * height] }

@@ -24,9 +24,6 @@ use crate::convert::{depth_to_numpy, image_to_numpy, numpy_to_image, overrides, 
 use crate::errors::{value_error, IntoPy};
 use crate::objects::{PyDisplay, PyExperiment, PyEye, PyScene};
 
-/// The most worker threads `threads=` accepts (as `--threads`).
-const MAX_THREADS: usize = 1024;
-
 /// Reports progress to a Python callable `callback(stage, done, total)`, taking the GIL only for
 /// the call (at most every 0.1 s per stage, see `inimtrace::progress`). The first exception the
 /// callable raises is kept, later reports are dropped, and the exception is raised when the
@@ -60,15 +57,15 @@ fn detached<T: Send>(
 ) -> PyResult<T> {
     let pool = match threads {
         None => None,
-        Some(n) if n == 0 || n > MAX_THREADS => {
-            return Err(value_error(format!("threads must be between 1 and {MAX_THREADS}, got {n}")))
+        Some(n) => {
+            let n = inimtrace::budget::check_threads("threads", n).map_err(value_error)?;
+            Some(
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(n)
+                    .build()
+                    .map_err(|e| value_error(format!("cannot start {n} threads: {e}")))?,
+            )
         }
-        Some(n) => Some(
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(n)
-                .build()
-                .map_err(|e| value_error(format!("cannot start {n} threads: {e}")))?,
-        ),
     };
     if let Some(cb) = progress.as_ref() {
         if !cb.bind(py).is_callable() {
@@ -104,11 +101,9 @@ fn parse_compression(name: &str) -> PyResult<ExrCompression> {
     )
 }
 
-/// Refuses an image that would not fit in memory before anything is allocated (as the CLI).
+/// Refuses an image that would not fit in memory before anything is allocated (the CLI's check).
 fn check_memory(what: &str, setting: &str, pixels: usize, bytes_each: u64, source: &str) -> PyResult<()> {
-    let mut e = inimtrace::budget::Estimate::default();
-    e.add(what, setting, pixels as u64, bytes_each);
-    e.check_memory(inimtrace::budget::memory_limit(), source).py_err()
+    inimtrace::budget::check_buffer(what, setting, pixels, bytes_each, source).py_err()
 }
 
 /// The display image of `scene` on `display` by `method` ("LC", "PC", "LA", "LA<k>"), as

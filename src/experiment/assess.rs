@@ -67,7 +67,7 @@ fn run(exp: &Experiment, out: Option<&Path>, opts: RunOptions, keep: bool) -> Re
     // Refuse settings that cannot fit in memory before anything is allocated; say so when the
     // run will be long, even when stderr is not a terminal.
     let estimate = estimate(exp);
-    estimate.check_memory(crate::budget::memory_limit(), &exp.source)?;
+    estimate.check_memory(&crate::budget::memory_budget(), &exp.source)?;
     let seconds = estimate.seconds(RAYS_PER_SECOND * rayon::current_num_threads() as f64);
     if seconds > 60.0 {
         eprintln!(

@@ -73,7 +73,8 @@ pub fn render_display_stack<D: RadianceField + ?Sized>(
 ) -> Result<DisplayStack> {
     let display = &exp.display;
     // One image buffer for every method; the stack keeps palette indices when it can.
-    let (mut image, mut depth) = (RgbImage::new(display.lcd.columns(), display.lcd.rows()), Vec::new());
+    let (mut image, mut depth) =
+        (RgbImage::try_new(display.lcd.columns(), display.lcd.rows(), "the display image")?, Vec::new());
     let mut stack = StackBuilder::new(display, exp.methods.len());
     for (k, m) in exp.methods.iter().enumerate() {
         let t = Instant::now();

@@ -420,7 +420,7 @@ impl ObjectInput<'_> {
         // about 100 bytes per triangle.
         let mut estimate = crate::budget::Estimate::default();
         estimate.add("the sphere grid's triangles and their acceleration structure", f("count"), tris, 100);
-        estimate.check_memory(crate::budget::memory_limit(), src)?;
+        estimate.check_memory(&crate::budget::memory_budget(), src)?;
         Ok(Shape::Mesh(Arc::new(procedural::sphere_grid(center, count, spacing, radius, segments))))
     }
 

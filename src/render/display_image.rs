@@ -193,7 +193,7 @@ pub fn render_display_image_with_depth<R: RadianceField + ?Sized>(
     tracer: &R,
     progress: &Progress,
 ) -> Result<(RgbImage, Option<Vec<f32>>)> {
-    let mut image = RgbImage::new(display.lcd.columns(), display.lcd.rows());
+    let mut image = RgbImage::try_new(display.lcd.columns(), display.lcd.rows(), "the display image")?;
     let (depth, known) = render_into(display, method, settings, tracer, progress, &mut image.pixels, Vec::new())?;
     Ok((image, known.then_some(depth)))
 }

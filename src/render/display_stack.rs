@@ -59,7 +59,7 @@ impl DisplayStack {
             }
         }
         let stride = 3 * images.len();
-        let mut values = vec![0f32; lcd.pixel_count() * stride];
+        let mut values = crate::budget::try_vec(lcd.pixel_count() * stride, 0f32, "the display stack")?;
         if stride > 0 {
             values.par_chunks_mut(stride).enumerate().for_each(|(i, dst)| {
                 for (k, img) in images.iter().enumerate() {
@@ -172,7 +172,8 @@ impl StackBuilder {
                 Some((new_index, new_palette)) => (*index, *palette) = (new_index, new_palette),
                 None => {
                     // Too many tuples: the images pushed so far, and this one, dense.
-                    let mut values = vec![0f32; self.width * self.height * stride];
+                    let mut values =
+                        crate::budget::try_vec(self.width * self.height * stride, 0f32, "the display stack")?;
                     let old = 3 * k;
                     values.par_chunks_mut(stride).zip(index.par_iter()).enumerate().for_each(|(i, (dst, &j))| {
                         let j = usize::from(j);

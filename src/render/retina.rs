@@ -54,8 +54,9 @@ pub fn simulate_stack(
     let inv_count = 1.0 / (pupil.len() * subpixels.len()) as f64;
     let fast = FastTransfer::new(display, eye, &pupil);
 
-    let mut images: Vec<RgbImage> = (0..m).map(|_| RgbImage::new(n, n)).collect();
-    let mut rows = vec![0f32; n * n * stride];
+    let mut images: Vec<RgbImage> =
+        (0..m).map(|_| RgbImage::try_new(n, n, "a retinal image")).collect::<Result<_>>()?;
+    let mut rows = crate::budget::try_vec(n * n * stride, 0f32, "the retinal images' rows")?;
     if stride == 0 {
         return Ok(images);
     }

@@ -224,7 +224,7 @@ impl Scene {
             },
             Material::Texture(tex) => match self.surface_uv(hit) {
                 Some(uv) => tex.sample(uv),
-                None => tex.mean,
+                None => tex.mean(),
             },
             Material::Grating(g) => g.at(target::hit_tangent(ray, hit.t)),
             Material::Edge(e) => e.at(target::hit_tangent(ray, hit.t)),
