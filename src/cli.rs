@@ -8,7 +8,7 @@ use clap::Args;
 use glam::DVec3;
 
 use inimtrace::io::exr::{Attributes, ExrCompression};
-use inimtrace::optics::{Aperture, Display, Eye, Focus, Retina};
+use inimtrace::optics::{Aperture, Display, Eye, Retina};
 use inimtrace::overrides::Override;
 use inimtrace::render::{with_fields, BackendChoice, Fields};
 use inimtrace::scene::Scene;
@@ -78,11 +78,8 @@ pub(crate) struct EyeArgs {
 
 impl EyeArgs {
     pub(crate) fn eye(&self) -> Result<(Eye, Retina)> {
-        let aperture = match (self.pinhole, self.focus_mm, self.focus_diopters) {
-            (true, _, _) => Aperture::Pinhole,
-            (false, Some(mm), None) => Aperture::ThinLens { pupil_diameter: self.pupil, focus: Focus::Millimetres(mm) },
-            (false, None, Some(d)) => Aperture::ThinLens { pupil_diameter: self.pupil, focus: Focus::Diopters(d) },
-            _ => bail!("give --pinhole, --focus-mm or --focus-diopters"),
+        let Some(aperture) = Aperture::stated(self.pinhole, self.focus_mm, self.focus_diopters, self.pupil) else {
+            bail!("give exactly one of --pinhole, --focus-mm or --focus-diopters")
         };
         let eye = Eye {
             retina_distance: self.retina_distance,

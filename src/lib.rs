@@ -1,7 +1,7 @@
 //! inimtrace: simulates how a near-eye integral-imaging (InIm) light-field display looks to a
 //! human eye, and scores the ways of rendering its display image (LensletCenter, PupilCenter,
-//! LensletAverage), after Dorado et al., "A framework for assessing rendering techniques for
-//! near-eye integral imaging displays".
+//! LensletAverage), after O. Doronin, E. Sahin, R. Bregovic and A. Gotchev, "A framework for
+//! assessing rendering techniques for near-eye integral imaging displays", ICIP 2020.
 //!
 //! Conventions (see README): millimetres; the eye's pupil centre is the origin; +z points from
 //! the eye toward the display and the scene, +x right, +y up; images are stored with row 0 at

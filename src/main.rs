@@ -366,8 +366,7 @@ fn run() -> Result<()> {
             let settings =
                 DisplayRenderSettings { samples_per_pixel, reference_plane_z: reference_plane, eye_position };
             let (img, depth, name) = with_field(&scene, backend, |fields| {
-                let p =
-                    Progress::new(display.lcd.rows() as u64, &format!("display image {}", method.short_name()), quiet);
+                let p = Progress::new(display.lcd.rows() as u64, &format!("display image {}", method.name()), quiet);
                 let (img, depth) = render_display_image_with_depth(&display, method, &settings, fields.with_depth, &p)?;
                 p.finish();
                 Ok((img, depth, fields.name))

@@ -16,6 +16,7 @@ use inimtrace::measure::stats::gram_matrices;
 use inimtrace::metrics::{self, SsimConstants};
 use inimtrace::optics::transfer::eye_scene_ray;
 use inimtrace::optics::transfer::eye_to_lcd;
+use inimtrace::optics::transfer::FastTransfer;
 use inimtrace::optics::{Display, Eye, Focus, Lattice, Retina};
 use inimtrace::progress::Progress;
 use inimtrace::raster::RgbImage;
@@ -338,6 +339,45 @@ fn the_eye_to_lcd_transfer_is_eq_1() {
         let pupil = DVec2::new(2.5 * f * (f * 40.0).cos(), 2.5 * f * (f * 40.0).sin());
         let slow = eye_to_lcd(&display, &eye, tangent, pupil).lcd;
         assert!((t.lcd_point(tangent, pupil) - slow).length() < 1e-12, "{tangent} {pupil}");
+    }
+}
+
+#[test]
+fn eye_to_lcd_and_fast_transfer_agree_bit_for_bit() {
+    // At every pupil-grid point, for an eye off the axis and off the pupil plane, on square and
+    // tilted lenslets: the same LCD point (to the bit) and the same pixels, one ray or batched.
+    let mut tilted = Display::paper();
+    let p = tilted.lenslets.matrix.x_axis.x;
+    tilted.lenslets =
+        Lattice::new(DVec2::new(0.13, -0.07), DMat2::from_angle(0.3) * DMat2::from_diagonal(DVec2::splat(p))).unwrap();
+    for display in [Display::paper(), tilted] {
+        let mut eye = Eye::thin_lens(5.0, Focus::Millimetres(350.0), 8);
+        eye.position = DVec3::new(0.7, -0.4, 1.5);
+        let pupil = eye.pupil_samples();
+        let fast = FastTransfer::new(&display, &eye, &pupil);
+        let t = EyeToLcd::new(&display, &eye);
+        let tangents: Vec<DVec2> = (0..400)
+            .map(|k| {
+                let f = k as f64 / 400.0;
+                DVec2::new(0.3 * (f * 7.1).sin(), 0.3 * (f * 3.3).cos())
+            })
+            .collect();
+        let (mut scratch, mut batch_fast, mut batch_t) =
+            (Vec::new(), vec![0u32; tangents.len()], vec![0u32; tangents.len()]);
+        let mut hits = 0;
+        for (k, &s) in pupil.iter().enumerate() {
+            for &tangent in &tangents {
+                let (a, b) = (fast.lcd_point(tangent, k), t.lcd_point(tangent, s));
+                assert_eq!((a.x.to_bits(), a.y.to_bits()), (b.x.to_bits(), b.y.to_bits()), "{tangent} {s}");
+                assert_eq!(fast.pixel_index(tangent, k), t.pixel_index(tangent, s));
+                hits += usize::from(t.pixel_index(tangent, s).is_some());
+            }
+            fast.pixel_indices(&tangents, k, &mut scratch, &mut batch_fast);
+            let samples: Vec<EyeSample> = tangents.iter().map(|&tangent| EyeSample { tangent, pupil: s }).collect();
+            t.pixel_indices(&samples, &mut batch_t);
+            assert_eq!(batch_fast, batch_t, "pupil sample {k}");
+        }
+        assert!(hits > pupil.len() * tangents.len() / 2, "most rays meet the LCD: {hits}");
     }
 }
 

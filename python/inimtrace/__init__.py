@@ -1,8 +1,8 @@
 """inimtrace: how a near-eye integral-imaging light-field display looks to a human eye.
 
-The paper's pipeline (Dorado et al., "A framework for assessing rendering techniques for
-near-eye integral imaging displays") with NumPy arrays in and out. Every function runs the same
-library code as the CLI command of the same name, so its outputs equal the CLI's bit for bit:
+The paper's pipeline (O. Doronin, E. Sahin, R. Bregovic and A. Gotchev, "A framework for
+assessing rendering techniques for near-eye integral imaging displays", ICIP 2020) with NumPy
+arrays in and out. Every function runs the same library code as the CLI command of the same name, so its outputs equal the CLI's bit for bit:
 
     import inimtrace
     scene, display = inimtrace.Scene.paper(), inimtrace.Display.paper()

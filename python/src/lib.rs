@@ -1,7 +1,7 @@
 //! `inimtrace._inimtrace`, the extension module of the `inimtrace` Python package: the paper's
-//! pipeline (Dorado et al., Sec. 2-4 and Table 1) with NumPy arrays in and out. Every function
-//! runs the library code of the CLI command of the same name, so its outputs equal the CLI's bit
-//! for bit. `python/inimtrace/__init__.py` is the package's pure-Python part (the `Assessment`
+//! pipeline (Doronin et al., ICIP 2020, Sec. 2-4 and Table 1) with NumPy arrays in and out.
+//! Every function runs the library code of the CLI command of the same name, so its outputs
+//! equal the CLI's bit for bit. `python/inimtrace/__init__.py` is the package's pure-Python part (the `Assessment`
 //! record, docstrings); `python/inimtrace/__init__.pyi` its type stubs.
 //!
 //! One concept per file: `errors.rs` (the exception classes), `convert.rs` (arrays, `set=`,

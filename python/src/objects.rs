@@ -9,7 +9,7 @@ use pyo3::prelude::*;
 
 use inimtrace::experiment::{Experiment, ExperimentSpec};
 use inimtrace::info::DisplayParameters;
-use inimtrace::optics::{Aperture, Display, Eye, Focus, Retina};
+use inimtrace::optics::{Aperture, Display, Eye, Retina};
 use inimtrace::scene::Scene;
 use inimtrace::settings::{load_display_part, load_experiment, load_scene_part};
 
@@ -144,12 +144,8 @@ impl PyEye {
         retina_distance: f64,
         position: (f64, f64, f64),
     ) -> PyResult<Self> {
-        let aperture = match (pinhole, focus_mm, focus_diopters) {
-            (true, None, None) => Aperture::Pinhole,
-            (false, Some(mm), None) => Aperture::ThinLens { pupil_diameter: pupil, focus: Focus::Millimetres(mm) },
-            (false, None, Some(d)) => Aperture::ThinLens { pupil_diameter: pupil, focus: Focus::Diopters(d) },
-            _ => return Err(value_error("Eye: give exactly one of pinhole=True, focus_mm or focus_diopters")),
-        };
+        let aperture = Aperture::stated(pinhole, focus_mm, focus_diopters, pupil)
+            .ok_or_else(|| value_error("Eye: give exactly one of pinhole=True, focus_mm or focus_diopters"))?;
         let eye =
             Eye { retina_distance, aperture, pupil_grid, position: DVec3::new(position.0, position.1, position.2) };
         eye.validate("Eye()").py_err()?;
@@ -323,10 +319,10 @@ impl PyExperiment {
     fn display(&self) -> PyDisplay {
         PyDisplay { inner: self.inner.display.clone() }
     }
-    /// The methods' short names ("LC", "PC", "LA").
+    /// The methods' names ("LC", "PC", "LA"; "LA3" for a 3 x 3 LensletAverage).
     #[getter]
-    fn methods(&self) -> Vec<&'static str> {
-        self.inner.methods.iter().map(|m| m.short_name()).collect()
+    fn methods(&self) -> Vec<String> {
+        self.inner.methods.iter().map(|m| m.name()).collect()
     }
     /// The eye cases as (name, Eye) pairs.
     #[getter]

@@ -146,7 +146,7 @@ pub fn render_display<'py>(
     let settings = DisplayRenderSettings { samples_per_pixel, reference_plane_z: reference_plane, eye_position };
     let (img, z) = detached(py, threads, progress, || {
         with_fields(scene, backend, |fields| {
-            let p = Progress::new(display.lcd.rows() as u64, &format!("display image {}", method.short_name()), true);
+            let p = Progress::new(display.lcd.rows() as u64, &format!("display image {}", method.name()), true);
             let out = render_display_image_with_depth(display, method, &settings, fields.with_depth, &p)?;
             p.finish();
             Ok(out)
@@ -282,7 +282,7 @@ pub fn assess<'py>(
     let images = PyDict::new(py);
     let depth_planes = PyDict::new(py);
     for ((m, img), depth) in exp.methods.iter().zip(displays).zip(depths) {
-        let stem = format!("display_{}", m.short_name());
+        let stem = format!("display_{}", m.name());
         let (rows, columns) = (img.height, img.width);
         images.set_item(&stem, image_to_numpy(py, img)?)?;
         match depth {
@@ -293,7 +293,7 @@ pub fn assess<'py>(
     for ((case, gt), sims) in exp.cases.iter().zip(ground_truths).zip(perceived) {
         images.set_item(format!("gt_{}", case.name), image_to_numpy(py, gt)?)?;
         for (m, sim) in exp.methods.iter().zip(sims) {
-            images.set_item(format!("sim_{}_{}", m.short_name(), case.name), image_to_numpy(py, sim)?)?;
+            images.set_item(format!("sim_{}_{}", m.name(), case.name), image_to_numpy(py, sim)?)?;
         }
     }
     result.set_item("images", images)?;

@@ -193,6 +193,10 @@ def test_assess_converged_scores_and_intervals_equal_cli(cli, tmp_path):
     cli("assess", path, "--out", cli_out, *SMALL_DISPLAY_ARGS)
     exp = inimtrace.Experiment.load(path, set=SMALL_DISPLAY)
     assert exp.estimator == "converged"
+    assert exp.methods == ["LC", "LA3"]
     result = inimtrace.assess(exp, threads=1)
     check_assessment(result, cli_out, "py-converged")
+    # LA3 keeps its name: in the scores, the images and the CLI's file names.
+    assert [s["method"] for s in result.scores] == ["LC", "LA3"]
+    assert {"display_LA3", "sim_LA3_Cen"} <= set(result.images)
     assert all(s["psnr_ci95_db"] > 0 and s["replicates"] == 4 for s in result.scores)

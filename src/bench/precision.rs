@@ -244,7 +244,7 @@ pub fn precision_series(
         let mut cells = Cells::new();
         for sc in &scores {
             let Some(i) = exp.cases.iter().position(|c| c.name == sc.eye_case) else { continue };
-            let Some(k) = exp.methods.iter().position(|x| x.short_name() == sc.method) else { continue };
+            let Some(k) = exp.methods.iter().position(|x| x.name() == sc.method) else { continue };
             cells.insert((sc.eye_case.clone(), labels[k]), (sc.psnr.mean, sc.ssim.mean));
             let mut r = row(Estimator::Grid, i, k, spp, (seconds, rays), (sc.psnr.mean, sc.ssim.mean));
             (r.pupil_grid, r.retina_samples) = (pupil, retina);

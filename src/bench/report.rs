@@ -10,32 +10,50 @@ use super::options::{BenchRow, BuildRecord};
 use super::plots::write_plots;
 use super::BenchReport;
 use crate::error::{Error, Result};
-
-fn csv_field(s: &str) -> String {
-    if s.contains([',', '"', '\n']) {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s.to_string()
-    }
-}
+use crate::io::csv_table::CsvTable;
 
 /// `bench.csv`: one line per row, the columns of [`BenchRow`] in order.
 pub fn rows_csv(rows: &[BenchRow]) -> String {
-    let mut csv = String::from(
-        "series,sweep,estimator,quantity,eye_case,focus_mm,backend,method,parameter,samples,seconds,rays,rays_per_second,psnr_db,ssim,\
-         scene,lcd_resolution,retina_resolution,display_samples,la_grid,pupil_grid,pupil_samples,retina_samples,\
-         reference,threads,cores,git_revision\n",
-    );
+    let mut csv = CsvTable::new();
+    csv.row([
+        "series",
+        "sweep",
+        "estimator",
+        "quantity",
+        "eye_case",
+        "focus_mm",
+        "backend",
+        "method",
+        "parameter",
+        "samples",
+        "seconds",
+        "rays",
+        "rays_per_second",
+        "psnr_db",
+        "ssim",
+        "scene",
+        "lcd_resolution",
+        "retina_resolution",
+        "display_samples",
+        "la_grid",
+        "pupil_grid",
+        "pupil_samples",
+        "retina_samples",
+        "reference",
+        "threads",
+        "cores",
+        "git_revision",
+    ]);
     for r in rows {
         let fields = [
-            csv_field(r.series.as_str()),
-            csv_field(r.sweep.as_str()),
+            r.series.as_str().to_string(),
+            r.sweep.as_str().to_string(),
             r.estimator.map(|e| e.as_str()).unwrap_or_default().to_string(),
-            csv_field(r.quantity.as_str()),
-            csv_field(&r.eye_case),
+            r.quantity.as_str().to_string(),
+            r.eye_case.clone(),
             r.focus_mm.map(|f| f.to_string()).unwrap_or_default(),
-            csv_field(r.backend.as_str()),
-            csv_field(r.method.as_str()),
+            r.backend.as_str().to_string(),
+            r.method.as_str().to_string(),
             r.parameter.to_string(),
             r.samples.to_string(),
             r.seconds.to_string(),
@@ -43,7 +61,7 @@ pub fn rows_csv(rows: &[BenchRow]) -> String {
             r.rays_per_second.to_string(),
             r.psnr_db.to_string(),
             r.ssim.to_string(),
-            csv_field(&r.scene),
+            r.scene.clone(),
             r.lcd_resolution.to_string(),
             r.retina_resolution.to_string(),
             r.display_samples.to_string(),
@@ -51,34 +69,32 @@ pub fn rows_csv(rows: &[BenchRow]) -> String {
             r.pupil_grid.to_string(),
             r.pupil_samples.to_string(),
             r.retina_samples.to_string(),
-            csv_field(&r.reference),
+            r.reference.clone(),
             r.threads.to_string(),
             r.cores.to_string(),
-            csv_field(&r.git_revision),
+            r.git_revision.clone(),
         ];
-        csv.push_str(&fields.join(","));
-        csv.push('\n');
+        csv.row(fields);
     }
-    csv
+    csv.finish()
 }
 
 /// `builds.csv`: one line per mesh backend.
 fn builds_csv(builds: &[BuildRecord]) -> String {
-    let mut csv = String::from("backend,triangles,build_seconds,constructor_seconds,threads,cores,git_revision\n");
+    let mut csv = CsvTable::new();
+    csv.row(["backend", "triangles", "build_seconds", "constructor_seconds", "threads", "cores", "git_revision"]);
     for b in builds {
-        let _ = writeln!(
-            csv,
-            "{},{},{},{},{},{},{}",
-            csv_field(b.backend.as_str()),
-            b.triangles,
-            b.build_seconds,
-            b.constructor_seconds,
-            b.threads,
-            b.cores,
-            csv_field(&b.git_revision)
-        );
+        csv.row([
+            b.backend.as_str().to_string(),
+            b.triangles.to_string(),
+            b.build_seconds.to_string(),
+            b.constructor_seconds.to_string(),
+            b.threads.to_string(),
+            b.cores.to_string(),
+            b.git_revision.clone(),
+        ]);
     }
-    csv
+    csv.finish()
 }
 
 /// Every report but `bench.json`: the CSVs, `summary.md`, `bench.md` and the plots.
@@ -152,9 +168,19 @@ mod tests {
     use super::*;
 
     #[test]
-    fn csv_fields_with_commas_are_quoted() {
-        assert_eq!(csv_field("a,b"), "\"a,b\"");
-        assert_eq!(csv_field("say \"x\", y"), "\"say \"\"x\"\", y\"");
-        assert_eq!(csv_field("plain"), "plain");
+    fn builds_csv_quotes_only_fields_that_need_it() {
+        let b = BuildRecord {
+            backend: super::super::options::Backend::Bvh,
+            triangles: 4,
+            build_seconds: 0.5,
+            constructor_seconds: 0.75,
+            threads: 2,
+            cores: 2,
+            git_revision: "abc, \"dirty\"".into(),
+        };
+        assert_eq!(
+            builds_csv(&[b]),
+            "backend,triangles,build_seconds,constructor_seconds,threads,cores,git_revision\nbvh,4,0.5,0.75,2,2,\"abc, \"\"dirty\"\"\"\n"
+        );
     }
 }

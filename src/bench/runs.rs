@@ -24,7 +24,7 @@ use crate::metrics::{self, SsimConstants};
 use crate::progress::Progress;
 use crate::raster::RgbImage;
 use crate::render::backend::scene_meshes;
-use crate::render::{FacingPlanes, Method, RadianceField, SceneTracer};
+use crate::render::{planar_kernel, FacingPlanes, Method, RadianceField, SceneTracer};
 use crate::scene::{Mesh, Scene};
 
 /// A backend that can render the scene, and its radiance field.
@@ -75,10 +75,11 @@ impl Backends {
         })
     }
 
-    /// The radiance fields of `scene` on these backends.
+    /// The radiance fields of `scene` on these backends; the fused kernel when the scene gets
+    /// it everywhere else ([`planar_kernel`], as [`crate::render::with_scene_fields`] decides).
     pub fn fields<'a>(&'a self, scene: &'a Scene) -> Fields<'a> {
         Fields {
-            fused: self.analytic.as_ref().and_then(|a| FacingPlanes::new(scene, a)),
+            fused: self.analytic.as_ref().and_then(|a| planar_kernel(scene, a)),
             analytic: self.analytic.as_ref().map(|a| SceneTracer { scene, backend: a }),
             #[cfg(feature = "embree")]
             embree: SceneTracer { scene, backend: &self.embree },

@@ -11,15 +11,13 @@ use super::metadata;
 use super::report::write_reports;
 use super::stages::{render_display_stack, stage_time, table1_each};
 use super::{AssessReport, Experiment};
-use crate::accel::analytic::AnalyticRects;
 use crate::budget::Estimate;
 use crate::error::Result;
 use crate::io::exr::{Attributes, ExrCompression};
 use crate::io::output::OutputDir;
 use crate::optics::Aperture;
 use crate::raster::RgbImage;
-use crate::render::backend::resolve;
-use crate::render::{with_fields, BackendChoice, FacingPlanes, RadianceField};
+use crate::render::{with_scene_fields, BackendChoice, FieldUser, RadianceField};
 
 /// What the display EXRs' `Z` channel holds (also written into their headers).
 pub const Z_CHANNEL_NOTE: &str = "hit distance in mm along each camera ray from its start on the reference plane; \
@@ -84,17 +82,27 @@ fn run(exp: &Experiment, out: Option<&Path>, opts: RunOptions, keep: bool) -> Re
     // appears under its final name only when complete; `results.json` comes last.
     let dir = out.map(OutputDir::open).transpose()?;
     let dir = dir.as_ref();
-    // The paper's kind of scene: the fused planar kernel, called directly (no virtual call per
-    // ray) for both images and depths. Everything else: the backend chosen by `with_fields`.
-    if resolve(&exp.scene, opts.backend) == BackendChoice::Analytic && exp.scene.is_analytic() {
-        let backend = AnalyticRects::new(&exp.scene)?;
-        if let Some(fast) = FacingPlanes::new(&exp.scene, &backend) {
-            return assess_with(exp, dir, opts, keep, &fast, &fast, "analytic (fused planar kernel)", start);
+    // The fields `with_scene_fields` chooses (the paper's kind of scene: the fused planar
+    // kernel), called with their concrete types: no virtual call per ray.
+    struct Assess<'a> {
+        exp: &'a Experiment,
+        dir: Option<&'a OutputDir>,
+        opts: RunOptions,
+        keep: bool,
+        start: Instant,
+    }
+    impl FieldUser for Assess<'_> {
+        type Output = Assessment;
+        fn run<S: RadianceField, D: RadianceField>(
+            self,
+            shade: &S,
+            with_depth: &D,
+            name: &'static str,
+        ) -> Result<Assessment> {
+            assess_with(self.exp, self.dir, self.opts, self.keep, shade, with_depth, name, self.start)
         }
     }
-    with_fields(&exp.scene, opts.backend, |fields| {
-        assess_with(exp, dir, opts, keep, fields.shade, fields.with_depth, fields.name, start)
-    })
+    with_scene_fields(&exp.scene, opts.backend, Assess { exp, dir, opts, keep, start })
 }
 
 /// Creates the output directory and checks it can be written, before any long computation
@@ -178,7 +186,7 @@ fn assess_with<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
         let m = exp.methods[k];
         let mut attributes = metadata::common("display image", name);
         attributes.extend(metadata::display_image(m, display, &exp.render, backend_name, depth.is_some()));
-        let stem = format!("display_{}", m.short_name());
+        let stem = format!("display_{}", m.name());
         let (exr, png) = rayon::join(
             || {
                 dir.write_with(&format!("{stem}.exr"), |p| {
@@ -269,7 +277,7 @@ fn write_case(
     for (m, image) in exp.methods.iter().zip(&result.perceived) {
         let attributes =
             measured(metadata::perceived(name, Some(*m), Some(&case.name), &case.eye, &exp.retina, &exp.display, None));
-        jobs.push(Job { stem: format!("sim_{}_{}", m.short_name(), case.name), image, attributes });
+        jobs.push(Job { stem: format!("sim_{}_{}", m.name(), case.name), image, attributes });
     }
     jobs.par_iter().try_for_each(|j| -> Result<()> {
         dir.write_with(&format!("{}.exr", j.stem), |p| {
@@ -285,29 +293,28 @@ fn write_case(
 /// then of each method's perceived image.
 fn figure<'a>(exp: &Experiment, cells: &'a [Vec<RgbImage>], scores: &[super::Score]) -> crate::io::figure::Figure<'a> {
     let mut column_labels = vec!["GT".to_string()];
-    column_labels.extend(exp.methods.iter().map(|m| m.short_name().to_string()));
-    let rows = exp
-        .cases
-        .iter()
-        .enumerate()
-        .map(|(c, case)| {
-            let label = match case.eye.aperture {
-                Aperture::Pinhole => format!("{}: pinhole", case.name),
-                Aperture::ThinLens { focus, .. } => {
-                    format!("{}: focus {:.0} mm ({:.2} D)", case.name, focus.distance_mm(), focus.diopters())
+    column_labels.extend(exp.methods.iter().map(|m| m.name()));
+    let rows =
+        exp.cases
+            .iter()
+            .enumerate()
+            .map(|(c, case)| {
+                let label = match case.eye.aperture {
+                    Aperture::Pinhole => format!("{}: pinhole", case.name),
+                    Aperture::ThinLens { focus, .. } => {
+                        format!("{}: focus {:.0} mm ({:.2} D)", case.name, focus.distance_mm(), focus.diopters())
+                    }
+                };
+                let mut row = vec![(&cells[c][0], None)];
+                for (k, m) in exp.methods.iter().enumerate() {
+                    let caption = scores.iter().find(|s| s.method == m.name() && s.eye_case == case.name).map(|s| {
+                        format!("PSNR {} dB, SSIM {:.3}", crate::metrics::format_db(s.psnr.mean, 2), s.ssim.mean)
+                    });
+                    row.push((&cells[c][k + 1], caption));
                 }
-            };
-            let mut row = vec![(&cells[c][0], None)];
-            for (k, m) in exp.methods.iter().enumerate() {
-                let caption = scores
-                    .iter()
-                    .find(|s| s.method == m.short_name() && s.eye_case == case.name)
-                    .map(|s| format!("PSNR {} dB, SSIM {:.3}", crate::metrics::format_db(s.psnr.mean, 2), s.ssim.mean));
-                row.push((&cells[c][k + 1], caption));
-            }
-            (label, row)
-        })
-        .collect();
+                (label, row)
+            })
+            .collect();
     crate::io::figure::Figure {
         title: Some(format!(
             "{}: perceived retinal images; PSNR and SSIM ({}) against the ground truth (GT)",

@@ -138,7 +138,7 @@ fn case_outputs(exp: &Experiment, case: &EyeCase, measured: &CaseMeasurement) ->
         .iter()
         .zip(&measured.cells)
         .map(|(m, cell)| Score {
-            method: m.short_name().into(),
+            method: m.name().into(),
             eye_case: case.name.clone(),
             psnr: cell.psnr,
             ssim: cell.ssim,

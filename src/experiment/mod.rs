@@ -30,7 +30,7 @@ use crate::io::text::{base_dir, read_text, toml_error};
 use crate::io::{load_display, load_scene};
 use crate::measure::spec::MeasurementSpec;
 use crate::metrics::SsimConstants;
-use crate::optics::{Aperture, Display, Eye, Focus, Retina};
+use crate::optics::{Aperture, Display, Eye, Retina};
 use crate::render::{DisplayRenderSettings, Method};
 use crate::scene::Scene;
 
@@ -243,11 +243,11 @@ impl Experiment {
                 (Method::LensletAverage { .. }, true) => Method::LensletAverage { grid: dr.la_grid },
                 (other, _) => other,
             };
-            if methods.iter().any(|x: &Method| x.short_name() == method.short_name()) {
+            if methods.iter().any(|x: &Method| x.name() == method.name()) {
                 return Err(Error::invalid(
                     source,
                     format!("methods[{i}]"),
-                    format!("{} appears twice (output file names would collide)", method.short_name()),
+                    format!("{} appears twice (output file names would collide)", method.name()),
                 ));
             }
             methods.push(method);
@@ -309,22 +309,14 @@ impl Experiment {
             if cases.iter().any(|x: &EyeCase| x.name == c.name) {
                 return Err(Error::invalid(source, format!("{field}.name"), format!("`{}` appears twice", c.name)));
             }
-            let aperture = match (c.pinhole, c.focus_mm, c.focus_diopters) {
-                (true, None, None) => Aperture::Pinhole,
-                (false, Some(mm), None) => {
-                    Aperture::ThinLens { pupil_diameter: e.pupil_diameter, focus: Focus::Millimetres(mm) }
-                }
-                (false, None, Some(d)) => {
-                    Aperture::ThinLens { pupil_diameter: e.pupil_diameter, focus: Focus::Diopters(d) }
-                }
-                _ => {
-                    return Err(Error::invalid(
+            let aperture =
+                Aperture::stated(c.pinhole, c.focus_mm, c.focus_diopters, e.pupil_diameter).ok_or_else(|| {
+                    Error::invalid(
                         source,
-                        field,
+                        &field,
                         "give exactly one of `pinhole = true`, `focus_mm` or `focus_diopters`",
-                    ))
-                }
-            };
+                    )
+                })?;
             let eye = Eye { retina_distance: e.retina_distance, aperture, pupil_grid: e.pupil_grid, position };
             eye.validate(source).map_err(|err| prefix_field(err, &format!("{field} / eye.")))?;
             cases.push(EyeCase { name: c.name.clone(), eye });

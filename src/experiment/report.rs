@@ -61,7 +61,7 @@ pub struct AssessReport {
 
 /// Table 1 as Markdown: rows are eye cases, columns PSNR per method | SSIM per method.
 pub fn table_markdown(report: &AssessReport, exp: &Experiment) -> String {
-    let methods: Vec<&str> = exp.methods.iter().map(|m| m.short_name()).collect();
+    let methods: Vec<String> = exp.methods.iter().map(|m| m.name()).collect();
     let mut s = format!(
         "# {}: PSNR (dB) and SSIM ({}) of the perceived retinal image against the ground truth\n\n",
         report.experiment, report.ssim_constants

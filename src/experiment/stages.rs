@@ -48,10 +48,10 @@ pub fn render_display_images<D: RadianceField + ?Sized>(
     let mut depths = Vec::new();
     for m in &exp.methods {
         let t = Instant::now();
-        let p = Progress::new(display.lcd.rows() as u64, &format!("display image {}", m.short_name()), quiet);
+        let p = Progress::new(display.lcd.rows() as u64, &format!("display image {}", m.name()), quiet);
         let (img, depth) = render_display_image_with_depth(display, *m, &exp.render, with_depth, &p)?;
         p.finish();
-        stage_time(stages, "render_display", Some(m.short_name()), None, t);
+        stage_time(stages, "render_display", Some(m.name().as_str()), None, t);
         displays.push(img);
         depths.push(depth);
     }
@@ -78,16 +78,16 @@ pub fn render_display_stack<D: RadianceField + ?Sized>(
     let mut stack = StackBuilder::new(display, exp.methods.len());
     for (k, m) in exp.methods.iter().enumerate() {
         let t = Instant::now();
-        let p = Progress::new(display.lcd.rows() as u64, &format!("display image {}", m.short_name()), quiet);
+        let p = Progress::new(display.lcd.rows() as u64, &format!("display image {}", m.name()), quiet);
         let known = render_display_image_into(display, *m, &exp.render, with_depth, &p, &mut image, &mut depth)?;
         p.finish();
-        stage_time(stages, "render_display", Some(m.short_name()), None, t);
+        stage_time(stages, "render_display", Some(m.name().as_str()), None, t);
         let t = Instant::now();
         finished(k, RgbView::from(&image), known.then_some(depth.as_slice()))?;
-        stage_time(stages, "write_display_image", Some(m.short_name()), None, t);
+        stage_time(stages, "write_display_image", Some(m.name().as_str()), None, t);
         let t = Instant::now();
         stack.push(RgbView::from(&image))?;
-        stage_time(stages, "pack_display_images", Some(m.short_name()), None, t);
+        stage_time(stages, "pack_display_images", Some(m.name().as_str()), None, t);
     }
     stack.finish()
 }
@@ -202,7 +202,7 @@ fn case_scores(exp: &Experiment, c: usize, gt: &RgbImage, sims: &[RgbImage]) -> 
         .zip(&exp.methods)
         .map(|(sim, m)| -> Result<Score> {
             Ok(Score {
-                method: m.short_name().into(),
+                method: m.name().into(),
                 eye_case: exp.cases[c].name.clone(),
                 psnr: metrics::psnr(sim, gt)?.into(),
                 ssim: metrics::ssim(sim, gt, exp.ssim)?.into(),

@@ -3,6 +3,7 @@
 //! images and their typed header attributes, PNG previews and figures. The loaders most callers
 //! need are re-exported here.
 
+pub mod csv_table;
 pub mod display_file;
 pub mod exr;
 mod exr_attributes;

@@ -18,8 +18,7 @@ use glam::DVec2;
 use rayon::prelude::*;
 
 use super::sampler::Sampler;
-use crate::optics::display::PixelIndexer;
-use crate::optics::transfer::{eye_scene_ray, lcd_pixels};
+use crate::optics::transfer::{eye_scene_ray, FastTransfer};
 use crate::optics::{Display, Eye, Retina};
 use crate::progress::Progress;
 use crate::raster::RgbImage;
@@ -61,65 +60,36 @@ pub trait PairedSource: Sync {
     }
 }
 
-/// Eq. (1) from the eye to the LCD for any retina tangent and pupil point, with the per-eye
-/// constants folded in. Same arithmetic as the grid simulation's `FastTransfer`, so at one of
+/// Eq. (1) from the eye to the LCD for any retina tangent and pupil point: the grid
+/// simulation's [`FastTransfer`] through pupil points instead of pupil-grid indices, so at one of
 /// its pupil-grid points both give the same LCD point bit for bit (tested).
 pub struct EyeToLcd<'a> {
-    display: &'a Display,
-    eye_xy: DVec2,
-    v0: f64,
-    d1: f64,
-    to_lenslets: f64,
-    lenslet_power: f64,
-    v2: f64,
-    indexer: PixelIndexer,
+    transfer: FastTransfer<'a>,
 }
 
 impl<'a> EyeToLcd<'a> {
     pub fn new(display: &'a Display, eye: &Eye) -> Self {
-        Self {
-            display,
-            eye_xy: eye.position.truncate(),
-            v0: eye.retina_distance,
-            d1: eye.power(),
-            to_lenslets: display.lenslet_z() - eye.position.z,
-            lenslet_power: display.lenslet_power(),
-            v2: display.lenslets_to_lcd,
-            indexer: PixelIndexer::new(&display.lcd),
-        }
+        Self { transfer: FastTransfer::for_eye(display, eye) }
     }
 
     /// Where the eye ray for retina direction `tangent` through pupil point `pupil` meets the
     /// LCD plane.
     #[inline(always)]
     pub fn lcd_point(&self, tangent: DVec2, pupil: DVec2) -> DVec2 {
-        let x1 = pupil + self.eye_xy;
-        let w1 = tangent + (pupil / self.v0 - pupil * self.d1);
-        let x2 = x1 + w1 * self.to_lenslets;
-        let c = self.display.lenslets.center(self.display.lenslets.nearest(x2));
-        let w2 = w1 - (x2 - c) * self.lenslet_power;
-        x2 + w2 * self.v2
+        self.transfer.lcd_point_through(tangent, pupil)
     }
 
     /// The LCD pixel that ray meets, if any.
     #[inline(always)]
     pub fn pixel_index(&self, tangent: DVec2, pupil: DVec2) -> Option<usize> {
-        self.indexer.index(self.lcd_point(tangent, pupil))
+        self.transfer.pixel_index_through(tangent, pupil)
     }
 
     /// [`EyeToLcd::pixel_index`] of every sample (`u32::MAX`: the ray misses the LCD), in
-    /// passes over the batch ([`lcd_pixels`]); same arithmetic as one ray at a time, so the same
-    /// pixels (tested).
+    /// passes over the batch; same arithmetic as one ray at a time, so the same pixels (tested).
     pub fn pixel_indices(&self, samples: &[EyeSample], out: &mut [u32]) {
-        let n = samples.len();
-        let mut scratch = vec![DVec2::ZERO; 3 * n];
-        let (x2s, rest) = scratch.split_at_mut(n);
-        let (w1s, centres) = rest.split_at_mut(n);
-        for ((s, x2), w1) in samples.iter().zip(x2s.iter_mut()).zip(w1s.iter_mut()) {
-            *w1 = s.tangent + (s.pupil / self.v0 - s.pupil * self.d1);
-            *x2 = (s.pupil + self.eye_xy) + *w1 * self.to_lenslets;
-        }
-        lcd_pixels(self.display, &self.indexer, x2s, w1s, centres, out);
+        let mut scratch = Vec::new();
+        self.transfer.pixel_indices_through(|i| (samples[i].tangent, samples[i].pupil), &mut scratch, out);
     }
 }
 

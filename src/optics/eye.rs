@@ -52,6 +52,27 @@ pub enum Aperture {
     ThinLens { pupil_diameter: f64, focus: Focus },
 }
 
+impl Aperture {
+    /// The aperture an eye is stated with everywhere (experiment `eye_cases`, the CLI's eye
+    /// flags, Python's `Eye`): exactly one of a pinhole, a focus distance in mm or a focus in
+    /// diopters, the lens with a pupil of `pupil_diameter` mm. `None` when not exactly one is
+    /// given; the caller names its own fields in the error. The values are checked with the
+    /// rest of the eye ([`Eye::validate`]).
+    pub fn stated(
+        pinhole: bool,
+        focus_mm: Option<f64>,
+        focus_diopters: Option<f64>,
+        pupil_diameter: f64,
+    ) -> Option<Self> {
+        match (pinhole, focus_mm, focus_diopters) {
+            (true, None, None) => Some(Aperture::Pinhole),
+            (false, Some(mm), None) => Some(Aperture::ThinLens { pupil_diameter, focus: Focus::Millimetres(mm) }),
+            (false, None, Some(d)) => Some(Aperture::ThinLens { pupil_diameter, focus: Focus::Diopters(d) }),
+            _ => None,
+        }
+    }
+}
+
 /// The eye model.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Eye {
@@ -240,6 +261,23 @@ pub fn stratified(k: usize) -> Vec<DVec2> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_aperture_is_stated_by_exactly_one_of_pinhole_focus_mm_focus_diopters() {
+        let lens = |focus| Some(Aperture::ThinLens { pupil_diameter: 4.0, focus });
+        assert_eq!(Aperture::stated(true, None, None, 4.0), Some(Aperture::Pinhole));
+        assert_eq!(Aperture::stated(false, Some(300.0), None, 4.0), lens(Focus::Millimetres(300.0)));
+        assert_eq!(Aperture::stated(false, None, Some(2.5), 4.0), lens(Focus::Diopters(2.5)));
+        for (pinhole, mm, d) in [
+            (false, None, None),
+            (true, Some(300.0), None),
+            (true, None, Some(2.5)),
+            (false, Some(300.0), Some(2.5)),
+            (true, Some(300.0), Some(2.5)),
+        ] {
+            assert_eq!(Aperture::stated(pinhole, mm, d, 4.0), None, "{pinhole} {mm:?} {d:?}");
+        }
+    }
 
     #[test]
     fn pupil_grid_counts_match_the_paper_and_the_framework() {

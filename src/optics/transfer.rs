@@ -96,11 +96,19 @@ pub fn eye_to_lcd(display: &Display, eye: &Eye, tangent: DVec2, pupil_offset: DV
 }
 
 /// The eye -> LCD trace of [`eye_to_lcd`] with the per-eye constants folded in, for the hot
-/// loop of the perceived-image simulation. Tests check it against `eye_to_lcd` (the slow twin).
+/// loops of the perceived-image simulation (a fixed pupil grid, [`FastTransfer::new`]) and of
+/// the converged measurement (any pupil point, [`FastTransfer::for_eye`]; its `EyeToLcd` is
+/// built on this). Every path (pupil sample or pupil point, one ray or a batch) does the same
+/// arithmetic in the same order, so they give the same LCD point bit for bit; tests check it
+/// against `eye_to_lcd` (the slow twin).
 pub struct FastTransfer<'a> {
     display: &'a Display,
-    /// Per pupil sample: world position at the pupil plane, and the slope offset
-    /// `s/v0 - s d1` so that `w1 = tangent + offset`.
+    /// The eye's x, y (the pupil centre in world coordinates).
+    eye_xy: DVec2,
+    /// v0 and d1 of the eye.
+    v0: f64,
+    d1: f64,
+    /// Per pupil sample: [`FastTransfer::pupil_constants`] of it.
     samples: Vec<(DVec2, DVec2)>,
     /// Distance from the pupil plane to the lenslets.
     to_lenslets: f64,
@@ -110,13 +118,22 @@ pub struct FastTransfer<'a> {
 }
 
 impl<'a> FastTransfer<'a> {
+    /// The trace through each of the pupil samples `pupil` (mm from the pupil centre), addressed
+    /// by index ([`FastTransfer::lcd_point`]).
     pub fn new(display: &'a Display, eye: &Eye, pupil: &[DVec2]) -> Self {
-        let v0 = eye.retina_distance;
-        let d1 = eye.power();
-        let samples = pupil.iter().map(|&s| (s + eye.position.truncate(), s / v0 - s * d1)).collect();
+        let mut t = Self::for_eye(display, eye);
+        t.samples = pupil.iter().map(|&s| t.pupil_constants(s)).collect();
+        t
+    }
+
+    /// The trace through any pupil point ([`FastTransfer::lcd_point_through`]), no samples.
+    pub fn for_eye(display: &'a Display, eye: &Eye) -> Self {
         Self {
             display,
-            samples,
+            eye_xy: eye.position.truncate(),
+            v0: eye.retina_distance,
+            d1: eye.power(),
+            samples: Vec::new(),
             to_lenslets: display.lenslet_z() - eye.position.z,
             lenslet_power: display.lenslet_power(),
             v2: display.lenslets_to_lcd,
@@ -124,15 +141,40 @@ impl<'a> FastTransfer<'a> {
         }
     }
 
-    /// Where the ray for retina direction `tangent` through pupil sample `k` meets the LCD.
+    /// For pupil point `s`: the world position at the pupil plane, and the slope offset
+    /// `s/v0 - s d1` so that `w1 = tangent + offset` (eq. (1a), (1b) with d1).
     #[inline(always)]
-    pub fn lcd_point(&self, tangent: DVec2, k: usize) -> DVec2 {
-        let (x1, offset) = self.samples[k];
+    fn pupil_constants(&self, s: DVec2) -> (DVec2, DVec2) {
+        (s + self.eye_xy, s / self.v0 - s * self.d1)
+    }
+
+    /// The lenslet-plane point x2 and the slope w1 of the ray leaving the pupil at `x1` with
+    /// slope `tangent + offset`.
+    #[inline(always)]
+    fn to_lenslet_plane(&self, (x1, offset): (DVec2, DVec2), tangent: DVec2) -> (DVec2, DVec2) {
         let w1 = tangent + offset;
-        let x2 = x1 + w1 * self.to_lenslets;
+        (x1 + w1 * self.to_lenslets, w1)
+    }
+
+    /// Refraction at the nearest lenslet and on to the LCD plane.
+    #[inline(always)]
+    fn to_lcd(&self, (x2, w1): (DVec2, DVec2)) -> DVec2 {
         let c = self.display.lenslets.center(self.display.lenslets.nearest(x2));
         let w2 = w1 - (x2 - c) * self.lenslet_power;
         x2 + w2 * self.v2
+    }
+
+    /// Where the ray for retina direction `tangent` through pupil sample `k` meets the LCD.
+    #[inline(always)]
+    pub fn lcd_point(&self, tangent: DVec2, k: usize) -> DVec2 {
+        self.to_lcd(self.to_lenslet_plane(self.samples[k], tangent))
+    }
+
+    /// Where the ray for retina direction `tangent` through pupil point `pupil` (mm from the
+    /// pupil centre) meets the LCD; at a pupil sample, the same point as [`FastTransfer::lcd_point`].
+    #[inline(always)]
+    pub fn lcd_point_through(&self, tangent: DVec2, pupil: DVec2) -> DVec2 {
+        self.to_lcd(self.to_lenslet_plane(self.pupil_constants(pupil), tangent))
     }
 
     /// The LCD pixel that ray hits, if any ([`crate::optics::Lcd::pixel_index`]).
@@ -141,19 +183,49 @@ impl<'a> FastTransfer<'a> {
         self.indexer.index(self.lcd_point(tangent, k))
     }
 
+    /// The LCD pixel the ray through pupil point `pupil` hits, if any.
+    #[inline(always)]
+    pub fn pixel_index_through(&self, tangent: DVec2, pupil: DVec2) -> Option<usize> {
+        self.indexer.index(self.lcd_point_through(tangent, pupil))
+    }
+
     /// [`FastTransfer::pixel_index`] for every tangent through pupil sample `k` (`u32::MAX`: off
     /// the LCD), in passes over the batch ([`lcd_pixels`]); same arithmetic, so the same pixels
     /// (tested). `scratch` is reused between calls.
     pub fn pixel_indices(&self, tangents: &[DVec2], k: usize, scratch: &mut Vec<DVec2>, out: &mut [u32]) {
-        let n = tangents.len();
-        let (x1, offset) = self.samples[k];
+        let constants = self.samples[k];
+        self.batch(tangents.len(), |i| self.to_lenslet_plane(constants, tangents[i]), scratch, out);
+    }
+
+    /// [`FastTransfer::pixel_index_through`] for the `out.len()` rays `ray(i)` = (tangent,
+    /// pupil point) (`u32::MAX`: off the LCD), in passes over the batch; same arithmetic, so the
+    /// same pixels.
+    pub fn pixel_indices_through(
+        &self,
+        ray: impl Fn(usize) -> (DVec2, DVec2),
+        scratch: &mut Vec<DVec2>,
+        out: &mut [u32],
+    ) {
+        self.batch(
+            out.len(),
+            |i| {
+                let (tangent, pupil) = ray(i);
+                self.to_lenslet_plane(self.pupil_constants(pupil), tangent)
+            },
+            scratch,
+            out,
+        );
+    }
+
+    /// The batched trace: `ray(i)` is ray `i`'s (x2, w1) at the lenslet plane.
+    #[inline(always)]
+    fn batch(&self, n: usize, ray: impl Fn(usize) -> (DVec2, DVec2), scratch: &mut Vec<DVec2>, out: &mut [u32]) {
         scratch.clear();
         scratch.resize(3 * n, DVec2::ZERO);
         let (x2s, rest) = scratch.split_at_mut(n);
         let (w1s, centres) = rest.split_at_mut(n);
-        for ((t, x2), w1) in tangents.iter().zip(x2s.iter_mut()).zip(w1s.iter_mut()) {
-            *w1 = *t + offset;
-            *x2 = x1 + *w1 * self.to_lenslets;
+        for (i, (x2, w1)) in x2s.iter_mut().zip(w1s.iter_mut()).enumerate() {
+            (*x2, *w1) = ray(i);
         }
         lcd_pixels(self.display, &self.indexer, x2s, w1s, centres, out);
     }

@@ -1,8 +1,10 @@
-//! Choosing the scene-intersection backend for a render (paper Sec. 3.1: rays traced into the
-//! 3-D scene). `auto` picks the exact analytic backend (with its fused planar kernel when the
-//! scene allows it) for scenes made only of rectangles, and Embree otherwise. Mesh backends
-//! see every rectangle tessellated into two triangles ([`Rect::to_mesh`]), so every scene
-//! renders with every mesh backend.
+//! Choosing the scene-intersection backend and the radiance field for a render (paper Sec. 3.1:
+//! rays traced into the 3-D scene): the one home of that decision, [`with_scene_fields`], which
+//! `assess`, `sweep`, the CLI's single-image commands and Python all go through (`bench`, which
+//! times every backend, takes its fused kernel from [`planar_kernel`] too). `auto` picks the
+//! exact analytic backend (with its fused planar kernel when the scene allows it) for scenes
+//! made only of rectangles, and Embree otherwise. Mesh backends see every rectangle tessellated
+//! into two triangles ([`Rect::to_mesh`]), so every scene renders with every mesh backend.
 
 use std::borrow::Cow;
 use std::fmt;
@@ -99,12 +101,36 @@ pub fn scene_meshes(scene: &Scene) -> Vec<(u32, Cow<'_, Mesh>)> {
         .collect()
 }
 
-/// Builds the backend `choice` asks for and runs `f` with its fields.
+/// Work that runs on a scene's radiance fields, called with their concrete types (no virtual
+/// call per ray): `shade` for radiance, `with_depth` for display images (their hit distances),
+/// `name` for reports (see [`Fields::name`]).
+pub trait FieldUser {
+    type Output;
+    fn run<S: RadianceField, D: RadianceField>(
+        self,
+        shade: &S,
+        with_depth: &D,
+        name: &'static str,
+    ) -> Result<Self::Output>;
+}
+
+/// The fused planar kernel of a rectangle-only scene, when the scene allows it (eye-facing
+/// axis-aligned rectangles, flat materials, no light): the field the analytic backend renders
+/// with, bit-identical in radiance to the generic analytic tracer and faster.
+pub fn planar_kernel<'a>(scene: &'a Scene, backend: &'a AnalyticRects) -> Option<FacingPlanes<'a>> {
+    if scene.light.is_some() {
+        return None;
+    }
+    FacingPlanes::new(scene, backend)
+}
+
+/// Builds the backend `choice` asks for and runs `user` with its fields: the one place that
+/// decides which radiance field a scene is traced with (assess, sweep, the CLI and Python).
 ///
 /// Errors: `analytic` on a scene with meshes, `brute` on a scene over
 /// [`BRUTE_MAX_TRIANGLES`], `embree` in a build without the `embree` feature
 /// ([`Error::Backend`]), and backend construction errors.
-pub fn with_fields<T>(scene: &Scene, choice: BackendChoice, f: impl FnOnce(Fields<'_>) -> Result<T>) -> Result<T> {
+pub fn with_scene_fields<U: FieldUser>(scene: &Scene, choice: BackendChoice, user: U) -> Result<U::Output> {
     match resolve(scene, choice) {
         BackendChoice::Analytic | BackendChoice::Auto => {
             if !scene.is_analytic() {
@@ -117,14 +143,14 @@ pub fn with_fields<T>(scene: &Scene, choice: BackendChoice, f: impl FnOnce(Field
                 });
             }
             let backend = AnalyticRects::new(scene)?;
-            let fused = if scene.light.is_none() { FacingPlanes::new(scene, &backend) } else { None };
-            let tracer = SceneTracer { scene, backend: &backend };
-            match fused {
-                // The fused kernel does not know depths; the generic analytic tracer does, and
-                // returns bit-identical radiance (tests/pipeline.rs checks), at one
-                // intersection per ray, so it renders the display images (with their Z).
-                Some(fast) => f(Fields { shade: &fast, with_depth: &fast, name: "analytic (fused planar kernel)" }),
-                None => f(Fields { shade: &tracer, with_depth: &tracer, name: "analytic" }),
+            match planar_kernel(scene, &backend) {
+                // The fused kernel returns radiance bit-identical to the generic analytic tracer
+                // (tests/pipeline.rs checks), depths included (its fallback tracer).
+                Some(fast) => user.run(&fast, &fast, "analytic (fused planar kernel)"),
+                None => {
+                    let tracer = SceneTracer { scene, backend: &backend };
+                    user.run(&tracer, &tracer, "analytic")
+                }
             }
         }
         BackendChoice::Brute => {
@@ -142,21 +168,34 @@ pub fn with_fields<T>(scene: &Scene, choice: BackendChoice, f: impl FnOnce(Field
             let refs: Vec<(u32, &Mesh)> = meshes.iter().map(|(i, m)| (*i, m.as_ref())).collect();
             let backend = BruteForce::new(&refs)?;
             let tracer = SceneTracer { scene, backend: &backend };
-            f(Fields { shade: &tracer, with_depth: &tracer, name: "brute" })
+            user.run(&tracer, &tracer, "brute")
         }
-        BackendChoice::Embree => with_embree(scene, f),
+        BackendChoice::Embree => with_embree(scene, user),
         BackendChoice::Bvh => {
             let meshes = scene_meshes(scene);
             let refs: Vec<(u32, &Mesh)> = meshes.iter().map(|(i, m)| (*i, m.as_ref())).collect();
             let backend = crate::accel::bvh::BvhIntersector::new(&refs)?;
             let tracer = SceneTracer { scene, backend: &backend };
-            f(Fields { shade: &tracer, with_depth: &tracer, name: "bvh" })
+            user.run(&tracer, &tracer, "bvh")
         }
     }
 }
 
+/// [`with_scene_fields`] with the fields as trait objects ([`Fields`]), for callers outside the
+/// hot loops.
+pub fn with_fields<T>(scene: &Scene, choice: BackendChoice, f: impl FnOnce(Fields<'_>) -> Result<T>) -> Result<T> {
+    struct Dynamic<F>(F);
+    impl<T, F: FnOnce(Fields<'_>) -> Result<T>> FieldUser for Dynamic<F> {
+        type Output = T;
+        fn run<S: RadianceField, D: RadianceField>(self, shade: &S, with_depth: &D, name: &'static str) -> Result<T> {
+            (self.0)(Fields { shade, with_depth, name })
+        }
+    }
+    with_scene_fields(scene, choice, Dynamic(f))
+}
+
 #[cfg(feature = "embree")]
-fn with_embree<T>(scene: &Scene, f: impl FnOnce(Fields<'_>) -> Result<T>) -> Result<T> {
+fn with_embree<U: FieldUser>(scene: &Scene, user: U) -> Result<U::Output> {
     use crate::accel::embree::{BuildQuality, EmbreeIntersector};
     let meshes = scene_meshes(scene);
     let refs: Vec<(u32, &Mesh)> = meshes.iter().map(|(i, m)| (*i, m.as_ref())).collect();
@@ -172,11 +211,11 @@ fn with_embree<T>(scene: &Scene, f: impl FnOnce(Fields<'_>) -> Result<T>) -> Res
     drop(refs);
     drop(meshes);
     let tracer = SceneTracer { scene, backend: &backend };
-    f(Fields { shade: &tracer, with_depth: &tracer, name: "embree" })
+    user.run(&tracer, &tracer, "embree")
 }
 
 #[cfg(not(feature = "embree"))]
-fn with_embree<T>(scene: &Scene, _f: impl FnOnce(Fields<'_>) -> Result<T>) -> Result<T> {
+fn with_embree<U: FieldUser>(scene: &Scene, _user: U) -> Result<U::Output> {
     Err(Error::Backend {
         scene: scene.name.clone(),
         message: format!(

@@ -43,13 +43,19 @@ pub enum Method {
     },
 }
 
+/// The paper's LensletAverage grid (Sec. 4.1: 5 x 5): what `LA` means without a `k`.
+pub const PAPER_LA_GRID: usize = 5;
+
 impl Method {
-    /// The paper's abbreviation, used in file names: "LC", "PC", "LA".
-    pub fn short_name(&self) -> &'static str {
+    /// The method's name in results, tables, file names and Python: "LC", "PC", "LA" for the
+    /// paper's 5 x 5 LensletAverage and "LA<k>" for any other k x k grid ("LA3", "LA7"), so
+    /// methods that differ have different names. It parses back to the same method.
+    pub fn name(&self) -> String {
         match self {
-            Method::LensletCenter => "LC",
-            Method::PupilCenter => "PC",
-            Method::LensletAverage { .. } => "LA",
+            Method::LensletCenter => "LC".into(),
+            Method::PupilCenter => "PC".into(),
+            Method::LensletAverage { grid: PAPER_LA_GRID } => "LA".into(),
+            Method::LensletAverage { grid } => format!("LA{grid}"),
         }
     }
 
@@ -66,7 +72,7 @@ impl fmt::Display for Method {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Method::LensletAverage { grid } => write!(f, "LA ({grid}x{grid})"),
-            m => f.write_str(m.short_name()),
+            m => f.write_str(&m.name()),
         }
     }
 }
@@ -74,7 +80,7 @@ impl fmt::Display for Method {
 impl FromStr for Method {
     type Err = String;
     /// "LC", "PC", "LA" (5 x 5) or "LA3" / "LA:3" for a 3 x 3 grid; case-insensitive. Also
-    /// reads what `Display` writes ("LA (3x3)").
+    /// reads what `Display` writes ("LA (3x3)") and what [`Method::name`] writes.
     fn from_str(s: &str) -> std::result::Result<Self, String> {
         let u = s.trim().to_ascii_uppercase();
         if let Some((a, b)) = u.strip_prefix("LA (").and_then(|r| r.strip_suffix(')')).and_then(|r| r.split_once('X')) {
@@ -85,7 +91,7 @@ impl FromStr for Method {
         match u.as_str() {
             "LC" | "LENSLETCENTER" => Ok(Method::LensletCenter),
             "PC" | "PUPILCENTER" => Ok(Method::PupilCenter),
-            "LA" | "LENSLETAVERAGE" => Ok(Method::LensletAverage { grid: 5 }),
+            "LA" | "LENSLETAVERAGE" => Ok(Method::LensletAverage { grid: PAPER_LA_GRID }),
             _ => {
                 let rest = u.strip_prefix("LA").map(|r| r.trim_start_matches([':', '-', '_']));
                 match rest.and_then(|r| r.parse::<usize>().ok()) {
@@ -410,6 +416,26 @@ mod tests {
 
     use super::*;
     use crate::optics::Lattice;
+
+    #[test]
+    fn method_names_keep_the_grid_and_parse_back() {
+        let la = |grid| Method::LensletAverage { grid };
+        assert_eq!(la(PAPER_LA_GRID).name(), "LA");
+        assert_eq!(la(3).name(), "LA3");
+        assert_eq!(la(7).name(), "LA7");
+        assert_eq!(la(1).name(), "LA1");
+        assert_eq!(Method::LensletCenter.name(), "LC");
+        assert_eq!(Method::PupilCenter.name(), "PC");
+        for m in [Method::LensletCenter, Method::PupilCenter].into_iter().chain((1..=64).map(la)) {
+            assert_eq!(m.name().parse::<Method>(), Ok(m), "{}", m.name());
+            assert_eq!(m.to_string().parse::<Method>(), Ok(m), "{m}");
+        }
+        assert_eq!("la3".parse::<Method>(), Ok(la(3)));
+        assert_eq!("LA:3".parse::<Method>(), Ok(la(3)));
+        assert_eq!("LA5".parse::<Method>(), Ok(la(5)));
+        assert!("LA0".parse::<Method>().is_err());
+        assert!("LA65".parse::<Method>().is_err());
+    }
 
     #[test]
     fn a_rows_base_rays_are_the_single_pixel_rays_bit_for_bit() {

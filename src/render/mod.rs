@@ -9,7 +9,7 @@ pub mod planar;
 pub mod retina;
 pub mod tracer;
 
-pub use backend::{with_fields, BackendChoice, Fields};
+pub use backend::{planar_kernel, with_fields, with_scene_fields, BackendChoice, FieldUser, Fields};
 pub use display_image::{
     render_display_image, render_display_image_into, render_display_image_with_depth, DisplayRenderSettings, Method,
 };

@@ -105,7 +105,7 @@ pub struct Timing {
 #[derive(Clone, Debug)]
 pub struct StudyResults {
     pub study: Study,
-    /// "ground_truth", then each method's short name.
+    /// "ground_truth", then each method's name ([`crate::render::Method::name`]).
     pub sources: Vec<String>,
     pub chart: Chart,
     /// The rendered part of the LCD, columns and rows.
@@ -127,9 +127,7 @@ impl StudyResults {
 
 /// Source names of `study`.
 pub fn source_names(study: &Study) -> Vec<String> {
-    std::iter::once("ground_truth".to_string())
-        .chain(study.methods.iter().map(|m| m.short_name().to_string()))
-        .collect()
+    std::iter::once("ground_truth".to_string()).chain(study.methods.iter().map(|m| m.name())).collect()
 }
 
 /// Runs `study`; progress bars on stderr unless `quiet`.

@@ -479,7 +479,7 @@ mod tests {
         let s = Study::paper(&[]).unwrap();
         assert_eq!(s.name, "paper");
         assert_eq!(s.pupil_diameter_mm, 5.0);
-        assert_eq!(s.methods.iter().map(|m| m.short_name()).collect::<Vec<_>>(), ["LC", "PC", "LA"]);
+        assert_eq!(s.methods.iter().map(|m| m.name()).collect::<Vec<_>>(), ["LC", "PC", "LA"]);
         // 0.5..3.5 D and 300, 400, 600 mm; 400 mm is 2.5 D, merged.
         let d: Vec<f64> = s.depths.iter().map(|d| (d.diopters * 1e6).round() / 1e6).collect();
         assert_eq!(d, [0.5, 1.0, 1.5, 1.666667, 2.0, 2.5, 3.0, 3.333333, 3.5]);

@@ -8,7 +8,6 @@
 
 mod collect;
 mod command;
-mod fields;
 mod plots;
 mod run;
 mod slurm;

@@ -9,14 +9,15 @@ use std::time::{Duration, Instant};
 
 use rayon::prelude::*;
 
-use super::fields::{with_scene_fields, FieldUser};
 use super::store::{host_name, unix_now, PointRecord, ScoreRow, Store};
 use crate::error::Result;
 use crate::experiment::{self, Experiment, Score};
 use crate::progress::Progress;
 use crate::raster::RgbImage;
 use crate::render::retina::DisplayStack;
-use crate::render::{render_display_image_with_depth, BackendChoice, Method, RadianceField};
+use crate::render::{
+    render_display_image_with_depth, with_scene_fields, BackendChoice, FieldUser, Method, RadianceField,
+};
 use crate::scene::Scene;
 use crate::settings::{hash_json, Resolved};
 
@@ -177,12 +178,7 @@ impl FieldUser for SharedDisplays<'_> {
     /// Display images rendered.
     type Output = usize;
 
-    fn run<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
-        self,
-        shade: &S,
-        with_depth: &D,
-        name: &str,
-    ) -> Result<usize> {
+    fn run<S: RadianceField, D: RadianceField>(self, shade: &S, with_depth: &D, name: &'static str) -> Result<usize> {
         // Points grouped by the display images they need, in order of first appearance.
         let mut groups: Vec<(Vec<String>, Vec<&Job>)> = Vec::new();
         for job in self.jobs {
