@@ -424,7 +424,7 @@ mod tests {
     #[test]
     fn a_refused_allocation_is_an_error_not_an_abort() {
         let e = try_vec(1usize << 60, 0u64, "the test buffer").unwrap_err().to_string();
-        assert_eq!(e, "cannot allocate 8192.0 TiB for the test buffer: the system refused the memory");
+        assert_eq!(e, "cannot allocate 8388608.0 TiB for the test buffer: the system refused the memory");
         assert_eq!(try_vec(3, 7u8, "x").unwrap(), vec![7, 7, 7]);
     }
 
