@@ -33,7 +33,9 @@ use crate::ray::Ray;
 /// A ray crossing a plane: transverse position and slope (dx/dz, dy/dz), travelling toward +z.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PlaneRay {
+    /// Transverse position (x, y), mm.
     pub position: DVec2,
+    /// Slope (dx/dz, dy/dz).
     pub slope: DVec2,
 }
 
@@ -110,6 +112,7 @@ pub struct FastTransfer<'a> {
 }
 
 impl<'a> FastTransfer<'a> {
+    /// Folds the per-eye constants of eq. (1) for `display`, `eye` and its `pupil` samples.
     pub fn new(display: &'a Display, eye: &Eye, pupil: &[DVec2]) -> Self {
         let v0 = eye.retina_distance;
         let d1 = eye.power();
