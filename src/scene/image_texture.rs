@@ -27,7 +27,9 @@ use crate::raster::srgb_to_linear;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Filter {
+    /// The nearest texel.
     Nearest,
+    /// Bilinear interpolation of the four nearest texels.
     #[default]
     Bilinear,
 }
@@ -36,19 +38,25 @@ pub enum Filter {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Wrap {
+    /// The texture tiles the plane.
     #[default]
     Repeat,
+    /// UVs are clamped to the edge texels.
     Clamp,
 }
 
 /// A linear-RGB image texture.
 #[derive(Clone, Debug)]
 pub struct ImageTexture {
+    /// Columns.
     pub width: usize,
+    /// Rows.
     pub height: usize,
     /// Row-major, row 0 at top, linear RGB.
     pub texels: Vec<DVec3>,
+    /// Filtering.
     pub filter: Filter,
+    /// What UVs outside [0, 1] do.
     pub wrap: Wrap,
     /// Mean of all texels: the fallback colour for non-finite UVs.
     pub mean: DVec3,
