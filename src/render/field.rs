@@ -3,7 +3,7 @@
 //! eye rays): [`RadianceField`], what one ray sees ([`Sample`]), and the bundles of rays that
 //! LensletAverage traces per display pixel ([`RayBundle`], [`BundleSum`]). Implementations are
 //! the generic [`super::tracer::SceneTracer`] and fused kernels such as
-//! [`super::planar::FacingPlanes`].
+//! [`super::FacingPlanes`].
 
 use glam::{DVec2, DVec3};
 
