@@ -420,8 +420,9 @@ fn ssim_channel_direct(a: &RgbImage, b: &RgbImage, c: usize, c1: f64, c2: f64) -
 /// assert!((ssim(&a, &a, SsimConstants::Wang2004)?.mean - 1.0).abs() < 1e-9);
 /// // Anti-correlated structure: SSIM below 0 with the data's own constants...
 /// assert!(ssim(&a, &b, SsimConstants::Wang2004)?.mean < 0.0);
-/// // ...while the published framework's 8-bit constants pin it near 1.
-/// assert!(ssim(&a, &b, SsimConstants::Framework8Bit)?.mean > 0.99);
+/// // ...while the published framework's 8-bit constants, which dwarf the data's variances,
+/// // keep it above 0.9.
+/// assert!(ssim(&a, &b, SsimConstants::Framework8Bit)?.mean > 0.9);
 /// # Ok::<(), inimtrace::Error>(())
 /// ```
 pub fn ssim(a: &RgbImage, b: &RgbImage, constants: SsimConstants) -> Result<Ssim> {
