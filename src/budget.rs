@@ -289,10 +289,12 @@ pub fn check_buffer(what: &str, setting: &str, count: usize, bytes_each: u64, so
 /// One part of an estimate: what it is for, the setting that sizes it, and its bytes.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Part {
+    /// What the memory is for.
     pub what: String,
     /// The setting(s) that make this part large, as a user would change them
     /// (e.g. `lcd.resolution = [30000, 30000]`).
     pub setting: String,
+    /// Bytes it takes.
     pub bytes: u64,
 }
 
@@ -300,7 +302,9 @@ pub struct Part {
 /// rays.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Estimate {
+    /// The parts, each alive for the whole run.
     pub parts: Vec<Part>,
+    /// Rays of work.
     pub rays: u64,
 }
 
@@ -315,6 +319,7 @@ impl Estimate {
         self.rays = self.rays.saturating_add(rays);
     }
 
+    /// Estimated peak memory: the sum of the parts' bytes (saturating).
     pub fn bytes(&self) -> u64 {
         self.parts.iter().fold(0u64, |a, p| a.saturating_add(p.bytes))
     }

@@ -14,6 +14,8 @@ use inimtrace::render::{with_fields, BackendChoice, Fields};
 use inimtrace::scene::Scene;
 use inimtrace::settings::{load_display_part, load_scene_part, setup_with};
 
+pub(crate) mod values;
+
 /// Refuses an image of `pixels` pixels at `bytes_each` bytes that would not fit in the memory
 /// budget ([`inimtrace::budget::memory_budget`]), naming the setting, before anything is allocated.
 pub(crate) fn check_memory(what: &str, setting: &str, pixels: usize, bytes_each: u64) -> Result<()> {

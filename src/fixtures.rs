@@ -17,9 +17,11 @@ impl Rng {
         self.0 ^= self.0 >> 27;
         (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
     }
+    /// A uniform number in [lo, hi).
     pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
         lo + (hi - lo) * self.next()
     }
+    /// A vector of three uniform numbers in [lo, hi).
     pub fn vec(&mut self, lo: f64, hi: f64) -> DVec3 {
         DVec3::new(self.range(lo, hi), self.range(lo, hi), self.range(lo, hi))
     }
@@ -45,6 +47,7 @@ impl Lcg {
         self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
         (self.0 >> 11) as f64 / (1u64 << 53) as f64
     }
+    /// A uniform number in [lo, hi).
     pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
         lo + (hi - lo) * self.next()
     }

@@ -31,7 +31,9 @@ use crate::scene::{Material, Scene, Shape};
 /// (`centre(i, j) = shift + [[a, b], [c, d]] (i, j)`), mm.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct LatticeParameters {
+    /// Centre of cell (0, 0), mm.
     pub shift_mm: [f64; 2],
+    /// The pitch matrix `[a, b, c, d]`, row-major, mm.
     pub pitch_matrix_mm: [f64; 4],
 }
 
@@ -44,19 +46,25 @@ impl From<&Lattice> for LatticeParameters {
 /// A display's parameters as structured fields (`results.json`, `info --json`).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct DisplayParameters {
+    /// Display name.
     pub name: String,
     /// v1: pupil plane to lenslet plane.
     pub eye_to_lenslets_mm: f64,
     /// v2: lenslet plane to LCD.
     pub lenslets_to_lcd_mm: f64,
+    /// f: the lenslets' focal length, mm.
     pub focal_length_mm: f64,
+    /// The lenslet lattice.
     pub lenslets: LatticeParameters,
+    /// The elemental-image lattice.
     pub elemental_images: LatticeParameters,
+    /// LCD width and height, mm.
     pub lcd_size_mm: [f64; 2],
     /// Columns, rows.
     pub lcd_resolution: [usize; 2],
     /// `None`: at infinity or real (LCD at or beyond the lenslets' focal plane).
     pub central_depth_plane_mm: Option<f64>,
+    /// The central depth plane in dioptres.
     pub central_depth_plane_diopters: Option<f64>,
 }
 
@@ -81,6 +89,7 @@ impl From<&Display> for DisplayParameters {
 /// What a display design offers the eye (see the module comment for the definitions).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct DisplayDesign {
+    /// The display's parameters.
     pub display: DisplayParameters,
     /// v1.
     pub eye_relief_mm: f64,
@@ -88,24 +97,29 @@ pub struct DisplayDesign {
     pub viewing_zone_mm: [f64; 2],
     /// Width and height of the eye box; `None` when the viewing zones have no common point.
     pub eye_box_mm: Option<[f64; 2]>,
+    /// Centre of the eye box, mm.
     pub eye_box_center_mm: Option<[f64; 2]>,
     /// How many lenslets (with their elemental image on the LCD) the eye box accounts for.
     pub lenslets_on_lcd: usize,
     /// Horizontal and vertical.
     pub field_of_view_deg: [f64; 2],
+    /// LCD pixel pitch, x and y, mm.
     pub pixel_pitch_mm: [f64; 2],
     /// At the central depth plane, x and y; `None` when the image is real.
     pub angular_pixel_pitch_arcmin: Option<[f64; 2]>,
+    /// Pixels per degree at the central depth plane, x and y; `None` when the image is real.
     pub pixels_per_degree: Option<[f64; 2]>,
     /// Elemental-image cell area over pixel area.
     pub pixels_per_elemental_image: f64,
     /// Cell width along x and y over the pixel pitch.
     pub pixels_per_elemental_image_xy: [f64; 2],
+    /// The pupil the views are counted through, mm.
     pub pupil_diameter_mm: f64,
     /// Eye-plane spacing of the views (one per LCD pixel) of a lenslet, `m p`.
     pub view_spacing_mm: [f64; 2],
     /// Pixels of the central elemental image whose rays enter the pupil.
     pub views_through_pupil: usize,
+    /// Design warnings (lattices that do not match).
     pub warnings: Vec<String>,
 }
 
@@ -273,13 +287,15 @@ pub fn display_design_text(x: &DisplayDesign, summary: &str) -> String {
 /// One scene object as `info --scene` reports it.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct ObjectSummary {
+    /// Object name.
     pub name: String,
     /// "rect" or "mesh".
     pub shape: &'static str,
     /// Tessellated rectangles count 2.
     pub triangles: usize,
-    /// Axis-aligned bounds after the object's transform, mm.
+    /// Axis-aligned lower bounds after the object's transform, mm.
     pub bounds_min_mm: [f64; 3],
+    /// Axis-aligned upper bounds after the object's transform, mm.
     pub bounds_max_mm: [f64; 3],
     /// "albedo [r, g, b]", "chart", "vertex colours", "texture W x H".
     pub material: String,
@@ -288,8 +304,11 @@ pub struct ObjectSummary {
 /// A scene as `info --scene` reports it.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct SceneSummary {
+    /// Scene name.
     pub name: String,
+    /// Every object.
     pub objects: Vec<ObjectSummary>,
+    /// Triangles of the whole scene (rectangles count 2).
     pub triangles: usize,
     /// Nearest and farthest z of the scene's geometry (along the optical axis), mm.
     pub depth_range_mm: [f64; 2],
@@ -297,8 +316,11 @@ pub struct SceneSummary {
     pub depth_range_diopters: [f64; 2],
     /// `None`: radiance = albedo.
     pub light_direction: Option<[f64; 3]>,
+    /// Linear RGB radiance of the light.
     pub light_radiance: Option<[f64; 3]>,
+    /// Radiance of rays that hit nothing.
     pub background: [f64; 3],
+    /// What loading the scene noticed.
     pub warnings: Vec<String>,
 }
 

@@ -60,7 +60,7 @@ struct Cli {
     #[arg(long, global = true)]
     timings: bool,
     /// Compression of the EXR files written (every choice but pxr24 is lossless).
-    #[arg(long, global = true, value_enum, default_value_t = ExrCompression::Zip)]
+    #[arg(long, global = true, value_parser = cli::values::exr_compression(), default_value_t = ExrCompression::Zip)]
     exr_compression: ExrCompression,
     /// Memory limit (e.g. 4G, 512M): settings or input files that would need more are refused
     /// before anything is allocated. The system's limits still apply (the smallest wins):
@@ -92,7 +92,7 @@ enum Command {
     /// Render one display image.
     RenderDisplay {
         /// The rendering method (case-insensitive).
-        #[arg(long, default_value = "LC")]
+        #[arg(long, default_value = "LC", value_parser = cli::values::MethodValueParser)]
         method: Method,
         #[command(flatten)]
         setup: Setup,
@@ -138,7 +138,7 @@ enum Command {
         a: PathBuf,
         b: PathBuf,
         /// SSIM constants.
-        #[arg(long, value_enum, default_value_t = SsimConstants::Wang2004)]
+        #[arg(long, value_parser = cli::values::ssim_constants(), default_value_t = SsimConstants::Wang2004)]
         ssim: SsimConstants,
         /// Print JSON (PSNR and SSIM per channel; an infinite PSNR, identical channels, is null).
         #[arg(long)]
@@ -263,7 +263,7 @@ enum PrintTarget {
 #[derive(Args)]
 struct BackendArg {
     /// Scene intersection backend.
-    #[arg(long = "backend", value_enum, ignore_case = true, default_value_t = BackendChoice::Auto)]
+    #[arg(long = "backend", value_parser = cli::values::backend(), ignore_case = true, default_value_t = BackendChoice::Auto)]
     backend: BackendChoice,
 }
 

@@ -16,7 +16,9 @@ use std::str::FromStr;
 /// One step of a key path: a table key or an array index.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Segment {
+    /// A table key (`eye`, `pupil_diameter`).
     Key(String),
+    /// An array index (`[1]`).
     Index(usize),
 }
 
@@ -25,7 +27,9 @@ pub enum Segment {
 pub struct Override {
     /// The key as written (`eye_cases[1].focus_diopters`).
     pub key: String,
+    /// The key as a path of table keys and array indices.
     pub path: Vec<Segment>,
+    /// The value, parsed as TOML.
     pub value: toml::Value,
     /// Directory that a `scene` or `display` set to a file path is relative to: the current
     /// directory for `--set`, the sweep file's folder for a sweep.

@@ -106,6 +106,7 @@ impl Progress {
         Self { bar: Some(bar), sink: None }
     }
 
+    /// Advances the bar (and the sink, if any) by `n` units.
     #[inline]
     pub fn inc(&self, n: u64) {
         if let Some(b) = &self.bar {
@@ -116,6 +117,7 @@ impl Progress {
         }
     }
 
+    /// Finishes and clears the bar.
     pub fn finish(&self) {
         if let Some(b) = &self.bar {
             b.finish_and_clear();

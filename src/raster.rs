@@ -6,8 +6,11 @@
 /// A linear-light RGB image, row 0 at the top, row-major.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RgbImage {
+    /// Columns.
     pub width: usize,
+    /// Rows.
     pub height: usize,
+    /// `width * height` linear RGB pixels, row-major from the top-left.
     pub pixels: Vec<[f32; 3]>,
 }
 
@@ -35,6 +38,7 @@ impl RgbImage {
         self.pixels[row * self.width + col]
     }
 
+    /// Sets the pixel at (row, column).
     #[inline]
     pub fn set(&mut self, row: usize, col: usize, value: [f32; 3]) {
         self.pixels[row * self.width + col] = value;
@@ -57,7 +61,9 @@ impl RgbImage {
 /// written.
 #[derive(Clone, Copy, Debug)]
 pub struct RgbView<'a> {
+    /// Columns.
     pub width: usize,
+    /// Rows.
     pub height: usize,
     values: &'a [f32],
     stride: usize,
@@ -85,6 +91,7 @@ impl<'a> RgbView<'a> {
         self.width * self.height
     }
 
+    /// True when the view has no pixels.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }

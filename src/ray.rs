@@ -7,7 +7,9 @@ use glam::{DVec2, DVec3};
 /// A ray `origin + t * dir`, `t > 0`. `dir` need not be unit length; `t` is in units of `dir`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ray {
+    /// Start point, world mm.
     pub origin: DVec3,
+    /// Direction (any length; `t` counts in its units).
     pub dir: DVec3,
 }
 
@@ -16,10 +18,18 @@ pub struct Ray {
 pub enum Surface {
     /// An analytic primitive: `uv` are its own surface coordinates (for a rectangle, local
     /// coordinates in [-1, 1]^2 along its two half-edge vectors).
-    Analytic { uv: DVec2 },
+    Analytic {
+        /// The primitive's surface coordinates.
+        uv: DVec2,
+    },
     /// Triangle `index` of a mesh, with Embree-convention barycentrics `bary = (u, v)`:
     /// point = (1 - u - v) p0 + u p1 + v p2.
-    Triangle { index: u32, bary: DVec2 },
+    Triangle {
+        /// The triangle's index in its mesh.
+        index: u32,
+        /// Barycentrics `(u, v)`.
+        bary: DVec2,
+    },
 }
 
 /// The nearest intersection of a ray with the scene.
@@ -29,6 +39,7 @@ pub struct Hit {
     pub t: f64,
     /// Index of the scene object that was hit (`Scene::objects`).
     pub object: u32,
+    /// What was hit where.
     pub surface: Surface,
 }
 

@@ -65,7 +65,9 @@ pub struct Resolved {
     /// `scene` and `display` hold the references of the parts as first given (paths or
     /// `builtin:paper`); the parts themselves are `scene` and `display` below.
     pub experiment: ExperimentSpec,
+    /// The scene, inline.
     pub scene: SceneSpec,
+    /// The display, inline.
     pub display: DisplaySpec,
     /// The resolved document (experiment with scene and display inline), as deserialized.
     pub document: toml::Value,
@@ -370,6 +372,30 @@ pub fn load_display_part(path: Option<&Path>, overrides: &[Override]) -> Result<
 /// An experiment as `inimtrace assess` loads it: the file at `path` (`None`: the paper's
 /// experiment measured converged), its scene replaced by the file `scene` when given, then
 /// `overrides` applied (through the resolved settings, so errors name the key).
+///
+/// ```
+/// use inimtrace::optics::Aperture;
+/// use inimtrace::overrides::{parse_value, Override};
+/// use inimtrace::settings::load_experiment;
+///
+/// // The built-in experiment: the paper's four eye cases and three methods.
+/// let exp = load_experiment(None, None, &[])?;
+/// let names: Vec<&str> = exp.cases.iter().map(|c| c.name.as_str()).collect();
+/// assert_eq!(names, ["Pin", "Near", "Cen", "Far"]);
+/// assert_eq!(exp.methods.len(), 3);
+///
+/// // `--set eye.pupil_diameter=3`: a 3 mm pupil for every thin-lens eye case.
+/// let set = [Override::new("eye.pupil_diameter", parse_value("3").unwrap()).unwrap()];
+/// let exp = load_experiment(None, None, &set)?;
+/// let near = exp.cases[1].eye.aperture;
+/// assert!(matches!(near, Aperture::ThinLens { pupil_diameter, .. } if pupil_diameter == 3.0));
+///
+/// // A bad value is refused, naming the key.
+/// let bad = [Override::new("eye.pupil_diameter", parse_value("-1").unwrap()).unwrap()];
+/// let err = load_experiment(None, None, &bad).unwrap_err().to_string();
+/// assert!(err.contains("pupil_diameter"), "{err}");
+/// # Ok::<(), inimtrace::Error>(())
+/// ```
 pub fn load_experiment(path: Option<&Path>, scene: Option<&Path>, overrides: &[Override]) -> Result<Experiment> {
     if !overrides.is_empty() {
         let mut s = match path {

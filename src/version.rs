@@ -15,8 +15,11 @@ pub const GIT_REVISION: &str = env!("INIMTRACE_GIT_REVISION");
 /// The tool that wrote an output, as reports record it.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize)]
 pub struct Tool {
+    /// "inimtrace".
     pub name: &'static str,
+    /// The crate version.
     pub version: &'static str,
+    /// The git revision it was built from (`unknown` outside a checkout).
     pub git_revision: &'static str,
 }
 

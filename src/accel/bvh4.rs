@@ -56,7 +56,9 @@ fn leaf_ref(first: usize, count: usize) -> u32 {
 /// An axis-aligned box in `f32`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Aabb {
+    /// Lower corner.
     pub lo: Vec3A,
+    /// Upper corner.
     pub hi: Vec3A,
 }
 
@@ -110,6 +112,7 @@ pub struct CullRay {
     ix: Vec4,
     iy: Vec4,
     iz: Vec4,
+    /// The ray's far limit (its parameter `t`), shrunk to the nearest hit found so far.
     pub t_max: f32,
 }
 

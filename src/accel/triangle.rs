@@ -50,6 +50,7 @@ impl NearestHit {
         better
     }
 
+    /// The nearest hit kept, if any.
     pub fn hit(self) -> Option<Hit> {
         self.0.map(|(t, object, index, bary)| Hit { t, object, surface: Surface::Triangle { index, bary } })
     }

@@ -77,7 +77,9 @@ pub struct Checks {
 /// Wall time of a step that is not a measured point (references, scoring, writing).
 #[derive(Clone, Debug, Serialize)]
 pub struct StageTime {
+    /// What the step did.
     pub stage: String,
+    /// Its wall time, s.
     pub seconds: f64,
 }
 
@@ -90,32 +92,48 @@ impl StageTime {
 /// Everything a run measured (`bench.json`).
 #[derive(Clone, Debug, Serialize)]
 pub struct BenchReport {
+    /// "quick" or "full".
     pub mode: String,
+    /// The scene measured.
     pub scene: String,
+    /// Its triangles, rectangles tessellated into two each.
     pub triangles_when_tessellated: usize,
+    /// The git revision of the build.
     pub git_revision: String,
+    /// Rayon threads used.
     pub threads: usize,
+    /// CPU cores of the machine.
     pub cores: usize,
+    /// The sizes the run measured at.
     pub sizes: Sizes,
     /// The paper experiment's settings the `method` series measures at.
     pub la_grid: usize,
+    /// Pupil diameter of the `method` series' eye, mm.
     pub pupil_diameter_mm: f64,
+    /// Its pupil grid n.
     pub pupil_grid: usize,
+    /// Its samples per retina pixel, per axis.
     pub retina_samples: usize,
+    /// Its eye cases: name and focus distance, mm.
     pub eye_cases: Vec<(String, f64)>,
     /// Backends measured, in order; the first renders every reference and the convergence series.
     pub backends: Vec<Backend>,
+    /// Build time of every mesh backend's acceleration structure.
     pub builds: Vec<BuildRecord>,
+    /// The convergence series, summarised.
     pub convergence: Vec<ConvergenceSummary>,
     /// The cost of precision: each Table 1 estimator against the converged Table 1.
     pub precision: PrecisionSummary,
+    /// What the run checked (the backends agree, the series converge).
     pub checks: Checks,
     /// Where the rest of the time went.
     pub stages: Vec<StageTime>,
     /// 1-minute load average (`/proc/loadavg`) at the start and the end of the run: above the
     /// thread count, another job shared the cores and the timings are pessimistic.
     pub load_average: [Option<f64>; 2],
+    /// Wall time of the whole run, s.
     pub total_seconds: f64,
+    /// Every measured point.
     pub rows: Vec<BenchRow>,
 }
 

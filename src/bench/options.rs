@@ -25,19 +25,27 @@ pub struct Sizes {
     pub reference_la_grid: usize,
     /// ... and the eye: pupil grid and samples per retina pixel (per axis).
     pub reference_pupil_grid: usize,
+    /// Samples per retina pixel (per axis) of the reference eye.
     pub reference_retina_samples: usize,
     /// Sweeps of the convergence series and their references.
     pub la_grids: Vec<usize>,
+    /// LA's k of the `la_grid` series' reference.
     pub la_grid_reference: usize,
+    /// Pupil grids n of the `pupil_grid` series.
     pub pupil_grids: Vec<usize>,
+    /// Pupil grid n of its reference.
     pub pupil_grid_reference: usize,
+    /// Samples per retina pixel (per axis) of the `retina_samples` series.
     pub retina_samples: Vec<usize>,
+    /// Samples per retina pixel (per axis) of its reference.
     pub retina_samples_reference: usize,
     /// The cost of precision: the reference run's target (half-width of every Table 1 PSNR's
     /// 95% interval, dB), its budget of samples per pixel and its time budget (seconds, over
     /// every eye case) ...
     pub precision_reference_db: f64,
+    /// Samples per pixel budget of the reference run.
     pub precision_reference_max_samples: u64,
+    /// Time budget of the reference run, s (over every eye case).
     pub precision_reference_seconds: f64,
     /// ... the grid estimator's settings (pupil grid n, samples per retina pixel per axis),
     /// cheapest first ...
@@ -90,14 +98,18 @@ impl Sizes {
 /// Settings of a bench run.
 #[derive(Clone, Debug)]
 pub struct BenchOptions {
+    /// The sizes of the run (quick or full).
     pub sizes: Sizes,
     /// Written into the report ("quick" or "full").
     pub mode: String,
+    /// The folder `bench.json`, `bench.csv` and the report go to.
     pub out: PathBuf,
+    /// No progress bars.
     pub quiet: bool,
 }
 
 impl BenchOptions {
+    /// The quick (`--quick`) or full sizes, writing into `out`.
     pub fn new(quick: bool, out: PathBuf, quiet: bool) -> Self {
         let (sizes, mode) = if quick { (Sizes::quick(), "quick") } else { (Sizes::full(), "full") };
         Self { sizes, mode: mode.into(), out, quiet }
@@ -192,8 +204,11 @@ names!(Parameter { DisplaySamples => "display_samples", LaGrid => "la_grid", Pup
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Quantity {
+    /// A display image, against its reference.
     Display,
+    /// A perceived retinal image.
     Perceived,
+    /// A ground-truth retinal image.
     GroundTruth,
 }
 names!(Quantity { Display => "display", Perceived => "perceived", GroundTruth => "ground_truth" });
@@ -203,9 +218,13 @@ names!(Quantity { Display => "display", Perceived => "perceived", GroundTruth =>
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Backend {
+    /// The fused planar kernel over the analytic backend.
     AnalyticFused,
+    /// The generic analytic tracer (exact f64 rectangles).
     Analytic,
+    /// Intel Embree over the tessellated scene.
     Embree,
+    /// inimtrace's own 4-wide BVH over the tessellated scene.
     Bvh,
 }
 names!(Backend { AnalyticFused => "analytic-fused", Analytic => "analytic", Embree => "embree", Bvh => "bvh" });
@@ -252,6 +271,7 @@ pub fn la_grid_of(m: Method) -> usize {
 /// One measured point.
 #[derive(Clone, Debug, Serialize)]
 pub struct BenchRow {
+    /// The series the row belongs to.
     pub series: Series,
     /// The parameter `parameter` holds: `display_samples` (`method` series), the series' own
     /// parameter (`la_grid`, `pupil_grid`, `retina_samples`); `retina_samples` for `precision`
@@ -266,7 +286,9 @@ pub struct BenchRow {
     pub eye_case: String,
     /// Its focus distance (mm); `None` for display images.
     pub focus_mm: Option<f64>,
+    /// The backend that rendered the point.
     pub backend: Backend,
+    /// The method (LC, PC, LA k).
     pub method: MethodLabel,
     /// The swept parameter's value: samples per display pixel per axis (`method`), k, n, or
     /// samples per retina pixel per axis (`precision`: samples per retina pixel).
@@ -282,6 +304,7 @@ pub struct BenchRow {
     /// Rays traced: camera rays of the display render, plus eye rays of the simulation.
     /// `precision` rows: the eye rays of the point (the reference's: of its eye case).
     pub rays: u64,
+    /// `rays / seconds`.
     pub rays_per_second: f64,
     /// Mean of the R, G, B PSNRs against the reference (peak 1, linear values). `precision`
     /// rows: Table 1's PSNR (perceived image against the ground truth).
@@ -289,8 +312,11 @@ pub struct BenchRow {
     /// Mean SSIM (Wang 2004 constants) of R, G, B against the reference.
     pub ssim: f64,
     // Settings of the point.
+    /// The scene measured.
     pub scene: String,
+    /// LCD pixels per side.
     pub lcd_resolution: usize,
+    /// Retina pixels per side.
     pub retina_resolution: usize,
     /// Samples per display pixel, per axis.
     pub display_samples: usize,
@@ -298,6 +324,7 @@ pub struct BenchRow {
     pub la_grid: usize,
     /// Pupil grid n (0 for display images) and the samples it keeps.
     pub pupil_grid: usize,
+    /// Pupil samples kept inside the circle.
     pub pupil_samples: usize,
     /// Samples per retina pixel, per axis (0 for display images).
     pub retina_samples: usize,
@@ -305,7 +332,9 @@ pub struct BenchRow {
     pub reference: String,
     /// Rayon worker threads and the machine's logical cores.
     pub threads: usize,
+    /// Logical cores of the machine.
     pub cores: usize,
+    /// The git revision of the build.
     pub git_revision: String,
 }
 
@@ -324,11 +353,17 @@ impl BenchRow {
 /// What every row of a run shares: the scene, the sizes and the machine.
 #[derive(Clone, Debug)]
 pub struct RowContext {
+    /// The scene measured.
     pub scene: String,
+    /// LCD pixels per side.
     pub lcd_resolution: usize,
+    /// Retina pixels per side.
     pub retina_resolution: usize,
+    /// Rayon threads used.
     pub threads: usize,
+    /// CPU cores of the machine.
     pub cores: usize,
+    /// The git revision of the build.
     pub git_revision: String,
 }
 
@@ -396,14 +431,19 @@ impl RowContext {
 /// The acceleration structure of a mesh backend.
 #[derive(Clone, Debug, Serialize)]
 pub struct BuildRecord {
+    /// The mesh backend.
     pub backend: Backend,
+    /// Triangles it was built over.
     pub triangles: usize,
     /// The backend's own build time (`build_seconds()`).
     pub build_seconds: f64,
     /// Wall time of the whole constructor (copying the meshes in, building, committing).
     pub constructor_seconds: f64,
+    /// Rayon worker threads.
     pub threads: usize,
+    /// Logical cores of the machine.
     pub cores: usize,
+    /// The git revision of the build.
     pub git_revision: String,
 }
 

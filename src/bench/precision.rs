@@ -27,7 +27,9 @@ use std::time::{Duration, Instant};
 
 use serde::Serialize;
 
-use super::options::{la_grid_of, BenchRow, Estimator, MethodLabel, Parameter, Quantity, RowContext, Series, Sizes};
+use super::options::{
+    la_grid_of, Backend, BenchRow, Estimator, MethodLabel, Parameter, Quantity, RowContext, Series, Sizes,
+};
 use super::pipeline::{display_images, focus_mm, ground_truth_image, perceived_images, Sampling};
 use super::runs::Field;
 use super::summary::capped_psnr;
@@ -38,6 +40,8 @@ use crate::measure::adaptive::{self, Precision};
 use crate::measure::estimator::{DisplaySource, Replicates};
 use crate::progress::Progress;
 use crate::raster::RgbImage;
+use crate::render::retina::DisplayStack;
+use crate::render::RadianceField;
 
 /// The precision targets of the thresholds table, dB (largest |PSNR error| over Table 1).
 pub const PRECISION_TARGETS_DB: [f64; 4] = [0.1, 0.05, 0.02, 0.01];
@@ -48,11 +52,13 @@ pub const SWEPT: [Estimator; 4] = [Estimator::Grid, Estimator::Random, Estimator
 /// One point of one estimator: Table 1 at one sample count.
 #[derive(Clone, Debug, Serialize)]
 pub struct PrecisionPoint {
+    /// The estimator measured.
     pub estimator: Estimator,
     /// Samples per retina pixel (eye rays per pixel; the grid: pupil points kept x s^2).
     pub samples_per_pixel: u64,
     /// The setting in words ("n = 8, s = 2x2"; "8 x 16").
     pub setting: String,
+    /// Wall time of the point (see the module comment for what counts), s.
     pub seconds: f64,
     /// Largest |PSNR - converged PSNR| over Table 1's cells, dB.
     pub max_psnr_error_db: f64,
@@ -63,10 +69,13 @@ pub struct PrecisionPoint {
 /// When an estimator reaches a target: the first point from which every point is within it.
 #[derive(Clone, Debug, Serialize)]
 pub struct PrecisionReached {
+    /// The estimator.
     pub estimator: Estimator,
+    /// The target, dB (largest |PSNR error| over Table 1).
     pub target_db: f64,
     /// `None`: the sweep's top does not reach it.
     pub seconds: Option<f64>,
+    /// Samples per pixel at that point; `None` as for `seconds`.
     pub samples_per_pixel: Option<u64>,
 }
 
@@ -79,10 +88,12 @@ pub struct PrecisionSummary {
     pub reference_ci95_db: f64,
     /// ... its samples per pixel (largest over the eye cases) and its seconds.
     pub reference_samples_per_pixel: u64,
+    /// Wall time of the reference run, s.
     pub reference_seconds: f64,
     /// Why the reference stopped: "target met" for every eye case, else the first budget that
     /// stopped one ("sample budget", "time budget").
     pub reference_stopped_by: String,
+    /// Replicates of the randomized-QMC points.
     pub replicates: usize,
     /// Every point, estimators in [`SWEPT`] order, sample counts increasing.
     pub points: Vec<PrecisionPoint>,
@@ -157,31 +168,110 @@ pub fn precision_series(
     let (displays, _) = display_images(base, field)?;
     let refs: Vec<&RgbImage> = displays.iter().collect();
     let stack = experiment::pack_display_images(base, &refs, &mut Vec::new())?;
-    let m = &base.measurement;
-    let pixels = (base.retina.resolution * base.retina.resolution) as u64;
-    let labels: Vec<MethodLabel> = base.methods.iter().map(|&x| MethodLabel::from(x)).collect();
-    let row =
-        |estimator: Estimator, case: usize, k: usize, spp: u64, (seconds, rays): (f64, u64), scores: (f64, f64)| {
-            let c = &base.cases[case];
-            BenchRow {
-                estimator: Some(estimator),
-                eye_case: c.name.clone(),
-                focus_mm: focus_mm(c),
-                parameter: spp as usize,
-                samples: spp as usize,
-                la_grid: la_grid_of(base.methods[k]),
-                pupil_samples: c.eye.pupil_samples().len(),
-                retina_samples: 0,
-                reference: "converged reference (same display images)".into(),
-                ..ctx.row(Series::Precision, Parameter::RetinaSamples, Quantity::Perceived, best.backend, labels[k])
-            }
-            .measured(seconds, rays, (capped_psnr(scores.0), scores.1))
-        };
+    let maker = RowMaker {
+        base,
+        ctx,
+        backend: best.backend,
+        labels: base.methods.iter().map(|&x| MethodLabel::from(x)).collect(),
+        pixels: (base.retina.resolution * base.retina.resolution) as u64,
+    };
 
-    // The reference: every eye case to the tight target, with its own seed.
-    let mut reference = Cells::new();
-    let (mut ref_ci, mut ref_spp, mut ref_seconds) = (0.0f64, 0u64, 0.0);
-    let mut ref_stopped_by = "target met";
+    let reference = reference_run(&maker, sizes, field, &stack, rows);
+    progress.inc(1);
+
+    let mut points = grid_points(&maker, sizes, field, &refs, &reference.cells, rows)?;
+    progress.inc(1);
+
+    let (rqmc, random) = ladder_steps(&maker, sizes, field, &stack)?;
+    for (estimator, list) in [(Estimator::Random, &random), (Estimator::RqmcNaive, &rqmc), (Estimator::Rqmc, &rqmc)] {
+        ladder_points(&maker, sizes, estimator, list, &reference.cells, rows, &mut points);
+    }
+    progress.inc(1);
+
+    let reached = reached(&points);
+    Ok(PrecisionSummary {
+        reference_target_db: sizes.precision_reference_db,
+        reference_ci95_db: reference.ci95_db,
+        reference_samples_per_pixel: reference.samples_per_pixel,
+        reference_seconds: reference.seconds,
+        reference_stopped_by: reference.stopped_by.into(),
+        replicates: base.measurement.replicates,
+        points,
+        reached,
+    })
+}
+
+/// What every row of the section shares: the bench's experiment, the backend measured and the
+/// methods' labels.
+struct RowMaker<'a> {
+    base: &'a Experiment,
+    ctx: &'a RowContext,
+    backend: Backend,
+    labels: Vec<MethodLabel>,
+    /// Retina pixels of one image.
+    pixels: u64,
+}
+
+impl RowMaker<'_> {
+    /// The row of eye case `case` and method `k` of `estimator` at `spp` samples per pixel.
+    fn row(
+        &self,
+        estimator: Estimator,
+        case: usize,
+        k: usize,
+        spp: u64,
+        (seconds, rays): (f64, u64),
+        scores: (f64, f64),
+    ) -> BenchRow {
+        let c = &self.base.cases[case];
+        BenchRow {
+            estimator: Some(estimator),
+            eye_case: c.name.clone(),
+            focus_mm: focus_mm(c),
+            parameter: spp as usize,
+            samples: spp as usize,
+            la_grid: la_grid_of(self.base.methods[k]),
+            pupil_samples: c.eye.pupil_samples().len(),
+            retina_samples: 0,
+            reference: "converged reference (same display images)".into(),
+            ..self.ctx.row(
+                Series::Precision,
+                Parameter::RetinaSamples,
+                Quantity::Perceived,
+                self.backend,
+                self.labels[k],
+            )
+        }
+        .measured(seconds, rays, (capped_psnr(scores.0), scores.1))
+    }
+}
+
+/// The reference run and what it reached (see [`PrecisionSummary`]'s `reference_*` fields).
+struct ReferenceRun {
+    cells: Cells,
+    ci95_db: f64,
+    samples_per_pixel: u64,
+    seconds: f64,
+    stopped_by: &'static str,
+}
+
+/// The reference: every eye case to the tight target, with its own seed.
+fn reference_run(
+    maker: &RowMaker<'_>,
+    sizes: &Sizes,
+    field: &dyn RadianceField,
+    stack: &DisplayStack,
+    rows: &mut Vec<BenchRow>,
+) -> ReferenceRun {
+    let base = maker.base;
+    let m = &base.measurement;
+    let mut out = ReferenceRun {
+        cells: Cells::new(),
+        ci95_db: 0.0,
+        samples_per_pixel: 0,
+        seconds: 0.0,
+        stopped_by: "target met",
+    };
     let ref_precision = Precision {
         psnr_ci95_db: sizes.precision_reference_db,
         ssim_ci95: f64::INFINITY,
@@ -194,32 +284,42 @@ pub fn precision_series(
     for (i, case) in base.cases.iter().enumerate() {
         let t = Instant::now();
         let deadline = Some(t + Duration::from_secs_f64(sizes.precision_reference_seconds / base.cases.len() as f64));
-        let source = DisplaySource::new(&base.display, &case.eye, field, &stack);
+        let source = DisplaySource::new(&base.display, &case.eye, field, stack);
         let got =
             measure(&source, ref_seed, i, &case.eye, &base.retina, base.ssim, &Precision { deadline, ..ref_precision });
         let seconds = t.elapsed().as_secs_f64();
-        ref_seconds += seconds;
-        ref_spp = ref_spp.max(got.samples_per_pixel());
-        if ref_stopped_by == "target met" {
-            ref_stopped_by = got.stopped_by;
+        out.seconds += seconds;
+        out.samples_per_pixel = out.samples_per_pixel.max(got.samples_per_pixel());
+        if out.stopped_by == "target met" {
+            out.stopped_by = got.stopped_by;
         }
         for (k, cell) in got.cells.iter().enumerate() {
-            ref_ci = ref_ci.max(cell.psnr.ci95.unwrap_or(f64::INFINITY));
-            reference.insert((case.name.clone(), labels[k]), (cell.psnr.mean, cell.ssim.mean));
-            rows.push(row(
+            out.ci95_db = out.ci95_db.max(cell.psnr.ci95.unwrap_or(f64::INFINITY));
+            out.cells.insert((case.name.clone(), maker.labels[k]), (cell.psnr.mean, cell.ssim.mean));
+            rows.push(maker.row(
                 Estimator::Reference,
                 i,
                 k,
                 got.samples_per_pixel(),
-                (seconds, got.samples_per_pixel() * pixels),
+                (seconds, got.samples_per_pixel() * maker.pixels),
                 (cell.psnr.mean, cell.ssim.mean),
             ));
         }
     }
-    progress.inc(1);
+    out
+}
 
+/// The grid estimator's points: pupil grid and retina samples together.
+fn grid_points(
+    maker: &RowMaker<'_>,
+    sizes: &Sizes,
+    field: &dyn RadianceField,
+    refs: &[&RgbImage],
+    reference: &Cells,
+    rows: &mut Vec<BenchRow>,
+) -> Result<Vec<PrecisionPoint>> {
+    let (base, pixels) = (maker.base, maker.pixels);
     let mut points = Vec::new();
-    // The grid estimator: pupil grid and retina samples together.
     let paper = Sampling::of(base);
     for &(pupil, retina) in &sizes.precision_grids {
         let exp = Sampling { pupil, retina, ..paper }.apply(base);
@@ -230,7 +330,7 @@ pub fn precision_series(
             seconds += t;
             gts.push(img);
         }
-        let sims = perceived_images(&exp, &refs)?;
+        let sims = perceived_images(&exp, refs)?;
         seconds += sims.pack_seconds + sims.case_seconds.iter().sum::<f64>();
         let mut stages = Vec::new();
         let scores = experiment::table1_scores(&exp, &gts, &sims.images, &mut stages)?;
@@ -245,12 +345,12 @@ pub fn precision_series(
         for sc in &scores {
             let Some(i) = exp.cases.iter().position(|c| c.name == sc.eye_case) else { continue };
             let Some(k) = exp.methods.iter().position(|x| x.name() == sc.method) else { continue };
-            cells.insert((sc.eye_case.clone(), labels[k]), (sc.psnr.mean, sc.ssim.mean));
-            let mut r = row(Estimator::Grid, i, k, spp, (seconds, rays), (sc.psnr.mean, sc.ssim.mean));
+            cells.insert((sc.eye_case.clone(), maker.labels[k]), (sc.psnr.mean, sc.ssim.mean));
+            let mut r = maker.row(Estimator::Grid, i, k, spp, (seconds, rays), (sc.psnr.mean, sc.ssim.mean));
             (r.pupil_grid, r.retina_samples) = (pupil, retina);
             rows.push(r);
         }
-        let (pe, se) = max_errors(&cells, &reference);
+        let (pe, se) = max_errors(&cells, reference);
         let setting = format!("n = {pupil}, s = {retina}x{retina}");
         points.push(PrecisionPoint {
             estimator: Estimator::Grid,
@@ -261,9 +361,19 @@ pub fn precision_series(
             max_ssim_error: se,
         });
     }
-    progress.inc(1);
+    Ok(points)
+}
 
-    // Random and randomized-QMC points: the same replicate count and sample ladder.
+/// Random and randomized-QMC steps, `(rqmc, random)`: the same replicate count and sample
+/// ladder ([`Sizes::precision_samples`]) for every eye case.
+fn ladder_steps(
+    maker: &RowMaker<'_>,
+    sizes: &Sizes,
+    field: &dyn RadianceField,
+    stack: &DisplayStack,
+) -> Result<(Vec<Step>, Vec<Step>)> {
+    let base = maker.base;
+    let m = &base.measurement;
     let nr = m.replicates;
     let loose = Precision {
         psnr_ci95_db: 0.0,
@@ -276,7 +386,7 @@ pub fn precision_series(
     let mut rqmc = Vec::new();
     let mut random = Vec::new();
     for (i, case) in base.cases.iter().enumerate() {
-        let source = DisplaySource::new(&base.display, &case.eye, field, &stack);
+        let source = DisplaySource::new(&base.display, &case.eye, field, stack);
         for (independent, store) in [(false, &mut rqmc), (true, &mut random)] {
             let sampler = if independent {
                 independent_case_sampler(m.seed, i, &case.eye)
@@ -311,64 +421,61 @@ pub fn precision_series(
             }
         }
     }
-    // Per estimator and ladder step: seconds summed over the eye cases, errors over every cell.
-    let mut add_points = |estimator: Estimator, list: &[Step]| {
-        for (j, &n) in sizes.precision_samples.iter().enumerate() {
-            let mut cells = Cells::new();
-            let mut seconds = 0.0;
-            let mut spp = 0;
-            for x in list.iter().filter(|x| x.step == j) {
-                let (i, sampled) = (&x.case, x.sampled);
-                spp = x.samples_per_pixel;
-                let scores: Vec<(f64, f64)> = match (estimator, &x.debiased) {
-                    (Estimator::Rqmc, Some((c, t))) => {
-                        seconds += sampled + t;
-                        c.iter().map(|c| (c.psnr.mean, c.ssim.mean)).collect()
-                    }
-                    _ => {
-                        seconds += sampled + x.naive_seconds;
-                        x.naive.iter().map(|(p, s)| (p.mean, s.mean)).collect()
-                    }
-                };
-                for (k, sc) in scores.iter().enumerate() {
-                    cells.insert((base.cases[*i].name.clone(), labels[k]), *sc);
-                }
-            }
-            for (i, case) in base.cases.iter().enumerate() {
-                for (k, label) in labels.iter().enumerate() {
-                    if let Some(&sc) = cells.get(&(case.name.clone(), *label)) {
-                        rows.push(row(estimator, i, k, spp, (seconds, spp * pixels * base.cases.len() as u64), sc));
-                    }
-                }
-            }
-            let (pe, se) = max_errors(&cells, &reference);
-            let setting = format!("{nr} x {n}");
-            points.push(PrecisionPoint {
-                estimator,
-                samples_per_pixel: spp,
-                setting,
-                seconds,
-                max_psnr_error_db: pe,
-                max_ssim_error: se,
-            });
-        }
-    };
-    add_points(Estimator::Random, &random);
-    add_points(Estimator::RqmcNaive, &rqmc);
-    add_points(Estimator::Rqmc, &rqmc);
-    progress.inc(1);
+    Ok((rqmc, random))
+}
 
-    let reached = reached(&points);
-    Ok(PrecisionSummary {
-        reference_target_db: sizes.precision_reference_db,
-        reference_ci95_db: ref_ci,
-        reference_samples_per_pixel: ref_spp,
-        reference_seconds: ref_seconds,
-        reference_stopped_by: ref_stopped_by.into(),
-        replicates: nr,
-        points,
-        reached,
-    })
+/// The points of `estimator` from its ladder steps `list`, per ladder step: seconds summed over
+/// the eye cases, errors over every cell.
+fn ladder_points(
+    maker: &RowMaker<'_>,
+    sizes: &Sizes,
+    estimator: Estimator,
+    list: &[Step],
+    reference: &Cells,
+    rows: &mut Vec<BenchRow>,
+    points: &mut Vec<PrecisionPoint>,
+) {
+    let (base, labels, pixels) = (maker.base, &maker.labels, maker.pixels);
+    let nr = base.measurement.replicates;
+    for (j, &n) in sizes.precision_samples.iter().enumerate() {
+        let mut cells = Cells::new();
+        let mut seconds = 0.0;
+        let mut spp = 0;
+        for x in list.iter().filter(|x| x.step == j) {
+            let (i, sampled) = (&x.case, x.sampled);
+            spp = x.samples_per_pixel;
+            let scores: Vec<(f64, f64)> = match (estimator, &x.debiased) {
+                (Estimator::Rqmc, Some((c, t))) => {
+                    seconds += sampled + t;
+                    c.iter().map(|c| (c.psnr.mean, c.ssim.mean)).collect()
+                }
+                _ => {
+                    seconds += sampled + x.naive_seconds;
+                    x.naive.iter().map(|(p, s)| (p.mean, s.mean)).collect()
+                }
+            };
+            for (k, sc) in scores.iter().enumerate() {
+                cells.insert((base.cases[*i].name.clone(), labels[k]), *sc);
+            }
+        }
+        for (i, case) in base.cases.iter().enumerate() {
+            for (k, label) in labels.iter().enumerate() {
+                if let Some(&sc) = cells.get(&(case.name.clone(), *label)) {
+                    rows.push(maker.row(estimator, i, k, spp, (seconds, spp * pixels * base.cases.len() as u64), sc));
+                }
+            }
+        }
+        let (pe, se) = max_errors(&cells, reference);
+        let setting = format!("{nr} x {n}");
+        points.push(PrecisionPoint {
+            estimator,
+            samples_per_pixel: spp,
+            setting,
+            seconds,
+            max_psnr_error_db: pe,
+            max_ssim_error: se,
+        });
+    }
 }
 
 #[cfg(test)]

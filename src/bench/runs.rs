@@ -30,7 +30,9 @@ use crate::scene::{Mesh, Scene};
 /// A backend that can render the scene, and its radiance field.
 #[derive(Clone, Copy)]
 pub struct Field<'a> {
+    /// Which backend.
     pub backend: Backend,
+    /// Its radiance field.
     pub field: &'a dyn RadianceField,
 }
 
@@ -149,6 +151,7 @@ pub struct Runs<'a> {
 }
 
 impl<'a> Runs<'a> {
+    /// The runs of the bench's experiment `base` at `sizes`, every row sharing `ctx`.
     pub fn new(base: &'a Experiment, sizes: &'a Sizes, ctx: &'a RowContext, progress: &'a Progress) -> Self {
         Self {
             base,

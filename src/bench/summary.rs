@@ -25,19 +25,26 @@ pub fn capped_psnr(db: f64) -> f64 {
 /// converged PSNR (the PSNR of its highest setting), and what it costs.
 #[derive(Clone, Debug, Serialize)]
 pub struct WithinTolerance {
+    /// The setting (the series' parameter).
     pub parameter: usize,
+    /// Samples it takes (per pixel).
     pub samples: usize,
+    /// Its wall time, s.
     pub seconds: f64,
+    /// Its PSNR, dB.
     pub psnr_db: f64,
 }
 
 /// Observed convergence of one series.
 #[derive(Clone, Debug, Serialize)]
 pub struct ConvergenceSummary {
+    /// The series.
     pub series: Series,
     /// What the series renders and varies, in words.
     pub quantity: String,
+    /// The backend that rendered the series.
     pub backend: Backend,
+    /// What the series is scored against.
     pub reference: String,
     /// p in error ~ samples^p: least-squares slope of ln(error) against ln(samples) over every
     /// point of the series, with error = 10^(-PSNR/20) (the geometric mean of the R, G, B
@@ -45,8 +52,11 @@ pub struct ConvergenceSummary {
     pub rate: Option<f64>,
     /// PSNR of the highest setting.
     pub converged_psnr_db: f64,
+    /// The series' highest setting.
     pub highest_parameter: usize,
+    /// Its wall time, s.
     pub highest_seconds: f64,
+    /// The cheapest setting within tolerance of the converged PSNR, if any.
     pub first_within_tolerance: Option<WithinTolerance>,
 }
 

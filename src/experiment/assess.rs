@@ -26,6 +26,7 @@ pub const Z_CHANNEL_NOTE: &str = "hit distance in mm along each camera ray from 
 /// Options of a run.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct RunOptions {
+    /// No progress bars or notes on stderr.
     pub quiet: bool,
     /// Scene intersection backend (`auto`: analytic for rectangle-only scenes, else Embree).
     pub backend: BackendChoice,
@@ -35,6 +36,7 @@ pub struct RunOptions {
 
 /// Everything an assessment computed: its report and its images, in the experiment's order.
 pub struct Assessment {
+    /// Table 1, stage times and the settings, as `results.json` holds them.
     pub report: AssessReport,
     /// The display image of every method.
     pub displays: Vec<RgbImage>,

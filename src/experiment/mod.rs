@@ -8,7 +8,7 @@
 
 mod assess;
 pub mod converged;
-pub mod converged_report;
+pub(crate) mod converged_report;
 pub mod metadata;
 mod report;
 mod stages;
@@ -102,10 +102,13 @@ impl Default for EyeSpec {
 pub struct EyeCaseSpec {
     /// Used in file names (`gt_<name>.exr`) and as the table's row label.
     pub name: String,
+    /// A pinhole eye (the paper's "Pin"): one chief ray per retina sample, no focus.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub pinhole: bool,
+    /// Focus distance from the pupil, mm (give this or `focus_diopters` unless `pinhole`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub focus_mm: Option<f64>,
+    /// Focus as vergence, dioptres (0 = infinity).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub focus_diopters: Option<f64>,
 }
@@ -114,7 +117,9 @@ pub struct EyeCaseSpec {
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct ExperimentSpec {
+    /// Names the experiment and its default output folder `out/<name>`.
     pub name: String,
+    /// One line for reports.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub description: Option<String>,
     /// `builtin:paper` or a scene TOML path (relative to this file).
@@ -132,10 +137,13 @@ pub struct ExperimentSpec {
     /// `[measurement]`: the estimator, its targets and budget (none: the grid estimator).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub measurement: Option<MeasurementSpec>,
+    /// `[display_render]`: how display images are rendered.
     #[serde(default)]
     pub display_render: DisplayRenderSpec,
+    /// `[eye]`: the eye shared by all eye cases.
     #[serde(default)]
     pub eye: EyeSpec,
+    /// `[[eye_cases]]`: the rows of Table 1, each a focus of the eye.
     pub eye_cases: Vec<EyeCaseSpec>,
 }
 
@@ -191,6 +199,7 @@ impl ExperimentSpec {
         }
     }
 
+    /// The spec as an experiment file (what `info --print paper-experiment` prints).
     pub fn to_toml(&self) -> String {
         toml::to_string_pretty(self).unwrap_or_default()
     }
@@ -199,24 +208,36 @@ impl ExperimentSpec {
 /// An eye case, resolved.
 #[derive(Clone, Debug)]
 pub struct EyeCase {
+    /// Table 1's row label and the file-name part (`gt_<name>.exr`).
     pub name: String,
+    /// The eye: the shared `[eye]` with this case's focus.
     pub eye: Eye,
 }
 
 /// A resolved experiment: everything needed to run it.
 #[derive(Clone, Debug)]
 pub struct Experiment {
+    /// The experiment's name.
     pub name: String,
+    /// The file it came from (or "built-in ..."), for errors and reports.
     pub source: String,
+    /// The scene the display shows.
     pub scene: Scene,
+    /// The display.
     pub display: Display,
+    /// The rendering methods compared, in the table's column order.
     pub methods: Vec<Method>,
+    /// How display images are rendered.
     pub render: DisplayRenderSettings,
+    /// The retina's sampling.
     pub retina: Retina,
+    /// The eye cases, in the table's row order.
     pub cases: Vec<EyeCase>,
+    /// SSIM constants.
     pub ssim: SsimConstants,
     /// How Table 1 is measured (`[measurement]`; the grid estimator when absent).
     pub measurement: MeasurementSpec,
+    /// The spec it was resolved from (what reports echo).
     pub spec: ExperimentSpec,
 }
 

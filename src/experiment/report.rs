@@ -16,13 +16,18 @@ use crate::version::Tool;
 /// (`ci95`, `channels_ci95` in `psnr` and `ssim`), its samples and whether the targets were met.
 #[derive(Clone, Debug, Serialize)]
 pub struct Score {
+    /// The method's short name (LC, PC, LA, LA<k>).
     pub method: String,
+    /// The eye case's name.
     pub eye_case: String,
+    /// PSNR of the perceived image against the ground truth, dB.
     pub psnr: Estimate,
+    /// SSIM of the perceived image against the ground truth.
     pub ssim: Estimate,
     /// Samples per retina pixel, over all replicates (converged estimator).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub samples_per_pixel: Option<u64>,
+    /// Replicates of the converged estimator.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub replicates: Option<usize>,
     /// Both 95% half-widths within the experiment's targets.
@@ -33,11 +38,15 @@ pub struct Score {
 /// Wall time of one stage.
 #[derive(Clone, Debug, Serialize)]
 pub struct StageTime {
+    /// The stage ("display image", "ground truth", "perceived", "score", ...).
     pub stage: String,
+    /// The method it ran for, if one.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub method: Option<String>,
+    /// The eye case it ran for, if one.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub eye_case: Option<String>,
+    /// Wall time, s.
     pub seconds: f64,
 }
 
@@ -46,16 +55,25 @@ pub struct StageTime {
 pub struct AssessReport {
     /// The inimtrace that wrote the report: version and git revision.
     pub tool: Tool,
+    /// The experiment's name.
     pub experiment: String,
+    /// The SSIM constants' name ("wang2004", "framework-8bit").
     pub ssim_constants: String,
+    /// The intersection backend that ran.
     pub backend: String,
+    /// Rayon worker threads.
     pub threads: usize,
     /// The display's parameters as fields (lengths in mm).
     pub display: DisplayParameters,
+    /// The display's central depth plane, mm from the pupil (`None`: at infinity or real).
     pub central_depth_plane_mm: Option<f64>,
+    /// Table 1: every method under every eye case.
     pub scores: Vec<Score>,
+    /// Wall time of every stage.
     pub stages: Vec<StageTime>,
+    /// Wall time of the run, s.
     pub total_seconds: f64,
+    /// The experiment's settings as resolved.
     pub settings: ExperimentSpec,
 }
 

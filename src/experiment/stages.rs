@@ -165,8 +165,11 @@ pub fn table1<S: RadianceField + ?Sized>(
 /// One eye case of Table 1: its ground truth, the perceived image of every method (in the
 /// experiment's order) and their scores.
 pub struct CaseResult {
+    /// What the eye looking straight at the scene sees.
     pub ground_truth: RgbImage,
+    /// What the eye perceives of each method's display image.
     pub perceived: Vec<RgbImage>,
+    /// PSNR and SSIM of each perceived image against the ground truth.
     pub scores: Vec<Score>,
 }
 

@@ -18,16 +18,22 @@ use crate::optics::{Display, Lattice, Lcd};
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(untagged)]
 pub enum PitchSpec {
+    /// Square cells of this pitch, mm.
     Square(f64),
+    /// Rectangular cells, `[x, y]` pitch, mm.
     Rectangular([f64; 2]),
+    /// The row-major pitch matrix `[[a, b], [c, d]]`, mm: cell (i, j) is centred at `shift + M (i, j)`.
     Matrix([[f64; 2]; 2]),
 }
 
+/// A lattice of cells (`[elemental_images]`): its shift and pitch.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct LatticeSpec {
+    /// Centre of cell (0, 0), mm (default the origin).
     #[serde(default)]
     pub shift: [f64; 2],
+    /// The pitch.
     pub pitch: PitchSpec,
 }
 
@@ -79,15 +85,20 @@ impl LatticeSpec {
     }
 }
 
+/// `[lenslets]`: the lenslet array, a lattice of thin lenses.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct LensletSpec {
+    /// f: focal length of every lenslet, mm.
     pub focal_length: f64,
+    /// Centre of lenslet (0, 0), mm (default the origin).
     #[serde(default)]
     pub shift: [f64; 2],
+    /// The lenslets' pitch.
     pub pitch: PitchSpec,
 }
 
+/// `[lcd]`: the panel.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct LcdSpec {
@@ -101,18 +112,23 @@ pub struct LcdSpec {
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct DisplaySpec {
+    /// Display name (default: the file's name).
     #[serde(default)]
     pub name: Option<String>,
     /// v1: pupil plane to lenslet plane, mm.
     pub eye_to_lenslets: f64,
     /// v2: lenslet plane to LCD, mm.
     pub lenslets_to_lcd: f64,
+    /// `[lenslets]`.
     pub lenslets: LensletSpec,
+    /// `[elemental_images]`.
     pub elemental_images: LatticeSpec,
+    /// `[lcd]`.
     pub lcd: LcdSpec,
 }
 
 impl DisplaySpec {
+    /// Resolves the file into a display and validates it; errors name `source` and the field.
     pub fn to_display(&self, source: &str) -> Result<Display> {
         let lenslets = LatticeSpec { shift: self.lenslets.shift, pitch: self.lenslets.pitch.clone() }
             .to_lattice(source, "lenslets")?;
@@ -130,6 +146,7 @@ impl DisplaySpec {
         Ok(d)
     }
 
+    /// The file of `d` (what `info --print paper-display` prints).
     pub fn from_display(d: &Display) -> Self {
         let l = LatticeSpec::from_lattice(&d.lenslets);
         Self {

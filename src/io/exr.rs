@@ -44,7 +44,7 @@ use crate::raster::{RgbImage, RgbView};
 /// display image with its `Z` channel is 74.7 MB uncompressed and 7.8-8.0 MB with ZIP (LA, LC;
 /// 19 MB for PC); a 512 x 512 retinal image 3.15 MB and 0.1-0.4 MB. Fine noise compresses little
 /// with ZIP (22 % with PIZ, at 2-3 s per 2160 x 2160 image); `none` writes fastest.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum ExrCompression {
     /// Uncompressed scan lines (largest, fastest).
@@ -90,6 +90,30 @@ impl ExrCompression {
 impl std::fmt::Display for ExrCompression {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(self.name())
+    }
+}
+
+impl ExrCompression {
+    /// Every choice, in the order `--help` lists them.
+    pub const ALL: [ExrCompression; 6] = [
+        ExrCompression::None,
+        ExrCompression::Rle,
+        ExrCompression::Zips,
+        ExrCompression::Zip,
+        ExrCompression::Piz,
+        ExrCompression::Pxr24,
+    ];
+}
+
+impl std::str::FromStr for ExrCompression {
+    type Err = String;
+    /// Parses a name of [`ExrCompression::name`] (case-insensitive).
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        let lower = s.trim().to_ascii_lowercase();
+        ExrCompression::ALL
+            .into_iter()
+            .find(|c| c.name() == lower)
+            .ok_or_else(|| format!("unknown EXR compression `{s}`: expected none, rle, zips, zip, piz or pxr24"))
     }
 }
 

@@ -10,9 +10,13 @@ use exr::meta::attribute::{AttributeValue, Text};
 /// One attribute value.
 #[derive(Clone, Debug, PartialEq)]
 pub enum AttrValue {
+    /// An EXR `string`.
     Text(String),
+    /// An EXR `double`.
     F64(f64),
+    /// An EXR `float`.
     F32(f32),
+    /// An EXR `int`.
     I32(i32),
 }
 
@@ -94,9 +98,13 @@ impl From<i32> for AttrValue {
 
 /// An ordered list of `inimtrace:` attributes being assembled.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct Attributes(pub Vec<(String, AttrValue)>);
+pub struct Attributes(
+    /// `(name, value)` pairs, in header order.
+    pub Vec<(String, AttrValue)>,
+);
 
 impl Attributes {
+    /// No attributes.
     pub fn new() -> Self {
         Self::default()
     }

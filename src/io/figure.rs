@@ -97,8 +97,11 @@ pub type FigureRow<'a> = (String, Vec<(&'a RgbImage, Option<String>)>);
 /// caption per image.
 #[derive(Clone, Debug, Default)]
 pub struct Figure<'a> {
+    /// Title line above the grid, if any.
     pub title: Option<String>,
+    /// One label per image column.
     pub column_labels: Vec<String>,
+    /// The rows, top to bottom.
     pub rows: Vec<FigureRow<'a>>,
 }
 

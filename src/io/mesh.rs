@@ -56,15 +56,22 @@ pub enum TextureSource {
     File(PathBuf),
     /// Image bytes held in the mesh file (a glTF buffer view or `data:` URI); `name` says which
     /// image of the file, for messages.
-    Embedded { name: String, bytes: Vec<u8> },
+    Embedded {
+        /// Which image of the file, for messages.
+        name: String,
+        /// The encoded image (PNG or JPEG).
+        bytes: Vec<u8>,
+    },
 }
 
 /// A texture named by the mesh file's own material.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FileTexture {
+    /// Where the image comes from.
     pub source: TextureSource,
     /// The file's sampler, when it names one (glTF).
     pub filter: Option<Filter>,
+    /// What UVs outside [0, 1] do, when the file says.
     pub wrap: Option<Wrap>,
 }
 
@@ -91,6 +98,7 @@ pub struct FileMaterial {
 pub struct MeshPart {
     /// Indices into [`Mesh::triangles`] of [`MeshLoad::mesh`].
     pub triangles: Range<usize>,
+    /// The file's material of these triangles.
     pub material: FileMaterial,
 }
 
@@ -115,6 +123,7 @@ pub struct MeshLoad {
 
 /// What a format reader returns before the shared checks.
 pub(super) struct Loaded {
+    /// The mesh as read.
     pub mesh: Mesh,
     /// As [`MeshLoad::parts`], before degenerate triangles are removed (may be empty: one part
     /// with no file material).

@@ -35,6 +35,7 @@ pub const TEMP_PREFIX: &str = ".inimtrace-tmp-";
 pub struct OutputFile {
     /// Name relative to the output folder.
     pub name: String,
+    /// Size, bytes.
     pub bytes: u64,
     /// CRC-32 (IEEE) of the file's bytes, 8 lowercase hex digits.
     pub crc32: String,

@@ -25,6 +25,7 @@ use crate::scene::image_texture::{Filter, Wrap};
 use crate::scene::usaf::{self, ChartScale};
 use crate::scene::{procedural, BarChart, Light, Material, Object, Rect, Scene, Shape, Transform};
 
+/// Which bar chart a `chart` material shows.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(rename_all = "kebab-case")]
 pub enum ChartKind {
@@ -36,10 +37,13 @@ pub enum ChartKind {
     File,
 }
 
+/// How a procedural chart is sized on its rectangle.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(rename_all = "kebab-case")]
 pub enum ChartScaleSpec {
+    /// Scaled to fill the rectangle.
     Fit,
+    /// At the chart standard's physical size (millimetres).
     Physical,
 }
 
@@ -47,13 +51,16 @@ pub enum ChartScaleSpec {
 #[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialSpec {
+    /// Linear RGB albedo in [0, 1].
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub albedo: Option<[f64; 3]>,
+    /// A bar chart instead of a plain albedo.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub chart: Option<ChartKind>,
     /// Procedural chart: first and last group (inclusive).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub groups: Option<[i32; 2]>,
+    /// Procedural chart: fit the rectangle (default) or physical size.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub scale: Option<ChartScaleSpec>,
     /// Bar-list file for `chart = "file"`.
@@ -62,6 +69,7 @@ pub struct MaterialSpec {
     /// Bar albedo (default black) and backing albedo (default white).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bar_albedo: Option<[f64; 3]>,
+    /// Albedo of the chart's backing (default white).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub backing_albedo: Option<[f64; 3]>,
     /// Meshes: interpolate the file's per-vertex colours (`vertex_color = true`; the file must
@@ -93,11 +101,15 @@ impl MaterialSpec {
     }
 }
 
+/// An object's `type`.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(rename_all = "kebab-case")]
 pub enum ShapeKind {
+    /// `"rect"`: a planar rectangle.
     Rect,
+    /// `"mesh"`: a triangle mesh from a file.
     Mesh,
+    /// `"sphere-grid"`: a procedural grid of UV spheres.
     SphereGrid,
 }
 
@@ -113,30 +125,43 @@ pub enum ShapeKind {
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct ObjectSpec {
+    /// Default: the mesh file's stem, else the object's index.
     #[serde(default)]
     pub name: Option<String>,
+    /// `type`: what the object is.
     #[serde(rename = "type")]
     pub kind: ShapeKind,
+    /// Rectangle or sphere-grid centre, mm.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub center: Option<[f64; 3]>,
+    /// Mesh file (relative to the scene file).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub file: Option<PathBuf>,
+    /// Mesh placement: scale, then rotation, then translation.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub transform: Option<Transform>,
+    /// Mesh placement by size and centre instead of a `transform`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub fit: Option<FitSpec>,
+    /// Sphere grid: spheres along x and y.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub count: Option<[usize; 2]>,
+    /// Sphere grid: centre-to-centre distance, mm.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub spacing: Option<f64>,
+    /// Sphere grid: sphere radius, mm.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub radius: Option<f64>,
+    /// Sphere grid: longitudes per sphere.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub segments: Option<usize>,
+    /// Eye-facing rectangle: width (x) and height (y), mm.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub size: Option<[f64; 2]>,
+    /// Oriented rectangle: half of its first side, as a vector, mm.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub half_u: Option<[f64; 3]>,
+    /// Oriented rectangle: half of its second side, as a vector, mm.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub half_v: Option<[f64; 3]>,
     /// Left out: the mesh file's own materials, else [`DEFAULT_ALBEDO`].
@@ -144,6 +169,7 @@ pub struct ObjectSpec {
     pub material: MaterialSpec,
 }
 
+/// A scene file (TOML): background, light and objects; millimetres, the eye's pupil at the origin.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct SceneSpec {
@@ -157,13 +183,16 @@ pub struct SceneSpec {
     /// mesh or sphere grid, none for rect-only scenes.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub light: Option<LightSpec>,
+    /// `[[objects]]`, in order.
     #[serde(rename = "objects")]
     pub objects: Vec<ObjectSpec>,
 }
 
+/// A `[light]`'s `type`.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(rename_all = "kebab-case")]
 pub enum LightKind {
+    /// Parallel light along `direction`.
     Distant,
     /// No light: radiance = albedo.
     None,
@@ -174,10 +203,13 @@ pub enum LightKind {
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct LightSpec {
+    /// `type`: distant or none.
     #[serde(rename = "type")]
     pub kind: LightKind,
+    /// Direction the light travels (normalised on load).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub direction: Option<[f64; 3]>,
+    /// Linear RGB radiance (default white).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub radiance: Option<[f64; 3]>,
 }

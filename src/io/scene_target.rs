@@ -19,11 +19,13 @@ pub struct GratingSpec {
     /// Direction of modulation, degrees counter-clockwise from +x (0 = vertical bars).
     #[serde(default)]
     pub orientation_deg: f64,
+    /// Mean luminance (linear; default 0.5).
     #[serde(default = "half")]
     pub mean: f64,
     /// Michelson contrast.
     #[serde(default = "one")]
     pub contrast: f64,
+    /// Phase at the pattern's origin, degrees.
     #[serde(default)]
     pub phase_deg: f64,
 }
@@ -36,8 +38,10 @@ pub struct EdgeSpec {
     /// a vertical edge turned 5 degrees, 95 a nearly horizontal one with `high` above.
     #[serde(default = "five")]
     pub angle_deg: f64,
+    /// Value on the dark side (default 0).
     #[serde(default)]
     pub low: f64,
+    /// Value on the light side (default 1).
     #[serde(default = "one")]
     pub high: f64,
     /// A point of the edge in tangent coordinates `(x / z, y / z)`.

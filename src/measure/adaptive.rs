@@ -31,13 +31,16 @@ pub struct Precision {
     pub deadline: Option<Instant>,
     /// Samples per replicate of the first round.
     pub initial_samples: u32,
+    /// Independent replicates R (at least 3).
     pub replicates: usize,
 }
 
 /// One cell's scores.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CellScores {
+    /// PSNR against image 0 (the ground truth), dB, with its 95% interval.
     pub psnr: Estimate,
+    /// SSIM against image 0, with its 95% interval.
     pub ssim: Estimate,
     /// Both half-widths within their targets.
     pub target_met: bool,
@@ -46,22 +49,28 @@ pub struct CellScores {
 /// One round of sampling.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Round {
+    /// Samples per retina pixel after the round, over all replicates.
     pub samples_per_pixel: u64,
+    /// Seconds spent tracing the round's samples.
     pub sample_seconds: f64,
+    /// Seconds spent scoring after it.
     pub stats_seconds: f64,
 }
 
 /// The measurement of one eye case: the replicates and every cell's scores.
 pub struct CaseMeasurement {
+    /// The replicate images.
     pub replicates: Replicates,
     /// `cells[k - 1]`: image `k` against image 0.
     pub cells: Vec<CellScores>,
+    /// Every round of sampling, in order.
     pub rounds: Vec<Round>,
     /// Why sampling stopped: "target met", "sample budget" or "time budget".
     pub stopped_by: &'static str,
 }
 
 impl CaseMeasurement {
+    /// Samples per retina pixel taken, over all replicates.
     pub fn samples_per_pixel(&self) -> u64 {
         self.replicates.samples_per_pixel()
     }

@@ -30,7 +30,9 @@ use crate::render::{RadianceField, Sample};
 /// the pupil centre).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct EyeSample {
+    /// Tangents (x, y) of the retina point's direction.
     pub tangent: DVec2,
+    /// Pupil point, mm from the pupil centre.
     pub pupil: DVec2,
 }
 
@@ -68,6 +70,7 @@ pub struct EyeToLcd<'a> {
 }
 
 impl<'a> EyeToLcd<'a> {
+    /// The eye -> LCD transfer of eq. (1) for `eye` looking at `display`.
     pub fn new(display: &'a Display, eye: &Eye) -> Self {
         Self { transfer: FastTransfer::for_eye(display, eye) }
     }
@@ -103,6 +106,8 @@ pub struct DisplaySource<'a, F: RadianceField + ?Sized> {
 }
 
 impl<'a, F: RadianceField + ?Sized> DisplaySource<'a, F> {
+    /// Samples of `eye`: the ground truth from `field`, and what it perceives of every display image
+    /// of `stack` on `display`.
     pub fn new(display: &'a Display, eye: &'a Eye, field: &'a F, stack: &'a DisplayStack) -> Self {
         Self { eye, field, transfer: EyeToLcd::new(display, eye), stack }
     }
@@ -290,9 +295,11 @@ impl Replicates {
     pub fn resolution(&self) -> usize {
         self.resolution
     }
+    /// Independent replicates R.
     pub fn replicates(&self) -> usize {
         self.replicates
     }
+    /// Images per replicate (the ground truth first, then one per method).
     pub fn images(&self) -> usize {
         self.images
     }

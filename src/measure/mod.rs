@@ -13,5 +13,5 @@ pub mod adaptive;
 pub mod estimator;
 pub mod sampler;
 pub mod spec;
-pub mod ssim;
+pub(crate) mod ssim;
 pub mod stats;

@@ -170,6 +170,7 @@ impl Points<'_> {
         (frac, (self.sampler.pupil_radius != 0.0).then(|| DVec2::new(f64::from(c), f64::from(d))))
     }
 
+    /// The next sample: the point in the pixel (fractions) and the point on the unit pupil disk.
     #[inline(always)]
     pub fn next_point(&mut self) -> (DVec2, DVec2) {
         let [a, b, c, d] = self.next_raw();

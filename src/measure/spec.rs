@@ -35,6 +35,7 @@ pub enum EstimatorKind {
 }
 
 impl EstimatorKind {
+    /// The name used in experiment files and reports ("converged", "grid").
     pub fn name(self) -> &'static str {
         match self {
             EstimatorKind::Converged => "converged",
@@ -47,6 +48,7 @@ impl EstimatorKind {
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct MeasurementSpec {
+    /// The estimator (default converged).
     pub estimator: EstimatorKind,
     /// Target: half-width of every PSNR's 95% interval, dB (the mean of the channels).
     pub psnr_ci95_db: f64,

@@ -37,7 +37,9 @@ use super::estimator::Replicates;
 /// In JSON an infinite value is written as the string `"inf"` (JSON has no infinity).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Estimate {
+    /// Per channel: R, G, B.
     pub channels: [f64; 3],
+    /// Mean of the channels.
     pub mean: f64,
     /// Half-width of the 95% interval of `mean`.
     pub ci95: Option<f64>,
@@ -166,7 +168,9 @@ pub fn jackknife_ci95(loo: &[f64]) -> f64 {
 /// against the reference, summed over pixels, and the pixel count.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Gram {
+    /// R: replicates.
     pub replicates: usize,
+    /// Pixels summed over.
     pub pixels: usize,
     /// `[channel][r * R + s]`, symmetric.
     pub g: [Vec<f64>; 3],

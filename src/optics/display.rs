@@ -22,12 +22,15 @@ pub struct Lcd {
 }
 
 impl Lcd {
+    /// Pixels per row (x).
     pub fn columns(&self) -> usize {
         self.resolution[0]
     }
+    /// Pixel rows (y).
     pub fn rows(&self) -> usize {
         self.resolution[1]
     }
+    /// Columns x rows.
     pub fn pixel_count(&self) -> usize {
         self.resolution[0] * self.resolution[1]
     }
@@ -75,6 +78,7 @@ pub struct PixelIndexer {
 }
 
 impl PixelIndexer {
+    /// The indexer of `lcd`'s pixel grid (see the README's LCD pixel convention).
     pub fn new(lcd: &Lcd) -> Self {
         let n = DVec2::new(lcd.resolution[0] as f64, lcd.resolution[1] as f64);
         let (nx, ny) = (lcd.resolution[0], lcd.resolution[1]);
@@ -83,6 +87,7 @@ impl PixelIndexer {
         Self { scale: n / lcd.size, half: 0.5 * n, nx, ny, fits_u32 }
     }
 
+    /// The row-major index of the pixel holding LCD point `p` (world x, y, mm); `None` off the panel or for NaN.
     #[inline(always)]
     pub fn index(&self, p: DVec2) -> Option<usize> {
         let fx = p.x * self.scale.x + self.half.x;
@@ -122,6 +127,7 @@ impl PixelIndexer {
 /// A near-eye InIm display.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Display {
+    /// Display name, for reports and EXR headers.
     pub name: String,
     /// v1: distance from the eye's pupil plane (z = 0) to the lenslet plane, mm.
     pub eye_to_lenslets: f64,
@@ -133,6 +139,7 @@ pub struct Display {
     pub lenslets: Lattice,
     /// Elemental-image centres on the LCD.
     pub elemental_images: Lattice,
+    /// The LCD panel.
     pub lcd: Lcd,
 }
 

@@ -38,6 +38,7 @@ impl Focus {
             Focus::Diopters(d) => 1000.0 / d,
         }
     }
+    /// The focus as vergence in dioptres (1000 / mm; 0 D for infinity).
     pub fn diopters(&self) -> f64 {
         1000.0 * self.vergence()
     }
@@ -49,7 +50,12 @@ pub enum Aperture {
     /// A pinhole at the pupil centre: everything in focus.
     Pinhole,
     /// A thin lens with a circular pupil.
-    ThinLens { pupil_diameter: f64, focus: Focus },
+    ThinLens {
+        /// Pupil diameter, mm.
+        pupil_diameter: f64,
+        /// Where the lens is focused.
+        focus: Focus,
+    },
 }
 
 impl Aperture {
@@ -78,6 +84,7 @@ impl Aperture {
 pub struct Eye {
     /// v0: pupil-to-retina distance, mm (17 mm by default).
     pub retina_distance: f64,
+    /// Pinhole or thin lens.
     pub aperture: Aperture,
     /// Pupil sampling: an n x n grid of cell centres over the pupil's bounding square, keeping
     /// those inside the circle (n = 8 gives 52 samples).
@@ -87,10 +94,13 @@ pub struct Eye {
 }
 
 impl Eye {
+    /// The paper's pinhole eye: v0 = 17 mm, one chief ray through the pupil centre at the origin.
     pub fn pinhole() -> Self {
         Self { retina_distance: 17.0, aperture: Aperture::Pinhole, pupil_grid: 1, position: DVec3::ZERO }
     }
 
+    /// A thin-lens eye (v0 = 17 mm, pupil centre at the origin): pupil diameter in mm, its focus,
+    /// and an n x n pupil grid (kept inside the circle; n = 8 gives 52 samples).
     pub fn thin_lens(pupil_diameter: f64, focus: Focus, pupil_grid: usize) -> Self {
         Self {
             retina_distance: 17.0,
@@ -195,7 +205,9 @@ pub fn pupil_grid(diameter: f64, n: usize) -> Vec<DVec2> {
 /// The retina's sampling: n x n pixels over tangents +-T, with k x k stratified samples per pixel.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Retina {
+    /// n: retina pixels per side.
     pub resolution: usize,
+    /// T: the retina covers tangents -T..T in x and y.
     pub half_tangent: f64,
     /// k: k x k samples per pixel, at the centres of a k x k subdivision (1 = pixel centre).
     pub samples_per_pixel: usize,
@@ -220,6 +232,7 @@ impl Retina {
         stratified(self.samples_per_pixel)
     }
 
+    /// Checks the resolution (1 to 32768), the half tangent and the samples per pixel; errors name `source`.
     pub fn validate(&self, source: &str) -> Result<()> {
         if self.resolution == 0 || self.resolution > 1 << 15 {
             return Err(Error::invalid(

@@ -8,8 +8,11 @@ use crate::error::{Error, Result};
 /// An inclusive range of a setting, in the setting's unit.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Range {
+    /// Smallest accepted value.
     pub min: f64,
+    /// Largest accepted value.
     pub max: f64,
+    /// The unit named in error messages ("mm", "D").
     pub unit: &'static str,
 }
 

@@ -33,7 +33,9 @@ use crate::ray::Ray;
 /// A ray crossing a plane: transverse position and slope (dx/dz, dy/dz), travelling toward +z.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PlaneRay {
+    /// Transverse position (x, y), mm.
     pub position: DVec2,
+    /// Slope (dx/dz, dy/dz).
     pub slope: DVec2,
 }
 

@@ -22,8 +22,9 @@ use crate::scene::{Mesh, Rect, Scene, Shape};
 /// every ray, so it is for small scenes and tests only.
 pub const BRUTE_MAX_TRIANGLES: usize = 10_000;
 
-/// `--backend` (a clap value enum: `--help` lists the values).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum)]
+/// The scene-intersection backend of a render (`--backend`; parsed by [`FromStr`], named by
+/// [`Display`](fmt::Display)).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum BackendChoice {
     /// Analytic for rectangle-only scenes, else Embree.
     #[default]
@@ -35,7 +36,7 @@ pub enum BackendChoice {
     /// The pure-Rust BVH (inimtrace's own 4-wide tree, f64 watertight triangle test).
     Bvh,
     /// Every triangle for every ray (small scenes only).
-    #[value(alias = "brute-force")]
+    /// (Also spelled `brute-force`.)
     Brute,
 }
 
@@ -70,7 +71,9 @@ impl fmt::Display for BackendChoice {
 /// generic analytic path they are the same object; the fused planar kernel does not know
 /// depths, so display images come from the generic analytic tracer (same radiance).
 pub struct Fields<'a> {
+    /// The field to use for radiance only (fastest).
     pub shade: &'a dyn RadianceField,
+    /// The field to use when hit distances are wanted too.
     pub with_depth: &'a dyn RadianceField,
     /// What ran, for reports: "analytic (fused planar kernel)", "analytic", "embree", "brute".
     pub name: &'static str,

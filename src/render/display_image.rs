@@ -35,10 +35,14 @@ use crate::ray::Ray;
 /// A display-image rendering method.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Method {
+    /// LC: each pixel's ray through the centre of its lenslet.
     LensletCenter,
+    /// PC: each pixel's ray through the point of its lenslet whose refracted ray passes through the
+    /// pupil centre (the eye position the settings give).
     PupilCenter,
-    /// `grid` x `grid` samples over the lenslet's pitch cell.
+    /// LA: the mean of `grid` x `grid` rays over the lenslet's pitch cell.
     LensletAverage {
+        /// k: samples per side of the lenslet cell (1 to 64; 1 is LC).
         grid: usize,
     },
 }
@@ -100,52 +104,6 @@ impl FromStr for Method {
                 }
             }
         }
-    }
-}
-
-/// `--method` on the command line: parses like [`Method::from_str`] (so a typo is a usage error
-/// before any work) and lists `LC`, `PC`, `LA` and `LA<k>` in `--help`.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct MethodValueParser;
-
-impl clap::builder::TypedValueParser for MethodValueParser {
-    type Value = Method;
-
-    fn parse_ref(
-        &self,
-        cmd: &clap::Command,
-        arg: Option<&clap::Arg>,
-        value: &std::ffi::OsStr,
-    ) -> std::result::Result<Method, clap::Error> {
-        let text = value.to_str().unwrap_or_default();
-        text.parse::<Method>().map_err(|message| {
-            let name = arg.map(|a| a.to_string()).unwrap_or_else(|| "--method".into());
-            clap::Error::raw(
-                clap::error::ErrorKind::InvalidValue,
-                format!("invalid value '{text}' for '{name}': {message}\n"),
-            )
-            .with_cmd(cmd)
-        })
-    }
-
-    fn possible_values(&self) -> Option<Box<dyn Iterator<Item = clap::builder::PossibleValue> + '_>> {
-        use clap::builder::PossibleValue;
-        Some(Box::new(
-            [
-                PossibleValue::new("LC").help("LensletCenter"),
-                PossibleValue::new("PC").help("PupilCenter"),
-                PossibleValue::new("LA").help("LensletAverage, 5 x 5"),
-                PossibleValue::new("LA<k>").help("LensletAverage, k x k with 1 <= k <= 64 (LA3, LA:3)"),
-            ]
-            .into_iter(),
-        ))
-    }
-}
-
-impl clap::builder::ValueParserFactory for Method {
-    type Parser = MethodValueParser;
-    fn value_parser() -> MethodValueParser {
-        MethodValueParser
     }
 }
 

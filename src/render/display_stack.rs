@@ -95,6 +95,7 @@ impl DisplayStack {
     pub fn len(&self) -> usize {
         self.count
     }
+    /// True when the stack holds no display image.
     pub fn is_empty(&self) -> bool {
         self.count == 0
     }

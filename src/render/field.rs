@@ -3,7 +3,7 @@
 //! eye rays): [`RadianceField`], what one ray sees ([`Sample`]), and the bundles of rays that
 //! LensletAverage traces per display pixel ([`RayBundle`], [`BundleSum`]). Implementations are
 //! the generic [`super::tracer::SceneTracer`] and fused kernels such as
-//! [`super::planar::FacingPlanes`].
+//! [`super::FacingPlanes`].
 
 use glam::{DVec2, DVec3};
 
@@ -12,6 +12,7 @@ use crate::ray::Ray;
 /// What one ray sees: its radiance and the distance to what it hit.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sample {
+    /// Linear RGB radiance.
     pub radiance: DVec3,
     /// World distance (mm) from the ray's origin to its hit along the ray; `+inf` for a miss;
     /// NaN when the field does not know (fields that only implement `radiance`).
@@ -31,6 +32,7 @@ impl Default for Sample {
 /// consecutive rays are neighbours (adjacent pixels, same sub-sample), which lets mesh backends
 /// trace them as packets. The defaults fall back to one ray at a time.
 pub trait RadianceField: Sync {
+    /// The linear RGB radiance along `ray`.
     fn radiance(&self, ray: &Ray) -> DVec3;
 
     /// Radiance and hit distance. Default: the depth is unknown (NaN).
@@ -77,6 +79,7 @@ pub trait RadianceField: Sync {
 /// Sums over a bundle of rays ([`RadianceField::sample_sum`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BundleSum {
+    /// Sum of the rays' radiance.
     pub radiance: DVec3,
     /// Sum of the finite hit distances.
     pub depth: f64,
@@ -102,6 +105,7 @@ impl BundleSum {
         self.depth_known &= other.depth_known;
     }
 
+    /// Adds one ray's sample.
     #[inline(always)]
     pub fn add(&mut self, s: Sample) {
         self.radiance += s.radiance;
@@ -129,13 +133,21 @@ impl BundleSum {
 /// the point in the pixel's square; eq. (1a)).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AffineRays {
+    /// Start point of the bundle's central ray (at q = 0, e = 0), world mm.
     pub origin: DVec3,
+    /// Slope (dx/dz, dy/dz) of the central ray.
     pub dir: DVec2,
+    /// Lower corner of the q box.
     pub q_lo: DVec2,
+    /// Upper corner of the q box.
     pub q_hi: DVec2,
+    /// How the start point moves with q.
     pub alpha: f64,
+    /// How the slope moves with q.
     pub beta: f64,
+    /// Lower corner of the e box (slope offsets).
     pub e_lo: DVec2,
+    /// Upper corner of the e box.
     pub e_hi: DVec2,
 }
 
@@ -167,8 +179,11 @@ pub struct RayBundle {
     pub shifts: Vec<(DVec2, DVec2)>,
     /// Component-wise bounds of the start and slope shifts.
     pub start_min: DVec2,
+    /// Upper bound of the start shifts.
     pub start_max: DVec2,
+    /// Lower bound of the slope shifts.
     pub slope_min: DVec2,
+    /// Upper bound of the slope shifts.
     pub slope_max: DVec2,
     /// For bundles made by [`RayBundle::lenslet_points`]: the bounds of the points `q` and the
     /// factors `alpha`, `beta` such that every shift is `(alpha q, beta q)` (see
@@ -183,6 +198,7 @@ pub fn bounds(points: impl IntoIterator<Item = DVec2>) -> (DVec2, DVec2) {
 }
 
 impl RayBundle {
+    /// A bundle of rays shifted from a base ray by `(start offset, slope offset)` pairs.
     pub fn new(shifts: Vec<(DVec2, DVec2)>) -> Self {
         let (start_min, start_max) = bounds(shifts.iter().map(|s| s.0));
         let (slope_min, slope_max) = bounds(shifts.iter().map(|s| s.1));

@@ -5,7 +5,7 @@ pub mod backend;
 pub mod display_image;
 pub mod display_stack;
 pub mod field;
-pub mod planar;
+pub(crate) mod planar;
 pub mod retina;
 pub mod tracer;
 

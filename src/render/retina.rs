@@ -23,6 +23,32 @@ pub use super::display_stack::DisplayStack;
 
 /// Simulates what the eye sees of each display image in `displays` (all with the LCD's
 /// resolution). Convenience wrapper over [`simulate_stack`].
+///
+/// Errors when a display image does not have the LCD's resolution.
+///
+/// ```
+/// use inimtrace::optics::{Display, Eye, Focus, Retina};
+/// use inimtrace::progress::Progress;
+/// use inimtrace::raster::RgbImage;
+/// use inimtrace::render::simulate;
+///
+/// let mut display = Display::paper();
+/// display.lcd.resolution = [270, 270];
+/// let retina = Retina { resolution: 16, ..Retina::default() };
+/// let eye = Eye::thin_lens(5.0, Focus::Millimetres(400.0), 4);
+/// // A uniformly lit LCD: every ray that reaches the panel reads the same colour, so no retina
+/// // pixel can be brighter than the panel, and the central ones see it through every pupil point.
+/// let white = RgbImage::filled(270, 270, [1.0, 0.5, 0.25]);
+/// let seen = simulate(&display, &eye, &retina, &[&white], &Progress::hidden())?.remove(0);
+/// assert_eq!((seen.width, seen.height), (16, 16));
+/// assert!(seen.pixels.iter().all(|p| p[0] <= 1.0 + 1e-6 && p[1] <= 0.5 + 1e-6));
+/// let centre = seen.get(8, 8);
+/// assert!((centre[0] - 1.0).abs() < 1e-6 && (centre[2] - 0.25).abs() < 1e-6, "{centre:?}");
+/// // A display image of the wrong size is refused.
+/// let small = RgbImage::new(10, 10);
+/// assert!(simulate(&display, &eye, &retina, &[&small], &Progress::hidden()).is_err());
+/// # Ok::<(), inimtrace::Error>(())
+/// ```
 pub fn simulate(
     display: &Display,
     eye: &Eye,

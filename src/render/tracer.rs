@@ -11,7 +11,9 @@ use crate::scene::Scene;
 /// A scene and the backend that intersects it. Generic so that hot loops inline a concrete
 /// backend; `SceneTracer<'_, dyn Intersector>` works for any backend chosen at run time.
 pub struct SceneTracer<'a, I: Intersector + ?Sized = dyn Intersector> {
+    /// The scene: materials, light and background.
     pub scene: &'a Scene,
+    /// The backend that intersects the scene's geometry.
     pub backend: &'a I,
 }
 

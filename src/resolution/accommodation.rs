@@ -15,7 +15,9 @@
 /// The peak of a sampled curve: where it is and how high.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Peak {
+    /// Where the peak is (the curve's x, e.g. dioptres).
     pub at: f64,
+    /// Its height.
     pub value: f64,
 }
 

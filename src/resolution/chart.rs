@@ -25,20 +25,28 @@ use crate::render::RadianceField;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Pattern {
     /// Vertical bars: `mean (1 + contrast cos(2 pi f (x - x_centre)))`, `f` in cycles per degree.
-    Grating { frequency_cpd: f64 },
+    Grating {
+        /// Frequency, cycles per degree.
+        frequency_cpd: f64,
+    },
     /// A straight edge through the patch centre, `angle_deg` from vertical: dark on the left,
     /// light on the right.
-    Edge { angle_deg: f64 },
+    Edge {
+        /// Angle from vertical, degrees.
+        angle_deg: f64,
+    },
 }
 
 /// A patch: its pattern, its measured window and the guard around it (degrees).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Patch {
+    /// What the patch shows.
     pub pattern: Pattern,
     /// Window centre, degrees (x right, y up).
     pub center_deg: DVec2,
     /// Window size in retina pixels (columns along x, rows along y).
     pub cols: usize,
+    /// Window rows (along y), retina pixels.
     pub rows: usize,
     /// Half-size of the patch (window plus guard), degrees.
     pub half_deg: DVec2,
@@ -56,9 +64,13 @@ impl Patch {
 /// The chart: patches, luminances, and the retina pixel pitch the windows are cut in.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Chart {
+    /// Every patch.
     pub patches: Vec<Patch>,
+    /// Mean luminance of every pattern (linear, in [0, 1]).
     pub mean: f64,
+    /// Michelson contrast of every pattern.
     pub contrast: f64,
+    /// Retina pixels per degree the windows are cut in.
     pub pixels_per_degree: f64,
     /// Half-extent of all patches, degrees.
     pub half_extent_deg: DVec2,
@@ -178,7 +190,9 @@ impl Chart {
 /// The chart on the plane `z = depth` (mm from the pupil), as a radiance field: rays that meet
 /// the plane in front of them see the chart at `(x, y) / depth`; others see the grey mean.
 pub struct ChartField<'a> {
+    /// The chart.
     pub chart: &'a Chart,
+    /// Its plane's distance from the pupil, mm.
     pub depth: f64,
 }
 

@@ -21,13 +21,17 @@ pub struct ResolutionCommand {
     pub study: Option<PathBuf>,
     /// Output folder (`None`: `out/resolution-<study name>`).
     pub out: Option<PathBuf>,
+    /// `--set` overrides, applied to the study file.
     pub overrides: Vec<Override>,
+    /// No progress bars.
     pub quiet: bool,
 }
 
 /// What a run produced.
 pub struct ResolutionRun {
+    /// The output folder written.
     pub out: PathBuf,
+    /// Every measured number.
     pub results: StudyResults,
     /// Every stage, the files last.
     pub timings: Vec<Timing>,

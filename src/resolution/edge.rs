@@ -53,6 +53,7 @@ pub const OVERSAMPLING: usize = 4;
 pub struct EdgeCurve {
     /// Cycles per pixel along the edge's normal, from 0 to 1 in steps of `4 / bins`.
     pub frequencies: Vec<f64>,
+    /// The MTF at each frequency (1 at 0).
     pub mtf: Vec<f64>,
     /// Cycles per pixel where the MTF first falls to 0.5; `None` if it stays above.
     pub mtf50: Option<f64>,

@@ -25,8 +25,11 @@ use crate::optics::Display;
 /// the content).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct DepthRange {
+    /// "ground_truth" or a method's short name.
     pub source: String,
+    /// The frequency, cpd.
     pub frequency_cpd: f64,
+    /// The contrast threshold (relative to the target's).
     pub contrast: f64,
     /// Every measured content depth (diopters) where the grating contrast is above `contrast`.
     pub passing_diopters: Vec<f64>,
@@ -40,12 +43,17 @@ pub struct DepthRange {
 /// `display.json`.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct DisplayLimits {
+    /// The display's parameters.
     pub display: DisplayParameters,
+    /// The pupil the limits are for, mm.
     pub pupil_diameter_mm: f64,
+    /// The central depth plane, mm from the pupil (`None`: at infinity or virtual).
     pub central_depth_plane_mm: Option<f64>,
+    /// The same, dioptres.
     pub central_depth_plane_diopters: Option<f64>,
     /// One LCD pixel's image at the CDP seen from the pupil centre, arcmin (x, y).
     pub angular_pixel_pitch_arcmin: Option<[f64; 2]>,
+    /// Pixels per degree at the CDP, x and y.
     pub pixels_per_degree: Option<[f64; 2]>,
     /// Half the pixels per degree.
     pub nyquist_cpd: Option<[f64; 2]>,
@@ -56,12 +64,16 @@ pub struct DisplayLimits {
     pub views_across_pupil: Option<[f64; 2]>,
     /// Rays of that point through lenslet centres that enter the pupil disk.
     pub views_in_pupil: Option<usize>,
+    /// v1: pupil to lenslets, mm.
     pub eye_relief_mm: f64,
+    /// Width and height of the eye box, mm (`None`: the viewing zones share no point).
     pub eye_box_mm: Option<[f64; 2]>,
+    /// Field of view, horizontal and vertical, degrees.
     pub field_of_view_deg: [f64; 2],
     /// The analytic property (module documentation): LC's contrast at the CDP falls to its
     /// first zero here, cpd (x).
     pub lc_cdp_first_zero_cpd: Option<f64>,
+    /// Content depths over which each source keeps the limits' contrast.
     pub depth_ranges: Vec<DepthRange>,
 }
 

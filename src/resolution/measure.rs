@@ -62,7 +62,9 @@ pub fn target_scene(name: &str, depth_mm: f64, material: Material) -> Scene {
 /// The ground truth alone: one image, the eye ray's radiance into the scene (what
 /// [`crate::measure::estimator::DisplaySource`] gives as its image 0, without a display).
 pub struct SceneSource<'a, F: RadianceField + ?Sized> {
+    /// The eye.
     pub eye: &'a Eye,
+    /// The scene's radiance field.
     pub field: &'a F,
 }
 
@@ -91,6 +93,7 @@ impl<F: RadianceField + ?Sized> PairedSource for SceneSource<'_, F> {
 /// eye's pupil disk (`measure::sampler`), `replicates` independent scrambles.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sampling {
+    /// Seed of the scrambles.
     pub seed: u64,
     /// Independent scrambles for different images measured with one seed (e.g. the index of
     /// the content depth and focus).

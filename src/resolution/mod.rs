@@ -19,11 +19,11 @@ pub mod measure;
 // The study (`inimtrace resolution`): its file, chart, measurement over the chart's windows,
 // accommodation, display limits, files and plots. Its windows are measured by `grating` and
 // `edge` above.
-pub mod accommodation;
+pub(crate) mod accommodation;
 pub mod chart;
 pub mod command;
 pub mod limits;
-pub mod plots;
+pub(crate) mod plots;
 pub mod report;
 pub mod run;
 pub mod study;

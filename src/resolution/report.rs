@@ -16,12 +16,15 @@ use crate::io::output::OutputFile;
 /// One row of `accommodation.csv`.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct AccommodationRow {
+    /// "ground_truth" or a method's short name.
     pub source: String,
+    /// The content depth, dioptres.
     pub target_diopters: f64,
     /// `contrast_at_frequency` or `mtf_area`.
     pub rule: &'static str,
     /// The frequency rule's frequency, or the area rule's upper limit.
     pub frequency_cpd: f64,
+    /// The eye focus the rule predicts, dioptres.
     pub predicted_focus_diopters: f64,
     /// The frequency rule: the contrast at the peak; the area rule: the mean contrast over the
     /// band (the area over its width) at the peak.
@@ -176,6 +179,7 @@ struct StudyRecord<'a> {
     files: &'a [OutputFile],
 }
 
+/// The text of `study.json`: the resolved study, its results, stage timings and output files.
 pub fn study_json(r: &StudyResults, timings: &[Timing], files: &[OutputFile]) -> String {
     let cdp = r.study.display.central_depth_plane();
     let rec = StudyRecord {

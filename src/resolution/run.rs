@@ -61,7 +61,9 @@ pub fn crop_display(display: &Display, half_tangent: DVec2, pupil_radius: f64, m
 /// A measured value with the half-width of its 95% interval (NaN when not measured).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Value {
+    /// The value.
     pub value: f64,
+    /// Half-width of its 95% interval.
     pub ci95: f64,
 }
 
@@ -96,7 +98,9 @@ pub fn edge_values(w: &WindowSamples, k: usize, frequencies_cpd: &[f64], ppd: f6
 /// What one stage took.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct Timing {
+    /// The stage.
     pub stage: String,
+    /// Its wall time, s.
     pub seconds: f64,
 }
 
@@ -104,15 +108,21 @@ pub struct Timing {
 /// is the ground truth, source `1 + m` method `m`.
 #[derive(Clone, Debug)]
 pub struct StudyResults {
+    /// The study measured.
     pub study: Study,
     /// "ground_truth", then each method's name ([`crate::render::Method::name`]).
     pub sources: Vec<String>,
+    /// The chart measured.
     pub chart: Chart,
     /// The rendered part of the LCD, columns and rows.
     pub lcd_crop: [usize; 2],
+    /// Grating contrast, `[source][depth][focus][frequency]`.
     pub grating: Vec<Vec<Vec<Vec<Value>>>>,
+    /// Edge MTF, `[source][depth][focus][frequency]`.
     pub edge: Vec<Vec<Vec<Vec<Value>>>>,
+    /// MTF50 in cpd, `[source][depth][focus]`.
     pub mtf50: Vec<Vec<Vec<Value>>>,
+    /// Wall time of every stage.
     pub timings: Vec<Timing>,
     /// Eye rays traced (each serves every source).
     pub eye_rays: u64,

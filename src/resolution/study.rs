@@ -40,8 +40,17 @@ pub const PAPER_STUDY: &str = include_str!("../../studies/paper.toml");
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(untagged)]
 pub enum Values {
+    /// An explicit list.
     List(Vec<f64>),
-    Range { from: f64, to: f64, step: f64 },
+    /// `{ from, to, step }`: every `from + i step` up to `to`.
+    Range {
+        /// First value.
+        from: f64,
+        /// Last value (included when on the grid).
+        to: f64,
+        /// Step between values.
+        step: f64,
+    },
 }
 
 impl Values {
@@ -127,6 +136,7 @@ pub struct SamplingSpec {
     pub samples_per_pixel: u32,
     /// Independent replicates (at least 3): the 95% intervals have one fewer degrees of freedom.
     pub replicates: usize,
+    /// Seed of the Sobol scrambles.
     pub seed: u64,
 }
 
@@ -155,25 +165,39 @@ pub struct LimitsSpec {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct StudySpec {
+    /// Names the output folder `out/resolution-<name>`.
     pub name: String,
+    /// One line for reports.
     #[serde(default)]
     pub description: String,
     /// `builtin:paper` or a display file (TOML or OpenCV YAML), relative to the study file.
     pub display: String,
+    /// Methods measured: "LC", "PC", "LA", "LA<k>".
     pub methods: Vec<String>,
+    /// Pupil diameter, mm.
     pub pupil_diameter_mm: f64,
+    /// v0: pupil to retina, mm (default 17).
     #[serde(default = "default_retina_distance")]
     pub retina_distance_mm: f64,
+    /// Content depths, dioptres (a list or a range).
     #[serde(default = "no_values")]
     pub content_diopters: Values,
+    /// More content depths, mm from the pupil.
     #[serde(default)]
     pub content_mm: Vec<f64>,
+    /// The eye's focus grid, dioptres (every content depth is added).
     pub focus_diopters: Values,
+    /// Grating frequencies, cycles per degree.
     pub frequencies_cpd: Values,
+    /// `[target]`: the patterns' mean and contrast.
     pub target: TargetSpec,
+    /// `[retina]`: pixels per degree, windows and guards.
     pub retina: RetinaSpec,
+    /// `[measurement]`: replicates and samples per pixel.
     pub measurement: SamplingSpec,
+    /// `[accommodation]`: what predicts the eye's focus.
     pub accommodation: AccommodationSpec,
+    /// `[limits]`: the display-limit contrast and frequencies.
     pub limits: LimitsSpec,
 }
 
@@ -188,24 +212,32 @@ fn default_retina_distance() -> f64 {
 /// A content depth.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Depth {
+    /// Vergence, dioptres.
     pub diopters: f64,
+    /// Distance from the pupil, mm.
     pub mm: f64,
 }
 
 /// A resolved study: everything `inimtrace resolution` needs, as `study.json` records it.
 #[derive(Clone, Debug, Serialize)]
 pub struct Study {
+    /// The study's name.
     pub name: String,
+    /// One line for reports.
     pub description: String,
     /// Where the study came from (a path, or `builtin:paper`).
     pub source: String,
     /// The display as the file named it.
     pub display_source: String,
+    /// The display, resolved.
     #[serde(skip)]
     pub display: Display,
+    /// Methods measured.
     #[serde(serialize_with = "method_names")]
     pub methods: Vec<Method>,
+    /// Pupil diameter, mm.
     pub pupil_diameter_mm: f64,
+    /// v0, mm.
     pub retina_distance_mm: f64,
     /// Content depths, far to near (increasing diopters), duplicates merged.
     pub depths: Vec<Depth>,
@@ -213,15 +245,21 @@ pub struct Study {
     pub focus_diopters: Vec<f64>,
     /// The focus grid as the file gave it.
     pub focus_grid_diopters: Vec<f64>,
+    /// Grating frequencies, cpd, increasing.
     pub frequencies_cpd: Vec<f64>,
+    /// The patterns' mean and contrast.
     pub target: TargetSpec,
+    /// The retina's sampling.
     pub retina: RetinaSpec,
     /// Size of one retina pixel, degrees (1 / pixels per degree).
     pub retina_pixel_deg: f64,
     /// The retina's Nyquist frequency, cpd.
     pub retina_nyquist_cpd: f64,
+    /// Replicates and samples per pixel.
     pub measurement: SamplingSpec,
+    /// What predicts the eye's focus.
     pub accommodation: AccommodationSpec,
+    /// The display-limit settings.
     pub limits: LimitsSpec,
 }
 
@@ -267,48 +305,10 @@ impl Study {
         }
         let display = load_display(&spec.display, base)?;
         display.validate(&spec.display)?;
-        let mut methods = Vec::new();
-        for (i, m) in spec.methods.iter().enumerate() {
-            let method: Method = m.parse().map_err(|e| bad(&format!("methods[{i}]"), e))?;
-            if methods.contains(&method) {
-                return Err(bad(&format!("methods[{i}]"), format!("{method} is listed twice")));
-            }
-            methods.push(method);
-        }
+        let methods = study_methods(spec, source)?;
         crate::optics::limits::PUPIL_DIAMETER.check(source, "pupil_diameter_mm", spec.pupil_diameter_mm)?;
         crate::optics::limits::RETINA_DISTANCE.check(source, "retina_distance_mm", spec.retina_distance_mm)?;
-
-        // Content depths: diopters and mm, merged, far to near.
-        let mut depths = Vec::new();
-        for (i, d) in spec.content_diopters.expand_any(source, "content_diopters")?.into_iter().enumerate() {
-            if !(d > 0.0 && d <= 100.0) {
-                return Err(bad(&format!("content_diopters[{i}]"), format!("must be in (0, 100] D, got {d}")));
-            }
-            depths.push(Depth { diopters: d, mm: 1000.0 / d });
-        }
-        for (i, &mm) in spec.content_mm.iter().enumerate() {
-            if !(mm.is_finite() && mm >= 10.0) {
-                return Err(bad(&format!("content_mm[{i}]"), format!("must be finite and at least 10 mm, got {mm}")));
-            }
-            depths.push(Depth { diopters: 1000.0 / mm, mm });
-        }
-        if depths.is_empty() {
-            return Err(bad("content_diopters", "no content depth: give content_diopters or content_mm".into()));
-        }
-        depths.sort_by(|a, b| a.diopters.total_cmp(&b.diopters));
-        depths.dedup_by(|a, b| (a.diopters - b.diopters).abs() < 1e-9);
-        for d in &depths {
-            if d.mm <= display.lcd_z() {
-                return Err(bad(
-                    "content_diopters",
-                    format!(
-                        "content at {:.1} mm is not beyond the LCD ({:.1} mm from the pupil)",
-                        d.mm,
-                        display.lcd_z()
-                    ),
-                ));
-            }
-        }
+        let depths = content_depths(spec, source, &display)?;
 
         let grid = spec.focus_diopters.expand(source, "focus_diopters")?;
         for (i, f) in grid.iter().enumerate() {
@@ -319,119 +319,11 @@ impl Study {
         focus.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
 
         let r = spec.retina;
-        let positive = |field: &str, v: f64| -> Result<()> {
-            if v.is_finite() && v > 0.0 {
-                Ok(())
-            } else {
-                Err(bad(field, format!("must be a positive finite number, got {v}")))
-            }
-        };
-        positive("retina.pixels_per_degree", r.pixels_per_degree)?;
-        if r.pixels_per_degree > 1000.0 {
-            return Err(bad("retina.pixels_per_degree", format!("at most 1000, got {}", r.pixels_per_degree)));
-        }
-        for (i, w) in r.window_deg.iter().enumerate() {
-            positive(&format!("retina.window_deg[{i}]"), *w)?;
-        }
-        for (i, w) in r.edge_window_deg.iter().enumerate() {
-            positive(&format!("retina.edge_window_deg[{i}]"), *w)?;
-        }
-        if !(r.guard_deg.is_finite() && r.guard_deg >= 0.0) {
-            return Err(bad("retina.guard_deg", format!("must be finite and >= 0, got {}", r.guard_deg)));
-        }
-        if !(r.edge_angle_deg.is_finite() && (1.0..=20.0).contains(&r.edge_angle_deg)) {
-            return Err(bad(
-                "retina.edge_angle_deg",
-                format!("must be between 1 and 20 degrees, got {}", r.edge_angle_deg),
-            ));
-        }
-        let pixels = |deg: f64| deg * r.pixels_per_degree;
-        for (field, deg) in [
-            ("retina.window_deg[0]", r.window_deg[0]),
-            ("retina.window_deg[1]", r.window_deg[1]),
-            ("retina.edge_window_deg[0]", r.edge_window_deg[0]),
-            ("retina.edge_window_deg[1]", r.edge_window_deg[1]),
-        ] {
-            let n = pixels(deg);
-            if (n - n.round()).abs() > 1e-6 || n.round() < 4.0 || n.round() > 4096.0 {
-                return Err(bad(
-                    field,
-                    format!("{deg} degrees is {n} retina pixels: it must be a whole number of pixels, 4 to 4096"),
-                ));
-            }
-        }
-        let half_field = 0.5 * (r.window_deg[0].max(r.edge_window_deg[0]) + 2.0 * r.guard_deg);
-        if half_field > 30.0 {
-            return Err(bad("retina.guard_deg", "windows and guards span more than 60 degrees".into()));
-        }
-
-        let frequencies = spec.frequencies_cpd.expand(source, "frequencies_cpd")?;
+        check_retina(&r, source)?;
+        let frequencies = study_frequencies(spec, source)?;
         let nyquist = 0.5 * r.pixels_per_degree;
-        for (i, f) in frequencies.iter().enumerate() {
-            let field = format!("frequencies_cpd[{i}]");
-            if !(*f > 0.0 && *f < nyquist) {
-                return Err(bad(
-                    &field,
-                    format!("must be in (0, {nyquist}) cpd (below the retina's Nyquist), got {f}"),
-                ));
-            }
-            let periods = f * r.window_deg[0];
-            if (periods - periods.round()).abs() > 1e-6 {
-                return Err(bad(
-                    &field,
-                    format!(
-                        "{f} cpd is {periods} periods over the {} degree window (retina.window_deg[0]): the window \
-                         must hold a whole number of periods of every frequency, so that frequencies do not leak \
-                         into each other's coefficients",
-                        r.window_deg[0]
-                    ),
-                ));
-            }
-            if frequencies[..i].iter().any(|g| (g - f).abs() < 1e-9) {
-                return Err(bad(&field, format!("{f} cpd is listed twice")));
-            }
-        }
-        let mut frequencies = frequencies;
-        frequencies.sort_by(f64::total_cmp);
-
-        let t = spec.target;
-        if !(t.mean.is_finite() && t.mean > 0.0 && t.mean <= 1.0) {
-            return Err(bad("target.mean", format!("must be in (0, 1], got {}", t.mean)));
-        }
-        if !(t.contrast.is_finite() && t.contrast > 0.0 && t.contrast <= 1.0) {
-            return Err(bad("target.contrast", format!("must be in (0, 1], got {}", t.contrast)));
-        }
-        let m = spec.measurement;
-        if !(3..=64).contains(&m.replicates) {
-            return Err(bad("measurement.replicates", format!("must be between 3 and 64, got {}", m.replicates)));
-        }
-        if !(1..=65_536).contains(&m.samples_per_pixel) {
-            return Err(bad(
-                "measurement.samples_per_pixel",
-                format!("must be between 1 and 65536, got {}", m.samples_per_pixel),
-            ));
-        }
-        let listed = |field: &str, f: f64| -> Result<()> {
-            if frequencies.iter().any(|g| (g - f).abs() < 1e-9) {
-                Ok(())
-            } else {
-                Err(bad(field, format!("{f} cpd is not one of frequencies_cpd {frequencies:?}")))
-            }
-        };
-        listed("accommodation.frequency_cpd", spec.accommodation.frequency_cpd)?;
-        listed("accommodation.area_limit_cpd", spec.accommodation.area_limit_cpd)?;
-        if spec.accommodation.area_limit_cpd <= frequencies[0] {
-            return Err(bad(
-                "accommodation.area_limit_cpd",
-                format!("must be above the lowest frequency {} cpd (an area needs two)", frequencies[0]),
-            ));
-        }
-        if !(spec.limits.contrast > 0.0 && spec.limits.contrast < 1.0) {
-            return Err(bad("limits.contrast", format!("must be in (0, 1), got {}", spec.limits.contrast)));
-        }
-        for (i, f) in spec.limits.frequencies_cpd.iter().enumerate() {
-            listed(&format!("limits.frequencies_cpd[{i}]"), *f)?;
-        }
+        check_target_and_measurement(spec, source)?;
+        check_listed_frequencies(spec, source, &frequencies)?;
         Ok(Study {
             name: spec.name.clone(),
             description: spec.description.clone(),
@@ -445,11 +337,11 @@ impl Study {
             focus_diopters: focus,
             focus_grid_diopters: grid,
             frequencies_cpd: frequencies,
-            target: t,
+            target: spec.target,
             retina: r,
             retina_pixel_deg: 1.0 / r.pixels_per_degree,
             retina_nyquist_cpd: nyquist,
-            measurement: m,
+            measurement: spec.measurement,
             accommodation: spec.accommodation,
             limits: spec.limits.clone(),
         })
@@ -464,6 +356,189 @@ impl Study {
     pub fn focus_index(&self, d: f64) -> Option<usize> {
         self.focus_diopters.iter().position(|g| (g - d).abs() < 1e-9)
     }
+}
+
+/// The study's methods, parsed, each listed once.
+fn study_methods(spec: &StudySpec, source: &str) -> Result<Vec<Method>> {
+    let bad = |field: &str, msg: String| Error::invalid(source, field, msg);
+    let mut methods = Vec::new();
+    for (i, m) in spec.methods.iter().enumerate() {
+        let method: Method = m.parse().map_err(|e| bad(&format!("methods[{i}]"), e))?;
+        if methods.contains(&method) {
+            return Err(bad(&format!("methods[{i}]"), format!("{method} is listed twice")));
+        }
+        methods.push(method);
+    }
+    Ok(methods)
+}
+
+/// Content depths: dioptres and millimetres, merged, far to near, each beyond the LCD.
+fn content_depths(spec: &StudySpec, source: &str, display: &Display) -> Result<Vec<Depth>> {
+    let bad = |field: &str, msg: String| Error::invalid(source, field, msg);
+    let mut depths = Vec::new();
+    for (i, d) in spec.content_diopters.expand_any(source, "content_diopters")?.into_iter().enumerate() {
+        if !(d > 0.0 && d <= 100.0) {
+            return Err(bad(&format!("content_diopters[{i}]"), format!("must be in (0, 100] D, got {d}")));
+        }
+        depths.push(Depth { diopters: d, mm: 1000.0 / d });
+    }
+    for (i, &mm) in spec.content_mm.iter().enumerate() {
+        if !(mm.is_finite() && mm >= 10.0) {
+            return Err(bad(&format!("content_mm[{i}]"), format!("must be finite and at least 10 mm, got {mm}")));
+        }
+        depths.push(Depth { diopters: 1000.0 / mm, mm });
+    }
+    if depths.is_empty() {
+        return Err(bad("content_diopters", "no content depth: give content_diopters or content_mm".into()));
+    }
+    depths.sort_by(|a, b| a.diopters.total_cmp(&b.diopters));
+    depths.dedup_by(|a, b| (a.diopters - b.diopters).abs() < 1e-9);
+    for d in &depths {
+        if d.mm <= display.lcd_z() {
+            return Err(bad(
+                "content_diopters",
+                format!("content at {:.1} mm is not beyond the LCD ({:.1} mm from the pupil)", d.mm, display.lcd_z()),
+            ));
+        }
+    }
+    Ok(depths)
+}
+
+/// Checks the retina's sampling: positive sizes, whole pixel counts of 4 to 4096 per window,
+/// an edge angle of 1 to 20 degrees and at most 60 degrees of field.
+fn check_retina(r: &RetinaSpec, source: &str) -> Result<()> {
+    let bad = |field: &str, msg: String| Error::invalid(source, field, msg);
+    let positive = |field: &str, v: f64| -> Result<()> {
+        if v.is_finite() && v > 0.0 {
+            Ok(())
+        } else {
+            Err(bad(field, format!("must be a positive finite number, got {v}")))
+        }
+    };
+    positive("retina.pixels_per_degree", r.pixels_per_degree)?;
+    if r.pixels_per_degree > 1000.0 {
+        return Err(bad("retina.pixels_per_degree", format!("at most 1000, got {}", r.pixels_per_degree)));
+    }
+    for (i, w) in r.window_deg.iter().enumerate() {
+        positive(&format!("retina.window_deg[{i}]"), *w)?;
+    }
+    for (i, w) in r.edge_window_deg.iter().enumerate() {
+        positive(&format!("retina.edge_window_deg[{i}]"), *w)?;
+    }
+    if !(r.guard_deg.is_finite() && r.guard_deg >= 0.0) {
+        return Err(bad("retina.guard_deg", format!("must be finite and >= 0, got {}", r.guard_deg)));
+    }
+    if !(r.edge_angle_deg.is_finite() && (1.0..=20.0).contains(&r.edge_angle_deg)) {
+        return Err(bad(
+            "retina.edge_angle_deg",
+            format!("must be between 1 and 20 degrees, got {}", r.edge_angle_deg),
+        ));
+    }
+    let pixels = |deg: f64| deg * r.pixels_per_degree;
+    for (field, deg) in [
+        ("retina.window_deg[0]", r.window_deg[0]),
+        ("retina.window_deg[1]", r.window_deg[1]),
+        ("retina.edge_window_deg[0]", r.edge_window_deg[0]),
+        ("retina.edge_window_deg[1]", r.edge_window_deg[1]),
+    ] {
+        let n = pixels(deg);
+        if (n - n.round()).abs() > 1e-6 || n.round() < 4.0 || n.round() > 4096.0 {
+            return Err(bad(
+                field,
+                format!("{deg} degrees is {n} retina pixels: it must be a whole number of pixels, 4 to 4096"),
+            ));
+        }
+    }
+    let half_field = 0.5 * (r.window_deg[0].max(r.edge_window_deg[0]) + 2.0 * r.guard_deg);
+    if half_field > 30.0 {
+        return Err(bad("retina.guard_deg", "windows and guards span more than 60 degrees".into()));
+    }
+    Ok(())
+}
+
+/// The grating frequencies, cycles per degree, sorted: each below the retina's Nyquist, listed
+/// once, with a whole number of periods over the window.
+fn study_frequencies(spec: &StudySpec, source: &str) -> Result<Vec<f64>> {
+    let bad = |field: &str, msg: String| Error::invalid(source, field, msg);
+    let r = spec.retina;
+    let frequencies = spec.frequencies_cpd.expand(source, "frequencies_cpd")?;
+    let nyquist = 0.5 * r.pixels_per_degree;
+    for (i, f) in frequencies.iter().enumerate() {
+        let field = format!("frequencies_cpd[{i}]");
+        if !(*f > 0.0 && *f < nyquist) {
+            return Err(bad(&field, format!("must be in (0, {nyquist}) cpd (below the retina's Nyquist), got {f}")));
+        }
+        let periods = f * r.window_deg[0];
+        if (periods - periods.round()).abs() > 1e-6 {
+            return Err(bad(
+                &field,
+                format!(
+                    "{f} cpd is {periods} periods over the {} degree window (retina.window_deg[0]): the window \
+                     must hold a whole number of periods of every frequency, so that frequencies do not leak \
+                     into each other's coefficients",
+                    r.window_deg[0]
+                ),
+            ));
+        }
+        if frequencies[..i].iter().any(|g| (g - f).abs() < 1e-9) {
+            return Err(bad(&field, format!("{f} cpd is listed twice")));
+        }
+    }
+    let mut frequencies = frequencies;
+    frequencies.sort_by(f64::total_cmp);
+    Ok(frequencies)
+}
+
+/// Checks the target's mean and contrast (in (0, 1]) and the measurement's replicates (3 to 64)
+/// and samples per pixel (1 to 65536).
+fn check_target_and_measurement(spec: &StudySpec, source: &str) -> Result<()> {
+    let bad = |field: &str, msg: String| Error::invalid(source, field, msg);
+    let t = spec.target;
+    if !(t.mean.is_finite() && t.mean > 0.0 && t.mean <= 1.0) {
+        return Err(bad("target.mean", format!("must be in (0, 1], got {}", t.mean)));
+    }
+    if !(t.contrast.is_finite() && t.contrast > 0.0 && t.contrast <= 1.0) {
+        return Err(bad("target.contrast", format!("must be in (0, 1], got {}", t.contrast)));
+    }
+    let m = spec.measurement;
+    if !(3..=64).contains(&m.replicates) {
+        return Err(bad("measurement.replicates", format!("must be between 3 and 64, got {}", m.replicates)));
+    }
+    if !(1..=65_536).contains(&m.samples_per_pixel) {
+        return Err(bad(
+            "measurement.samples_per_pixel",
+            format!("must be between 1 and 65536, got {}", m.samples_per_pixel),
+        ));
+    }
+    Ok(())
+}
+
+/// Checks that the accommodation and limits frequencies are among `frequencies` (sorted), the
+/// area limit above the lowest one, and the limits' contrast in (0, 1).
+fn check_listed_frequencies(spec: &StudySpec, source: &str, frequencies: &[f64]) -> Result<()> {
+    let bad = |field: &str, msg: String| Error::invalid(source, field, msg);
+    let listed = |field: &str, f: f64| -> Result<()> {
+        if frequencies.iter().any(|g| (g - f).abs() < 1e-9) {
+            Ok(())
+        } else {
+            Err(bad(field, format!("{f} cpd is not one of frequencies_cpd {frequencies:?}")))
+        }
+    };
+    listed("accommodation.frequency_cpd", spec.accommodation.frequency_cpd)?;
+    listed("accommodation.area_limit_cpd", spec.accommodation.area_limit_cpd)?;
+    if spec.accommodation.area_limit_cpd <= frequencies[0] {
+        return Err(bad(
+            "accommodation.area_limit_cpd",
+            format!("must be above the lowest frequency {} cpd (an area needs two)", frequencies[0]),
+        ));
+    }
+    if !(spec.limits.contrast > 0.0 && spec.limits.contrast < 1.0) {
+        return Err(bad("limits.contrast", format!("must be in (0, 1), got {}", spec.limits.contrast)));
+    }
+    for (i, f) in spec.limits.frequencies_cpd.iter().enumerate() {
+        listed(&format!("limits.frequencies_cpd[{i}]"), *f)?;
+    }
+    Ok(())
 }
 
 #[cfg(test)]

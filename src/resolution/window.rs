@@ -26,9 +26,13 @@ const BATCH: usize = 2048;
 /// One window's measurement: luminance (mean of R, G, B) per replicate, source and pixel.
 #[derive(Clone, Debug, PartialEq)]
 pub struct WindowSamples {
+    /// Window columns, retina pixels.
     pub cols: usize,
+    /// Window rows.
     pub rows: usize,
+    /// Independent replicates.
     pub replicates: usize,
+    /// Sources (the ground truth, then each method).
     pub sources: usize,
     /// `[replicate][source][row * cols + col]`.
     pub values: Vec<f32>,

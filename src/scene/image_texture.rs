@@ -27,7 +27,9 @@ use crate::raster::srgb_to_linear;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Filter {
+    /// The nearest texel.
     Nearest,
+    /// Bilinear interpolation of the four nearest texels.
     #[default]
     Bilinear,
 }
@@ -36,8 +38,10 @@ pub enum Filter {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Wrap {
+    /// The texture tiles the plane.
     #[default]
     Repeat,
+    /// UVs are clamped to the edge texels.
     Clamp,
 }
 
@@ -57,10 +61,14 @@ enum Texels {
 /// samples take one byte each, not the 24 bytes of a linear `DVec3` texel).
 #[derive(Clone, Debug)]
 pub struct ImageTexture {
+    /// Columns.
     pub width: usize,
+    /// Rows.
     pub height: usize,
     texels: Texels,
+    /// Filtering.
     pub filter: Filter,
+    /// What UVs outside [0, 1] do.
     pub wrap: Wrap,
     /// Every texel is multiplied by this when looked up ([`ImageTexture::scaled`]).
     factor: DVec3,

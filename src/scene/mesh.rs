@@ -15,7 +15,9 @@ use crate::error::{Error, Result};
 /// An indexed triangle mesh in world space.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Mesh {
+    /// Vertex positions, world mm.
     pub positions: Vec<DVec3>,
+    /// Vertex indices of each triangle.
     pub triangles: Vec<[u32; 3]>,
     /// Per-vertex shading normals, when known.
     pub normals: Option<Vec<DVec3>>,

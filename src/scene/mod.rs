@@ -10,7 +10,7 @@
 
 pub mod image_texture;
 pub mod mesh;
-pub mod polygon;
+pub(crate) mod polygon;
 pub mod procedural;
 pub mod target;
 pub mod texture;
@@ -31,8 +31,11 @@ pub use transform::Transform;
 /// A planar rectangle `center + s half_u + t half_v`, `s, t` in `[-1, 1]`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Rect {
+    /// Centre, world mm.
     pub center: DVec3,
+    /// Half of the first side, as a vector.
     pub half_u: DVec3,
+    /// Half of the second side, as a vector.
     pub half_v: DVec3,
 }
 
@@ -59,7 +62,9 @@ impl Rect {
 /// The geometry of an object.
 #[derive(Clone, Debug)]
 pub enum Shape {
+    /// A planar rectangle (exact for the analytic backend).
     Rect(Rect),
+    /// A triangle mesh, shared between scenes that hold it.
     Mesh(Arc<Mesh>),
 }
 
@@ -69,7 +74,14 @@ pub enum Material {
     /// A constant albedo.
     Albedo(DVec3),
     /// A bar chart: `bar` albedo on the bars, `backing` elsewhere, looked up by surface `uv`.
-    Chart { chart: Arc<BarChart>, bar: DVec3, backing: DVec3 },
+    Chart {
+        /// The bars, in the rectangle's surface coordinates.
+        chart: Arc<BarChart>,
+        /// Albedo on the bars.
+        bar: DVec3,
+        /// Albedo elsewhere.
+        backing: DVec3,
+    },
     /// Per-vertex colours of a mesh, interpolated.
     VertexColor,
     /// An image looked up by the mesh's interpolated texture coordinates (objects without
@@ -85,20 +97,29 @@ pub enum Material {
 /// RGB) scaled so that a surface facing it head-on has radiance `albedo * radiance`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Light {
+    /// Unit direction the light travels.
     pub direction: DVec3,
+    /// Linear RGB radiance.
     pub radiance: DVec3,
 }
 
+/// One object of a scene: its geometry and material.
 #[derive(Clone, Debug)]
 pub struct Object {
+    /// Name, for `info --scene` and errors.
     pub name: String,
+    /// Its geometry.
     pub shape: Shape,
+    /// Its colour: albedo, chart or texture.
     pub material: Material,
 }
 
+/// A 3-D scene in world millimetres: objects, background and an optional distant light.
 #[derive(Clone, Debug)]
 pub struct Scene {
+    /// Name, for reports.
     pub name: String,
+    /// The objects, in file order.
     pub objects: Vec<Object>,
     /// Radiance seen by rays that hit nothing.
     pub background: DVec3,

@@ -112,8 +112,11 @@ impl Grating {
 pub struct SlantedEdge {
     /// A point of the edge, tangent coordinates.
     pub through: DVec2,
+    /// Normal direction, degrees counter-clockwise from +x (toward `high`).
     pub angle_deg: f64,
+    /// Value on the dark side.
     pub low: f64,
+    /// Value on the light side.
     pub high: f64,
 }
 

@@ -12,11 +12,14 @@ use glam::DVec2;
 /// One axis-aligned bar, in chart coordinates.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Bar {
+    /// Lower-left corner.
     pub min: DVec2,
+    /// Upper-right corner.
     pub max: DVec2,
 }
 
 impl Bar {
+    /// True when `p` lies in the bar (edges included).
     #[inline]
     pub fn contains(&self, p: DVec2) -> bool {
         p.x >= self.min.x && p.x <= self.max.x && p.y >= self.min.y && p.y <= self.max.y
@@ -88,6 +91,7 @@ impl BarChart {
         Self { bars, cells, candidates }
     }
 
+    /// Every bar of the chart.
     pub fn bars(&self) -> &[Bar] {
         &self.bars
     }

@@ -13,6 +13,7 @@ use crate::scene::mesh::Mesh;
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct Transform {
+    /// Scale along x, y, z (applied first).
     pub scale: DVec3,
     /// XYZ Euler angles in degrees, applied X then Y then Z.
     pub rotation_deg: DVec3,

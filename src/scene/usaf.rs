@@ -109,7 +109,10 @@ pub enum ChartScale {
     Fit,
     /// Chart millimetres are the rectangle's millimetres (true MIL-STD-150A scale); bars outside
     /// the rectangle are clipped. `half_size` is the rectangle's half width and height, mm.
-    Physical { half_size: DVec2 },
+    Physical {
+        /// The rectangle's half width and height, mm.
+        half_size: DVec2,
+    },
 }
 
 /// A procedural MIL-STD-150A chart for groups `groups`, as a texture over `[-1, 1]^2`.

@@ -20,13 +20,17 @@ use crate::settings::Resolved;
 /// What a collection found and wrote.
 #[derive(Clone, Debug, Default)]
 pub struct Collected {
+    /// Points with a record.
     pub complete: usize,
     /// Indices of the points without a record.
     pub missing: Vec<usize>,
     /// Rows of `sweep.csv`.
     pub rows: usize,
+    /// `sweep.csv`, written.
     pub csv: PathBuf,
+    /// `sweep.json`, written.
     pub json: PathBuf,
+    /// The plots written.
     pub plots: Vec<PathBuf>,
 }
 

@@ -17,16 +17,21 @@ use crate::render::BackendChoice;
 /// The command's arguments.
 #[derive(Clone, Debug, Default)]
 pub struct SweepCommand {
+    /// The sweep file.
     pub sweep: PathBuf,
+    /// Output folder (`None`: the file's `out`, else `out/<sweep name>`).
     pub out: Option<PathBuf>,
     /// `--set`: applied to the base after the file's `[set]`.
     pub overrides: Vec<Override>,
+    /// Scene intersection backend of every point.
     pub backend: BackendChoice,
+    /// No progress bars.
     pub quiet: bool,
     /// Only these points (`0..4`, `3,5,8..10`), and no collection (what an array task runs).
     pub points: Option<String>,
     /// Every point's images too (also `images = true` in the file), with this EXR compression.
     pub images: bool,
+    /// Compression of those images.
     pub exr_compression: crate::io::exr::ExrCompression,
     /// Collect what is complete and list what is missing; run nothing.
     pub collect: bool,

@@ -32,8 +32,11 @@ use crate::settings::{hash_json, Resolved, Settings};
 /// line's `--set`), its points and where it writes.
 #[derive(Clone, Debug)]
 pub struct Sweep {
+    /// The sweep file, parsed.
     pub spec: SweepSpec,
+    /// Every point of the expansion, in order.
     pub points: Vec<Point>,
+    /// The output folder.
     pub out: PathBuf,
     /// `--set` overrides from the command line.
     pub overrides: Vec<Override>,

@@ -17,7 +17,9 @@ use crate::error::{Error, Result};
 /// is not a number) and the scores.
 #[derive(Clone, Debug)]
 pub struct PlotRow {
+    /// The value of every swept key, in the keys' order (`None`: not a number).
     pub xs: Vec<Option<f64>>,
+    /// The point's score of one method and eye case.
     pub score: ScoreRow,
 }
 

@@ -24,7 +24,9 @@ use crate::settings::{hash_json, Resolved};
 /// How points run.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct LocalOptions {
+    /// Scene intersection backend.
     pub backend: BackendChoice,
+    /// No progress bars.
     pub quiet: bool,
     /// Write every point's images (a full `assess` output in `points/<id>/`).
     pub images: bool,
@@ -37,10 +39,13 @@ pub struct LocalOptions {
 pub struct RunSummary {
     /// Points asked for, already complete before the run, and run now.
     pub selected: usize,
+    /// Points already complete before the run.
     pub already_complete: usize,
+    /// Points run now.
     pub ran: usize,
     /// Display images rendered (each shared by the points that use it).
     pub display_images: usize,
+    /// Wall time of the run, s.
     pub seconds: f64,
     /// What loading the scenes noticed.
     pub warnings: Vec<String>,

@@ -32,8 +32,11 @@ pub struct SlurmOptions {
     pub max_running: Option<usize>,
     /// Print the script instead of submitting it.
     pub dry_run: bool,
+    /// Scene intersection backend of every point.
     pub backend: BackendChoice,
+    /// Write every point's images too.
     pub images: bool,
+    /// Compression of those images.
     pub exr_compression: crate::io::exr::ExrCompression,
 }
 
@@ -60,8 +63,11 @@ pub struct Submission {
     pub job_id: Option<String>,
     /// The points submitted, and the `--points` text of each task.
     pub points: Vec<usize>,
+    /// The `--points` text of each array task.
     pub chunks: Vec<String>,
+    /// The job script.
     pub script: String,
+    /// Where the script was written (`None` for a dry run).
     pub script_path: Option<PathBuf>,
 }
 
@@ -238,9 +244,7 @@ fn script(sweep: &Sweep, chunks: &[String], id: &str, out: &Path, opts: &SlurmOp
         format!("--sweep-id {id} --backend {}", opts.backend),
     ];
     if opts.images {
-        use clap::ValueEnum;
-        let compression = opts.exr_compression.to_possible_value().map(|v| v.get_name().to_string());
-        lines.push(format!("--images --exr-compression {}", compression.unwrap_or_else(|| "zip".into())));
+        lines.push(format!("--images --exr-compression {}", opts.exr_compression.name()));
     }
     for o in &sweep.overrides {
         lines.push(format!("--set {}", quote(&o.to_arg())));

@@ -51,21 +51,26 @@ struct SweepFile {
 /// One key of an axis and its values.
 #[derive(Clone, Debug, PartialEq)]
 pub struct AxisKey {
+    /// The settings key (`eye.pupil_diameter`, `eye_cases[0].focus_diopters`).
     pub key: String,
+    /// Its values, in order.
     pub values: Vec<toml::Value>,
 }
 
 /// An axis: one key, or several declared together (zipped: value i of each key goes together).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Axis {
+    /// The keys, all with the same number of values.
     pub keys: Vec<AxisKey>,
 }
 
 impl Axis {
+    /// Values along the axis.
     pub fn len(&self) -> usize {
         self.keys.first().map(|k| k.values.len()).unwrap_or(0)
     }
 
+    /// True for an axis without values.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
@@ -74,21 +79,28 @@ impl Axis {
 /// One point: its index in the expansion and the value of every swept key.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Point {
+    /// Index in the expansion (the product of the axes, the first axis slowest).
     pub index: usize,
+    /// `(key, value)` of every swept key.
     pub values: Vec<(String, toml::Value)>,
 }
 
 /// A parsed sweep file.
 #[derive(Clone, Debug)]
 pub struct SweepSpec {
+    /// The sweep file.
     pub path: PathBuf,
+    /// Names the default output folder `out/<name>`.
     pub name: String,
+    /// One line for reports.
     pub description: Option<String>,
     /// The base experiment as written (a path relative to the sweep file, or `builtin:paper`).
     pub experiment: String,
+    /// Write every point's images too.
     pub images: bool,
     /// `[set]`, in order, paths relative to the sweep file.
     pub set: Vec<Override>,
+    /// The axes, in order (the first varies slowest).
     pub axes: Vec<Axis>,
 }
 

@@ -22,14 +22,20 @@ use crate::io::output::{write_atomic, TEMP_PREFIX};
 /// bit for bit (and `inf`, which JSON has no number for).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ScoreRow {
+    /// The method's short name.
     pub method: String,
+    /// The eye case.
     pub eye_case: String,
+    /// Mean PSNR of the channels, dB.
     #[serde(with = "exact")]
     pub psnr_db: f64,
+    /// Its 95% half-width, dB.
     #[serde(default, with = "exact_option", skip_serializing_if = "Option::is_none")]
     pub psnr_ci95_db: Option<f64>,
+    /// Mean SSIM of the channels.
     #[serde(with = "exact")]
     pub ssim: f64,
+    /// Its 95% half-width.
     #[serde(default, with = "exact_option", skip_serializing_if = "Option::is_none")]
     pub ssim_ci95: Option<f64>,
 }
@@ -56,14 +62,19 @@ pub struct PointRecord {
     pub index: usize,
     /// The swept values, as `KEY=VALUE` in TOML syntax.
     pub values: Vec<String>,
+    /// Table 1 of the point: every method under every eye case.
     pub scores: Vec<ScoreRow>,
     /// Wall time of the point: its own stages plus its share of the display images it shared.
     pub seconds: f64,
+    /// The intersection backend that ran.
     pub backend: String,
+    /// Rayon worker threads.
     pub threads: usize,
     /// Where and when it ran, and with which inimtrace.
     pub host: String,
+    /// Seconds since the Unix epoch when it finished.
     pub finished_unix: u64,
+    /// The inimtrace version.
     pub version: String,
 }
 
@@ -85,6 +96,7 @@ impl Store {
         Ok(Self { root: root.to_path_buf() })
     }
 
+    /// The store's folder.
     pub fn root(&self) -> &Path {
         &self.root
     }

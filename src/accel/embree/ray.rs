@@ -13,9 +13,13 @@ const _: () = assert!(std::mem::align_of::<Valid16>() >= 64);
 /// A ray in Embree's single precision: `org + t dir` for `tnear <= t <= tfar`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RawRay {
+    /// Origin, world mm.
     pub org: [f32; 3],
+    /// Direction (any length).
     pub dir: [f32; 3],
+    /// Smallest `t` accepted.
     pub tnear: f32,
+    /// Largest `t` accepted.
     pub tfar: f32,
 }
 
@@ -55,10 +59,13 @@ pub struct RawHit {
     pub t: f32,
     /// Barycentrics: point = (1 - u - v) p0 + u p1 + v p2.
     pub u: f32,
+    /// Second barycentric.
     pub v: f32,
     /// Unnormalised geometric normal, (p1 - p0) x (p2 - p0) up to Embree's sign convention.
     pub ng: [f32; 3],
+    /// Embree's id of the geometry hit (the scene object).
     pub geom_id: u32,
+    /// Embree's id of the triangle hit within it.
     pub prim_id: u32,
 }
 

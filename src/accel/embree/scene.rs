@@ -16,9 +16,12 @@ use crate::error::Result;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum BuildQuality {
+    /// Fastest build (Embree's `RTC_BUILD_QUALITY_LOW`).
     Low,
+    /// Embree's default (`RTC_BUILD_QUALITY_MEDIUM`).
     #[default]
     Medium,
+    /// Spatial splits: slowest build, fastest tracing (`RTC_BUILD_QUALITY_HIGH`).
     High,
 }
 
