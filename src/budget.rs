@@ -76,7 +76,9 @@ impl fmt::Display for Limit {
 /// The memory a run may still use, and the limit that sets it.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Budget {
+    /// The bytes the run may still allocate.
     pub bytes: u64,
+    /// Which limit sets them (named in refusals).
     pub limit: Limit,
 }
 
@@ -245,6 +247,7 @@ fn unescape(field: &str) -> String {
 pub struct Held(u64);
 
 impl Held {
+    /// Counts `bytes` as held until the guard is dropped.
     pub fn new(bytes: u64) -> Self {
         HELD.fetch_add(bytes, Ordering::Relaxed);
         Held(bytes)

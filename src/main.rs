@@ -307,6 +307,18 @@ fn main() {
     }
 }
 
+/// The global flags every command reads.
+struct Globals {
+    /// `--set` overrides.
+    set: Vec<Override>,
+    /// `--quiet`.
+    quiet: bool,
+    /// `--timings`.
+    timings: bool,
+    /// `--exr-compression`.
+    exr_compression: ExrCompression,
+}
+
 fn run() -> Result<()> {
     let cli = Cli::parse();
     if let Some(n) = cli.threads {
@@ -318,158 +330,29 @@ fn run() -> Result<()> {
     }
     let quiet = cli.quiet;
     let set = cli.set;
+    let g = Globals { set: set.clone(), quiet, timings: cli.timings, exr_compression: cli.exr_compression };
     let start = Instant::now();
     // `assess` and `bench` print their own total with --timings.
     let mut printed_total = false;
     match cli.command {
         Command::Assess { experiment, out, scene, backend } => {
-            let backend = backend.choice()?;
-            let exp = load_experiment(experiment.as_deref(), scene.as_deref(), &set)?;
-            announce(&exp.scene, backend, quiet);
-            let out = out.unwrap_or_else(|| PathBuf::from("out").join(&exp.name));
-            if !quiet {
-                eprintln!("{}", exp.display.summary());
-            }
-            let options = RunOptions { quiet, backend, exr_compression: cli.exr_compression };
-            let report = experiment::assess(&exp, &out, options)?;
-            out!("{}", experiment::table_markdown(&report, &exp));
-            if cli.timings {
-                printed_total = true;
-                for s in &report.stages {
-                    let what = [s.method.as_deref(), s.eye_case.as_deref()]
-                        .into_iter()
-                        .flatten()
-                        .collect::<Vec<_>>()
-                        .join(" ");
-                    eprintln!("{:>8.3} s  {} {}", s.seconds, s.stage, what);
-                }
-                eprintln!(
-                    "{:>8.3} s  total ({} threads, backend {})",
-                    report.total_seconds, report.threads, report.backend
-                );
-            }
-            if !quiet {
-                eprintln!("wrote {}", out.display());
-            }
+            printed_total = assess(&g, experiment, out, scene, backend)?;
         }
         Command::RenderDisplay { method, setup, samples_per_pixel, reference_plane, eye_position, out, backend } => {
-            let backend = backend.choice()?;
-            let (scene, display) = load_setup(&setup, &set)?;
-            announce(&scene, backend, quiet);
-            inimtrace::optics::limits::REFERENCE_PLANE_Z.check("command line", "--reference-plane", reference_plane)?;
-            check_memory(
-                "the display image, its depth plane and its preview",
-                &format!("lcd.resolution = {:?} of the display", display.lcd.resolution),
-                display.lcd.pixel_count(),
-                32,
-            )?;
-            let settings =
-                DisplayRenderSettings { samples_per_pixel, reference_plane_z: reference_plane, eye_position };
-            let (img, depth, name) = with_field(&scene, backend, |fields| {
-                let p = Progress::new(display.lcd.rows() as u64, &format!("display image {}", method.name()), quiet);
-                let (img, depth) = render_display_image_with_depth(&display, method, &settings, fields.with_depth, &p)?;
-                p.finish();
-                Ok((img, depth, fields.name))
-            })?;
-            let mut attrs = metadata::common("display image", None);
-            attrs.extend(metadata::display_image(method, &display, &settings, name, depth.is_some()));
-            write_image(&out, &img, depth.as_deref(), &attrs, cli.exr_compression)?;
+            printed_total =
+                render_display(&g, method, setup, samples_per_pixel, reference_plane, eye_position, out, backend)?;
         }
         Command::Simulate { display_image, setup, eye, out } => {
-            let (_, display) = load_setup(&setup, &set)?;
-            let (eye, retina) = eye.eye()?;
-            check_memory("the retinal image", "--retina", retina.resolution * retina.resolution, 24)?;
-            let img = inimtrace::io::exr::read_rgb(&display_image)?;
-            // The method, when the display image says which.
-            let method = inimtrace::io::exr::read_attributes(&display_image)?
-                .into_iter()
-                .find(|(k, _)| k == "inimtrace:method")
-                .and_then(|(_, v)| v.parse::<Method>().ok());
-            let p = Progress::new(retina.resolution as u64, "simulate", quiet);
-            let sim = simulate(&display, &eye, &retina, &[&img], &p)
-                .with_context(|| format!("simulating {}", display_image.display()))?;
-            p.finish();
-            let source = display_image.display().to_string();
-            let attrs = metadata::perceived(None, method, None, &eye, &retina, &display, Some(&source));
-            write_image(&out, &sim[0], None, &attrs, cli.exr_compression)?;
+            printed_total = simulate_command(&g, display_image, setup, eye, out)?;
         }
         Command::GroundTruth { setup, eye, out, backend } => {
-            let backend = backend.choice()?;
-            let (scene, _) = load_setup(&setup, &set)?;
-            let (eye, retina) = eye.eye()?;
-            check_memory("the retinal image", "--retina", retina.resolution * retina.resolution, 24)?;
-            announce(&scene, backend, quiet);
-            let (img, name) = with_field(&scene, backend, |fields| {
-                let p = Progress::new(retina.resolution as u64, "ground truth", quiet);
-                let img = ground_truth(&eye, &retina, fields.shade, &p);
-                p.finish();
-                Ok((img, fields.name))
-            })?;
-            let attrs = metadata::ground_truth(None, None, &eye, &retina, name);
-            write_image(&out, &img, None, &attrs, cli.exr_compression)?;
+            printed_total = ground_truth_command(&g, setup, eye, out, backend)?;
         }
         Command::Compare { a, b, ssim: constants, json } => {
-            if !set.is_empty() {
-                bail!("--set does not apply to compare (it reads no experiment, scene or display)");
-            }
-            let ia = inimtrace::io::exr::read_rgb(&a)?;
-            let ib = inimtrace::io::exr::read_rgb(&b)?;
-            let p =
-                metrics::psnr(&ia, &ib).with_context(|| format!("comparing {} and {}", a.display(), b.display()))?;
-            let s = metrics::ssim(&ia, &ib, constants)
-                .with_context(|| format!("comparing {} and {}", a.display(), b.display()))?;
-            if json {
-                let channels = |v: [f64; 3], m: f64, f: &dyn Fn(f64) -> serde_json::Value| serde_json::json!({"R": f(v[0]), "G": f(v[1]), "B": f(v[2]), "mean": f(m)});
-                let db = |x: f64| serde_json::json!(metrics::finite_db(x));
-                let out = serde_json::json!({
-                    "a": a.display().to_string(),
-                    "b": b.display().to_string(),
-                    "width": ia.width,
-                    "height": ia.height,
-                    "psnr_db": channels(p.channels, p.mean, &db),
-                    "ssim": channels(s.channels, s.mean, &|x| serde_json::json!(x)),
-                    "ssim_constants": constants.name(),
-                    "tool": inimtrace::version::TOOL,
-                });
-                outln!("{}", serde_json::to_string_pretty(&out)?);
-                return Ok(());
-            }
-            outln!(
-                "PSNR  {} dB  (R {}, G {}, B {})",
-                metrics::format_db(p.mean, 3),
-                metrics::format_db(p.channels[0], 3),
-                metrics::format_db(p.channels[1], 3),
-                metrics::format_db(p.channels[2], 3)
-            );
-            outln!(
-                "SSIM  {:.5}  (R {:.5}, G {:.5}, B {:.5}; constants {})",
-                s.mean,
-                s.channels[0],
-                s.channels[1],
-                s.channels[2],
-                constants
-            );
+            printed_total = compare(&g, a, b, constants, json)?;
         }
         Command::Bench { quick, scene, out } => {
-            let (scene, label) = match &scene {
-                _ if !set.is_empty() => (scene_with(scene.as_deref(), &set)?, "--set".to_string()),
-                Some(p) => (load_scene(&p.to_string_lossy(), Path::new(""))?, p.display().to_string()),
-                None => (Scene::paper(), "builtin:paper".to_string()),
-            };
-            for w in &scene.warnings {
-                eprintln!("warning: {w}");
-            }
-            let out = out.unwrap_or_else(|| PathBuf::from(if quick { "out/bench-quick" } else { "out/bench" }));
-            let opts = inimtrace::bench::BenchOptions::new(quick, out.clone(), quiet);
-            let report = inimtrace::bench::run(&opts, &scene, &label)?;
-            out!("{}", inimtrace::bench::console_table(&report));
-            if cli.timings {
-                printed_total = true;
-                eprintln!("{:>8.3} s  bench ({} run)", report.total_seconds, report.mode);
-            }
-            if !quiet {
-                eprintln!("wrote {}", out.display());
-            }
+            printed_total = bench(&g, quick, scene, out)?;
         }
         Command::Sweep {
             sweep,
@@ -524,45 +407,7 @@ fn run() -> Result<()> {
             printed_total = true;
         }
         Command::Info { display, scene, pupil, json, print } => {
-            if let Some(what) = print {
-                if !set.is_empty() {
-                    bail!("--set does not apply to --print (it prints the built-in files as they are)");
-                }
-                let text = match what {
-                    PrintTarget::PaperExperiment => ExperimentSpec::paper_converged().to_toml(),
-                    PrintTarget::PaperGridExperiment => ExperimentSpec::paper().to_toml(),
-                    PrintTarget::Framework2020Experiment => ExperimentSpec::framework_2020().to_toml(),
-                    PrintTarget::PaperScene => toml::to_string_pretty(&SceneSpec::paper())?,
-                    PrintTarget::PaperDisplay => toml::to_string_pretty(&DisplaySpec::from_display(&Display::paper()))?,
-                };
-                out!("{text}");
-                return Ok(());
-            }
-            if let Some(p) = scene {
-                let scene = match set.is_empty() {
-                    true => load_scene(&p.to_string_lossy(), Path::new(""))?,
-                    false => scene_with(Some(&p), &set)?,
-                };
-                let summary = inimtrace::info::scene_summary(&scene);
-                match json {
-                    true => outln!("{}", serde_json::to_string_pretty(&summary)?),
-                    false => out!("{}", inimtrace::info::scene_summary_text(&summary)),
-                }
-                return Ok(());
-            }
-            if !(pupil.is_finite() && pupil > 0.0) {
-                bail!("--pupil must be a positive number of mm, got {pupil}");
-            }
-            let d = match display {
-                _ if !set.is_empty() => display_with(display.as_deref(), &set)?,
-                Some(p) => load_display(&p.to_string_lossy(), Path::new(""))?,
-                None => Display::paper(),
-            };
-            let design = inimtrace::info::display_design(&d, pupil);
-            match json {
-                true => outln!("{}", serde_json::to_string_pretty(&design)?),
-                false => out!("{}", inimtrace::info::display_design_text(&design, &d.summary())),
-            }
+            printed_total = info(&g, display, scene, pupil, json, print)?;
         }
     }
     if cli.timings && !printed_total {
@@ -570,4 +415,238 @@ fn run() -> Result<()> {
     }
     std::io::Write::flush(&mut std::io::stdout())?;
     Ok(())
+}
+
+/// `inimtrace assess`; returns whether it printed its own total time.
+fn assess(
+    g: &Globals,
+    experiment: Option<PathBuf>,
+    out: Option<PathBuf>,
+    scene: Option<PathBuf>,
+    backend: BackendArg,
+) -> Result<bool> {
+    let (set, quiet) = (&g.set[..], g.quiet);
+    let mut printed_total = false;
+    let backend = backend.choice()?;
+    let exp = load_experiment(experiment.as_deref(), scene.as_deref(), &set)?;
+    announce(&exp.scene, backend, quiet);
+    let out = out.unwrap_or_else(|| PathBuf::from("out").join(&exp.name));
+    if !quiet {
+        eprintln!("{}", exp.display.summary());
+    }
+    let options = RunOptions { quiet, backend, exr_compression: g.exr_compression };
+    let report = experiment::assess(&exp, &out, options)?;
+    out!("{}", experiment::table_markdown(&report, &exp));
+    if g.timings {
+        printed_total = true;
+        for s in &report.stages {
+            let what = [s.method.as_deref(), s.eye_case.as_deref()].into_iter().flatten().collect::<Vec<_>>().join(" ");
+            eprintln!("{:>8.3} s  {} {}", s.seconds, s.stage, what);
+        }
+        eprintln!("{:>8.3} s  total ({} threads, backend {})", report.total_seconds, report.threads, report.backend);
+    }
+    if !quiet {
+        eprintln!("wrote {}", out.display());
+    }
+    Ok(printed_total)
+}
+
+/// `inimtrace render-display`; returns whether it printed its own total time.
+#[allow(clippy::too_many_arguments)] // the command's flags, as clap parsed them
+fn render_display(
+    g: &Globals,
+    method: Method,
+    setup: Setup,
+    samples_per_pixel: usize,
+    reference_plane: f64,
+    eye_position: DVec3,
+    out: PathBuf,
+    backend: BackendArg,
+) -> Result<bool> {
+    let (set, quiet) = (&g.set[..], g.quiet);
+    let backend = backend.choice()?;
+    let (scene, display) = load_setup(&setup, &set)?;
+    announce(&scene, backend, quiet);
+    inimtrace::optics::limits::REFERENCE_PLANE_Z.check("command line", "--reference-plane", reference_plane)?;
+    check_memory(
+        "the display image, its depth plane and its preview",
+        &format!("lcd.resolution = {:?} of the display", display.lcd.resolution),
+        display.lcd.pixel_count(),
+        32,
+    )?;
+    let settings = DisplayRenderSettings { samples_per_pixel, reference_plane_z: reference_plane, eye_position };
+    let (img, depth, name) = with_field(&scene, backend, |fields| {
+        let p = Progress::new(display.lcd.rows() as u64, &format!("display image {}", method.name()), quiet);
+        let (img, depth) = render_display_image_with_depth(&display, method, &settings, fields.with_depth, &p)?;
+        p.finish();
+        Ok((img, depth, fields.name))
+    })?;
+    let mut attrs = metadata::common("display image", None);
+    attrs.extend(metadata::display_image(method, &display, &settings, name, depth.is_some()));
+    write_image(&out, &img, depth.as_deref(), &attrs, g.exr_compression)?;
+    Ok(false)
+}
+
+/// `inimtrace simulate`; returns whether it printed its own total time.
+fn simulate_command(g: &Globals, display_image: PathBuf, setup: Setup, eye: EyeArgs, out: PathBuf) -> Result<bool> {
+    let (set, quiet) = (&g.set[..], g.quiet);
+    let (_, display) = load_setup(&setup, &set)?;
+    let (eye, retina) = eye.eye()?;
+    check_memory("the retinal image", "--retina", retina.resolution * retina.resolution, 24)?;
+    let img = inimtrace::io::exr::read_rgb(&display_image)?;
+    // The method, when the display image says which.
+    let method = inimtrace::io::exr::read_attributes(&display_image)?
+        .into_iter()
+        .find(|(k, _)| k == "inimtrace:method")
+        .and_then(|(_, v)| v.parse::<Method>().ok());
+    let p = Progress::new(retina.resolution as u64, "simulate", quiet);
+    let sim = simulate(&display, &eye, &retina, &[&img], &p)
+        .with_context(|| format!("simulating {}", display_image.display()))?;
+    p.finish();
+    let source = display_image.display().to_string();
+    let attrs = metadata::perceived(None, method, None, &eye, &retina, &display, Some(&source));
+    write_image(&out, &sim[0], None, &attrs, g.exr_compression)?;
+    Ok(false)
+}
+
+/// `inimtrace ground-truth`; returns whether it printed its own total time.
+fn ground_truth_command(g: &Globals, setup: Setup, eye: EyeArgs, out: PathBuf, backend: BackendArg) -> Result<bool> {
+    let (set, quiet) = (&g.set[..], g.quiet);
+    let backend = backend.choice()?;
+    let (scene, _) = load_setup(&setup, &set)?;
+    let (eye, retina) = eye.eye()?;
+    check_memory("the retinal image", "--retina", retina.resolution * retina.resolution, 24)?;
+    announce(&scene, backend, quiet);
+    let (img, name) = with_field(&scene, backend, |fields| {
+        let p = Progress::new(retina.resolution as u64, "ground truth", quiet);
+        let img = ground_truth(&eye, &retina, fields.shade, &p);
+        p.finish();
+        Ok((img, fields.name))
+    })?;
+    let attrs = metadata::ground_truth(None, None, &eye, &retina, name);
+    write_image(&out, &img, None, &attrs, g.exr_compression)?;
+    Ok(false)
+}
+
+/// `inimtrace compare`; returns whether it printed its own total time.
+fn compare(g: &Globals, a: PathBuf, b: PathBuf, constants: SsimConstants, json: bool) -> Result<bool> {
+    let set = &g.set[..];
+    if !set.is_empty() {
+        bail!("--set does not apply to compare (it reads no experiment, scene or display)");
+    }
+    let ia = inimtrace::io::exr::read_rgb(&a)?;
+    let ib = inimtrace::io::exr::read_rgb(&b)?;
+    let p = metrics::psnr(&ia, &ib).with_context(|| format!("comparing {} and {}", a.display(), b.display()))?;
+    let s =
+        metrics::ssim(&ia, &ib, constants).with_context(|| format!("comparing {} and {}", a.display(), b.display()))?;
+    if json {
+        let channels = |v: [f64; 3], m: f64, f: &dyn Fn(f64) -> serde_json::Value| serde_json::json!({"R": f(v[0]), "G": f(v[1]), "B": f(v[2]), "mean": f(m)});
+        let db = |x: f64| serde_json::json!(metrics::finite_db(x));
+        let out = serde_json::json!({
+            "a": a.display().to_string(),
+            "b": b.display().to_string(),
+            "width": ia.width,
+            "height": ia.height,
+            "psnr_db": channels(p.channels, p.mean, &db),
+            "ssim": channels(s.channels, s.mean, &|x| serde_json::json!(x)),
+            "ssim_constants": constants.name(),
+            "tool": inimtrace::version::TOOL,
+        });
+        outln!("{}", serde_json::to_string_pretty(&out)?);
+        return Ok(true);
+    }
+    outln!(
+        "PSNR  {} dB  (R {}, G {}, B {})",
+        metrics::format_db(p.mean, 3),
+        metrics::format_db(p.channels[0], 3),
+        metrics::format_db(p.channels[1], 3),
+        metrics::format_db(p.channels[2], 3)
+    );
+    outln!(
+        "SSIM  {:.5}  (R {:.5}, G {:.5}, B {:.5}; constants {})",
+        s.mean,
+        s.channels[0],
+        s.channels[1],
+        s.channels[2],
+        constants
+    );
+    Ok(false)
+}
+
+/// `inimtrace bench`; returns whether it printed its own total time.
+fn bench(g: &Globals, quick: bool, scene: Option<PathBuf>, out: Option<PathBuf>) -> Result<bool> {
+    let (set, quiet) = (&g.set[..], g.quiet);
+    let mut printed_total = false;
+    let (scene, label) = match &scene {
+        _ if !set.is_empty() => (scene_with(scene.as_deref(), &set)?, "--set".to_string()),
+        Some(p) => (load_scene(&p.to_string_lossy(), Path::new(""))?, p.display().to_string()),
+        None => (Scene::paper(), "builtin:paper".to_string()),
+    };
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
+    let out = out.unwrap_or_else(|| PathBuf::from(if quick { "out/bench-quick" } else { "out/bench" }));
+    let opts = inimtrace::bench::BenchOptions::new(quick, out.clone(), quiet);
+    let report = inimtrace::bench::run(&opts, &scene, &label)?;
+    out!("{}", inimtrace::bench::console_table(&report));
+    if g.timings {
+        printed_total = true;
+        eprintln!("{:>8.3} s  bench ({} run)", report.total_seconds, report.mode);
+    }
+    if !quiet {
+        eprintln!("wrote {}", out.display());
+    }
+    Ok(printed_total)
+}
+
+/// `inimtrace info`; returns whether it printed its own total time.
+fn info(
+    g: &Globals,
+    display: Option<PathBuf>,
+    scene: Option<PathBuf>,
+    pupil: f64,
+    json: bool,
+    print: Option<PrintTarget>,
+) -> Result<bool> {
+    let set = &g.set[..];
+    if let Some(what) = print {
+        if !set.is_empty() {
+            bail!("--set does not apply to --print (it prints the built-in files as they are)");
+        }
+        let text = match what {
+            PrintTarget::PaperExperiment => ExperimentSpec::paper_converged().to_toml(),
+            PrintTarget::PaperGridExperiment => ExperimentSpec::paper().to_toml(),
+            PrintTarget::Framework2020Experiment => ExperimentSpec::framework_2020().to_toml(),
+            PrintTarget::PaperScene => toml::to_string_pretty(&SceneSpec::paper())?,
+            PrintTarget::PaperDisplay => toml::to_string_pretty(&DisplaySpec::from_display(&Display::paper()))?,
+        };
+        out!("{text}");
+        return Ok(true);
+    }
+    if let Some(p) = scene {
+        let scene = match set.is_empty() {
+            true => load_scene(&p.to_string_lossy(), Path::new(""))?,
+            false => scene_with(Some(&p), &set)?,
+        };
+        let summary = inimtrace::info::scene_summary(&scene);
+        match json {
+            true => outln!("{}", serde_json::to_string_pretty(&summary)?),
+            false => out!("{}", inimtrace::info::scene_summary_text(&summary)),
+        }
+        return Ok(true);
+    }
+    if !(pupil.is_finite() && pupil > 0.0) {
+        bail!("--pupil must be a positive number of mm, got {pupil}");
+    }
+    let d = match display {
+        _ if !set.is_empty() => display_with(display.as_deref(), &set)?,
+        Some(p) => load_display(&p.to_string_lossy(), Path::new(""))?,
+        None => Display::paper(),
+    };
+    let design = inimtrace::info::display_design(&d, pupil);
+    match json {
+        true => outln!("{}", serde_json::to_string_pretty(&design)?),
+        false => out!("{}", inimtrace::info::display_design_text(&design, &d.summary())),
+    }
+    Ok(false)
 }

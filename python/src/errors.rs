@@ -65,7 +65,9 @@ fn file_class(path: &str) -> Option<Class> {
 fn classify(e: &LibError) -> Class {
     match e.innermost() {
         LibError::Singular(_) | LibError::Lattice { .. } => Class::Optics,
-        LibError::Embree { .. } | LibError::Alloc(_) | LibError::External { .. } | LibError::Incomplete(_) => Class::Base,
+        LibError::Embree { .. } | LibError::Alloc(_) | LibError::External { .. } | LibError::Incomplete(_) => {
+            Class::Base
+        }
         LibError::Io { path, .. } | LibError::Parse { path, .. } | LibError::UnknownFormat { path, .. } => {
             file_class(&path.to_string_lossy()).unwrap_or(Class::Config)
         }

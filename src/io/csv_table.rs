@@ -16,6 +16,7 @@ impl Default for CsvTable {
 }
 
 impl CsvTable {
+    /// An empty table (quoting fields only where needed, lines ending in `\n`).
     pub fn new() -> Self {
         let writer = WriterBuilder::new()
             .quote_style(QuoteStyle::Necessary)

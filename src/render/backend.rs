@@ -108,7 +108,9 @@ pub fn scene_meshes(scene: &Scene) -> Vec<(u32, Cow<'_, Mesh>)> {
 /// call per ray): `shade` for radiance, `with_depth` for display images (their hit distances),
 /// `name` for reports (see [`Fields::name`]).
 pub trait FieldUser {
+    /// What the work returns.
     type Output;
+    /// Runs the work on the chosen fields; `name` says which backend they are.
     fn run<S: RadianceField, D: RadianceField>(
         self,
         shade: &S,
