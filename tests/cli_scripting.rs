@@ -121,16 +121,16 @@ fn single_stage_commands_match_assess_in_pixels_and_metadata() {
 
     // simulate from assess's LA display image: the method comes from its header.
     let sim = dir.path().join("sim.exr");
-    let la = out.join("display_LA.exr");
+    let la = out.join("display_LA2.exr");
     let mut args =
         vec!["simulate", la.to_str().unwrap(), "--focus-mm", "300", "--display", d, "--out", sim.to_str().unwrap()];
     args.extend(EYE);
     let o = run(&args);
     assert!(o.status.success(), "{}", text(&o.stderr));
-    assert!(read_rgb(&sim).unwrap() == read_rgb(&out.join("sim_LA_Near.exr")).unwrap());
+    assert!(read_rgb(&sim).unwrap() == read_rgb(&out.join("sim_LA2_Near.exr")).unwrap());
     same_metadata(
         &sim,
-        &out.join("sim_LA_Near.exr"),
+        &out.join("sim_LA2_Near.exr"),
         &["inimtrace:experiment", "inimtrace:eye_case", "inimtrace:source"],
     );
     let get = |p: &Path, k: &str| attrs(p).into_iter().find(|(n, _)| n == k).map(|(_, v)| v);

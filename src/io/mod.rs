@@ -10,6 +10,7 @@ mod exr_attributes;
 mod exr_zip;
 pub mod figure;
 mod gltf;
+mod gltf_accessor;
 pub(crate) mod input;
 pub mod mesh;
 mod obj;
