@@ -428,7 +428,7 @@ fn assess(
     let (set, quiet) = (&g.set[..], g.quiet);
     let mut printed_total = false;
     let backend = backend.choice()?;
-    let exp = load_experiment(experiment.as_deref(), scene.as_deref(), &set)?;
+    let exp = load_experiment(experiment.as_deref(), scene.as_deref(), set)?;
     announce(&exp.scene, backend, quiet);
     let out = out.unwrap_or_else(|| PathBuf::from("out").join(&exp.name));
     if !quiet {
@@ -465,7 +465,7 @@ fn render_display(
 ) -> Result<bool> {
     let (set, quiet) = (&g.set[..], g.quiet);
     let backend = backend.choice()?;
-    let (scene, display) = load_setup(&setup, &set)?;
+    let (scene, display) = load_setup(&setup, set)?;
     announce(&scene, backend, quiet);
     inimtrace::optics::limits::REFERENCE_PLANE_Z.check("command line", "--reference-plane", reference_plane)?;
     check_memory(
@@ -490,7 +490,7 @@ fn render_display(
 /// `inimtrace simulate`; returns whether it printed its own total time.
 fn simulate_command(g: &Globals, display_image: PathBuf, setup: Setup, eye: EyeArgs, out: PathBuf) -> Result<bool> {
     let (set, quiet) = (&g.set[..], g.quiet);
-    let (_, display) = load_setup(&setup, &set)?;
+    let (_, display) = load_setup(&setup, set)?;
     let (eye, retina) = eye.eye()?;
     check_memory("the retinal image", "--retina", retina.resolution * retina.resolution, 24)?;
     let img = inimtrace::io::exr::read_rgb(&display_image)?;
@@ -513,7 +513,7 @@ fn simulate_command(g: &Globals, display_image: PathBuf, setup: Setup, eye: EyeA
 fn ground_truth_command(g: &Globals, setup: Setup, eye: EyeArgs, out: PathBuf, backend: BackendArg) -> Result<bool> {
     let (set, quiet) = (&g.set[..], g.quiet);
     let backend = backend.choice()?;
-    let (scene, _) = load_setup(&setup, &set)?;
+    let (scene, _) = load_setup(&setup, set)?;
     let (eye, retina) = eye.eye()?;
     check_memory("the retinal image", "--retina", retina.resolution * retina.resolution, 24)?;
     announce(&scene, backend, quiet);
@@ -578,7 +578,7 @@ fn bench(g: &Globals, quick: bool, scene: Option<PathBuf>, out: Option<PathBuf>)
     let (set, quiet) = (&g.set[..], g.quiet);
     let mut printed_total = false;
     let (scene, label) = match &scene {
-        _ if !set.is_empty() => (scene_with(scene.as_deref(), &set)?, "--set".to_string()),
+        _ if !set.is_empty() => (scene_with(scene.as_deref(), set)?, "--set".to_string()),
         Some(p) => (load_scene(&p.to_string_lossy(), Path::new(""))?, p.display().to_string()),
         None => (Scene::paper(), "builtin:paper".to_string()),
     };
@@ -626,7 +626,7 @@ fn info(
     if let Some(p) = scene {
         let scene = match set.is_empty() {
             true => load_scene(&p.to_string_lossy(), Path::new(""))?,
-            false => scene_with(Some(&p), &set)?,
+            false => scene_with(Some(&p), set)?,
         };
         let summary = inimtrace::info::scene_summary(&scene);
         match json {
@@ -639,7 +639,7 @@ fn info(
         bail!("--pupil must be a positive number of mm, got {pupil}");
     }
     let d = match display {
-        _ if !set.is_empty() => display_with(display.as_deref(), &set)?,
+        _ if !set.is_empty() => display_with(display.as_deref(), set)?,
         Some(p) => load_display(&p.to_string_lossy(), Path::new(""))?,
         None => Display::paper(),
     };

@@ -138,7 +138,7 @@ fn case_outputs(exp: &Experiment, case: &EyeCase, measured: &CaseMeasurement) ->
         .iter()
         .zip(&measured.cells)
         .map(|(m, cell)| Score {
-            method: m.name().into(),
+            method: m.name(),
             eye_case: case.name.clone(),
             psnr: cell.psnr,
             ssim: cell.ssim,

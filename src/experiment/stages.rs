@@ -205,7 +205,7 @@ fn case_scores(exp: &Experiment, c: usize, gt: &RgbImage, sims: &[RgbImage]) -> 
         .zip(&exp.methods)
         .map(|(sim, m)| -> Result<Score> {
             Ok(Score {
-                method: m.name().into(),
+                method: m.name(),
                 eye_case: exp.cases[c].name.clone(),
                 psnr: metrics::psnr(sim, gt)?.into(),
                 ssim: metrics::ssim(sim, gt, exp.ssim)?.into(),
