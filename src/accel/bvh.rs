@@ -11,7 +11,7 @@
 //!
 //! * The tree stores `f32` boxes and is traversed with an `f32` copy of the ray. This is only
 //!   used to *cull*: it never decides a hit. Every triangle box is padded by
-//!   [`PAD_REL`] times the scene scale `S` (the largest vertex coordinate magnitude or scene
+//!   `PAD_REL` times the scene scale `S` (the largest vertex coordinate magnitude or scene
 //!   diagonal), which is far more than the rounding of the `f32` ray and box arithmetic
 //!   (a few `2^-24 S`), so a box that holds a triangle the exact ray hits is never culled.
 //!   To keep the `f32` origin near the scene (so that its rounding stays ~`2^-24 S`), a ray whose

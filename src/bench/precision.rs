@@ -95,7 +95,7 @@ pub struct PrecisionSummary {
     pub reference_stopped_by: String,
     /// Replicates of the randomized-QMC points.
     pub replicates: usize,
-    /// Every point, estimators in [`SWEPT`] order, sample counts increasing.
+    /// Every point, estimators in `SWEPT` order, sample counts increasing.
     pub points: Vec<PrecisionPoint>,
     /// Per estimator and target of [`PRECISION_TARGETS_DB`].
     pub reached: Vec<PrecisionReached>,

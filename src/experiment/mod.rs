@@ -128,7 +128,7 @@ pub struct ExperimentSpec {
     /// `builtin:paper` or a display TOML / OpenCV YAML path (relative to this file).
     #[serde(default = "builtin")]
     pub display: String,
-    /// "LC", "PC", "LA" (grid from `display_render.la_grid`), or "LA<k>".
+    /// "LC", "PC", "LA" (grid from `display_render.la_grid`), or `LA<k>`.
     #[serde(default = "default_methods")]
     pub methods: Vec<String>,
     /// "wang2004" (default) or "framework-8bit".

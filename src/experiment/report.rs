@@ -16,7 +16,7 @@ use crate::version::Tool;
 /// (`ci95`, `channels_ci95` in `psnr` and `ssim`), its samples and whether the targets were met.
 #[derive(Clone, Debug, Serialize)]
 pub struct Score {
-    /// The method's short name (LC, PC, LA, LA<k>).
+    /// The method's short name (LC, PC, LA, `LA<k>`).
     pub method: String,
     /// The eye case's name.
     pub eye_case: String,

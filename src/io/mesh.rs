@@ -28,7 +28,7 @@
 //!   share a [`FileMaterial`] (an OBJ `usemtl`, a glTF primitive's material). A scene object
 //!   without a `material` uses them.
 //! * Files as exporters write them: a `\` in an OBJ/MTL file name is a path separator
-//!   ([`file_name_path`]); a texture that is missing or cannot be read, and vertex colours that
+//!   (`file_name_path`); a texture that is missing or cannot be read, and vertex colours that
 //!   cannot be used, are warnings (the material's base colour is used instead), as in Assimp and
 //!   Blender. Geometry that cannot be read is still an error.
 

@@ -4,7 +4,7 @@
 //! A round adds samples to every replicate of every pixel ([`Replicates::extend`]), then computes
 //! every cell's (scored image's) PSNR with its 95% half-width, and, once every PSNR meets its
 //! target, every SSIM. When some cell misses its target, the samples per replicate grow to what
-//! the slowest cell's half-width predicts (see [`next_samples`]), within the sample budget, and
+//! the slowest cell's half-width predicts (see `next_samples`), within the sample budget, and
 //! only if the round's predicted time fits the time budget. The schedule depends only on the
 //! numbers, so the same seed gives the same result, unless the time budget stops it.
 

@@ -3,7 +3,7 @@
 //!
 //! Every sample of a retina pixel ([`super::sampler`]) is ONE eye ray: a point of the pixel's
 //! square (its tangent) and a point of the pupil. The ray's radiance into the scene is the ground
-//! truth's sample ([`crate::render::retina::eye_scene_ray`] and the radiance field); the same ray
+//! truth's sample (`render::retina`'s eye rays and the radiance field); the same ray
 //! traced retina -> eye lens -> lenslet -> LCD by eq. (1) reads every method's display image at
 //! the LCD pixel it meets (a ray that misses the LCD carries black and still counts). Because
 //! the images share their rays, the noise of their difference is much smaller than the noise of

@@ -4,10 +4,10 @@
 //! - [`sampler`]: Owen-scrambled Sobol points over each retina pixel x the pupil disk;
 //! - [`estimator`]: the paired estimator (one eye ray for the ground truth and every method) and
 //!   the per-replicate images;
-//! - [`stats`], [`ssim`]: PSNR and SSIM from cross-replicate products (no noise bias), with
+//! - [`stats`], `ssim`: PSNR and SSIM from cross-replicate products (no noise bias), with
 //!   jackknife intervals;
 //! - [`adaptive`]: doubling the samples until every cell meets its target or the budget is spent;
-//! - [`spec`]: the experiment file's `[measurement]` table; [`run`]: `assess`'s converged Table 1.
+//! - [`spec`]: the experiment file's `[measurement]` table; `experiment::converged`: `assess`'s converged Table 1.
 
 pub mod adaptive;
 pub mod estimator;

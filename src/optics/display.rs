@@ -45,7 +45,7 @@ impl Lcd {
         self.pixel_point(row, col, DVec2::splat(0.5))
     }
 
-    /// A point inside pixel (row, column): `frac` in [0,1]^2 runs left-to-right, top-to-bottom.
+    /// A point inside pixel (row, column): `frac` in `[0, 1]^2` runs left-to-right, top-to-bottom.
     #[inline]
     pub fn pixel_point(&self, row: usize, col: usize, frac: DVec2) -> DVec2 {
         let pitch = self.pixel_pitch();

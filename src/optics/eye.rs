@@ -220,7 +220,7 @@ impl Default for Retina {
 }
 
 impl Retina {
-    /// Tangents of the direction seen by the point `frac` (in [0,1]^2) of pixel (row, col).
+    /// Tangents of the direction seen by the point `frac` (in `[0, 1]^2`) of pixel (row, col).
     #[inline]
     pub fn tangent(&self, row: usize, col: usize, frac: DVec2) -> DVec2 {
         let step = 2.0 * self.half_tangent / self.resolution as f64;

@@ -52,7 +52,7 @@ pub const PAPER_LA_GRID: usize = 5;
 
 impl Method {
     /// The method's name in results, tables, file names and Python: "LC", "PC", "LA" for the
-    /// paper's 5 x 5 LensletAverage and "LA<k>" for any other k x k grid ("LA3", "LA7"), so
+    /// paper's 5 x 5 LensletAverage and `LA<k>` for any other k x k grid ("LA3", "LA7"), so
     /// methods that differ have different names. It parses back to the same method.
     pub fn name(&self) -> String {
         match self {

@@ -172,7 +172,7 @@ pub struct StudySpec {
     pub description: String,
     /// `builtin:paper` or a display file (TOML or OpenCV YAML), relative to the study file.
     pub display: String,
-    /// Methods measured: "LC", "PC", "LA", "LA<k>".
+    /// Methods measured: "LC", "PC", "LA", `LA<k>`.
     pub methods: Vec<String>,
     /// Pupil diameter, mm.
     pub pupil_diameter_mm: f64,

@@ -1,10 +1,10 @@
 //! Parameter sweeps: the paper's assessment (Sec. 4, Table 1) over ranges of its settings
 //! (pupil, focus, eye position, lenslet pitch, gap, methods, ...). A sweep file names a base
-//! experiment and axes of `--set` overrides ([`spec`]); each point is a fully resolved
+//! experiment and axes of `--set` overrides (`spec`); each point is a fully resolved
 //! experiment identified by the content hash of its settings ([`crate::settings`]). Points run
-//! on all cores sharing display images ([`run`]) or as a Slurm job array ([`slurm`]), are
-//! recorded atomically one by one ([`store`]), and are collected into `sweep.csv`,
-//! `sweep.json` and plots ([`collect`], [`plots`]). A rerun skips recorded points.
+//! on all cores sharing display images (`run`) or as a Slurm job array (`slurm`), are
+//! recorded atomically one by one (`store`), and are collected into `sweep.csv`,
+//! `sweep.json` and plots ([`collect`], `plots`). A rerun skips recorded points.
 
 mod collect;
 mod command;
