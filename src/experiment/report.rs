@@ -6,6 +6,7 @@ use serde::Serialize;
 use super::{Experiment, ExperimentSpec};
 use crate::error::{Error, Result};
 use crate::info::DisplayParameters;
+use crate::io::csv_table::CsvTable;
 use crate::io::output::OutputDir;
 use crate::measure::spec::EstimatorKind;
 use crate::measure::stats::Estimate;
@@ -122,46 +123,83 @@ pub fn table_markdown(report: &AssessReport, exp: &Experiment) -> String {
 pub(super) fn write_reports(report: &AssessReport, exp: &Experiment, dir: &OutputDir) -> Result<()> {
     let write = |name: &str, text: String| -> Result<()> { dir.write_bytes(name, text.as_bytes()) };
     write("table.md", table_markdown(report, exp))?;
-    // psnr_ci95_db and ssim_ci95 (last, empty for the grid estimator): 95% half-widths.
-    let mut csv =
-        String::from("record,experiment,method,eye_case,channel,psnr_db,ssim,stage,seconds,psnr_ci95_db,ssim_ci95\n");
+    // psnr_ci95_db and ssim_ci95 (last, empty for the grid estimator): 95% half-widths. Names
+    // (experiment, eye case) are quoted where they hold a comma, a quote or a line break.
+    let mut csv = CsvTable::new();
+    row(
+        &mut csv,
+        [
+            "record",
+            "experiment",
+            "method",
+            "eye_case",
+            "channel",
+            "psnr_db",
+            "ssim",
+            "stage",
+            "seconds",
+            "psnr_ci95_db",
+            "ssim_ci95",
+        ],
+    );
     let ci = |h: Option<f64>| h.map(csv_db).unwrap_or_default();
+    let e = report.experiment.as_str();
     for s in &report.scores {
         for (c, name) in ["R", "G", "B"].iter().enumerate() {
-            csv.push_str(&format!(
-                "score,{},{},{},{},{},{},,,{},{}\n",
-                report.experiment,
-                s.method,
-                s.eye_case,
-                name,
-                csv_db(s.psnr.channels[c]),
-                s.ssim.channels[c],
-                ci(s.psnr.channels_ci95.map(|h| h[c])),
-                ci(s.ssim.channels_ci95.map(|h| h[c])),
-            ));
+            row(
+                &mut csv,
+                [
+                    "score",
+                    e,
+                    &s.method,
+                    &s.eye_case,
+                    name,
+                    &csv_db(s.psnr.channels[c]),
+                    &s.ssim.channels[c].to_string(),
+                    "",
+                    "",
+                    &ci(s.psnr.channels_ci95.map(|h| h[c])),
+                    &ci(s.ssim.channels_ci95.map(|h| h[c])),
+                ],
+            );
         }
-        csv.push_str(&format!(
-            "score,{},{},{},mean,{},{},,,{},{}\n",
-            report.experiment,
-            s.method,
-            s.eye_case,
-            csv_db(s.psnr.mean),
-            s.ssim.mean,
-            ci(s.psnr.ci95),
-            ci(s.ssim.ci95),
-        ));
+        row(
+            &mut csv,
+            [
+                "score",
+                e,
+                &s.method,
+                &s.eye_case,
+                "mean",
+                &csv_db(s.psnr.mean),
+                &s.ssim.mean.to_string(),
+                "",
+                "",
+                &ci(s.psnr.ci95),
+                &ci(s.ssim.ci95),
+            ],
+        );
     }
     for st in &report.stages {
-        csv.push_str(&format!(
-            "stage,{},{},{},,,,{},{},,\n",
-            report.experiment,
-            st.method.as_deref().unwrap_or(""),
-            st.eye_case.as_deref().unwrap_or(""),
-            st.stage,
-            st.seconds
-        ));
+        row(
+            &mut csv,
+            [
+                "stage",
+                e,
+                st.method.as_deref().unwrap_or(""),
+                st.eye_case.as_deref().unwrap_or(""),
+                "",
+                "",
+                "",
+                &st.stage,
+                &st.seconds.to_string(),
+                "",
+                "",
+            ],
+        );
     }
-    csv.push_str(&format!("stage,{},,,,,,total,{},,\n", report.experiment, report.total_seconds));
+    row(&mut csv, ["stage", e, "", "", "", "", "", "total", &report.total_seconds.to_string(), "", ""]);
+    let csv = csv.finish();
     write("results.csv", csv)?;
     // Last: its presence marks a complete run, and it lists every other file of the run with
     // its size and CRC-32 (`files`), so a reader can verify the set.
@@ -170,6 +208,11 @@ pub(super) fn write_reports(report: &AssessReport, exp: &Experiment, dir: &Outpu
         value["files"] = serde_json::to_value(files).map_err(|e| Error::serialize("serialise the report", e))?;
         serde_json::to_vec_pretty(&value).map_err(|e| Error::serialize("serialise the report", e))
     })
+}
+
+/// One row of `results.csv` (its 11 columns).
+fn row(csv: &mut CsvTable, fields: [&str; 11]) {
+    csv.row(fields);
 }
 
 /// PSNR for CSV: identical images give "inf".
