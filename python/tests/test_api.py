@@ -43,7 +43,7 @@ def test_experiment_fields_and_set_forms():
     as_dict = inimtrace.Experiment.load(path, set={"eye.pupil_diameter": 3, "methods": ["LC", "LA3"]})
     as_list = inimtrace.Experiment.load(path, set=["eye.pupil_diameter=3", 'methods=["LC", "LA3"]'])
     assert as_dict.settings() == as_list.settings()
-    assert as_dict.eye_cases[1][1].pupil == 3.0 and as_dict.methods == ["LC", "LA"]
+    assert as_dict.eye_cases[1][1].pupil == 3.0 and as_dict.methods == ["LC", "LA3"]
     assert as_dict.settings()["eye"]["pupil_diameter"] == 3
     assert inimtrace.Experiment.paper().estimator == "converged"
     assert "[[eye_cases]]" in exp.to_toml()
