@@ -141,6 +141,24 @@ pub fn exr_header_bomb(w: i32, h: i32) -> Vec<u8> {
     b
 }
 
+/// Writes `quad.obj` (a 100 mm square at z = 400 mm facing the eye, with texture coordinates)
+/// and `scene.toml` (that square textured with the image `texture`, a file name in `dir`) into
+/// `dir`, and returns the scene file's path.
+pub fn textured_quad_scene(dir: &std::path::Path, name: &str, texture: &str) -> std::io::Result<std::path::PathBuf> {
+    std::fs::write(
+        dir.join("quad.obj"),
+        "v -50 -50 400\nv 50 -50 400\nv 50 50 400\nv -50 50 400\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nf 1/1 2/2 3/3 4/4\n",
+    )?;
+    let scene = dir.join("scene.toml");
+    std::fs::write(
+        &scene,
+        format!(
+            "name = \"{name}\"\n[[objects]]\ntype = \"mesh\"\nfile = \"quad.obj\"\nmaterial = {{ texture = \"{texture}\" }}\n"
+        ),
+    )?;
+    Ok(scene)
+}
+
 /// A 57-byte PNG whose header claims `w` x `h` RGB pixels (and whose one data chunk is empty).
 pub fn png_header_bomb(w: u32, h: u32) -> Vec<u8> {
     fn chunk(out: &mut Vec<u8>, kind: &[u8; 4], data: &[u8]) {

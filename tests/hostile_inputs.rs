@@ -253,17 +253,7 @@ fn absurd_thread_counts_and_misnamed_outputs_are_refused_before_work() {
 fn a_png_texture_claiming_a_huge_image_is_refused_before_decoding() {
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(dir.path().join("bomb.png"), inimtrace::fixtures::png_header_bomb(200_000, 200_000)).unwrap();
-    std::fs::write(
-        dir.path().join("quad.obj"),
-        "v -50 -50 400\nv 50 -50 400\nv 50 50 400\nv -50 50 400\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nf 1/1 2/2 3/3 4/4\n",
-    )
-    .unwrap();
-    let scene = dir.path().join("scene.toml");
-    std::fs::write(
-        &scene,
-        "name = \"bomb\"\n[[objects]]\ntype = \"mesh\"\nfile = \"quad.obj\"\nmaterial = { texture = \"bomb.png\" }\n",
-    )
-    .unwrap();
+    let scene = inimtrace::fixtures::textured_quad_scene(dir.path(), "bomb", "bomb.png").unwrap();
     let out = dir.path().join("gt.exr");
     let o = run_capped(1024, &[&["--max-memory", "8G"][..], &gt_args(&scene, &out)].concat());
     assert_clean_failure(&o, "bomb.png");

@@ -72,17 +72,7 @@ fn a_23000_squared_grey_png_texture_renders_in_little_memory_under_an_8_gib_addr
     write_grey_png(&png, 23000, 23000);
     let size = std::fs::metadata(&png).unwrap().len();
     assert!(size < 4 << 20, "the PNG is {size} bytes");
-    std::fs::write(
-        dir.path().join("quad.obj"),
-        "v -50 -50 400\nv 50 -50 400\nv 50 50 400\nv -50 50 400\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nf 1/1 2/2 3/3 4/4\n",
-    )
-    .unwrap();
-    let scene = dir.path().join("scene.toml");
-    std::fs::write(
-        &scene,
-        "name = \"big texture\"\n[[objects]]\ntype = \"mesh\"\nfile = \"quad.obj\"\nmaterial = { texture = \"big.png\" }\n",
-    )
-    .unwrap();
+    let scene = inimtrace::fixtures::textured_quad_scene(dir.path(), "big texture", "big.png").unwrap();
     let out = dir.path().join("gt.exr");
     let args = [
         "--quiet",

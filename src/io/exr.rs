@@ -495,14 +495,5 @@ pub fn read_compression(path: &Path) -> Result<Option<ExrCompression>> {
     check_readable_file(path)?;
     let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| exr_error(path, e))?;
     let c = meta.headers.first().map(|h| h.compression);
-    Ok([
-        ExrCompression::None,
-        ExrCompression::Rle,
-        ExrCompression::Zips,
-        ExrCompression::Zip,
-        ExrCompression::Piz,
-        ExrCompression::Pxr24,
-    ]
-    .into_iter()
-    .find(|x| Some(x.to_exr()) == c))
+    Ok(ExrCompression::ALL.into_iter().find(|x| Some(x.to_exr()) == c))
 }
