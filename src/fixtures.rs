@@ -159,6 +159,13 @@ pub fn textured_quad_scene(dir: &std::path::Path, name: &str, texture: &str) -> 
     Ok(scene)
 }
 
+/// The CLI arguments of `ground-truth` for a 16 x 16 pinhole retina of `scene`, written to `out`
+/// (the smallest run that loads a scene and its textures).
+pub fn pinhole_ground_truth_args<'a>(scene: &'a std::path::Path, out: &'a std::path::Path) -> Vec<&'a str> {
+    let text = |p: &'a std::path::Path| p.to_str().expect("a UTF-8 test path");
+    vec!["--quiet", "ground-truth", "--pinhole", "--retina", "16", "--scene", text(scene), "--out", text(out)]
+}
+
 /// A 57-byte PNG whose header claims `w` x `h` RGB pixels (and whose one data chunk is empty).
 pub fn png_header_bomb(w: u32, h: u32) -> Vec<u8> {
     fn chunk(out: &mut Vec<u8>, kind: &[u8; 4], data: &[u8]) {

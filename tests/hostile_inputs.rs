@@ -20,17 +20,7 @@ fn run_capped(cap_mb: u64, args: &[&str]) -> Output {
 
 /// `ground-truth` of a 16 x 16 pinhole retina of `scene`, written to `out`.
 fn gt_args<'a>(scene: &'a Path, out: &'a Path) -> Vec<&'a str> {
-    vec![
-        "--quiet",
-        "ground-truth",
-        "--pinhole",
-        "--retina",
-        "16",
-        "--scene",
-        scene.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]
+    inimtrace::fixtures::pinhole_ground_truth_args(scene, out)
 }
 
 fn stderr(o: &Output) -> String {

@@ -74,17 +74,7 @@ fn a_23000_squared_grey_png_texture_renders_in_little_memory_under_an_8_gib_addr
     assert!(size < 4 << 20, "the PNG is {size} bytes");
     let scene = inimtrace::fixtures::textured_quad_scene(dir.path(), "big texture", "big.png").unwrap();
     let out = dir.path().join("gt.exr");
-    let args = [
-        "--quiet",
-        "ground-truth",
-        "--pinhole",
-        "--retina",
-        "16",
-        "--scene",
-        scene.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ];
+    let args = inimtrace::fixtures::pinhole_ground_truth_args(&scene, &out);
     let (o, peak) = run_limited(8 << 30, &args);
     eprintln!("23000 x 23000 grey texture: exit {:?}, peak RSS {} MiB", o.status.code(), peak >> 20);
     let lines = own_lines(&o);
