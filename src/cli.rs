@@ -88,6 +88,7 @@ impl EyeArgs {
             aperture,
             pupil_grid: self.pupil_grid,
             position: self.eye_position,
+            optics: None,
         };
         eye.validate("command line")?;
         let retina =

@@ -146,8 +146,13 @@ impl PyEye {
     ) -> PyResult<Self> {
         let aperture = Aperture::stated(pinhole, focus_mm, focus_diopters, pupil)
             .ok_or_else(|| value_error("Eye: give exactly one of pinhole=True, focus_mm or focus_diopters"))?;
-        let eye =
-            Eye { retina_distance, aperture, pupil_grid, position: DVec3::new(position.0, position.1, position.2) };
+        let eye = Eye {
+            retina_distance,
+            aperture,
+            pupil_grid,
+            position: DVec3::new(position.0, position.1, position.2),
+            optics: None,
+        };
         eye.validate("Eye()").py_err()?;
         let retina = Retina { resolution: retina, half_tangent, samples_per_pixel: retina_samples };
         retina.validate("Eye()").py_err()?;

@@ -22,7 +22,7 @@ pub use stages::{
 
 use std::path::Path;
 
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
@@ -30,6 +30,7 @@ use crate::io::text::{base_dir, read_text, toml_error};
 use crate::io::{load_display, load_scene};
 use crate::measure::spec::MeasurementSpec;
 use crate::metrics::SsimConstants;
+use crate::optics::eye::{EyeModel, EyeOptics, EyeOpticsSpec, FocusCriterion, UserEye};
 use crate::optics::{Aperture, Display, Eye, Retina};
 use crate::render::{DisplayRenderSettings, Method};
 use crate::scene::Scene;
@@ -80,6 +81,100 @@ pub struct EyeSpec {
     pub retina_samples: usize,
     /// Pupil centre, mm.
     pub position: [f64; 3],
+    /// The eye model ([`EyeModel::parse`]): "thin-lens" (the paper's, the default), "navarro"
+    /// (1985), "navarro-1999", "arizona", "le-grand" or "user" (with `[eye.user]`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub model: Option<String>,
+    /// `[eye.user]`: a user-defined schematic eye (with `model = "user"`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub user: Option<UserEye>,
+    /// How a schematic eye's focus is judged when its accommodation is solved: "paraxial" or
+    /// "min-rms-spot".
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub focus_criterion: Option<FocusCriterion>,
+    /// The reference wavelength of the focus and the retina's map, and the single-wavelength
+    /// mode's wavelength, nm (555).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub wavelength_nm: Option<f64>,
+    /// "primaries" (each channel at its display primary's wavelengths; a schematic eye's
+    /// default) or "single" (every channel at `wavelength_nm`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub spectrum: Option<String>,
+    /// The grid estimator's wavelengths per channel (3); the converged one samples them.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub wavelength_samples: Option<usize>,
+    /// The Stiles-Crawford effect's rho, 1/mm^2 (absent: not applied; 0.05 is typical).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stiles_crawford_rho: Option<f64>,
+    /// The Stiles-Crawford peak in the entrance pupil, mm from its centre ([0, 0]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stiles_crawford_peak: Option<[f64; 2]>,
+}
+
+impl EyeSpec {
+    /// The eye beyond the thin lens these settings ask for; errors name `source` and the field.
+    pub fn optics_spec(&self, source: &str) -> Result<EyeOpticsSpec> {
+        let model = EyeModel::parse(self.model.as_deref().unwrap_or("thin-lens"), self.user.clone(), source)?;
+        if self.user.is_some() && !matches!(model, EyeModel::User(_)) {
+            return Err(Error::invalid(source, "eye.user", "is only read with `model = \"user\"`"));
+        }
+        let reference_nm = self.wavelength_nm.unwrap_or(555.0);
+        if !(reference_nm.is_finite() && (380.0..=780.0).contains(&reference_nm)) {
+            return Err(Error::invalid(
+                source,
+                "eye.wavelength_nm",
+                format!("must be a visible wavelength in nm (380 to 780), got {reference_nm}"),
+            ));
+        }
+        let primaries = match self.spectrum.as_deref() {
+            None => model != EyeModel::ThinLens,
+            Some("primaries") => true,
+            Some("single") => false,
+            Some(other) => {
+                return Err(Error::invalid(
+                    source,
+                    "eye.spectrum",
+                    format!("`{other}` is not one of \"primaries\" or \"single\""),
+                ))
+            }
+        };
+        let stiles_crawford = match (self.stiles_crawford_rho, self.stiles_crawford_peak) {
+            (None, None) => None,
+            (None, Some(_)) => {
+                return Err(Error::invalid(
+                    source,
+                    "eye.stiles_crawford_peak",
+                    "needs eye.stiles_crawford_rho (0.05 /mm^2 is typical)",
+                ))
+            }
+            (Some(rho), peak) => {
+                if !(rho.is_finite() && (0.0..=1.0).contains(&rho)) {
+                    return Err(Error::invalid(
+                        source,
+                        "eye.stiles_crawford_rho",
+                        format!("must be between 0 and 1 /mm^2 (0.05 is typical), got {rho}"),
+                    ));
+                }
+                let peak = DVec2::from_array(peak.unwrap_or([0.0; 2]));
+                if !peak.is_finite() || peak.length() > 0.5 * self.pupil_diameter.max(0.0) + 1e-12 {
+                    return Err(Error::invalid(
+                        source,
+                        "eye.stiles_crawford_peak",
+                        format!("must lie inside the pupil (radius {} mm), got {peak}", 0.5 * self.pupil_diameter),
+                    ));
+                }
+                Some((rho, peak))
+            }
+        };
+        Ok(EyeOpticsSpec {
+            model,
+            criterion: self.focus_criterion.unwrap_or(FocusCriterion::Paraxial),
+            reference_nm,
+            primaries,
+            wavelength_samples: self.wavelength_samples.unwrap_or(3),
+            stiles_crawford,
+        })
+    }
 }
 
 impl Default for EyeSpec {
@@ -92,6 +187,14 @@ impl Default for EyeSpec {
             retina_half_tangent: 0.3,
             retina_samples: 1,
             position: [0.0; 3],
+            model: None,
+            user: None,
+            focus_criterion: None,
+            wavelength_nm: None,
+            spectrum: None,
+            wavelength_samples: None,
+            stiles_crawford_rho: None,
+            stiles_crawford_peak: None,
         }
     }
 }
@@ -317,6 +420,8 @@ impl Experiment {
         if spec.eye_cases.is_empty() {
             return Err(Error::invalid(source, "eye_cases", "list at least one eye case"));
         }
+        let optics_spec = e.optics_spec(source)?;
+        let primaries = display.primaries.clone().unwrap_or_default();
         let mut cases = Vec::new();
         for (i, c) in spec.eye_cases.iter().enumerate() {
             let field = format!("eye_cases[{i}]");
@@ -338,8 +443,13 @@ impl Experiment {
                         "give exactly one of `pinhole = true`, `focus_mm` or `focus_diopters`",
                     )
                 })?;
-            let eye = Eye { retina_distance: e.retina_distance, aperture, pupil_grid: e.pupil_grid, position };
+            let mut eye =
+                Eye { retina_distance: e.retina_distance, aperture, pupil_grid: e.pupil_grid, position, optics: None };
             eye.validate(source).map_err(|err| prefix_field(err, &format!("{field} / eye.")))?;
+            let focus_field =
+                if c.focus_mm.is_some() { format!("{field}.focus_mm") } else { format!("{field}.focus_diopters") };
+            eye.optics =
+                EyeOptics::build(&optics_spec, &aperture, e.retina_distance, &primaries, source, &focus_field)?;
             cases.push(EyeCase { name: c.name.clone(), eye });
         }
         if methods.contains(&Method::PupilCenter) {

@@ -125,6 +125,9 @@ pub struct DisplaySpec {
     pub elemental_images: LatticeSpec,
     /// `[lcd]`.
     pub lcd: LcdSpec,
+    /// `[primaries]`: the red, green and blue emission spectra (default: a typical LCD's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub primaries: Option<crate::optics::spectrum::Primaries>,
 }
 
 impl DisplaySpec {
@@ -141,7 +144,11 @@ impl DisplaySpec {
             lenslets,
             elemental_images,
             lcd: Lcd { size: DVec2::from_array(self.lcd.size), resolution: self.lcd.resolution },
+            primaries: self.primaries.clone(),
         };
+        if let Some(p) = &d.primaries {
+            p.validate(source)?;
+        }
         d.validate(source)?;
         Ok(d)
     }
@@ -156,6 +163,7 @@ impl DisplaySpec {
             lenslets: LensletSpec { focal_length: d.focal_length, shift: l.shift, pitch: l.pitch },
             elemental_images: LatticeSpec::from_lattice(&d.elemental_images),
             lcd: LcdSpec { size: d.lcd.size.to_array(), resolution: d.lcd.resolution },
+            primaries: d.primaries.clone(),
         }
     }
 }
@@ -281,6 +289,7 @@ pub fn parse_opencv_display(text: &str, path: &Path) -> Result<Display> {
         lenslets: lattice("lensletshift", "lensletorientation")?,
         elemental_images: lattice("eishift", "eiorientation")?,
         lcd: Lcd { size: DVec2::new(size[0], size[1]), resolution: [res[0] as usize, res[1] as usize] },
+        primaries: None,
     };
     // Name the framework's keys in validation errors.
     d.validate(&src).map_err(|e| match e {

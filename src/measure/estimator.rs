@@ -18,6 +18,8 @@ use glam::DVec2;
 use rayon::prelude::*;
 
 use super::sampler::Sampler;
+
+mod through_optics;
 use crate::optics::transfer::{eye_scene_ray, FastTransfer};
 use crate::optics::{Display, Eye, Retina};
 use crate::progress::Progress;
@@ -34,6 +36,10 @@ pub struct EyeSample {
     pub tangent: DVec2,
     /// Pupil point, mm from the pupil centre.
     pub pupil: DVec2,
+    /// The uniform number in [0, 1) that picks the sample's wavelengths from the display
+    /// primaries' spectra (a fifth sampled dimension; 0 when the source does not ask for it,
+    /// [`PairedSource::spectral`]).
+    pub spectral: f64,
 }
 
 /// What is measured along each eye ray: the radiance of several images, image 0 being the
@@ -45,6 +51,11 @@ pub trait PairedSource: Sync {
     /// The radiance of every image along every ray: `out[i * images + k]` is image `k`'s RGB
     /// for `samples[i]` (`out.len() == samples.len() * images`).
     fn eval(&self, samples: &[EyeSample], out: &mut [[f64; 3]]);
+
+    /// True when the samples need their spectral number ([`EyeSample::spectral`]).
+    fn spectral(&self) -> bool {
+        false
+    }
 
     /// Image 0's radiance when it is one value along every eye ray of a retina pixel (tangents
     /// in the box `tangents`, pupil points within `pupil_radius` mm of the pupil centre), exactly
@@ -122,7 +133,15 @@ impl<F: RadianceField + ?Sized> PairedSource for DisplaySource<'_, F> {
         self.eval_known(samples, &[], out);
     }
 
+    fn spectral(&self) -> bool {
+        self.eye.optics.as_ref().is_some_and(|o| !o.is_single_wavelength())
+    }
+
     fn reference_over(&self, tangents: (DVec2, DVec2), pupil_radius: f64) -> Option<[f64; 3]> {
+        if self.eye.optics.is_some() {
+            // The thin lens's ray family: not a schematic eye's.
+            return None;
+        }
         let pupil = (DVec2::splat(-pupil_radius), DVec2::splat(pupil_radius));
         self.field.uniform(&eye_rays(self.eye, tangents, pupil)).map(|(c, _)| c.to_array())
     }
@@ -132,6 +151,9 @@ impl<F: RadianceField + ?Sized> PairedSource for DisplaySource<'_, F> {
         let k = self.images();
         let m = self.stack.len();
         debug_assert_eq!(out.len(), samples.len() * k);
+        if let Some(optics) = &self.eye.optics {
+            return self.eval_through(optics, samples, out);
+        }
         if self.field.prefers_batches() {
             let rays: Vec<_> = samples.iter().map(|s| eye_scene_ray(self.eye, s.tangent, s.pupil)).collect();
             let mut hits = vec![Sample::default(); rays.len()];
@@ -425,6 +447,7 @@ impl Replicates {
             let mut values = vec![[0.0f64; 3]; batch * k];
             let mut sums = vec![0.0f64; TILE * TILE * k * 3];
             let radius = sampler.pupil_radius();
+            let spectral = source.spectral();
             let mut pupils = vec![DVec2::ZERO; batch];
             // Image 0 of each sample, when known for its whole pixel (`reference_over`).
             let mut known = vec![None; batch];
@@ -476,7 +499,8 @@ impl Replicates {
                                     -retina.half_tangent + (c as f64 + frac.x) * step,
                                     retina.half_tangent - (row as f64 + frac.y) * step,
                                 );
-                                samples[filled] = EyeSample { tangent, pupil: DVec2::ZERO };
+                                let spectral = if spectral { points.spectral_of_last() } else { 0.0 };
+                                samples[filled] = EyeSample { tangent, pupil: DVec2::ZERO, spectral };
                                 pupils[filled] = raw.unwrap_or(DVec2::ZERO);
                                 owners[filled] = owner;
                                 known[filled] = pixel_known[owner as usize];

@@ -161,6 +161,22 @@ impl Points<'_> {
     /// The current sample: the point of the pixel square (fractions in [0, 1)^2, x right, y down
     /// as [`crate::optics::Retina::tangent`] takes them) and the pupil point (mm from the pupil
     /// centre); then step to the next.
+    /// The fifth coordinate in [0, 1) of the sample the last call to [`Points::next_raw`] (or
+    /// a `next_point` method) returned: the spectral dimension that picks a schematic eye's
+    /// wavelengths. It is dimension 4 of the same seed's Owen-scrambled Sobol sequence in
+    /// [`sobol_burley::sample`], whose second dimension set is index-shuffled independently of
+    /// the first (Burley 2020's padding): a stratified 1-D sequence over every pixel's samples,
+    /// uncorrelated with the pixel and pupil points. Independent points hash instead.
+    #[inline]
+    pub fn spectral_of_last(&self) -> f64 {
+        let i = self.index.wrapping_sub(1);
+        if self.sampler.independent {
+            let h = mix64((u64::from(self.seed) << 32 | u64::from(i)) ^ self.sampler.key ^ 0x5bd1_e995_7f4a_7c15);
+            return (h >> 11) as f64 * (1.0 / (1u64 << 53) as f64);
+        }
+        f64::from(sobol_burley::sample(i, 4, self.seed))
+    }
+
     /// The current sample's pixel point and the raw uniform pair of its pupil point (to map with
     /// [`concentric_disk_batch`]; `None` for the pinhole eye); then step to the next.
     #[inline(always)]

@@ -141,6 +141,10 @@ pub struct Display {
     pub elemental_images: Lattice,
     /// The LCD panel.
     pub lcd: Lcd,
+    /// The emission spectra of the LCD's red, green and blue primaries (`[primaries]`; `None`:
+    /// the documented default, [`crate::optics::spectrum::Primaries::typical_lcd`]). Only the
+    /// schematic eyes read them, tracing each channel at its primary's wavelengths.
+    pub primaries: Option<crate::optics::spectrum::Primaries>,
 }
 
 impl Display {
@@ -155,6 +159,7 @@ impl Display {
             lenslets: Lattice::square(1.2).expect("valid built-in lattice"),
             elemental_images: Lattice::square(1.58).expect("valid built-in lattice"),
             lcd: Lcd { size: DVec2::splat(21.6), resolution: [2160, 2160] },
+            primaries: None,
         }
     }
 

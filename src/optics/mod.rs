@@ -4,6 +4,7 @@ pub mod display;
 pub mod eye;
 pub mod lattice;
 pub mod limits;
+pub mod spectrum;
 pub mod transfer;
 
 pub use display::{Display, Lcd};

@@ -179,6 +179,15 @@ impl<'a> FastTransfer<'a> {
         self.to_lcd(self.to_lenslet_plane(self.pupil_constants(pupil), tangent))
     }
 
+    /// The LCD pixel met by any ray leaving the eye: `ray` is its line where it crosses the
+    /// plane of the eye's pupil centre (world x, y; travelling toward +z), as a schematic eye's
+    /// rays are given ([`crate::optics::eye::EyeOptics::rays`]). Eq. (1) from the lenslet plane
+    /// on, the same arithmetic as every other path.
+    #[inline(always)]
+    pub fn pixel_index_of(&self, ray: PlaneRay) -> Option<usize> {
+        self.indexer.index(self.to_lcd((ray.position + ray.slope * self.to_lenslets, ray.slope)))
+    }
+
     /// The LCD pixel that ray hits, if any ([`crate::optics::Lcd::pixel_index`]).
     #[inline(always)]
     pub fn pixel_index(&self, tangent: DVec2, k: usize) -> Option<usize> {

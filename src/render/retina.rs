@@ -21,6 +21,8 @@ use crate::raster::RgbImage;
 
 pub use super::display_stack::DisplayStack;
 
+mod through_optics;
+
 /// Simulates what the eye sees of each display image in `displays` (all with the LCD's
 /// resolution). Convenience wrapper over [`simulate_stack`].
 ///
@@ -82,6 +84,9 @@ pub fn simulate_stack(
 
     let mut images: Vec<RgbImage> =
         (0..m).map(|_| RgbImage::try_new(n, n, "a retinal image")).collect::<Result<_>>()?;
+    if let Some(optics) = &eye.optics {
+        return Ok(through_optics::simulate_stack(display, eye, optics, retina, stack, images, progress));
+    }
     let mut rows = crate::budget::try_vec(n * n * stride, 0f32, "the retinal images' rows")?;
     if stride == 0 {
         return Ok(images);
@@ -200,6 +205,9 @@ pub fn ground_truth<R: RadianceField + ?Sized>(
     tracer: &R,
     progress: &Progress,
 ) -> RgbImage {
+    if let Some(optics) = &eye.optics {
+        return through_optics::ground_truth(eye, optics, retina, tracer, progress);
+    }
     let n = retina.resolution;
     let pupil = eye.pupil_samples();
     let subpixels = retina.subpixel_offsets();

@@ -124,6 +124,7 @@ pub fn measure_windows<S: PairedSource + ?Sized>(
             let mut owners = Vec::with_capacity(BATCH);
             let mut values = vec![[0.0f64; 3]; BATCH * k];
             let mut sums = vec![0.0f64; n * k];
+            let spectral = source.spectral();
             let flush =
                 |batch: &mut Vec<EyeSample>, owners: &mut Vec<u32>, sums: &mut [f64], values: &mut [[f64; 3]]| {
                     let vals = &mut values[..batch.len() * k];
@@ -149,7 +150,8 @@ pub fn measure_windows<S: PairedSource + ?Sized>(
                                 corner.x + (c as f64 + frac.x) * step,
                                 corner.y - (row as f64 + frac.y) * step,
                             );
-                            batch.push(EyeSample { tangent, pupil });
+                            let spectral = if spectral { points.spectral_of_last() } else { 0.0 };
+                            batch.push(EyeSample { tangent, pupil, spectral });
                             owners.push((dr * p.cols + c) as u32);
                             if batch.len() == BATCH {
                                 flush(&mut batch, &mut owners, &mut sums, &mut values);

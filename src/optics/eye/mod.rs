@@ -13,6 +13,11 @@ use serde::{Deserialize, Serialize};
 use super::limits;
 use crate::error::{Error, Result};
 
+pub mod rays;
+mod stub_interface;
+pub use rays::{EyeOptics, EyeOpticsSpec};
+pub use stub_interface::{EyeModel, FocusCriterion, Paraxial, SchematicEye, UserEye};
+
 /// Where the eye is focused.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -91,12 +96,15 @@ pub struct Eye {
     pub pupil_grid: usize,
     /// Pupil centre (the origin by default).
     pub position: DVec3,
+    /// A schematic eye, the display primaries' wavelengths or the Stiles-Crawford effect
+    /// ([`rays`]); `None`: the paper's thin lens, traced by the fast paths.
+    pub optics: Option<std::sync::Arc<EyeOptics>>,
 }
 
 impl Eye {
     /// The paper's pinhole eye: v0 = 17 mm, one chief ray through the pupil centre at the origin.
     pub fn pinhole() -> Self {
-        Self { retina_distance: 17.0, aperture: Aperture::Pinhole, pupil_grid: 1, position: DVec3::ZERO }
+        Self { retina_distance: 17.0, aperture: Aperture::Pinhole, pupil_grid: 1, position: DVec3::ZERO, optics: None }
     }
 
     /// A thin-lens eye (v0 = 17 mm, pupil centre at the origin): pupil diameter in mm, its focus,
@@ -107,6 +115,7 @@ impl Eye {
             aperture: Aperture::ThinLens { pupil_diameter, focus },
             pupil_grid,
             position: DVec3::ZERO,
+            optics: None,
         }
     }
 

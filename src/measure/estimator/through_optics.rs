@@ -1,0 +1,69 @@
+//! The paired samples through an eye beyond the thin lens's fast paths (a schematic eye, the
+//! display primaries' wavelengths, the Stiles-Crawford weight; `optics::eye::rays`): the same
+//! measurement, each sample's object-space rays from [`EyeOptics::rays`] instead of eq. (1b)'s
+//! thin lens. Channel c of the ground truth is the scene's channel c along channel c's ray, and
+//! channel c of every perceived image the display image's channel c at the LCD pixel that ray
+//! meets (eq. (1) from the lenslet plane on, [`FastTransfer::pixel_index_of`]); a ray blocked
+//! inside the eye carries black for every image, as a ray that misses the LCD does.
+//!
+//! [`FastTransfer::pixel_index_of`]: crate::optics::transfer::FastTransfer::pixel_index_of
+
+use super::{DisplaySource, EyeSample};
+use crate::optics::eye::EyeOptics;
+use crate::optics::PlaneRay;
+use crate::ray::Ray;
+use crate::render::{RadianceField, Sample};
+
+impl<F: RadianceField + ?Sized> DisplaySource<'_, F> {
+    /// [`super::PairedSource::eval`] through `optics`: `out[i * images + k]` is image `k` of
+    /// sample `i`.
+    pub(super) fn eval_through(&self, optics: &EyeOptics, samples: &[EyeSample], out: &mut [[f64; 3]]) {
+        let k = 1 + self.stack.len();
+        let eye_xy = self.eye.position.truncate();
+        let z = self.eye.position.z;
+        let world = |r: PlaneRay| PlaneRay { position: r.position + eye_xy, slope: r.slope };
+        // Every sample's rays (1 or 3), the scene traced in one batch when the field wants it.
+        let all: Vec<_> = samples.iter().map(|s| optics.rays(s.tangent, s.pupil, s.spectral)).collect();
+        let mut rays = Vec::with_capacity(samples.len() * 3);
+        for sr in &all {
+            let n = if sr.single { 1 } else { 3 };
+            for r in &sr.rays[..n] {
+                if let Some(r) = r {
+                    let w = world(*r);
+                    rays.push(Ray { origin: w.position.extend(z), dir: w.slope.extend(1.0) });
+                }
+            }
+        }
+        let mut hits = vec![Sample::default(); rays.len()];
+        if self.field.prefers_batches() {
+            self.field.sample_many(&rays, &mut hits);
+        } else {
+            for (h, r) in hits.iter_mut().zip(&rays) {
+                h.radiance = self.field.radiance(r);
+            }
+        }
+        let mut next = 0;
+        for (o, sr) in out.chunks_exact_mut(k).zip(&all) {
+            o.fill([0.0; 3]);
+            let channels: &[usize] = if sr.single { &[0] } else { &[0, 1, 2] };
+            for &c in channels {
+                let Some(r) = sr.rays[c] else { continue };
+                let gt = hits[next].radiance.to_array();
+                next += 1;
+                let idx = self.transfer.transfer.pixel_index_of(world(r));
+                let px = idx.map(|i| self.stack.pixel(i));
+                // The channels this ray carries: all three for one ray, else its own.
+                let carried = if sr.single { 0..3 } else { c..c + 1 };
+                for ch in carried {
+                    o[0][ch] = gt[ch] * sr.weight;
+                    if let Some(px) = px {
+                        for (j, v) in o[1..].iter_mut().enumerate() {
+                            v[ch] = f64::from(px[3 * j + ch]) * sr.weight;
+                        }
+                    }
+                }
+            }
+        }
+        debug_assert_eq!(next, rays.len());
+    }
+}

@@ -1,0 +1,433 @@
+//! The eye's rays when they are not the thin lens's fast paths (docs/EYE.md): a schematic eye
+//! (Navarro, Arizona, Le Grand or a user's, traced exactly), the display primaries' wavelengths
+//! and the Stiles-Crawford effect. One measurement, more dimensions: a sample is still a point of
+//! the retina pixel's square (its tangent in visual space) and a point of the entrance pupil, and
+//! now also a uniform number that picks each channel's wavelength from its primary's spectrum
+//! (`optics::spectrum`). The ray is the same object-space line for the ground truth and for
+//! every method's perceived image, so chromatic aberration and the eye's aberrations enter both
+//! alike and nothing is added on top.
+//!
+//! - Retina pixel (r, c) keeps meaning a direction in visual space: its tangent is mapped to the
+//!   curved retina through the model's chief ray at the reference wavelength
+//!   ([`SchematicEye::retina_point`]), and the ray from that retina point through the iris point
+//!   (the entrance-pupil point scaled by the paraxial pupil magnification) is traced out of the
+//!   eye ([`SchematicEye::ray_out`]).
+//! - The Stiles-Crawford effect of the first kind (Stiles & Crawford, Proc. R. Soc. B 112:428,
+//!   1933), in the Gaussian form of Applegate & Lakshminarayanan (JOSA A 10:1611, 1993): an
+//!   intensity weight `10^(-rho |p - p0|^2)` over entrance-pupil points p. The pupil points are
+//!   drawn from that density by a radial warp of the uniform disk point (exact when the peak p0
+//!   is the pupil centre, so a uniform scene stays exactly uniform); an off-centre peak adds the
+//!   remaining factor as a weight normalised by its exact mean over the disk.
+//! - A thin-lens eye with the Stiles-Crawford weight also comes here (`Lens::ThinLens`, the
+//!   paper's eq. (1b) with d1); without it, the thin lens keeps its fast paths and this module is
+//!   not used, so the paper's numbers stay bit for bit.
+
+use std::sync::Arc;
+
+use glam::DVec2;
+
+use super::{Aperture, EyeModel, FocusCriterion, SchematicEye};
+use crate::error::{Error, Result};
+use crate::optics::spectrum::{Primaries, SpectrumSampler};
+use crate::optics::transfer::PlaneRay;
+
+/// How the eye's colour channels are traced.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Spectrum {
+    /// Every channel at one wavelength, nm.
+    Single(f64),
+    /// Each channel at wavelengths drawn from its display primary.
+    Primaries(Box<[SpectrumSampler; 3]>),
+}
+
+/// The Stiles-Crawford apodization over the entrance pupil.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StilesCrawford {
+    /// rho, 1/mm^2 (0.05 by default).
+    pub rho: f64,
+    /// The peak's position in the entrance pupil, mm from its centre.
+    pub peak: DVec2,
+    /// 1 / the mean over the disk of the off-centre factor (1 for a centred peak).
+    norm: f64,
+}
+
+impl StilesCrawford {
+    /// The apodization with `rho` (1/mm^2) peaked at `peak` (mm) over a pupil of `radius` mm.
+    pub fn new(rho: f64, peak: DVec2, radius: f64) -> Self {
+        let mut s = Self { rho, peak, norm: 1.0 };
+        if peak != DVec2::ZERO && radius > 0.0 {
+            // The mean over the disk of the off-centre factor under the centred density, by a
+            // product Gauss-Legendre rule in (s = r^2 / a^2, angle): smooth integrand, 1e-13.
+            let (nodes, weights) = gauss_legendre_64();
+            let mut total = 0.0;
+            for (&u, &wu) in nodes.iter().zip(&weights) {
+                for (&v, &wv) in nodes.iter().zip(&weights) {
+                    let p = s.warp(polar(0.5 * (u + 1.0), std::f64::consts::PI * (v + 1.0), radius), radius);
+                    total += 0.25 * wu * wv * s.offset_factor(p);
+                }
+            }
+            s.norm = 1.0 / total;
+        }
+        s
+    }
+
+    /// The uniform disk point `p` (radius `radius`) moved radially so that uniform points become
+    /// points of density proportional to `10^(-rho r^2)`.
+    #[inline]
+    pub fn warp(&self, p: DVec2, radius: f64) -> DVec2 {
+        let r2 = p.length_squared();
+        if r2 == 0.0 || radius == 0.0 || self.rho == 0.0 {
+            return p;
+        }
+        let s = r2 / (radius * radius);
+        let k = self.rho * std::f64::consts::LN_10;
+        // F(r) = (1 - e^{-k r^2}) / (1 - e^{-k a^2}) = s  =>  r^2 = -ln(1 - s (1 - e^{-k a^2})) / k.
+        let new_r2 = -(-s * (-(-k * radius * radius).exp_m1())).ln_1p() / k;
+        p * (new_r2 / r2).sqrt()
+    }
+
+    /// The factor the centred density leaves out when the peak is off centre:
+    /// `10^(-rho (|p - p0|^2 - |p|^2))`.
+    #[inline]
+    fn offset_factor(&self, p: DVec2) -> f64 {
+        10f64.powf(-self.rho * (self.peak.length_squared() - 2.0 * p.dot(self.peak)))
+    }
+
+    /// The weight of warped pupil point `p`: 1 for a centred peak, else the normalised factor.
+    #[inline]
+    pub fn weight(&self, p: DVec2) -> f64 {
+        if self.peak == DVec2::ZERO {
+            1.0
+        } else {
+            self.offset_factor(p) * self.norm
+        }
+    }
+}
+
+fn polar(s: f64, angle: f64, radius: f64) -> DVec2 {
+    let r = radius * s.sqrt();
+    DVec2::new(r * angle.cos(), r * angle.sin())
+}
+
+/// Nodes and weights of the 64-point Gauss-Legendre rule on [-1, 1] (Newton on the Legendre
+/// recurrence).
+fn gauss_legendre_64() -> (Vec<f64>, Vec<f64>) {
+    let n = 64;
+    let (mut x, mut w) = (vec![0.0; n], vec![0.0; n]);
+    for i in 0..n {
+        let mut z = (std::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
+        for _ in 0..100 {
+            let (mut p0, mut p1) = (1.0, z);
+            for k in 2..=n {
+                let p2 = ((2 * k - 1) as f64 * z * p1 - (k - 1) as f64 * p0) / k as f64;
+                p0 = p1;
+                p1 = p2;
+            }
+            let dp = n as f64 * (z * p1 - p0) / (z * z - 1.0);
+            let dz = p1 / dp;
+            z -= dz;
+            if dz.abs() < 1e-16 {
+                let (mut p0, mut p1) = (1.0, z);
+                for k in 2..=n {
+                    let p2 = ((2 * k - 1) as f64 * z * p1 - (k - 1) as f64 * p0) / k as f64;
+                    p0 = p1;
+                    p1 = p2;
+                }
+                let dp = n as f64 * (z * p1 - p0) / (z * z - 1.0);
+                x[i] = z;
+                w[i] = 2.0 / ((1.0 - z * z) * dp * dp);
+                break;
+            }
+        }
+    }
+    (x, w)
+}
+
+/// The lens the rays go through.
+#[derive(Clone, Debug)]
+enum Lens {
+    /// The paper's thin lens: v0 and d1 (eq. (1b)).
+    ThinLens { v0: f64, d1: f64 },
+    /// A schematic eye, solved for this eye case's focus.
+    Schematic(Box<SchematicEye>),
+}
+
+/// The settings of an eye beyond the thin lens, as the experiment's `[eye]` states them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EyeOpticsSpec {
+    /// The model.
+    pub model: EyeModel,
+    /// How the focus is judged when the accommodation is solved.
+    pub criterion: FocusCriterion,
+    /// The reference wavelength of the focus and of the retina's map, nm.
+    pub reference_nm: f64,
+    /// Trace each channel at its primary's wavelengths (else all at `reference_nm`).
+    pub primaries: bool,
+    /// Wavelengths per channel of the grid estimator (the converged one samples them).
+    pub wavelength_samples: usize,
+    /// Stiles-Crawford: rho (1/mm^2) and peak (mm), if applied.
+    pub stiles_crawford: Option<(f64, DVec2)>,
+}
+
+/// An eye's optics beyond the thin lens's fast paths, solved for one eye case.
+#[derive(Clone, Debug)]
+pub struct EyeOptics {
+    lens: Lens,
+    /// The model.
+    pub model: EyeModel,
+    /// The solved accommodation, D (schematic eyes).
+    pub accommodation: Option<f64>,
+    /// The entrance pupil's diameter, mm (0: a pinhole).
+    pub pupil_diameter: f64,
+    /// The iris diameter that gives it, mm.
+    pub iris_diameter: f64,
+    /// The colour channels' wavelengths.
+    pub spectrum: Spectrum,
+    /// Grid estimator: wavelengths per channel (their quantiles).
+    pub wavelength_samples: usize,
+    /// The apodization, if applied.
+    pub stiles_crawford: Option<StilesCrawford>,
+    /// The focus criterion the accommodation was solved with.
+    pub criterion: FocusCriterion,
+    /// The reference wavelength, nm.
+    pub reference_nm: f64,
+}
+
+impl PartialEq for EyeOptics {
+    fn eq(&self, o: &Self) -> bool {
+        self.model == o.model
+            && self.accommodation == o.accommodation
+            && self.pupil_diameter == o.pupil_diameter
+            && self.spectrum == o.spectrum
+            && self.stiles_crawford == o.stiles_crawford
+            && self.criterion == o.criterion
+            && self.reference_nm == o.reference_nm
+            && self.wavelength_samples == o.wavelength_samples
+    }
+}
+
+/// Up to three object-space rays of one sample (one per channel) and its weight.
+#[derive(Clone, Copy, Debug)]
+pub struct SampleRays {
+    /// Channel c's ray at the eye's plane z = 0 (eye coordinates), `None` when blocked inside the
+    /// eye (it then carries black for every image).
+    pub rays: [Option<PlaneRay>; 3],
+    /// True when one ray serves all three channels (`rays[0]`).
+    pub single: bool,
+    /// The sample's weight (1 unless a Stiles-Crawford peak is off centre).
+    pub weight: f64,
+}
+
+impl EyeOptics {
+    /// The optics of an eye case with aperture `aperture`, or `None` when the eye is the paper's
+    /// thin lens without Stiles-Crawford (the fast paths). `field` names the case for errors.
+    pub fn build(
+        spec: &EyeOpticsSpec,
+        aperture: &Aperture,
+        retina_distance: f64,
+        primaries: &Primaries,
+        source: &str,
+        field: &str,
+    ) -> Result<Option<Arc<EyeOptics>>> {
+        let (pupil_diameter, vergence) = match *aperture {
+            Aperture::Pinhole => (0.0, None),
+            Aperture::ThinLens { pupil_diameter, focus } => (pupil_diameter, Some(1000.0 * focus.vergence())),
+        };
+        let thin = spec.model == EyeModel::ThinLens;
+        if thin && spec.stiles_crawford.is_none() {
+            return Ok(None);
+        }
+        let (lens, accommodation, iris_diameter) = if thin {
+            let d1 = 1.0 / retina_distance + vergence.unwrap_or(0.0) / 1000.0;
+            (Lens::ThinLens { v0: retina_distance, d1 }, None, pupil_diameter)
+        } else {
+            let (eye, a) = match vergence {
+                Some(v) => SchematicEye::focused(
+                    &spec.model,
+                    v,
+                    spec.reference_nm,
+                    spec.criterion,
+                    pupil_diameter,
+                    source,
+                    field,
+                )?,
+                None => {
+                    let a = spec.model.accommodation_range().0;
+                    (SchematicEye::new(&spec.model, a, source)?, a)
+                }
+            };
+            let iris = eye.iris_diameter(pupil_diameter);
+            (Lens::Schematic(Box::new(eye)), Some(a), iris)
+        };
+        let spectrum = if spec.primaries && !thin {
+            Spectrum::Primaries(Box::new(primaries.samplers(source)?))
+        } else {
+            Spectrum::Single(spec.reference_nm)
+        };
+        if spec.wavelength_samples == 0 || spec.wavelength_samples > 64 {
+            return Err(Error::invalid(
+                source,
+                "eye.wavelength_samples",
+                format!("must be between 1 and 64, got {}", spec.wavelength_samples),
+            ));
+        }
+        let stiles_crawford =
+            spec.stiles_crawford.map(|(rho, peak)| StilesCrawford::new(rho, peak, 0.5 * pupil_diameter));
+        Ok(Some(Arc::new(EyeOptics {
+            lens,
+            model: spec.model.clone(),
+            accommodation,
+            pupil_diameter,
+            iris_diameter,
+            spectrum,
+            wavelength_samples: spec.wavelength_samples,
+            stiles_crawford,
+            criterion: spec.criterion,
+            reference_nm: spec.reference_nm,
+        })))
+    }
+
+    /// The schematic eye, if this is one.
+    pub fn schematic(&self) -> Option<&SchematicEye> {
+        match &self.lens {
+            Lens::Schematic(e) => Some(e),
+            Lens::ThinLens { .. } => None,
+        }
+    }
+
+    /// True when every channel is traced at one wavelength (one ray per sample).
+    pub fn is_single_wavelength(&self) -> bool {
+        matches!(self.spectrum, Spectrum::Single(_)) || self.schematic().is_none()
+    }
+
+    /// Channel `c`'s wavelength for the uniform number `u`, nm.
+    #[inline]
+    pub fn wavelength(&self, c: usize, u: f64) -> f64 {
+        match &self.spectrum {
+            Spectrum::Single(nm) => *nm,
+            Spectrum::Primaries(s) => s[c].wavelength(u),
+        }
+    }
+
+    /// The grid estimator's uniform numbers for the wavelengths (one, 0.5, when single).
+    pub fn grid_spectral(&self) -> Vec<f64> {
+        if self.is_single_wavelength() {
+            return vec![0.5];
+        }
+        let k = self.wavelength_samples;
+        (0..k).map(|j| (j as f64 + 0.5) / k as f64).collect()
+    }
+
+    /// The rays of the sample with retina tangent `tangent`, entrance-pupil point `pupil` (a
+    /// uniform point of the pupil disk, mm from its centre) and spectral number `u`.
+    #[inline]
+    pub fn rays(&self, tangent: DVec2, pupil: DVec2, u: f64) -> SampleRays {
+        let (pupil, weight) = match &self.stiles_crawford {
+            Some(sc) => {
+                let p = sc.warp(pupil, 0.5 * self.pupil_diameter);
+                (p, sc.weight(p))
+            }
+            None => (pupil, 1.0),
+        };
+        match &self.lens {
+            Lens::ThinLens { v0, d1 } => {
+                // eq. (1a), (1b) as `transfer::eye_ray`.
+                let x0 = -*v0 * tangent;
+                let w0 = (pupil - x0) / *v0;
+                let ray = PlaneRay { position: pupil, slope: w0 }.refract(DVec2::ZERO, *d1);
+                SampleRays { rays: [Some(ray); 3], single: true, weight }
+            }
+            Lens::Schematic(eye) => {
+                let retina = eye.retina_point(tangent);
+                let scale = if self.pupil_diameter > 0.0 { self.iris_diameter / self.pupil_diameter } else { 0.0 };
+                let iris = pupil * scale;
+                match &self.spectrum {
+                    Spectrum::Single(nm) => {
+                        let ray = eye.ray_out(retina, iris, *nm);
+                        SampleRays { rays: [ray; 3], single: true, weight }
+                    }
+                    Spectrum::Primaries(s) => SampleRays {
+                        rays: std::array::from_fn(|c| eye.ray_out(retina, iris, s[c].wavelength(u))),
+                        single: false,
+                        weight,
+                    },
+                }
+            }
+        }
+    }
+
+    /// One line for reports: the model, its accommodation, the pupils and the colour.
+    pub fn describe(&self) -> String {
+        let mut s = self.model.name().to_string();
+        if let Some(a) = self.accommodation {
+            s += &format!(", accommodation {a:.3} D ({})", criterion_name(self.criterion));
+        }
+        if self.pupil_diameter > 0.0 {
+            s += &format!(", entrance pupil {:.3} mm (iris {:.3} mm)", self.pupil_diameter, self.iris_diameter);
+        }
+        s += &match self.spectrum {
+            Spectrum::Single(nm) => format!(", {nm} nm"),
+            Spectrum::Primaries(_) => ", display primaries".to_string(),
+        };
+        if let Some(sc) = &self.stiles_crawford {
+            s += &format!(", Stiles-Crawford rho {} /mm^2", sc.rho);
+        }
+        s
+    }
+}
+
+/// The file name of a focus criterion.
+pub fn criterion_name(c: FocusCriterion) -> &'static str {
+    match c {
+        FocusCriterion::Paraxial => "paraxial",
+        FocusCriterion::MinRmsSpot => "min-rms-spot",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gauss_legendre_integrates_polynomials_exactly() {
+        let (x, w) = gauss_legendre_64();
+        assert!((w.iter().sum::<f64>() - 2.0).abs() < 1e-13);
+        let i: f64 = x.iter().zip(&w).map(|(x, w)| w * x.powi(10)).sum();
+        assert!((i - 2.0 / 11.0).abs() < 1e-13, "{i}");
+    }
+
+    #[test]
+    fn the_warp_draws_the_stiles_crawford_density() {
+        // Uniform disk points (by area fraction s) warped: the fraction of points within radius
+        // r must be the density's CDF (1 - 10^(-rho r^2)) / (1 - 10^(-rho a^2)).
+        let (rho, a) = (0.05, 3.0);
+        let sc = StilesCrawford::new(rho, DVec2::ZERO, a);
+        for s in [0.1, 0.3, 0.5, 0.8, 0.99] {
+            let p = sc.warp(DVec2::new(a * f64::sqrt(s), 0.0), a);
+            let r2 = p.length_squared();
+            let cdf = (1.0 - 10f64.powf(-rho * r2)) / (1.0 - 10f64.powf(-rho * a * a));
+            assert!((cdf - s).abs() < 1e-12, "{s}: {cdf}");
+        }
+        assert_eq!(sc.weight(DVec2::new(1.0, 1.0)), 1.0);
+        // The edge stays the edge, the centre the centre.
+        assert!((sc.warp(DVec2::new(0.0, a), a).y - a).abs() < 1e-12);
+    }
+
+    #[test]
+    fn an_off_centre_peak_weights_average_to_one_over_the_disk() {
+        // Monte Carlo check of the normalisation, independent of the quadrature: the mean weight
+        // of warped uniform points is 1.
+        let a = 2.5;
+        let sc = StilesCrawford::new(0.05, DVec2::new(0.5, -0.3), a);
+        let n = 400;
+        let mut total = 0.0;
+        for i in 0..n {
+            for j in 0..n {
+                let p = polar((i as f64 + 0.5) / n as f64, std::f64::consts::TAU * (j as f64 + 0.5) / n as f64, a);
+                total += sc.weight(sc.warp(p, a));
+            }
+        }
+        let mean = total / (n * n) as f64;
+        assert!((mean - 1.0).abs() < 1e-5, "{mean}");
+    }
+}

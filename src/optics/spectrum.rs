@@ -1,0 +1,264 @@
+//! The emission spectra of the display's red, green and blue primaries (issue "colour as
+//! light"): each channel of the LCD (and of the scene's RGB, which the ground truth reads) is
+//! light of its primary's spectrum, so a schematic eye traces each channel at wavelengths drawn
+//! from that spectrum and the eye's longitudinal and transverse chromatic aberration follow from
+//! the media's dispersion (docs/EYE.md).
+//!
+//! A primary is a Gaussian (peak and full width at half maximum, truncated to 380-780 nm) or a
+//! table of (wavelength nm, relative power) pairs, linear between the pairs. The default is a
+//! typical white-LED-backlit LCD: blue 450 nm (FWHM 20 nm, the LED's InGaN peak), green 535 nm
+//! (FWHM 40 nm) and red 610 nm (FWHM 40 nm), the colour filters' pass bands over the phosphor;
+//! these are representative values, not a measured panel: give a panel's own spectra in the
+//! display file (`[primaries]`) for its numbers. Wavelengths are drawn by the inverse of each
+//! spectrum's cumulative distribution, tabulated on a 0.25 nm grid.
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+
+/// The visible range every spectrum is confined to, nm.
+pub const VISIBLE_NM: (f64, f64) = (380.0, 780.0);
+
+/// One primary's emission spectrum.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(untagged, deny_unknown_fields)]
+pub enum PrimarySpec {
+    /// A Gaussian line: `{ peak_nm = 535, fwhm_nm = 40 }`.
+    Gaussian {
+        /// Peak wavelength, nm.
+        peak_nm: f64,
+        /// Full width at half maximum, nm.
+        fwhm_nm: f64,
+    },
+    /// `{ table = [[400, 0.0], [450, 1.0], ...] }`: (wavelength nm, relative power), wavelengths
+    /// increasing, powers >= 0 and not all zero; linear between the pairs, zero outside.
+    Table {
+        /// The (wavelength, power) pairs.
+        table: Vec<[f64; 2]>,
+    },
+}
+
+/// `[primaries]` of a display file: the red, green and blue spectra.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Primaries {
+    /// Channel 0.
+    pub red: PrimarySpec,
+    /// Channel 1.
+    pub green: PrimarySpec,
+    /// Channel 2.
+    pub blue: PrimarySpec,
+}
+
+impl Default for Primaries {
+    fn default() -> Self {
+        Self::typical_lcd()
+    }
+}
+
+impl Primaries {
+    /// The documented default: a typical white-LED LCD (module comment).
+    pub fn typical_lcd() -> Self {
+        let g = |peak_nm, fwhm_nm| PrimarySpec::Gaussian { peak_nm, fwhm_nm };
+        Self { red: g(610.0, 40.0), green: g(535.0, 40.0), blue: g(450.0, 20.0) }
+    }
+
+    /// Checks every spectrum; errors name `source` and `primaries.<channel>`.
+    pub fn validate(&self, source: &str) -> Result<()> {
+        for (name, p) in self.channels() {
+            p.validate(source, &format!("primaries.{name}"))?;
+        }
+        Ok(())
+    }
+
+    fn channels(&self) -> [(&'static str, &PrimarySpec); 3] {
+        [("red", &self.red), ("green", &self.green), ("blue", &self.blue)]
+    }
+
+    /// The wavelength samplers of the three channels (validated first).
+    pub fn samplers(&self, source: &str) -> Result<[SpectrumSampler; 3]> {
+        self.validate(source)?;
+        Ok(self.channels().map(|(_, p)| SpectrumSampler::new(p)))
+    }
+}
+
+impl PrimarySpec {
+    fn validate(&self, source: &str, field: &str) -> Result<()> {
+        match self {
+            PrimarySpec::Gaussian { peak_nm, fwhm_nm } => {
+                if !(peak_nm.is_finite() && (VISIBLE_NM.0..=VISIBLE_NM.1).contains(peak_nm)) {
+                    return Err(Error::invalid(
+                        source,
+                        format!("{field}.peak_nm"),
+                        format!("must be a wavelength in nm between 380 and 780, got {peak_nm}"),
+                    ));
+                }
+                if !(fwhm_nm.is_finite() && *fwhm_nm >= 1.0 && *fwhm_nm <= 200.0) {
+                    return Err(Error::invalid(
+                        source,
+                        format!("{field}.fwhm_nm"),
+                        format!("must be between 1 and 200 nm, got {fwhm_nm}"),
+                    ));
+                }
+            }
+            PrimarySpec::Table { table } => {
+                if table.len() < 2 || table.len() > 10_000 {
+                    return Err(Error::invalid(
+                        source,
+                        format!("{field}.table"),
+                        format!("needs 2 to 10000 [wavelength, power] pairs, got {}", table.len()),
+                    ));
+                }
+                for (i, [l, p]) in table.iter().enumerate() {
+                    if !(l.is_finite() && (VISIBLE_NM.0..=VISIBLE_NM.1).contains(l)) {
+                        return Err(Error::invalid(
+                            source,
+                            format!("{field}.table[{i}][0]"),
+                            format!("must be a wavelength in nm between 380 and 780, got {l}"),
+                        ));
+                    }
+                    if !(p.is_finite() && *p >= 0.0) {
+                        return Err(Error::invalid(
+                            source,
+                            format!("{field}.table[{i}][1]"),
+                            format!("must be a finite power >= 0, got {p}"),
+                        ));
+                    }
+                    if i > 0 && *l <= table[i - 1][0] {
+                        return Err(Error::invalid(
+                            source,
+                            format!("{field}.table[{i}][0]"),
+                            "wavelengths must increase",
+                        ));
+                    }
+                }
+                if table.iter().all(|[_, p]| *p == 0.0) {
+                    return Err(Error::invalid(source, format!("{field}.table"), "all powers are zero"));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Relative power at `nm` (zero outside the visible range and the table).
+    pub fn power(&self, nm: f64) -> f64 {
+        if !(VISIBLE_NM.0..=VISIBLE_NM.1).contains(&nm) {
+            return 0.0;
+        }
+        match self {
+            PrimarySpec::Gaussian { peak_nm, fwhm_nm } => {
+                let sigma = fwhm_nm / (2.0 * (2.0 * std::f64::consts::LN_2).sqrt());
+                (-0.5 * ((nm - peak_nm) / sigma).powi(2)).exp()
+            }
+            PrimarySpec::Table { table } => {
+                let i = table.partition_point(|[l, _]| *l <= nm);
+                if i == 0 || i == table.len() {
+                    return if i == table.len() && nm == table[i - 1][0] { table[i - 1][1] } else { 0.0 };
+                }
+                let ([l0, p0], [l1, p1]) = (table[i - 1], table[i]);
+                p0 + (p1 - p0) * (nm - l0) / (l1 - l0)
+            }
+        }
+    }
+}
+
+/// Draws wavelengths from one spectrum: the inverse of its cumulative distribution.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SpectrumSampler {
+    /// Cumulative distribution at `VISIBLE_NM.0 + i * STEP`, normalised to end at 1.
+    cdf: Vec<f64>,
+    /// The spectrum's power-weighted mean wavelength, nm.
+    mean_nm: f64,
+}
+
+const STEP: f64 = 0.25;
+
+impl SpectrumSampler {
+    /// The sampler of `spectrum` (validated by the caller).
+    pub fn new(spectrum: &PrimarySpec) -> Self {
+        let n = ((VISIBLE_NM.1 - VISIBLE_NM.0) / STEP).round() as usize;
+        let mut cdf = Vec::with_capacity(n + 1);
+        let (mut acc, mut moment) = (0.0, 0.0);
+        cdf.push(0.0);
+        for i in 0..n {
+            let (a, b) = (VISIBLE_NM.0 + i as f64 * STEP, VISIBLE_NM.0 + (i + 1) as f64 * STEP);
+            // Trapezoid over the step: exact for the tables' linear pieces on the grid.
+            let w = 0.5 * (spectrum.power(a) + spectrum.power(b)) * STEP;
+            acc += w;
+            moment += w * 0.5 * (a + b);
+            cdf.push(acc);
+        }
+        let total = acc.max(f64::MIN_POSITIVE);
+        cdf.iter_mut().for_each(|c| *c /= total);
+        Self { cdf, mean_nm: moment / total }
+    }
+
+    /// The wavelength (nm) of the uniform number `u` in [0, 1): the inverse distribution,
+    /// linear within each step.
+    #[inline]
+    pub fn wavelength(&self, u: f64) -> f64 {
+        let u = u.clamp(0.0, 1.0);
+        let i = self.cdf.partition_point(|&c| c < u).clamp(1, self.cdf.len() - 1);
+        let (c0, c1) = (self.cdf[i - 1], self.cdf[i]);
+        let f = if c1 > c0 { (u - c0) / (c1 - c0) } else { 0.5 };
+        VISIBLE_NM.0 + (i as f64 - 1.0 + f) * STEP
+    }
+
+    /// `k` wavelengths at the midpoints of `k` equal-probability bands (the grid estimator's
+    /// stratified wavelength samples).
+    pub fn quantiles(&self, k: usize) -> Vec<f64> {
+        (0..k).map(|j| self.wavelength((j as f64 + 0.5) / k as f64)).collect()
+    }
+
+    /// The power-weighted mean wavelength, nm.
+    pub fn mean_nm(&self) -> f64 {
+        self.mean_nm
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_gaussian_primary_is_sampled_with_its_mean_and_width() {
+        let s = SpectrumSampler::new(&PrimarySpec::Gaussian { peak_nm: 535.0, fwhm_nm: 40.0 });
+        assert!((s.mean_nm() - 535.0).abs() < 1e-6, "{}", s.mean_nm());
+        let n = 20_000;
+        let xs: Vec<f64> = (0..n).map(|i| s.wavelength((i as f64 + 0.5) / n as f64)).collect();
+        let mean = xs.iter().sum::<f64>() / n as f64;
+        let sd = (xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n as f64).sqrt();
+        let sigma = 40.0 / (2.0 * (2.0 * std::f64::consts::LN_2).sqrt());
+        assert!((mean - 535.0).abs() < 0.01, "{mean}");
+        assert!((sd - sigma).abs() / sigma < 2e-3, "{sd} vs {sigma}");
+        // The median of a symmetric line is its peak.
+        assert!((s.wavelength(0.5) - 535.0).abs() < 1e-3);
+    }
+
+    #[test]
+    fn a_table_is_linear_between_its_pairs_and_a_box_samples_uniformly() {
+        let t = PrimarySpec::Table { table: vec![[500.0, 1.0], [520.0, 1.0]] };
+        assert_eq!(t.power(510.0), 1.0);
+        assert_eq!(t.power(499.0), 0.0);
+        assert_eq!(t.power(520.0), 1.0);
+        let s = SpectrumSampler::new(&t);
+        for u in [0.1, 0.25, 0.5, 0.9] {
+            assert!((s.wavelength(u) - (500.0 + 20.0 * u)).abs() < 1e-9, "{u}: {}", s.wavelength(u));
+        }
+        assert_eq!(s.quantiles(2).len(), 2);
+    }
+
+    #[test]
+    fn bad_spectra_name_the_field() {
+        let mut p = Primaries::typical_lcd();
+        p.green = PrimarySpec::Gaussian { peak_nm: f64::NAN, fwhm_nm: 40.0 };
+        let e = p.validate("d.toml").unwrap_err().to_string();
+        assert!(e.contains("primaries.green.peak_nm") && e.contains("d.toml"), "{e}");
+        p.green = PrimarySpec::Table { table: vec![[500.0, 1.0], [490.0, 1.0]] };
+        let e = p.validate("d.toml").unwrap_err().to_string();
+        assert!(e.contains("primaries.green.table[1][0]"), "{e}");
+        p.green = PrimarySpec::Table { table: vec![[500.0, 0.0], [510.0, 0.0]] };
+        assert!(p.validate("d").is_err());
+        Primaries::typical_lcd().validate("d").unwrap();
+    }
+}

@@ -1,0 +1,143 @@
+//! The grid estimator's retinal images through an eye beyond the thin lens's fast paths (a
+//! schematic eye, the display primaries' wavelengths, Stiles-Crawford; `optics::eye::rays`): for
+//! every retina sub-pixel sample, pupil-grid point and wavelength quantile of each primary, the
+//! sample's rays ([`EyeOptics::rays`]) into the scene (the ground truth) or on through the
+//! lenslets to the LCD (the perceived images, eq. (1) from the lenslet plane on). The pixel is
+//! the plain mean over those samples, as on the thin lens's grid; a ray blocked inside the eye
+//! carries black.
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use super::DisplayStack;
+use crate::optics::eye::rays::SampleRays;
+use crate::optics::eye::EyeOptics;
+use crate::optics::transfer::FastTransfer;
+use crate::optics::{Display, Eye, PlaneRay, Retina};
+use crate::progress::Progress;
+use crate::raster::RgbImage;
+use crate::ray::Ray;
+use crate::render::RadianceField;
+
+/// Every sample of pixel (row, col): its rays.
+fn pixel_samples<'a>(
+    optics: &'a EyeOptics,
+    eye: &'a Eye,
+    retina: &'a Retina,
+    row: usize,
+    col: usize,
+) -> impl Iterator<Item = SampleRays> + 'a {
+    let pupil = eye.pupil_samples();
+    let spectral = optics.grid_spectral();
+    retina.subpixel_offsets().into_iter().flat_map(move |frac| {
+        let t = retina.tangent(row, col, frac);
+        let spectral = spectral.clone();
+        pupil.clone().into_iter().flat_map(move |s| spectral.clone().into_iter().map(move |u| optics.rays(t, s, u)))
+    })
+}
+
+/// The number of samples per pixel.
+fn per_pixel(optics: &EyeOptics, eye: &Eye, retina: &Retina) -> f64 {
+    (retina.subpixel_offsets().len() * eye.pupil_samples().len() * optics.grid_spectral().len()) as f64
+}
+
+/// `ray` (eye coordinates, at the eye's plane) in world coordinates.
+fn world(eye: &Eye, r: PlaneRay) -> PlaneRay {
+    PlaneRay { position: r.position + eye.position.truncate(), slope: r.slope }
+}
+
+/// Calls `f(channels, ray)` for each ray of a sample: all three channels for one ray, else each
+/// channel with its own.
+fn each_ray(sr: &SampleRays, mut f: impl FnMut(std::ops::Range<usize>, PlaneRay)) {
+    if sr.single {
+        if let Some(r) = sr.rays[0] {
+            f(0..3, r);
+        }
+    } else {
+        for c in 0..3 {
+            if let Some(r) = sr.rays[c] {
+                f(c..c + 1, r);
+            }
+        }
+    }
+}
+
+/// The perceived images of every display image of `stack` (grid estimator).
+pub(super) fn simulate_stack(
+    display: &Display,
+    eye: &Eye,
+    optics: &EyeOptics,
+    retina: &Retina,
+    stack: &DisplayStack,
+    mut images: Vec<RgbImage>,
+    progress: &Progress,
+) -> Vec<RgbImage> {
+    let n = retina.resolution;
+    let m = stack.len();
+    let transfer = FastTransfer::for_eye(display, eye);
+    let inv = 1.0 / per_pixel(optics, eye, retina);
+    let rows: Vec<Vec<f64>> = (0..n)
+        .into_par_iter()
+        .map(|row| {
+            let mut out = vec![0.0f64; n * 3 * m];
+            for col in 0..n {
+                let acc = &mut out[col * 3 * m..(col + 1) * 3 * m];
+                for sr in pixel_samples(optics, eye, retina, row, col) {
+                    each_ray(&sr, |channels, r| {
+                        if let Some(i) = transfer.pixel_index_of(world(eye, r)) {
+                            let px = stack.pixel(i);
+                            for j in 0..m {
+                                for c in channels.clone() {
+                                    acc[3 * j + c] += f64::from(px[3 * j + c]) * sr.weight;
+                                }
+                            }
+                        }
+                    });
+                }
+            }
+            progress.inc(1);
+            out
+        })
+        .collect();
+    for (row, out) in rows.iter().enumerate() {
+        for col in 0..n {
+            for (j, img) in images.iter_mut().enumerate() {
+                let a = &out[(col * m + j) * 3..(col * m + j) * 3 + 3];
+                img.pixels[row * n + col] = [(a[0] * inv) as f32, (a[1] * inv) as f32, (a[2] * inv) as f32];
+            }
+        }
+    }
+    images
+}
+
+/// The ground-truth retinal image (grid estimator).
+pub(super) fn ground_truth<R: RadianceField + ?Sized>(
+    eye: &Eye,
+    optics: &EyeOptics,
+    retina: &Retina,
+    field: &R,
+    progress: &Progress,
+) -> RgbImage {
+    let n = retina.resolution;
+    let inv = 1.0 / per_pixel(optics, eye, retina);
+    let z = eye.position.z;
+    let mut image = RgbImage::new(n, n);
+    image.pixels.par_chunks_mut(n).enumerate().for_each(|(row, out)| {
+        for (col, px) in out.iter_mut().enumerate() {
+            let mut sum = DVec3::ZERO;
+            for sr in pixel_samples(optics, eye, retina, row, col) {
+                each_ray(&sr, |channels, r| {
+                    let w = world(eye, r);
+                    let l = field.radiance(&Ray { origin: w.position.extend(z), dir: w.slope.extend(1.0) });
+                    for c in channels {
+                        sum[c] += l[c] * sr.weight;
+                    }
+                });
+            }
+            let v = sum * inv;
+            *px = [v.x as f32, v.y as f32, v.z as f32];
+        }
+        progress.inc(1);
+    });
+    image
+}
