@@ -243,6 +243,7 @@ fn assess_with<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
         threads: rayon::current_num_threads(),
         display: display.into(),
         central_depth_plane_mm: display.central_depth_plane(),
+        eyes: super::report::EyeReport::of(exp),
         scores,
         stages,
         total_seconds: start.elapsed().as_secs_f64(),
@@ -306,6 +307,10 @@ fn figure<'a>(exp: &Experiment, cells: &'a [Vec<RgbImage>], scores: &[super::Sco
                     Aperture::ThinLens { focus, .. } => {
                         format!("{}: focus {:.0} mm ({:.2} D)", case.name, focus.distance_mm(), focus.diopters())
                     }
+                };
+                let label = match case.eye.optics.as_ref().and_then(|o| Some((o.model.name(), o.accommodation?))) {
+                    Some((model, a)) => format!("{label}, {model} A {a:.2} D"),
+                    None => label,
                 };
                 let mut row = vec![(&cells[c][0], None)];
                 for (k, m) in exp.methods.iter().enumerate() {

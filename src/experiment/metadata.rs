@@ -102,6 +102,22 @@ pub fn eye(case: Option<&str>, eye: &Eye, retina: &Retina) -> Attributes {
             a.set("inimtrace:pupil_grid", AttrValue::count(eye.pupil_grid));
         }
     }
+    if let Some(o) = &eye.optics {
+        a.set("inimtrace:eye_model", o.model.name());
+        a.set("inimtrace:eye_model_citation", o.model.citation());
+        if let Some(acc) = o.accommodation {
+            a.set("inimtrace:accommodation_diopters", acc);
+            a.set("inimtrace:focus_criterion", crate::optics::eye::rays::criterion_name(o.criterion));
+        }
+        a.set("inimtrace:reference_wavelength_nm", o.reference_nm);
+        a.set("inimtrace:iris_diameter_mm", o.iris_diameter);
+        a.set("inimtrace:spectrum", if o.is_single_wavelength() { "single" } else { "primaries" });
+        if let Some(sc) = &o.stiles_crawford {
+            a.set("inimtrace:stiles_crawford_rho", sc.rho);
+            a.set("inimtrace:stiles_crawford_peak_x_mm", sc.peak.x);
+            a.set("inimtrace:stiles_crawford_peak_y_mm", sc.peak.y);
+        }
+    }
     a.set("inimtrace:pupil_samples", AttrValue::count(eye.pupil_samples().len()));
     a.set("inimtrace:retina_distance_mm", eye.retina_distance);
     a.set("inimtrace:eye_x_mm", eye.position.x);

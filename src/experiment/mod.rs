@@ -114,15 +114,67 @@ pub struct EyeSpec {
 impl EyeSpec {
     /// The eye beyond the thin lens these settings ask for; errors name `source` and the field.
     pub fn optics_spec(&self, source: &str) -> Result<EyeOpticsSpec> {
-        let model = EyeModel::parse(self.model.as_deref().unwrap_or("thin-lens"), self.user.clone(), source)?;
+        let m = EyeModelSettings {
+            model: self.model.clone(),
+            user: self.user.clone(),
+            focus_criterion: self.focus_criterion,
+            wavelength_nm: self.wavelength_nm,
+            spectrum: self.spectrum.clone(),
+            wavelength_samples: self.wavelength_samples,
+            stiles_crawford_rho: self.stiles_crawford_rho,
+            stiles_crawford_peak: self.stiles_crawford_peak,
+        };
+        m.optics_spec(self.pupil_diameter, source, "eye.")
+    }
+}
+
+/// The eye-model settings of an experiment's `[eye]` (there among the eye's other fields) and of
+/// a resolution study's `[eye]` table: the model, its focus criterion, the wavelengths and the
+/// Stiles-Crawford effect (docs/EYE.md).
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct EyeModelSettings {
+    /// See [`EyeSpec::model`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub model: Option<String>,
+    /// See [`EyeSpec::user`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub user: Option<UserEye>,
+    /// See [`EyeSpec::focus_criterion`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub focus_criterion: Option<FocusCriterion>,
+    /// See [`EyeSpec::wavelength_nm`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub wavelength_nm: Option<f64>,
+    /// See [`EyeSpec::spectrum`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub spectrum: Option<String>,
+    /// See [`EyeSpec::wavelength_samples`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub wavelength_samples: Option<usize>,
+    /// See [`EyeSpec::stiles_crawford_rho`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stiles_crawford_rho: Option<f64>,
+    /// See [`EyeSpec::stiles_crawford_peak`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stiles_crawford_peak: Option<[f64; 2]>,
+}
+
+impl EyeModelSettings {
+    /// The eye beyond the thin lens these settings ask for, with a pupil of `pupil_diameter`
+    /// mm; errors name `source` and the field (`prefix` + its name).
+    pub fn optics_spec(&self, pupil_diameter: f64, source: &str, prefix: &str) -> Result<EyeOpticsSpec> {
+        let f = |name: &str| format!("{prefix}{name}");
+        let model = EyeModel::parse(self.model.as_deref().unwrap_or("thin-lens"), self.user.clone(), source)
+            .map_err(|e| prefix_model_field(e, prefix))?;
         if self.user.is_some() && !matches!(model, EyeModel::User(_)) {
-            return Err(Error::invalid(source, "eye.user", "is only read with `model = \"user\"`"));
+            return Err(Error::invalid(source, f("user"), "is only read with `model = \"user\"`"));
         }
         let reference_nm = self.wavelength_nm.unwrap_or(555.0);
         if !(reference_nm.is_finite() && (380.0..=780.0).contains(&reference_nm)) {
             return Err(Error::invalid(
                 source,
-                "eye.wavelength_nm",
+                f("wavelength_nm"),
                 format!("must be a visible wavelength in nm (380 to 780), got {reference_nm}"),
             ));
         }
@@ -133,7 +185,7 @@ impl EyeSpec {
             Some(other) => {
                 return Err(Error::invalid(
                     source,
-                    "eye.spectrum",
+                    f("spectrum"),
                     format!("`{other}` is not one of \"primaries\" or \"single\""),
                 ))
             }
@@ -143,7 +195,7 @@ impl EyeSpec {
             (None, Some(_)) => {
                 return Err(Error::invalid(
                     source,
-                    "eye.stiles_crawford_peak",
+                    f("stiles_crawford_peak"),
                     "needs eye.stiles_crawford_rho (0.05 /mm^2 is typical)",
                 ))
             }
@@ -151,16 +203,16 @@ impl EyeSpec {
                 if !(rho.is_finite() && (0.0..=1.0).contains(&rho)) {
                     return Err(Error::invalid(
                         source,
-                        "eye.stiles_crawford_rho",
+                        f("stiles_crawford_rho"),
                         format!("must be between 0 and 1 /mm^2 (0.05 is typical), got {rho}"),
                     ));
                 }
                 let peak = DVec2::from_array(peak.unwrap_or([0.0; 2]));
-                if !peak.is_finite() || peak.length() > 0.5 * self.pupil_diameter.max(0.0) + 1e-12 {
+                if !peak.is_finite() || peak.length() > 0.5 * pupil_diameter.max(0.0) + 1e-12 {
                     return Err(Error::invalid(
                         source,
-                        "eye.stiles_crawford_peak",
-                        format!("must lie inside the pupil (radius {} mm), got {peak}", 0.5 * self.pupil_diameter),
+                        f("stiles_crawford_peak"),
+                        format!("must lie inside the pupil (radius {} mm), got {peak}", 0.5 * pupil_diameter),
                     ));
                 }
                 Some((rho, peak))
@@ -174,6 +226,18 @@ impl EyeSpec {
             wavelength_samples: self.wavelength_samples.unwrap_or(3),
             stiles_crawford,
         })
+    }
+}
+
+/// An error of the model's own fields (`eye.model`, `eye.user...`) renamed under `prefix`.
+fn prefix_model_field(e: Error, prefix: &str) -> Error {
+    match e {
+        Error::Invalid { source_name, field, message } if prefix != "eye." => Error::Invalid {
+            source_name,
+            field: format!("{prefix}{}", field.strip_prefix("eye.").unwrap_or(&field)),
+            message,
+        },
+        other => other,
     }
 }
 

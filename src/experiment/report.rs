@@ -36,6 +36,57 @@ pub struct Score {
     pub target_met: Option<bool>,
 }
 
+/// The eye of one eye case beyond the thin lens (`results.json`'s `eyes`).
+#[derive(Clone, Debug, Serialize)]
+pub struct EyeReport {
+    /// The eye case's name.
+    pub eye_case: String,
+    /// The model's name (`thin-lens`, `navarro-1985`, ...).
+    pub model: String,
+    /// Where its parameters come from.
+    pub citation: String,
+    /// The model's accommodation parameter solved from the case's focus, D.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub accommodation_d: Option<f64>,
+    /// The criterion it was solved by (`paraxial`, `min-rms-spot`).
+    pub focus_criterion: String,
+    /// The reference wavelength of the focus and the retina's map, nm.
+    pub reference_wavelength_nm: f64,
+    /// The entrance pupil's diameter (`pupil_diameter`), mm.
+    pub entrance_pupil_mm: f64,
+    /// The iris diameter that gives it, mm.
+    pub iris_mm: f64,
+    /// `single` or `primaries`.
+    pub spectrum: String,
+    /// The Stiles-Crawford rho, 1/mm^2, if applied.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stiles_crawford_rho: Option<f64>,
+}
+
+impl EyeReport {
+    /// The reports of every case of `exp` with an eye beyond the thin lens's fast paths.
+    pub fn of(exp: &Experiment) -> Vec<EyeReport> {
+        exp.cases
+            .iter()
+            .filter_map(|c| {
+                let o = c.eye.optics.as_ref()?;
+                Some(EyeReport {
+                    eye_case: c.name.clone(),
+                    model: o.model.name().to_string(),
+                    citation: o.model.citation().to_string(),
+                    accommodation_d: o.accommodation,
+                    focus_criterion: crate::optics::eye::rays::criterion_name(o.criterion).to_string(),
+                    reference_wavelength_nm: o.reference_nm,
+                    entrance_pupil_mm: o.pupil_diameter,
+                    iris_mm: o.iris_diameter,
+                    spectrum: if o.is_single_wavelength() { "single" } else { "primaries" }.to_string(),
+                    stiles_crawford_rho: o.stiles_crawford.map(|s| s.rho),
+                })
+            })
+            .collect()
+    }
+}
+
 /// Wall time of one stage.
 #[derive(Clone, Debug, Serialize)]
 pub struct StageTime {
@@ -68,6 +119,10 @@ pub struct AssessReport {
     pub display: DisplayParameters,
     /// The display's central depth plane, mm from the pupil (`None`: at infinity or real).
     pub central_depth_plane_mm: Option<f64>,
+    /// The eye of every case that is not the paper's thin lens (a schematic eye, the primaries'
+    /// wavelengths, Stiles-Crawford): its model and solved accommodation. Absent for thin lenses.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub eyes: Vec<EyeReport>,
     /// Table 1: every method under every eye case.
     pub scores: Vec<Score>,
     /// Wall time of every stage.

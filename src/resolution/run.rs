@@ -21,6 +21,7 @@ use crate::error::Result;
 use crate::measure::estimator::DisplaySource;
 use crate::measure::sampler::Sampler;
 use crate::optics::display::Lcd;
+use crate::optics::eye::EyeOptics;
 use crate::optics::{Display, Eye, Focus};
 use crate::progress::Progress;
 use crate::raster::RgbImage;
@@ -147,7 +148,33 @@ pub fn run_study(study: &Study, quiet: bool) -> Result<StudyResults> {
     let half = chart.half_extent_tangent();
     let max_vergence = study.focus_diopters.iter().map(|d| d / 1000.0).fold(0.0, f64::max);
     let radius = 0.5 * study.pupil_diameter_mm;
-    let display = crop_display(&study.display, half, radius, max_vergence);
+    // The eye of every focus, its accommodation solved once (schematic eyes).
+    let primaries = study.display.primaries.clone().unwrap_or_default();
+    let eyes: Vec<Eye> = study
+        .focus_diopters
+        .iter()
+        .enumerate()
+        .map(|(i, &focus)| {
+            let mut eye = Eye::thin_lens(study.pupil_diameter_mm, Focus::Diopters(focus), 8);
+            eye.retina_distance = study.retina_distance_mm;
+            eye.optics = EyeOptics::build(
+                &study.eye_optics,
+                &eye.aperture,
+                eye.retina_distance,
+                &primaries,
+                &study.source,
+                &format!("focus_diopters[{i}]"),
+            )?;
+            Ok(eye)
+        })
+        .collect::<Result<_>>()?;
+    // A schematic eye's rays leave the thin lens's bound by its aberrations: a wide margin (the
+    // crop only saves display-image pixels).
+    let display = if eyes.iter().any(|e| e.optics.as_ref().is_some_and(|o| o.schematic().is_some())) {
+        crop_display(&study.display, half * 1.25 + 0.02, radius * 1.3, max_vergence + 0.003)
+    } else {
+        crop_display(&study.display, half, radius, max_vergence)
+    };
     let sources = source_names(study);
     let (nd, nf, nq) = (study.depths.len(), study.focus_diopters.len(), study.frequencies_cpd.len());
     let ns = sources.len();
@@ -176,11 +203,9 @@ pub fn run_study(study: &Study, quiet: bool) -> Result<StudyResults> {
         let refs: Vec<&RgbImage> = images.iter().collect();
         let stack = DisplayStack::new(&display, &refs)?;
         t_display += t.elapsed().as_secs_f64();
-        for (fi, &focus) in study.focus_diopters.iter().enumerate() {
+        for (fi, eye) in eyes.iter().enumerate() {
             let t = Instant::now();
-            let mut eye = Eye::thin_lens(study.pupil_diameter_mm, Focus::Diopters(focus), 8);
-            eye.retina_distance = study.retina_distance_mm;
-            let source = DisplaySource::new(&display, &eye, &field, &stack);
+            let source = DisplaySource::new(&display, eye, &field, &stack);
             let sampler = Sampler::new(study.measurement.seed, (di * nf + fi) as u64, Some(radius));
             let windows = measure_windows(&source, &sampler, &chart, reps, spp, &measure_bar);
             eye_rays += windows.iter().map(|w| (w.cols * w.rows * reps) as u64 * u64::from(spp)).sum::<u64>();

@@ -199,6 +199,10 @@ pub struct StudySpec {
     pub accommodation: AccommodationSpec,
     /// `[limits]`: the display-limit contrast and frequencies.
     pub limits: LimitsSpec,
+    /// `[eye]`: the eye model (default the paper's thin lens), its focus criterion, wavelengths
+    /// and Stiles-Crawford effect, as an experiment's `[eye]` names them (docs/EYE.md).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub eye: Option<crate::experiment::EyeModelSettings>,
 }
 
 fn no_values() -> Values {
@@ -257,6 +261,12 @@ pub struct Study {
     pub retina_nyquist_cpd: f64,
     /// Replicates and samples per pixel.
     pub measurement: SamplingSpec,
+    /// The eye-model settings as the file gave them (absent: the thin lens).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub eye: Option<crate::experiment::EyeModelSettings>,
+    /// The eye beyond the thin lens they ask for.
+    #[serde(skip)]
+    pub eye_optics: crate::optics::eye::EyeOpticsSpec,
     /// What predicts the eye's focus.
     pub accommodation: AccommodationSpec,
     /// The display-limit settings.
@@ -342,6 +352,8 @@ impl Study {
             retina_pixel_deg: 1.0 / r.pixels_per_degree,
             retina_nyquist_cpd: nyquist,
             measurement: spec.measurement,
+            eye: spec.eye.clone(),
+            eye_optics: spec.eye.clone().unwrap_or_default().optics_spec(spec.pupil_diameter_mm, source, "eye.")?,
             accommodation: spec.accommodation,
             limits: spec.limits.clone(),
         })
