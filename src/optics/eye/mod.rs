@@ -11,6 +11,26 @@ use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
 use super::limits;
+
+pub mod accommodation;
+pub mod arizona;
+pub mod conic;
+pub mod le_grand;
+pub mod medium;
+pub mod model;
+pub mod navarro;
+pub mod paraxial;
+pub mod refract;
+pub mod schematic;
+pub mod trace;
+pub mod user;
+
+pub use medium::Dispersion;
+pub use model::{EyeModel, FocusCriterion};
+pub use paraxial::Paraxial;
+pub use schematic::SchematicEye;
+pub use trace::EyeAtWavelength;
+pub use user::{UserEye, UserIris, UserSurface};
 use crate::error::{Error, Result};
 
 pub mod rays;

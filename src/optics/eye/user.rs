@@ -1,0 +1,216 @@
+//! A user-defined schematic eye: a table of rotationally symmetric conic surfaces (sag formula of
+//! Welford, "Aberrations of Optical Systems", 1986, Sec. 2.4, see [`super::conic`]), media
+//! given by a dispersion formula of [`super::medium`], an iris plane and a spherical retina.
+//!
+//! ```toml
+//! [eye.user]
+//! retina_radius = -12.0
+//! iris = { after = "cornea-back", distance = 3.05 }
+//! [[eye.user.surfaces]]
+//! name = "cornea-front"
+//! radius = 7.72
+//! conic = -0.26
+//! thickness = 0.55
+//! semi_diameter = 5.5
+//! medium = { constant = 1.376 }
+//! ```
+
+use serde::{Deserialize, Serialize};
+
+use super::medium::Dispersion;
+use super::model::{EyeDefinition, SurfaceDef, REFERENCE_WAVELENGTH};
+use crate::error::{Error, Result};
+
+/// One surface of a user eye, in order from the cornea toward the retina.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct UserSurface {
+    /// A name the iris can refer to (optional).
+    #[serde(default)]
+    pub name: Option<String>,
+    /// Signed vertex radius of curvature, mm: positive when the centre of curvature lies toward
+    /// the retina; 0 or infinite for a plane.
+    pub radius: f64,
+    /// Conic constant (0 sphere, -1 paraboloid, < -1 hyperboloid).
+    #[serde(default)]
+    pub conic: f64,
+    /// Axial distance from this surface's vertex to the next one's (the last: to the retina
+    /// vertex), mm.
+    pub thickness: f64,
+    /// The medium after this surface.
+    pub medium: Dispersion,
+    /// Semi-diameter, mm: rays farther from the axis are blocked.
+    pub semi_diameter: f64,
+}
+
+/// Where the iris stop sits: `distance` mm behind the vertex of surface `after` (by name, or by
+/// index as a string such as "1"), before the next surface. Its diameter is set by the run.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct UserIris {
+    /// The surface the iris follows: its `name`, or its index.
+    pub after: String,
+    /// Distance behind that surface's vertex, mm (>= 0, at most its thickness).
+    pub distance: f64,
+}
+
+/// A user-defined eye.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct UserEye {
+    /// The surfaces, cornea front first (the medium before the first one is air, n = 1).
+    pub surfaces: Vec<UserSurface>,
+    /// The iris stop.
+    pub iris: UserIris,
+    /// Radius of the spherical retina, mm (negative: concave toward the lens, as a real eye;
+    /// 0 for a flat retina).
+    pub retina_radius: f64,
+    /// The wavelength at which the eye's frame and retina map are built, nm (555 by default).
+    #[serde(default)]
+    pub reference_wavelength: Option<f64>,
+}
+
+impl UserEye {
+    /// Index of the surface the iris follows.
+    fn iris_surface(&self) -> Option<usize> {
+        self.surfaces
+            .iter()
+            .position(|s| s.name.as_deref() == Some(self.iris.after.as_str()))
+            .or_else(|| self.iris.after.parse::<usize>().ok().filter(|&i| i < self.surfaces.len()))
+    }
+
+    /// Checks the table; errors name the field (`eye.surfaces[2].radius`).
+    pub fn validate(&self, source: &str) -> Result<()> {
+        let err = |f: String, m: String| Err(Error::invalid(source, f, m));
+        if self.surfaces.is_empty() || self.surfaces.len() > 64 {
+            return err("eye.surfaces".into(), format!("needs 1 to 64 surfaces, got {}", self.surfaces.len()));
+        }
+        for (i, s) in self.surfaces.iter().enumerate() {
+            let f = |name: &str| format!("eye.surfaces[{i}].{name}");
+            if s.radius.is_nan() || (s.radius.is_finite() && s.radius != 0.0 && s.radius.abs() < 0.1) {
+                return err(f("radius"), format!("must be 0 (plane), infinite or at least 0.1 mm in size, got {}", s.radius));
+            }
+            if !(s.conic.is_finite() && s.conic.abs() <= 1e3) {
+                return err(f("conic"), format!("must be finite (|Q| <= 1000), got {}", s.conic));
+            }
+            if !(s.thickness.is_finite() && s.thickness > 0.0 && s.thickness <= 100.0) {
+                return err(f("thickness"), format!("must be positive and at most 100 mm, got {}", s.thickness));
+            }
+            if !(s.semi_diameter.is_finite() && s.semi_diameter > 0.0 && s.semi_diameter <= 50.0) {
+                return err(f("semi_diameter"), format!("must be positive and at most 50 mm, got {}", s.semi_diameter));
+            }
+            if s.radius.is_finite() && s.radius != 0.0 {
+                let c = 1.0 / s.radius;
+                if (1.0 + s.conic) * c * c * s.semi_diameter * s.semi_diameter > 1.0 {
+                    return err(
+                        f("semi_diameter"),
+                        format!("{} mm is beyond the edge of the conic (R = {}, Q = {})", s.semi_diameter, s.radius, s.conic),
+                    );
+                }
+            }
+            s.medium.validate(source, &f("medium"))?;
+        }
+        let Some(k) = self.iris_surface() else {
+            return err("eye.iris.after".into(), format!("names no surface: `{}`", self.iris.after));
+        };
+        let d = self.iris.distance;
+        if !(d.is_finite() && d >= 0.0 && d <= self.surfaces[k].thickness) {
+            return err(
+                "eye.iris.distance".into(),
+                format!("must be between 0 and the surface's thickness {} mm, got {d}", self.surfaces[k].thickness),
+            );
+        }
+        let r = self.retina_radius;
+        if r.is_nan() || (r.is_finite() && r != 0.0 && r.abs() < 1.0) {
+            return err("eye.retina_radius".into(), format!("must be 0 (flat) or at least 1 mm in size, got {r}"));
+        }
+        if let Some(w) = self.reference_wavelength {
+            if !(w.is_finite() && (350.0..=1100.0).contains(&w)) {
+                return err("eye.reference_wavelength".into(), format!("must be between 350 and 1100 nm, got {w}"));
+            }
+        }
+        Ok(())
+    }
+
+    /// The surface table (the eye must have been validated).
+    pub(crate) fn definition(&self) -> EyeDefinition {
+        EyeDefinition {
+            surfaces: self
+                .surfaces
+                .iter()
+                .map(|s| SurfaceDef {
+                    radius: s.radius,
+                    conic: s.conic,
+                    thickness: s.thickness,
+                    medium: s.medium.clone(),
+                    semi_diameter: s.semi_diameter,
+                })
+                .collect(),
+            iris_after: self.iris_surface().unwrap_or(0),
+            iris_distance: self.iris.distance,
+            retina_radius: self.retina_radius,
+            reference_wavelength: self.reference_wavelength.unwrap_or(REFERENCE_WAVELENGTH),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    pub(crate) const NAVARRO_LIKE: &str = r#"
+retina_radius = -12.0
+iris = { after = "cornea-back", distance = 3.05 }
+[[surfaces]]
+name = "cornea-front"
+radius = 7.72
+conic = -0.26
+thickness = 0.55
+semi_diameter = 5.5
+medium = { constant = 1.376 }
+[[surfaces]]
+name = "cornea-back"
+radius = 6.5
+thickness = 3.05
+semi_diameter = 5.5
+medium = { cauchy = { a = 1.3247, b = 0.0044 } }
+[[surfaces]]
+radius = 10.2
+conic = -3.1316
+thickness = 4.0
+semi_diameter = 4.5
+medium = { table = { wavelength_nm = [400.0, 550.0, 700.0], index = [1.434, 1.422, 1.416] } }
+[[surfaces]]
+radius = -6.0
+conic = -1.0
+thickness = 16.40
+semi_diameter = 4.5
+medium = { sellmeier = { b = [0.7848], c = [0.0118] } }
+"#;
+
+    #[test]
+    fn a_user_eye_reads_from_toml_and_validates() {
+        let u: UserEye = toml::from_str(NAVARRO_LIKE).unwrap();
+        u.validate("e.toml").unwrap();
+        assert_eq!(u.definition().iris_after, 1);
+        assert_eq!(u.surfaces[1].medium, Dispersion::Cauchy { a: 1.3247, b: 0.0044, c: 0.0 });
+    }
+
+    #[test]
+    fn bad_user_eyes_name_the_field() {
+        let mut u: UserEye = toml::from_str(NAVARRO_LIKE).unwrap();
+        u.surfaces[2].radius = f64::NAN;
+        let e = u.validate("e.toml").unwrap_err().to_string();
+        assert!(e.contains("eye.surfaces[2].radius"), "{e}");
+        let mut u: UserEye = toml::from_str(NAVARRO_LIKE).unwrap();
+        u.iris.after = "lens".into();
+        assert!(u.validate("e").unwrap_err().to_string().contains("eye.iris.after"));
+        let mut u: UserEye = toml::from_str(NAVARRO_LIKE).unwrap();
+        u.surfaces[0].semi_diameter = 9.0;
+        assert!(u.validate("e").unwrap_err().to_string().contains("eye.surfaces[0].semi_diameter"));
+        let unknown = NAVARRO_LIKE.replace("retina_radius = -12.0", "retina_radius = -12.0\ncolour = 1");
+        assert!(toml::from_str::<UserEye>(&unknown).is_err());
+        let unknown = NAVARRO_LIKE.replace("b = 0.0044", "b = 0.0044, d = 1.0");
+        assert!(toml::from_str::<UserEye>(&unknown).is_err(), "unknown fields in a medium are refused");
+    }
+}
