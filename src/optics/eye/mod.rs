@@ -31,12 +31,11 @@ pub use paraxial::Paraxial;
 pub use schematic::SchematicEye;
 pub use trace::EyeAtWavelength;
 pub use user::{UserEye, UserIris, UserSurface};
-use crate::error::{Error, Result};
 
 pub mod rays;
-mod stub_interface;
 pub use rays::{EyeOptics, EyeOpticsSpec};
-pub use stub_interface::{EyeModel, FocusCriterion, Paraxial, SchematicEye, UserEye};
+
+use crate::error::{Error, Result};
 
 /// Where the eye is focused.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
