@@ -25,13 +25,13 @@ pub mod schematic;
 pub mod trace;
 pub mod user;
 
+use crate::error::{Error, Result};
 pub use medium::Dispersion;
 pub use model::{EyeModel, FocusCriterion};
 pub use paraxial::Paraxial;
 pub use schematic::SchematicEye;
 pub use trace::EyeAtWavelength;
 pub use user::{UserEye, UserIris, UserSurface};
-use crate::error::{Error, Result};
 
 /// Where the eye is focused.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
