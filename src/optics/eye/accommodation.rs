@@ -70,7 +70,12 @@ impl SchematicEye {
 
     /// The object vergence (D) in best focus on axis by `criterion` at `wavelength_nm` for an
     /// entrance pupil of `pupil_diameter` mm.
-    pub fn best_focus_vergence(&self, wavelength_nm: f64, criterion: FocusCriterion, pupil_diameter: f64) -> Option<f64> {
+    pub fn best_focus_vergence(
+        &self,
+        wavelength_nm: f64,
+        criterion: FocusCriterion,
+        pupil_diameter: f64,
+    ) -> Option<f64> {
         let paraxial = self.paraxial(wavelength_nm).conjugate_vergence_d;
         if criterion == FocusCriterion::Paraxial || !paraxial.is_finite() {
             return paraxial.is_finite().then_some(paraxial);
@@ -127,13 +132,25 @@ impl SchematicEye {
         field: &str,
     ) -> Result<(Self, f64)> {
         if !object_vergence_d.is_finite() {
-            return Err(Error::invalid(source, field, format!("must be a finite vergence in D, got {object_vergence_d}")));
+            return Err(Error::invalid(
+                source,
+                field,
+                format!("must be a finite vergence in D, got {object_vergence_d}"),
+            ));
         }
         if !(wavelength_nm.is_finite() && (350.0..=1100.0).contains(&wavelength_nm)) {
-            return Err(Error::invalid(source, "wavelength", format!("must be within 350..1100 nm, got {wavelength_nm}")));
+            return Err(Error::invalid(
+                source,
+                "wavelength",
+                format!("must be within 350..1100 nm, got {wavelength_nm}"),
+            ));
         }
         if !(pupil_diameter.is_finite() && pupil_diameter > 0.0 && pupil_diameter <= 10.0) {
-            return Err(Error::invalid(source, "pupil_diameter", format!("must be within (0, 10] mm, got {pupil_diameter}")));
+            return Err(Error::invalid(
+                source,
+                "pupil_diameter",
+                format!("must be within (0, 10] mm, got {pupil_diameter}"),
+            ));
         }
         let (lo, hi) = model.accommodation_range();
         let best = |a: f64| -> Result<f64> {
@@ -142,10 +159,12 @@ impl SchematicEye {
                 Error::invalid(source, field, format!("no ray of the {} eye reaches the retina at {a} D", model.name()))
             })
         };
-        let (f_lo, f_hi) = (best(lo)? - object_vergence_d, if hi > lo { best(hi)? } else { f64::NAN } - object_vergence_d);
+        let (f_lo, f_hi) =
+            (best(lo)? - object_vergence_d, if hi > lo { best(hi)? } else { f64::NAN } - object_vergence_d);
         let tol = 1e-9;
         let unreachable = || {
-            let (v_lo, v_hi) = (f_lo + object_vergence_d, if hi > lo { f_hi + object_vergence_d } else { f_lo + object_vergence_d });
+            let (v_lo, v_hi) =
+                (f_lo + object_vergence_d, if hi > lo { f_hi + object_vergence_d } else { f_lo + object_vergence_d });
             Error::invalid(
                 source,
                 field,

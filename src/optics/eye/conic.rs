@@ -176,7 +176,8 @@ mod tests {
         let mut compared = 0;
         for surf in surfaces {
             for _ in 0..400 {
-                let p = DVec3::new(rng.next() * 6.0 - 3.0, rng.next() * 6.0 - 3.0, surf.vertex - 3.0 - rng.next() * 2.0);
+                let p =
+                    DVec3::new(rng.next() * 6.0 - 3.0, rng.next() * 6.0 - 3.0, surf.vertex - 3.0 - rng.next() * 2.0);
                 let d = DVec3::new(rng.next() - 0.5, rng.next() - 0.5, 1.0).normalize();
                 let a = surf.intersect(p, d);
                 let b = surf.intersect_by_root_finding(p, d, 40.0, 4000);

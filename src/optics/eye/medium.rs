@@ -128,7 +128,11 @@ impl Dispersion {
             }
             Dispersion::Sellmeier { b, c } => {
                 if b.len() != c.len() || b.is_empty() {
-                    return bad(format!("sellmeier needs as many b as c terms (>= 1), got {} and {}", b.len(), c.len()));
+                    return bad(format!(
+                        "sellmeier needs as many b as c terms (>= 1), got {} and {}",
+                        b.len(),
+                        c.len()
+                    ));
                 }
                 if !finite(b) || !finite(c) {
                     return bad("sellmeier coefficients must be finite".into());

@@ -25,6 +25,7 @@ pub mod schematic;
 pub mod trace;
 pub mod user;
 
+use crate::error::{Error, Result};
 pub use medium::Dispersion;
 pub use model::{EyeModel, FocusCriterion};
 pub use paraxial::Paraxial;
@@ -34,8 +35,6 @@ pub use user::{UserEye, UserIris, UserSurface};
 
 pub mod rays;
 pub use rays::{EyeOptics, EyeOpticsSpec};
-
-use crate::error::{Error, Result};
 
 /// Where the eye is focused.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]

@@ -58,7 +58,11 @@ impl EyeModel {
             }
         };
         if user.is_some() {
-            return Err(Error::invalid(source, "eye.user", format!("a surface table is only for model \"user\", not `{name}`")));
+            return Err(Error::invalid(
+                source,
+                "eye.user",
+                format!("a surface table is only for model \"user\", not `{name}`"),
+            ));
         }
         Ok(model)
     }

@@ -74,7 +74,12 @@ impl RetinaTable {
             t * t * (3.0 - 2.0 * t),
             t * t * (t - 1.0),
         );
-        Some(h00 * self.rho[i] + h10 * self.step * self.slope[i] + h01 * self.rho[i + 1] + h11 * self.step * self.slope[i + 1])
+        Some(
+            h00 * self.rho[i]
+                + h10 * self.step * self.slope[i]
+                + h01 * self.rho[i + 1]
+                + h11 * self.step * self.slope[i + 1],
+        )
     }
 }
 
@@ -121,11 +126,8 @@ impl SchematicEye {
             surfaces.push(Conic::from_radius(t, s.radius, s.conic, s.semi_diameter));
             t += s.thickness;
         }
-        let retina_sd = if def.retina_radius == 0.0 || def.retina_radius.is_infinite() {
-            1e3
-        } else {
-            def.retina_radius.abs()
-        };
+        let retina_sd =
+            if def.retina_radius == 0.0 || def.retina_radius.is_infinite() { 1e3 } else { def.retina_radius.abs() };
         let retina = Conic::from_radius(t, def.retina_radius, 0.0, retina_sd);
         let iris_t = surfaces[def.iris_after].vertex + def.iris_distance;
         let mut eye = SchematicEye {
@@ -144,7 +146,11 @@ impl SchematicEye {
         let n = eye.indices(eye.reference_wavelength);
         let (ep_t, iris_over_ep) = eye.paraxial_input(&n, &mut Vec::new(), &mut Vec::new(), |p| p.entrance_pupil());
         if !(ep_t.is_finite() && iris_over_ep.is_finite() && iris_over_ep.abs() > 1e-9) {
-            return Err(Error::invalid(source, "eye.iris", "the iris has no finite entrance pupil (its image through the cornea)"));
+            return Err(Error::invalid(
+                source,
+                "eye.iris",
+                "the iris has no finite entrance pupil (its image through the cornea)",
+            ));
         }
         eye.origin_t = ep_t;
         Ok(eye)

@@ -4,10 +4,11 @@
 //! and vector Snell refraction ([`super::refract`]) surface by surface. Ray aiming
 //! ([`EyeAtWavelength::ray_out`]) finds the ray from a retina point through a given iris point:
 //! a 2-D root find in the ray's direction tangents in the vitreous, started from the paraxial
-//! solution of the y-nu matrices ([`super::paraxial`]) and solved by Newton's method with a
-//! finite-difference Jacobian at the start and Broyden's rank-one updates after it
+//! solution of the y-nu matrices ([`super::paraxial`]) and solved by a quasi-Newton iteration
+//! whose Jacobian starts as the paraxial one and is refined by Broyden's rank-one updates
 //! (C. G. Broyden, Math. Comp. 19:577, 1965; Dennis & Schnabel, "Numerical Methods for
-//! Unconstrained Optimization and Nonlinear Equations", 1983, Ch. 8), to 1e-11 mm at the iris.
+//! Unconstrained Optimization and Nonlinear Equations", 1983, Ch. 8), to 1e-11 mm at the iris;
+//! a step that leaves the optics is halved up to eight times.
 
 use glam::{DVec2, DVec3};
 
@@ -18,6 +19,8 @@ use crate::optics::PlaneRay;
 
 /// Iris residual at which ray aiming stops, mm.
 const AIM_TOLERANCE: f64 = 1e-11;
+/// Rays crossing the iris this far beyond its radius still pass `ray_in`, mm.
+const IRIS_SLACK: f64 = 1e-9;
 /// Iterations before ray aiming gives up.
 const AIM_ITERATIONS: usize = 40;
 /// The object-space start plane of inward rays, mm in front of the cornea vertex.
@@ -96,6 +99,8 @@ impl EyeAtWavelength<'_> {
         }
         let q = p + s * d;
         if let Some(r) = self.eye.iris_radius {
+            // The slack lets a ray aimed at the iris edge (to 1e-11 mm) back in.
+            let r = r + IRIS_SLACK;
             if q.x * q.x + q.y * q.y > r * r {
                 return None;
             }
@@ -115,7 +120,8 @@ impl EyeAtWavelength<'_> {
         }
         let (p, d) = self.forward(p, d, 0, eye.iris_after + 1)?;
         let q = self.iris_crossing(p, d)?;
-        let (p, d) = self.forward(q, d, eye.iris_after + 1, eye.surfaces.len())?;
+        // On from before the iris plane: it may touch the next surface's vertex.
+        let (p, d) = self.forward(p, d, eye.iris_after + 1, eye.surfaces.len())?;
         let hit = eye.retina.intersect(p, d)?;
         Some((eye.flip(hit.point), DVec2::new(q.x, q.y)))
     }
@@ -135,7 +141,8 @@ impl EyeAtWavelength<'_> {
     pub fn ray_out(&self, retina: DVec3, iris: DVec2) -> Option<PlaneRay> {
         let eye = self.eye;
         if let Some(r) = eye.iris_radius {
-            if iris.length_squared() > r * r {
+            // A relative 1e-12 forgives the rounding of a point put at the edge by hand.
+            if iris.length() > r * (1.0 + 1e-12) {
                 return None;
             }
         }
@@ -152,11 +159,9 @@ impl EyeAtWavelength<'_> {
         let mut u = (iris - f.d * yr) / (f.b * nv);
         let residual = |u: DVec2| self.to_iris(p0, u).map(|(q, d)| (DVec2::new(q.x, q.y) - iris, q, d));
         let (mut r, mut q, mut d) = residual(u)?;
-        // Jacobian: forward differences at the start, Broyden updates after.
-        let h = 1e-7;
-        let (rx, _, _) = residual(u + DVec2::new(h, 0.0))?;
-        let (ry, _, _) = residual(u + DVec2::new(0.0, h))?;
-        let mut jac = [(rx - r) / h, (ry - r) / h]; // columns
+        // Jacobian: the paraxial one at the start, Broyden updates after.
+        let j0 = f.b * nv;
+        let mut jac = [DVec2::new(j0, 0.0), DVec2::new(0.0, j0)]; // columns
         let mut iterations = 0;
         while r.length_squared() > AIM_TOLERANCE * AIM_TOLERANCE {
             iterations += 1;

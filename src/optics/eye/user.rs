@@ -88,7 +88,10 @@ impl UserEye {
         for (i, s) in self.surfaces.iter().enumerate() {
             let f = |name: &str| format!("eye.surfaces[{i}].{name}");
             if s.radius.is_nan() || (s.radius.is_finite() && s.radius != 0.0 && s.radius.abs() < 0.1) {
-                return err(f("radius"), format!("must be 0 (plane), infinite or at least 0.1 mm in size, got {}", s.radius));
+                return err(
+                    f("radius"),
+                    format!("must be 0 (plane), infinite or at least 0.1 mm in size, got {}", s.radius),
+                );
             }
             if !(s.conic.is_finite() && s.conic.abs() <= 1e3) {
                 return err(f("conic"), format!("must be finite (|Q| <= 1000), got {}", s.conic));
@@ -104,7 +107,10 @@ impl UserEye {
                 if (1.0 + s.conic) * c * c * s.semi_diameter * s.semi_diameter > 1.0 {
                     return err(
                         f("semi_diameter"),
-                        format!("{} mm is beyond the edge of the conic (R = {}, Q = {})", s.semi_diameter, s.radius, s.conic),
+                        format!(
+                            "{} mm is beyond the edge of the conic (R = {}, Q = {})",
+                            s.semi_diameter, s.radius, s.conic
+                        ),
                     );
                 }
             }

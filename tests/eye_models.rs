@@ -1,0 +1,210 @@
+//! The schematic eyes inside the measurement (docs/EYE.md): invariants that would fail if a
+//! real eye's rays entered the estimators wrongly.
+//! - A uniform scene seen through any eye model gives a uniform retinal image (ground truth, grid
+//!   and converged, single wavelength and the display primaries, with Stiles-Crawford).
+//! - A schematic eye made thin and aberration-free on axis (a reduced eye: one ellipsoidal
+//!   surface with the iris at its vertex, a flat retina at its focus) reproduces the thin-lens
+//!   eye's Table 1 within the intervals, over a small field and pupil.
+//! - The thin lens through the generic path (Stiles-Crawford with rho = 0) equals its fast path.
+
+use std::path::Path;
+
+use glam::{DVec2, DVec3};
+use inimtrace::experiment::{assess_images, RunOptions};
+use inimtrace::measure::estimator::{DisplaySource, Replicates};
+use inimtrace::measure::sampler::Sampler;
+use inimtrace::optics::eye::{EyeModel, EyeOptics, EyeOpticsSpec, FocusCriterion};
+use inimtrace::optics::spectrum::Primaries;
+use inimtrace::optics::{Display, Eye, Focus, Retina};
+use inimtrace::overrides::Override;
+use inimtrace::progress::Progress;
+use inimtrace::ray::Ray;
+use inimtrace::raster::RgbImage;
+use inimtrace::render::retina::{ground_truth, DisplayStack};
+use inimtrace::render::RadianceField;
+use inimtrace::settings::load_experiment;
+
+/// A scene of one colour in every direction.
+struct Uniform(DVec3);
+
+impl RadianceField for Uniform {
+    fn radiance(&self, _ray: &Ray) -> DVec3 {
+        self.0
+    }
+}
+
+fn spec(model: EyeModel, primaries: bool, stiles_crawford: Option<(f64, DVec2)>) -> EyeOpticsSpec {
+    EyeOpticsSpec {
+        model,
+        criterion: FocusCriterion::Paraxial,
+        reference_nm: 555.0,
+        primaries,
+        wavelength_samples: 3,
+        stiles_crawford,
+    }
+}
+
+fn eye_with(spec: &EyeOpticsSpec, focus_diopters: f64) -> Eye {
+    let mut eye = Eye::thin_lens(5.0, Focus::Diopters(focus_diopters), 4);
+    eye.optics = EyeOptics::build(spec, &eye.aperture, 17.0, &Primaries::default(), "test", "focus").unwrap();
+    eye
+}
+
+#[test]
+fn a_uniform_scene_looks_uniform_through_every_eye_model() {
+    let colour = DVec3::new(0.8, 0.5, 0.2);
+    let field = Uniform(colour);
+    let retina = Retina { resolution: 12, half_tangent: 0.3, samples_per_pixel: 2 };
+    let models = [EyeModel::Navarro1985, EyeModel::Navarro1999, EyeModel::Arizona];
+    let sc = Some((0.05, DVec2::ZERO));
+    for model in models {
+        for (primaries, sce) in [(false, None), (true, None), (true, sc)] {
+            let s = spec(model.clone(), primaries, sce);
+            let eye = eye_with(&s, 2.5);
+            let gt = ground_truth(&eye, &retina, &field, &Progress::hidden());
+            for p in &gt.pixels {
+                for c in 0..3 {
+                    assert!((f64::from(p[c]) - colour[c]).abs() < 1e-6, "{model:?} {primaries} {sce:?}: {p:?}");
+                }
+            }
+        }
+    }
+    // Le Grand does not accommodate: at its own focus.
+    let s = spec(EyeModel::LeGrand, true, sc);
+    let mut eye = Eye::pinhole();
+    eye.optics = EyeOptics::build(&s, &eye.aperture, 17.0, &Primaries::default(), "test", "focus").unwrap();
+    let gt = ground_truth(&eye, &retina, &field, &Progress::hidden());
+    for (i, p) in gt.pixels.iter().enumerate() {
+        assert!((f64::from(p[1]) - 0.5).abs() < 1e-6, "pixel {i}: {p:?}");
+    }
+}
+
+#[test]
+fn a_uniform_scene_and_a_uniform_display_look_uniform_in_the_converged_measurement() {
+    let mut display = Display::paper();
+    display.lcd.resolution = [540, 540];
+    let white = RgbImage::filled(540, 540, [0.25, 0.5, 1.0]);
+    let stack = DisplayStack::new(&display, &[&white]).unwrap();
+    let field = Uniform(DVec3::new(0.25, 0.5, 1.0));
+    // The central field: every ray there reaches the LCD.
+    let retina = Retina { resolution: 8, half_tangent: 0.1, samples_per_pixel: 1 };
+    for (primaries, sce) in [(false, None), (true, Some((0.05, DVec2::ZERO)))] {
+        let s = spec(EyeModel::Navarro1985, primaries, sce);
+        let eye = eye_with(&s, 2.5);
+        let source = DisplaySource::new(&display, &eye, &field, &stack);
+        let sampler = Sampler::new(1, 0, Some(2.5));
+        let mut reps = Replicates::new(8, 3, 2);
+        reps.extend(&source, &sampler, &retina, 16, &Progress::hidden());
+        for k in 0..2 {
+            let img = reps.mean_image(k);
+            for p in &img.pixels {
+                assert!((p[0] - 0.25).abs() < 1e-6 && (p[1] - 0.5).abs() < 1e-6 && (p[2] - 1.0).abs() < 1e-6, "{k}: {p:?}");
+            }
+        }
+    }
+}
+
+fn overrides(list: &[String]) -> Vec<Override> {
+    list.iter().map(|s| s.parse().unwrap()).collect()
+}
+
+fn small_paper(extra: &[String]) -> Vec<Override> {
+    let mut set: Vec<String> = [
+        "display.lcd.resolution=[540, 540]",
+        "eye.retina_resolution=48",
+        "measurement.max_samples_per_pixel=256",
+        "measurement.psnr_ci95_db=0.05",
+        "measurement.ssim_ci95=0.005",
+        r#"eye_cases=[{ name = "Inf", focus_diopters = 0.0 }]"#,
+        "eye.pupil_diameter=2.0",
+        "eye.retina_half_tangent=0.08",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    set.extend(extra.iter().cloned());
+    overrides(&set)
+}
+
+#[test]
+fn a_thin_aberration_free_schematic_eye_reproduces_the_thin_lens_within_the_intervals() {
+    // A reduced eye (one refracting surface, the iris at its vertex) whose surface is the
+    // ellipsoid Q = -1/n^2 that images infinity without aberration onto the axis (Descartes'
+    // oval for infinity), a flat retina at its focal distance n R / (n - 1): focused at
+    // infinity, free of spherical aberration, thin (the stop at the surface).
+    let (n, r) = (1.336f64, 5.55f64);
+    let user = format!(
+        "eye.user={{ retina_radius = 0.0, iris = {{ after = \"0\", distance = 0.0 }}, surfaces = [\
+         {{ radius = {r}, conic = {}, thickness = {}, semi_diameter = 5.0, medium = {{ constant = {n} }} }}] }}",
+        -1.0 / (n * n),
+        n * r / (n - 1.0)
+    );
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/paper-converged.toml");
+    let thin = load_experiment(Some(&path), None, &small_paper(&[])).unwrap();
+    let schematic = load_experiment(
+        Some(&path),
+        None,
+        &small_paper(&["eye.model=\"user\"".into(), user, "eye.spectrum=\"single\"".into()]),
+    )
+    .unwrap();
+    assert!(schematic.cases[0].eye.optics.is_some());
+    let opts = || RunOptions { quiet: true, ..Default::default() };
+    let a = assess_images(&thin, None, opts()).unwrap();
+    let b = assess_images(&schematic, None, opts()).unwrap();
+    for (x, y) in a.report.scores.iter().zip(&b.report.scores) {
+        let (cx, cy) = (x.psnr.ci95.unwrap(), y.psnr.ci95.unwrap());
+        // Independent samples (different eyes, same seeds): agreement within the combined
+        // interval, with a floor for the eyes' residual differences (thickness, distortion).
+        let bound = 2.0 * (cx * cx + cy * cy).sqrt() + 0.05;
+        assert!((x.psnr.mean - y.psnr.mean).abs() < bound, "{}: {} vs {} (bound {bound})", x.method, x.psnr.mean, y.psnr.mean);
+        let (sx, sy) = (x.ssim.ci95.unwrap(), y.ssim.ci95.unwrap());
+        let bound = 2.0 * (sx * sx + sy * sy).sqrt() + 0.002;
+        assert!((x.ssim.mean - y.ssim.mean).abs() < bound, "{}: {} vs {}", x.method, x.ssim.mean, y.ssim.mean);
+    }
+}
+
+#[test]
+fn the_thin_lens_through_the_generic_path_equals_its_fast_path() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/paper.toml");
+    let base = [
+        "display.lcd.resolution=[540, 540]".to_string(),
+        "eye.retina_resolution=32".into(),
+        "eye.pupil_grid=4".into(),
+        r#"eye_cases=[{ name = "Near", focus_diopters = 3.0 }, { name = "Pin", pinhole = true }]"#.into(),
+    ];
+    let fast = load_experiment(Some(&path), None, &overrides(&base)).unwrap();
+    let mut with = base.to_vec();
+    with.push("eye.stiles_crawford_rho=0.0".into());
+    let generic = load_experiment(Some(&path), None, &overrides(&with)).unwrap();
+    assert!(fast.cases[0].eye.optics.is_none() && generic.cases[0].eye.optics.is_some());
+    let opts = || RunOptions { quiet: true, ..Default::default() };
+    let a = assess_images(&fast, None, opts()).unwrap();
+    let b = assess_images(&generic, None, opts()).unwrap();
+    let images = |x: &inimtrace::experiment::Assessment| -> Vec<RgbImage> {
+        x.ground_truths.iter().chain(x.perceived.iter().flatten()).cloned().collect()
+    };
+    // The same rays in another order of operations: a sample may land on the other side of an
+    // LCD pixel or chart edge by rounding, nothing more.
+    for (k, (ia, ib)) in images(&a).iter().zip(&images(&b)).enumerate() {
+        let differ =
+            ia.pixels.iter().zip(&ib.pixels).filter(|(p, q)| (0..3).any(|c| (p[c] - q[c]).abs() > 1e-5)).count();
+        assert!(differ * 100 <= ia.pixels.len(), "image {k}: {differ} pixels differ");
+        for (p, q) in ia.pixels.iter().zip(&ib.pixels) {
+            assert!((0..3).all(|c| (p[c] - q[c]).abs() <= 0.25), "image {k}: {p:?} vs {q:?}");
+        }
+    }
+}
+
+#[test]
+fn zz_debug_le_grand() {
+    use inimtrace::optics::eye::SchematicEye;
+    let e = SchematicEye::new(&EyeModel::LeGrand, 0.0, "t").unwrap();
+    for t in [0.0, 0.005, 0.0125, 0.0375, 0.1] {
+        let tan = DVec2::new(-t, t);
+        let r = e.retina_point(tan);
+        for nm in [450.0, 535.0, 555.0, 610.0] {
+            println!("t {t} nm {nm}: {:?}", e.ray_out(r, DVec2::ZERO, nm));
+        }
+    }
+    panic!();
+}
