@@ -240,6 +240,14 @@ enum Command {
         /// Print the built-in experiment, scene or display as a file.
         #[arg(long, value_enum)]
         print: Option<PrintTarget>,
+        /// Describe this schematic eye instead (navarro, navarro-1999, arizona, le-grand): its
+        /// accommodation range, and at --focus-diopters its accommodation, power and pupils
+        /// (--pupil is the entrance pupil).
+        #[arg(long, conflicts_with_all = ["display", "scene"])]
+        eye: Option<String>,
+        /// The focus of --eye, D (default: the relaxed eye's).
+        #[arg(long, requires = "eye")]
+        focus_diopters: Option<f64>,
     },
 }
 
@@ -406,7 +414,23 @@ fn run() -> Result<()> {
             }
             printed_total = true;
         }
-        Command::Info { display, scene, pupil, json, print } => {
+        Command::Info { eye: Some(model), focus_diopters, pupil, json, .. } => {
+            let model = inimtrace::optics::eye::EyeModel::parse(&model, None, "--eye")?;
+            let focus = match focus_diopters {
+                Some(f) => f,
+                None => inimtrace::optics::eye::SchematicEye::new(&model, model.accommodation_range().0, "--eye")?
+                    .paraxial(555.0)
+                    .conjugate_vergence_d,
+            };
+            let criterion = inimtrace::optics::eye::FocusCriterion::Paraxial;
+            let d = inimtrace::optics::eye::describe::describe(&model, focus, pupil, criterion, 555.0)?;
+            match json {
+                true => outln!("{}", serde_json::to_string_pretty(&d)?),
+                false => out!("{}", d.text()),
+            }
+            printed_total = true;
+        }
+        Command::Info { display, scene, pupil, json, print, .. } => {
             printed_total = info(&g, display, scene, pupil, json, print)?;
         }
     }

@@ -15,6 +15,7 @@ use super::limits;
 pub mod accommodation;
 pub mod arizona;
 pub mod conic;
+pub mod describe;
 pub mod le_grand;
 pub mod medium;
 pub mod model;
