@@ -69,7 +69,7 @@ impl Conic {
         let b = c * (p.x * d.x + p.y * d.y + k1 * pz * d.z) - d.z;
         let cc = c * (p.x * p.x + p.y * p.y + k1 * pz * pz) - 2.0 * pz;
         let disc = b * b - a * cc;
-        if !(disc >= 0.0) {
+        if disc.is_nan() || disc < 0.0 {
             return None;
         }
         let q = -(b + disc.sqrt().copysign(b));
@@ -77,7 +77,7 @@ impl Conic {
         let r2 = if a != 0.0 { q / a } else { f64::NAN };
         let (lo, hi) = if r1 <= r2 || r2.is_nan() { (r1, r2) } else { (r2, r1) };
         for s in [lo, hi] {
-            if !(s > 0.0) {
+            if s.is_nan() || s <= 0.0 {
                 continue;
             }
             let point = p + s * d;

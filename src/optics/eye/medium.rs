@@ -3,7 +3,8 @@
 //! - [`Dispersion::Navarro`]: Navarro, Santamaria & Bescos, "Accommodation-dependent model of the
 //!   human eye with aspherics", JOSA A 2:1273 (1985), Eq. (4) and Table 3: a Herzberger-type
 //!   interpolation `n(λ) = a1(λ) n(365) + a2(λ) n(486.1) + a3(λ) n(656.3) + a4(λ) n(1014)`, with
-//!   `ai(λ) = Ai + Bi λ² + Ci λ⁻² + Di λ⁻⁴` (λ in µm); the four indices per medium are the
+//!   `ai(λ) = Ai + Bi λ² + Ci/(λ² - λ0²) + Di/(λ² - λ0²)²` (λ in µm, λ0 = 0.1673 µm, the
+//!   Herzberger form: M. Herzberger, Opt. Acta 6:197, 1959); the four indices per medium are the
 //!   paper's (also listed by Atchison & Smith, "Chromatic dispersions of the ocular media of
 //!   human eyes", JOSA A 22:29, 2005).
 //! - [`Dispersion::Abbe`]: the Arizona eye's linear form from the d-line index and the Abbe
@@ -21,7 +22,11 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 
-/// Navarro et al. (1985) Eq. (4) coefficients: rows a1..a4; columns constant, λ², λ⁻², λ⁻⁴.
+/// Herzberger's pole of Navarro et al.'s Eq. (4), µm.
+const HERZBERGER_L0: f64 = 0.1673;
+
+/// Navarro et al. (1985) Eq. (4) coefficients: rows a1..a4; columns constant, λ²,
+/// 1/(λ² - λ0²), 1/(λ² - λ0²)².
 const NAVARRO_COEFFS: [[f64; 4]; 4] = [
     [0.661_471_96, -0.403_527_96, -0.280_467_90, 0.033_859_79],
     [-4.201_463_83, 2.735_089_56, 1.505_437_84, -0.115_932_35],
@@ -153,10 +158,8 @@ impl Dispersion {
                     return bad("table wavelengths must be strictly increasing".into());
                 }
             }
-            Dispersion::Abbe { nd, vd } => {
-                if !(nd.is_finite() && vd.is_finite() && *vd > 0.0) {
-                    return bad(format!("abbe needs a finite nd and a positive vd, got {nd}, {vd}"));
-                }
+            Dispersion::Abbe { nd, vd } if !(nd.is_finite() && vd.is_finite() && *vd > 0.0) => {
+                return bad(format!("abbe needs a finite nd and a positive vd, got {nd}, {vd}"));
             }
             Dispersion::Navarro { n, offset } if !finite(n) || !offset.is_finite() => {
                 return bad("navarro indices must be finite".into())
@@ -175,7 +178,7 @@ impl Dispersion {
 
 fn navarro(n: &[f64; 4], um: f64) -> f64 {
     let l2 = um * um;
-    let li2 = 1.0 / l2;
+    let li2 = 1.0 / (l2 - HERZBERGER_L0 * HERZBERGER_L0);
     let li4 = li2 * li2;
     let mut out = 0.0;
     for (row, ni) in NAVARRO_COEFFS.iter().zip(n) {

@@ -169,7 +169,7 @@ impl EyeAtWavelength<'_> {
                 return None;
             }
             let det = jac[0].x * jac[1].y - jac[1].x * jac[0].y;
-            if !(det.abs() > 1e-300) {
+            if det.is_nan() || det.abs() <= 1e-300 {
                 return None;
             }
             let step = -DVec2::new(jac[1].y * r.x - jac[1].x * r.y, -jac[0].y * r.x + jac[0].x * r.y) / det;
@@ -198,7 +198,7 @@ impl EyeAtWavelength<'_> {
         // Into the frame: z = origin_t - t, so the direction's z flips.
         let pf = eye.flip(p);
         let dz = -d.z;
-        if !(dz > 0.0) {
+        if dz.is_nan() || dz <= 0.0 {
             return None;
         }
         let slope = DVec2::new(d.x, d.y) / dz;
@@ -240,7 +240,7 @@ impl EyeAtWavelength<'_> {
             h1 = h2;
             f1 = g(h1)?.0;
         }
-        if !(f1.abs() < 1e-12) {
+        if f1.is_nan() || f1.abs() >= 1e-12 {
             return None;
         }
         let ray = PlaneRay { position: e * h1, slope: tangent };
