@@ -97,7 +97,7 @@ pub fn submit(sweep: &Sweep, resolved: &[Resolved], store: &Store, opts: &SlurmO
     let dir = store.root().join("slurm");
     std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
     let path = dir.join(format!("submit-{}-{}.sbatch", super::store::unix_now(), std::process::id()));
-    std::fs::write(&path, &sub.script).map_err(|e| Error::io(&path, e))?;
+    crate::io::output::write_atomic(&path, |tmp| std::fs::write(tmp, &sub.script).map_err(|e| Error::io(tmp, e)))?;
     let out = Command::new("sbatch").arg("--parsable").arg(&path).output().map_err(|e| {
         Error::External {
             program: "sbatch",

@@ -14,7 +14,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::experiment::Score;
-use crate::io::output::{write_atomic, TEMP_PREFIX};
+use crate::io::output::{read_regular, write_atomic, TEMP_PREFIX};
 
 /// One score row of a point: a method under an eye case. PSNR in dB (`inf` for identical
 /// images); the 95% half-widths are present when the experiment's measurement gives them.
@@ -90,8 +90,11 @@ impl Store {
     pub fn open(root: &Path) -> Result<Self> {
         let points = root.join("points");
         fs::create_dir_all(&points).map_err(|e| Error::io(&points, e))?;
-        let probe = points.join(format!("{TEMP_PREFIX}{}-probe", std::process::id()));
-        fs::write(&probe, b"").map_err(|e| Error::io(&points, e))?;
+        let probe = points.join(format!("{TEMP_PREFIX}probe-{}", std::process::id()));
+        write_atomic(&probe, |tmp| fs::write(tmp, b"").map_err(|e| Error::io(tmp, e))).map_err(|e| match e {
+            Error::Io { source, .. } => Error::io(&points, source),
+            other => other,
+        })?;
         let _ = fs::remove_file(&probe);
         Ok(Self { root: root.to_path_buf() })
     }
@@ -113,7 +116,8 @@ impl Store {
     /// The record of point `id`, if it is complete. A record that cannot be read or does not
     /// belong to `id` counts as missing (the point runs again and replaces it).
     pub fn read(&self, id: &str) -> Option<PointRecord> {
-        let bytes = fs::read(self.record_path(id)).ok()?;
+        // Never through a link, never blocking on a FIFO: such a record counts as missing.
+        let bytes = read_regular(&self.record_path(id)).ok()??;
         serde_json::from_slice::<PointRecord>(&bytes).ok().filter(|r| r.id == id)
     }
 
