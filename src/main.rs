@@ -378,6 +378,8 @@ fn run() -> Result<()> {
                 cpus_per_task,
                 max_running,
                 dry_run,
+                threads: cli.threads,
+                max_memory: cli.max_memory,
                 ..Default::default()
             });
             let cmd = inimtrace::sweep::SweepCommand {
