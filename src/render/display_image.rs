@@ -277,8 +277,10 @@ fn render_into<R: RadianceField + ?Sized>(
     let reach = display.lenslet_z() - z_ref;
     let bundle = match method {
         Method::LensletAverage { grid } => {
-            let offsets: Vec<DVec2> =
-                stratified(grid).into_iter().map(|f| display.lenslets.matrix * (f - DVec2::splat(0.5))).collect();
+            let offsets: Vec<DVec2> = stratified(grid)
+                .into_iter()
+                .map(|f| display.lenslets.reduced_matrix() * (f - DVec2::splat(0.5)))
+                .collect();
             RayBundle::lenslet_points(&offsets, gain, reach)
         }
         _ => RayBundle::new(vec![(DVec2::ZERO, DVec2::ZERO)]),
