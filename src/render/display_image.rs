@@ -26,7 +26,7 @@ use rayon::prelude::*;
 use super::field::{BundleSum, RadianceField, RayBundle, Sample};
 use crate::error::{Error, Result};
 use crate::optics::eye::stratified;
-use crate::optics::transfer::{camera_ray, check_pupil_center, pupil_center_point};
+use crate::optics::transfer::{camera_ray, check_eye_in_front, check_pupil_center, pupil_center_point};
 use crate::optics::Display;
 use crate::progress::Progress;
 use crate::raster::RgbImage;
@@ -250,6 +250,7 @@ fn render_into<R: RadianceField + ?Sized>(
     dst: &mut [[f32; 3]],
     mut depth: Vec<f32>,
 ) -> Result<(Vec<f32>, bool)> {
+    check_eye_in_front(display, settings.eye_position.z, "display render settings", "eye_position")?;
     if method == Method::PupilCenter {
         check_pupil_center(display, settings.eye_position)?;
     }
