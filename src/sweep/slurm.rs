@@ -89,7 +89,7 @@ pub fn submit(sweep: &Sweep, resolved: &[Resolved], store: &Store, opts: &SlurmO
         .points
         .iter()
         .map(|p| p.index)
-        .filter(|&i| seen.insert(resolved[i].id.clone()) && store.read(&resolved[i].id).is_none())
+        .filter(|&i| seen.insert(resolved[i].id.clone()) && store.record_of(&resolved[i]).is_none())
         .collect();
     let chunks = split(&missing, opts.array_max);
     let mut sub = Submission { job_id: None, points: missing, chunks, script: String::new(), script_path: None };
@@ -138,7 +138,7 @@ pub fn wait_for(job: &str, resolved: &[Resolved], points: &[usize], store: &Stor
     let mut shown = 0;
     let mut failures = 0;
     loop {
-        let done = points.iter().filter(|&&i| store.read(&resolved[i].id).is_some()).count();
+        let done = points.iter().filter(|&&i| store.record_of(&resolved[i]).is_some()).count();
         if done > shown {
             progress.inc((done - shown) as u64);
             shown = done;
