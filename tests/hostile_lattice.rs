@@ -46,11 +46,11 @@ fn the_nearest_cell_of_any_basis_is_the_nearest_by_brute_force() {
     let mut next = rng(0x5eed);
     let mut old_rule_wrong = 0usize;
     let mut checked = 0usize;
-    for b in 0..40 {
+    for b in 0..40i32 {
         // A reduced basis (random lengths and angle), then sheared by a random unimodular matrix.
         let (a, r, angle) = (0.5 + next(), 0.6 + next(), 0.4 + 2.3 * next());
         let base = DMat2::from_cols(DVec2::new(a, 0.0), DVec2::new(r * angle.cos(), r * angle.sin()));
-        let k = 1 + (b % 7) as i32;
+        let k = 1 + b % 7;
         let shear = if b % 2 == 0 {
             DMat2::from_cols(DVec2::new(1.0, 0.0), DVec2::new(k as f64, 1.0))
         } else {

@@ -87,6 +87,9 @@ fn corrupt_records_are_reported_by_collect_and_run_again_on_resume() {
     assert!(text(&o).0.starts_with("3 of 3 points complete") && !text(&o).0.contains("cannot count"), "{}", text(&o).0);
 }
 
+/// A change to a record's JSON.
+type Edit = dyn Fn(&mut serde_json::Value);
+
 #[test]
 fn records_are_checked_against_their_points_settings() {
     use inimtrace::sweep::{RecordState, Store, Sweep};
@@ -102,7 +105,7 @@ fn records_are_checked_against_their_points_settings() {
     let RecordState::Complete(good) = store.state(&resolved[0]) else { panic!("point 0 is not complete") };
     assert_eq!(store.state(&resolved[1]), RecordState::Missing);
     let path = out.join("points").join(format!("{}.json", resolved[0].id));
-    let cases: Vec<(&str, Box<dyn Fn(&mut serde_json::Value)>)> = vec![
+    let cases: Vec<(&str, Box<Edit>)> = vec![
         ("SSIM", Box::new(|v| v["scores"][0]["ssim"] = "1.5".into())),
         ("PSNR", Box::new(|v| v["scores"][0]["psnr_db"] = "-inf".into())),
         ("not this point's", Box::new(|v| v["id"] = "0123456789abcdef".into())),

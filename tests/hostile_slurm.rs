@@ -57,7 +57,10 @@ fn sbatch_words(line: &str) -> Vec<String> {
 fn task_arguments(script: &str, dir: &Path) -> Vec<String> {
     let body: String = script
         .lines()
-        .map(|l| if l.starts_with("exec ") { format!("printf '%s\\n' {}", &l[5..]) } else { l.to_string() })
+        .map(|l| match l.strip_prefix("exec ") {
+            Some(rest) => format!("printf '%s\\n' {rest}"),
+            None => l.to_string(),
+        })
         .collect::<Vec<_>>()
         .join("\n");
     let file = dir.join("task.sh");
