@@ -127,7 +127,7 @@ pub struct DisplayDesign {
 /// nearest-centre rule).
 fn cell_half_extent(l: &Lattice, dir: DVec2) -> f64 {
     let home = l.nearest(l.shift);
-    let (mut inside, mut outside) = (0.0, l.matrix.x_axis.length() + l.matrix.y_axis.length());
+    let (mut inside, mut outside) = (0.0, l.reduced_matrix().x_axis.length() + l.reduced_matrix().y_axis.length());
     for _ in 0..60 {
         let mid = 0.5 * (inside + outside);
         if l.nearest(l.shift + mid * dir) == home {

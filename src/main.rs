@@ -386,6 +386,8 @@ fn run() -> Result<()> {
                 cpus_per_task,
                 max_running,
                 dry_run,
+                threads: cli.threads,
+                max_memory: cli.max_memory,
                 ..Default::default()
             });
             let cmd = inimtrace::sweep::SweepCommand {
@@ -498,6 +500,7 @@ fn render_display(
         display.lcd.pixel_count(),
         32,
     )?;
+    inimtrace::optics::transfer::check_eye_in_front(&display, eye_position.z, "command line", "--eye-position")?;
     let settings = DisplayRenderSettings { samples_per_pixel, reference_plane_z: reference_plane, eye_position };
     let (img, depth, name) = with_field(&scene, backend, |fields| {
         let p = Progress::new(display.lcd.rows() as u64, &format!("display image {}", method.name()), quiet);
@@ -516,6 +519,7 @@ fn simulate_command(g: &Globals, display_image: PathBuf, setup: Setup, eye: EyeA
     let (set, quiet) = (&g.set[..], g.quiet);
     let (_, display) = load_setup(&setup, set)?;
     let (eye, retina) = eye.eye()?;
+    inimtrace::optics::transfer::check_eye_in_front(&display, eye.position.z, "command line", "--eye-position")?;
     check_memory("the retinal image", "--retina", retina.resolution * retina.resolution, 24)?;
     let img = inimtrace::io::exr::read_rgb(&display_image)?;
     // The method, when the display image says which.

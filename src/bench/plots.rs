@@ -18,19 +18,22 @@ use super::summary::ConvergenceSummary;
 use super::BenchReport;
 use crate::error::{Error, Result};
 
-/// Draws `$body` (with the drawing area bound to `$area`) into `$out/$name.png` and `.svg`.
+/// Draws `$body` (with the drawing area bound to `$area`) into `$out/$name.png` and `.svg`, each
+/// written atomically.
 macro_rules! draw_plot {
     ($out:expr, $name:expr, $size:expr, |$area:ident| $body:expr) => {{
         for ext in ["png", "svg"] {
             let path = $out.join(format!("{}.{ext}", $name));
-            let res: PlotResult = if ext == "png" {
-                let $area = BitMapBackend::new(&path, $size).into_drawing_area();
-                $body
-            } else {
-                let $area = SVGBackend::new(&path, $size).into_drawing_area();
-                $body
-            };
-            res.map_err(|e| Error::draw(path.display(), "plot", e))?;
+            crate::io::output::write_atomic(&path, |tmp| {
+                let res: PlotResult = if ext == "png" {
+                    let $area = BitMapBackend::new(tmp, $size).into_drawing_area();
+                    $body
+                } else {
+                    let $area = SVGBackend::new(tmp, $size).into_drawing_area();
+                    $body
+                };
+                res.map_err(|e| Error::draw(path.display(), "plot", e))
+            })?;
         }
     }};
 }

@@ -101,7 +101,7 @@ fn builds_csv(builds: &[BuildRecord]) -> String {
 pub fn write_reports(report: &BenchReport, out: &Path) -> Result<()> {
     let write = |name: &str, text: String| -> Result<()> {
         let p = out.join(name);
-        std::fs::write(&p, text).map_err(|e| Error::io(&p, e))
+        crate::io::output::write_atomic(&p, |tmp| std::fs::write(tmp, &text).map_err(|e| Error::io(tmp, e)))
     };
     write("bench.csv", rows_csv(&report.rows))?;
     write("builds.csv", builds_csv(&report.builds))?;
@@ -115,7 +115,7 @@ pub fn write_reports(report: &BenchReport, out: &Path) -> Result<()> {
 pub fn write_json(report: &BenchReport, out: &Path) -> Result<()> {
     let p = out.join("bench.json");
     let text = serde_json::to_string_pretty(report).map_err(|e| Error::serialize("serialise the bench report", e))?;
-    std::fs::write(&p, text).map_err(|e| Error::io(&p, e))
+    crate::io::output::write_atomic(&p, |tmp| std::fs::write(tmp, &text).map_err(|e| Error::io(tmp, e)))
 }
 
 /// What `inimtrace bench` prints on stdout: every row as a Markdown table, the rate of each

@@ -475,6 +475,16 @@ impl Experiment {
         if !render.eye_position.is_finite() {
             return Err(Error::invalid(source, "display_render.eye_position", "must be finite"));
         }
+        // An eye at or beyond the lenslets sees nothing of the display, for every method.
+        crate::optics::transfer::check_eye_in_front(&display, position.z, source, "eye.position")?;
+        if dr.eye_position.is_some() {
+            crate::optics::transfer::check_eye_in_front(
+                &display,
+                render.eye_position.z,
+                source,
+                "display_render.eye_position",
+            )?;
+        }
         let retina = Retina {
             resolution: e.retina_resolution,
             half_tangent: e.retina_half_tangent,

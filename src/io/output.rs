@@ -4,10 +4,15 @@
 //! - **Owned**: opening a folder takes an exclusive lock on `.inimtrace.lock` inside it (an OS
 //!   file lock, released when the process ends, even by SIGKILL). A second run into the same
 //!   folder fails at once and names the holder (its process id and command line).
-//! - **Atomic**: every file is written under a hidden temporary name in the folder
-//!   (`.inimtrace-tmp-<pid>-<name>`, keeping the extension so that format writers that look at
-//!   it still work) and renamed to its final name only when complete. A killed run leaves at
-//!   most temporary files, which the next run into the folder removes.
+//! - **Atomic**: every file is written in a hidden private folder made for it beside its final
+//!   name (`.inimtrace-tmp-<random>/`, created new with mode 0700, so nothing can be planted in
+//!   it), under its own name (so that format writers that look at the extension still work),
+//!   and renamed to its final name only when complete. A killed run leaves at most temporary
+//!   folders, which the next run into the folder removes.
+//! - **No links followed**: the lock is opened with `O_NOFOLLOW` and must be a regular file with
+//!   one link; an output name (or the lock, or the report) that is a symbolic link, a FIFO, a
+//!   directory or a device is refused with its name, before any work, and again before each
+//!   rename, so a planted link can neither be written through nor truncate its target.
 //! - **Manifest**: every file written is recorded with its size and CRC-32; the run's report
 //!   (`results.json`) is written last and lists them, so its presence marks a complete run and
 //!   a reader can verify the set. Opening a folder removes the previous run's report first, then
@@ -18,7 +23,9 @@
 
 use std::fs::{self, File, TryLockError};
 use std::io::{Read, Write};
+use std::os::unix::fs::{DirBuilderExt, MetadataExt, OpenOptionsExt};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Mutex;
 
 use serde::{Deserialize, Serialize};
@@ -27,8 +34,11 @@ use crate::error::{Error, Result};
 
 /// Name of the lock file inside an output folder.
 pub const LOCK_FILE: &str = ".inimtrace.lock";
-/// Prefix of temporary files inside an output folder.
+/// Prefix of temporary folders inside an output folder.
 pub const TEMP_PREFIX: &str = ".inimtrace-tmp-";
+/// Extensions of the files runs write: an entry of the output folder with a plain name and one
+/// of these that is not a regular file is refused when the folder is opened.
+const OUTPUT_EXTENSIONS: &[&str] = &["exr", "png", "svg", "md", "csv", "json", "sbatch"];
 
 /// One complete file of a run, as the manifest lists it.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -59,14 +69,21 @@ impl OutputDir {
         if !root.is_dir() {
             return Err(Error::io(root, std::io::Error::other("is not a directory")));
         }
+        refuse_outputs_that_are_not_files(root)?;
         let lock_path = root.join(LOCK_FILE);
         let mut lock = fs::OpenOptions::new()
             .read(true)
             .write(true)
             .create(true)
             .truncate(false)
+            .custom_flags(libc::O_NOFOLLOW | libc::O_NONBLOCK)
             .open(&lock_path)
-            .map_err(|e| Error::io(&lock_path, e))?;
+            .map_err(|e| not_a_file_error(&lock_path).unwrap_or_else(|| Error::io(&lock_path, e)))?;
+        let meta = lock.metadata().map_err(|e| Error::io(&lock_path, e))?;
+        if !meta.is_file() || meta.nlink() != 1 {
+            let what = if meta.is_file() { "a regular file with other hard links" } else { kind(&meta.file_type()) };
+            return Err(refusal(&lock_path, what));
+        }
         match lock.try_lock() {
             Ok(()) => {}
             Err(TryLockError::WouldBlock) => {
@@ -145,8 +162,7 @@ impl OutputDir {
     /// complete, then every file its manifest listed, and left-over temporary files.
     fn remove_previous_run(&self) -> Result<()> {
         let report = self.root.join("results.json");
-        let listed: Vec<String> = fs::read(&report)
-            .ok()
+        let listed: Vec<String> = read_regular(&report)?
             .and_then(|b| serde_json::from_slice::<serde_json::Value>(&b).ok())
             .and_then(|v| v.get("files").cloned())
             .and_then(|f| serde_json::from_value::<Vec<OutputFile>>(f).ok())
@@ -168,7 +184,7 @@ impl OutputDir {
         if let Ok(entries) = fs::read_dir(&self.root) {
             for entry in entries.flatten() {
                 if entry.file_name().to_string_lossy().starts_with(TEMP_PREFIX) {
-                    let _ = fs::remove_file(entry.path());
+                    remove_temporary(&entry.path());
                 }
             }
         }
@@ -180,18 +196,150 @@ impl OutputDir {
     }
 }
 
-/// Writes the single file `path` atomically: `write` gets a hidden temporary path beside it
-/// (same folder, same extension) and must leave a complete file there, which is then renamed to
-/// `path`. On error nothing appears under `path` and the temporary file is removed.
+/// Writes the single file `path` atomically: `write` gets a path of the same name in a new
+/// private hidden folder beside it (a file created there new, never through a link) and must
+/// leave a complete file there, which is then renamed to `path`. On error nothing appears under
+/// `path` and the temporary folder is removed. A `path` that exists and is not a regular file (a
+/// symbolic link, a FIFO, a directory) is refused, before `write` runs and again before the rename.
 pub fn write_atomic(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+    refuse_if_not_a_file(path)?;
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let temp = path.with_file_name(format!("{TEMP_PREFIX}{}-{name}", std::process::id()));
-    let result = write(&temp).and_then(|_| fs::rename(&temp, path).map_err(|e| Error::io(path, e)));
-    if result.is_err() {
-        let _ = fs::remove_file(&temp);
-    }
+    let folder = private_folder(path)?;
+    let temp = folder.join(&name);
+    let result = fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .custom_flags(libc::O_NOFOLLOW)
+        .open(&temp)
+        .map_err(|e| Error::io(&temp, e))
+        .and_then(|_| write(&temp))
+        .and_then(|_| refuse_if_not_a_file(&temp))
+        .and_then(|_| refuse_if_not_a_file(path))
+        .and_then(|_| fs::rename(&temp, path).map_err(|e| Error::io(path, e)));
+    remove_temporary(&folder);
     // Errors name the file the user asked for, not the temporary one.
     result.map_err(|e| rename_in_error(e, &temp, path))
+}
+
+/// Creates a new private folder (mode 0700, a random name that did not exist) beside `path`.
+fn private_folder(path: &Path) -> Result<PathBuf> {
+    let mut last = None;
+    for _ in 0..16 {
+        let folder = path.with_file_name(format!("{TEMP_PREFIX}{:016x}", random_u64()));
+        match fs::DirBuilder::new().mode(0o700).create(&folder) {
+            Ok(()) => return Ok(folder),
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => last = Some(e),
+            Err(e) => return Err(Error::io(path, e)),
+        }
+    }
+    Err(Error::io(path, last.unwrap_or_else(|| std::io::Error::other("no free temporary name"))))
+}
+
+/// An unpredictable 64-bit number: the process id, the time and a counter, hashed with the
+/// standard library's randomly keyed SipHash (its keys come from the operating system).
+fn random_u64() -> u64 {
+    use std::hash::{BuildHasher, Hasher};
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let mut h = std::collections::hash_map::RandomState::new().build_hasher();
+    h.write_u32(std::process::id());
+    h.write_u128(std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos()));
+    h.write_u64(COUNTER.fetch_add(1, Ordering::Relaxed));
+    h.finish()
+}
+
+/// Removes a temporary entry without following it: a folder with what is in it, else the entry.
+fn remove_temporary(path: &Path) {
+    match fs::symlink_metadata(path) {
+        Ok(m) if m.is_dir() => {
+            let _ = fs::remove_dir_all(path);
+        }
+        Ok(_) => {
+            let _ = fs::remove_file(path);
+        }
+        Err(_) => {}
+    }
+}
+
+/// What kind of entry a non-regular file is, for messages.
+fn kind(t: &fs::FileType) -> &'static str {
+    use std::os::unix::fs::FileTypeExt;
+    if t.is_symlink() {
+        "a symbolic link"
+    } else if t.is_dir() {
+        "a directory"
+    } else if t.is_fifo() {
+        "a FIFO"
+    } else if t.is_socket() {
+        "a socket"
+    } else if t.is_block_device() || t.is_char_device() {
+        "a device"
+    } else {
+        "not a regular file"
+    }
+}
+
+fn refusal(path: &Path, what: &str) -> Error {
+    Error::io(
+        path,
+        std::io::Error::other(format!(
+            "is {what}, where inimtrace writes a regular file (it never follows links or writes \
+             through special files in its output): remove it or choose another output"
+        )),
+    )
+}
+
+/// The refusal of `path` if it exists and is not a regular file.
+fn not_a_file_error(path: &Path) -> Option<Error> {
+    let meta = fs::symlink_metadata(path).ok()?;
+    (!meta.is_file()).then(|| refusal(path, kind(&meta.file_type())))
+}
+
+/// Refuses `path` if it exists and is not a regular file (a link is not followed).
+pub fn refuse_if_not_a_file(path: &Path) -> Result<()> {
+    not_a_file_error(path).map_or(Ok(()), Err)
+}
+
+/// Refuses every entry of the folder `root` that a run may write or read (the lock, a plain name
+/// with an output extension) and that is not a regular file.
+fn refuse_outputs_that_are_not_files(root: &Path) -> Result<()> {
+    let entries = fs::read_dir(root).map_err(|e| Error::io(root, e))?;
+    for entry in entries.flatten() {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let output_like = name == LOCK_FILE
+            || (is_plain_name(&name)
+                && Path::new(&name).extension().is_some_and(|x| OUTPUT_EXTENSIONS.iter().any(|o| x == *o)));
+        if output_like {
+            refuse_if_not_a_file(&entry.path())?;
+        }
+    }
+    Ok(())
+}
+
+/// Opens `path` for reading without following a link or blocking on a FIFO; anything but a
+/// regular file is refused with its name.
+pub fn open_regular(path: &Path) -> Result<File> {
+    let file = fs::OpenOptions::new()
+        .read(true)
+        .custom_flags(libc::O_NOFOLLOW | libc::O_NONBLOCK)
+        .open(path)
+        .map_err(|e| not_a_file_error(path).unwrap_or_else(|| Error::io(path, e)))?;
+    let meta = file.metadata().map_err(|e| Error::io(path, e))?;
+    if !meta.is_file() {
+        return Err(refusal(path, kind(&meta.file_type())));
+    }
+    Ok(file)
+}
+
+/// The bytes of the regular file `path` (see [`open_regular`]); `None` when it does not exist.
+pub fn read_regular(path: &Path) -> Result<Option<Vec<u8>>> {
+    let mut file = match open_regular(path) {
+        Ok(f) => f,
+        Err(Error::Io { source, .. }) if source.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(e) => return Err(e),
+    };
+    let mut bytes = Vec::new();
+    file.read_to_end(&mut bytes).map_err(|e| Error::io(path, e))?;
+    Ok(Some(bytes))
 }
 
 fn rename_in_error(e: Error, temp: &Path, path: &Path) -> Error {
@@ -215,7 +363,7 @@ pub fn is_plain_name(name: &str) -> bool {
 
 /// Size and CRC-32 of the file at `path`, listed as `name`.
 fn describe(path: &Path, name: &str) -> Result<OutputFile> {
-    let mut file = File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut file = open_regular(path)?;
     let mut hasher = crc32fast::Hasher::new();
     let mut buf = vec![0u8; 1 << 20];
     let mut bytes = 0u64;

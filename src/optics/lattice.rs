@@ -6,6 +6,13 @@
 //! nearest (its Voronoi cell). Ties are broken deterministically: the candidate found by
 //! rounding the lattice coordinates (`floor(u + 0.5)`) wins, so a point exactly half-way
 //! between two centres of an axis-aligned lattice belongs to the cell with the larger index.
+//!
+//! The nearest-cell search looks at the rounded candidate's neighbours, which is right only
+//! for a reduced basis (`2 |b1 . b2| <= min(|b1|^2, |b2|^2)`). A basis that is not reduced (e.g.
+//! `[[1.2, 12], [0, 1.2]]`, a shear of the square lattice) is reduced by Lagrange-Gauss when the
+//! lattice is made, and the search runs in the reduced basis; cell indices stay the user's (the
+//! found cell is mapped back by the unimodular change of basis), since the lenslet and
+//! elemental-image lattices share them. A basis that is already reduced is used untouched.
 
 use glam::{DMat2, DVec2, IVec2};
 
@@ -22,6 +29,15 @@ pub struct Lattice {
     /// paths skip the zero products (same values as the full products for finite input).
     diagonal: DVec2,
     inverse_diagonal: DVec2,
+    /// The Lagrange-Gauss reduced basis of the same lattice (equal to `matrix` when that is
+    /// reduced already) and its inverse.
+    reduced: DMat2,
+    reduced_inverse: DMat2,
+    /// `matrix` is reduced: the search runs in it directly.
+    given_is_reduced: bool,
+    /// Columns of the unimodular integer matrix `U` with `reduced = matrix U`: a cell `k` of the
+    /// reduced basis is cell `U k` of the user's.
+    to_user: [[i64; 2]; 2],
 }
 
 impl Lattice {
@@ -35,6 +51,8 @@ impl Lattice {
         }
         let axis_aligned = matrix.x_axis.y == 0.0 && matrix.y_axis.x == 0.0;
         let inverse = matrix.inverse();
+        let given_is_reduced = is_reduced(matrix.x_axis, matrix.y_axis);
+        let (reduced, to_user) = if given_is_reduced { (matrix, [[1, 0], [0, 1]]) } else { reduce(matrix)? };
         Some(Self {
             shift,
             matrix,
@@ -42,7 +60,18 @@ impl Lattice {
             axis_aligned,
             diagonal: DVec2::new(matrix.x_axis.x, matrix.y_axis.y),
             inverse_diagonal: DVec2::new(inverse.x_axis.x, inverse.y_axis.y),
+            reduced,
+            reduced_inverse: if given_is_reduced { inverse } else { reduced.inverse() },
+            given_is_reduced,
+            to_user,
         })
+    }
+
+    /// The reduced basis of the lattice (Lagrange-Gauss; the pitch matrix itself when that is
+    /// reduced): its columns span the same centres with the shortest, most nearly orthogonal
+    /// vectors, so its parallelogram is the shape of one cell.
+    pub fn reduced_matrix(&self) -> DMat2 {
+        self.reduced
     }
 
     /// A square lattice of the given pitch, centred on the optical axis.
@@ -101,6 +130,9 @@ impl Lattice {
     /// `nearest_brute_force` is the slow twin that tests check this against.
     #[inline(always)]
     pub fn nearest(&self, p: DVec2) -> IVec2 {
+        if !self.given_is_reduced {
+            return self.nearest_via_reduced(p);
+        }
         let u = self.coordinates(p);
         let rounded = IVec2::new(round_half_up(u.x), round_half_up(u.y));
         if self.axis_aligned {
@@ -155,25 +187,77 @@ impl Lattice {
         self.nearest_around(u, rounded, radius)
     }
 
-    /// The candidate within `radius` of `rounded` with the smallest squared distance
-    /// `d^T (M^T M) d`, `d = u - candidate`; ties keep `rounded`, then the first found.
+    /// [`Lattice::nearest`] for a pitch matrix that is not reduced: the search in the reduced
+    /// basis, the cell mapped back to the user's indices (saturating, never overflowing).
+    #[inline(never)]
+    fn nearest_via_reduced(&self, p: DVec2) -> IVec2 {
+        let u = self.reduced_inverse * (p - self.shift);
+        let rounded = IVec2::new(round_half_up(u.x), round_half_up(u.y));
+        let k = nearest_around(self.reduced, u, rounded, 1);
+        let [c0, c1] = self.to_user;
+        let (kx, ky) = (i64::from(k.x), i64::from(k.y));
+        let to_i32 = |v: i64| v.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32;
+        IVec2::new(to_i32(c0[0] * kx + c1[0] * ky), to_i32(c0[1] * kx + c1[1] * ky))
+    }
+
     #[inline(always)]
     fn nearest_around(&self, u: DVec2, rounded: IVec2, radius: i32) -> IVec2 {
-        let dist2 = |cand: IVec2| (self.matrix * (u - cand.as_dvec2())).length_squared();
-        let mut best = rounded;
-        let mut best_d2 = dist2(rounded);
-        for dj in -radius..=radius {
-            for di in -radius..=radius {
-                let cand = rounded + IVec2::new(di, dj);
-                let d2 = dist2(cand);
-                if d2 < best_d2 {
-                    best = cand;
-                    best_d2 = d2;
-                }
+        nearest_around(self.matrix, u, rounded, radius)
+    }
+}
+
+/// The candidate within `radius` of `rounded` with the smallest squared distance
+/// `d^T (M^T M) d`, `d = u - candidate`; ties keep `rounded`, then the first found.
+#[inline(always)]
+fn nearest_around(matrix: DMat2, u: DVec2, rounded: IVec2, radius: i32) -> IVec2 {
+    let dist2 = |cand: IVec2| (matrix * (u - cand.as_dvec2())).length_squared();
+    let mut best = rounded;
+    let mut best_d2 = dist2(rounded);
+    for dj in -radius..=radius {
+        for di in -radius..=radius {
+            let cand = rounded + IVec2::new(di, dj);
+            let d2 = dist2(cand);
+            if d2 < best_d2 {
+                best = cand;
+                best_d2 = d2;
             }
         }
-        best
     }
+    best
+}
+
+/// A basis is reduced when `2 |b1 . b2| <= min(|b1|^2, |b2|^2)` (within a relative 1e-9, so that
+/// a hexagonal basis whose product rounds a hair above the half stays as given).
+fn is_reduced(b1: DVec2, b2: DVec2) -> bool {
+    2.0 * b1.dot(b2).abs() <= b1.length_squared().min(b2.length_squared()) * (1.0 + 1e-9)
+}
+
+/// Lagrange-Gauss reduction of the columns of `m`: the reduced basis `m U` and the columns of the
+/// unimodular `U`. `None` for a basis so skewed that `U` would be absurd (entries beyond 2^20).
+fn reduce(m: DMat2) -> Option<(DMat2, [[i64; 2]; 2])> {
+    let at = |u: [i64; 2]| m * DVec2::new(u[0] as f64, u[1] as f64);
+    let (mut u1, mut u2) = ([1i64, 0], [0i64, 1]);
+    if at(u1).length_squared() > at(u2).length_squared() {
+        std::mem::swap(&mut u1, &mut u2);
+    }
+    for _ in 0..200 {
+        let (b1, b2) = (at(u1), at(u2));
+        let mu = (b1.dot(b2) / b1.length_squared()).round();
+        if !mu.is_finite() || mu.abs() > f64::from(1 << 20) {
+            return None;
+        }
+        let mu = mu as i64;
+        u2 = [u2[0] - mu * u1[0], u2[1] - mu * u1[1]];
+        if u2.iter().chain(&u1).any(|v| v.abs() > 1 << 20) {
+            return None;
+        }
+        if at(u2).length_squared() < at(u1).length_squared() {
+            std::mem::swap(&mut u1, &mut u2);
+        } else {
+            break;
+        }
+    }
+    Some((DMat2::from_cols(at(u1), at(u2)), [u1, u2]))
 }
 
 /// Nearest integer to `x`, halves rounding up, as an index; saturates for absurd inputs and

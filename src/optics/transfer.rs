@@ -325,6 +325,29 @@ pub fn pupil_center_denominator(display: &Display, eye: DVec3) -> f64 {
 /// cancellation has already lost nine of sixteen significant digits.
 pub const PUPIL_CENTER_SINGULAR_TOLERANCE: f64 = 1e-9;
 
+/// How far in front of the lenslet plane the eye's pupil must at least be, mm (1 um). An eye at
+/// or beyond the lenslet plane sees nothing of the display (every image black, PSNR inf), and
+/// nearer than this the pupil-to-lenslet distance in eq. (1) is no longer a physical one.
+pub const MIN_EYE_TO_LENSLETS_MM: f64 = 1e-3;
+
+/// Refuses an eye (pupil centre) at `eye_z` that is not at least [`MIN_EYE_TO_LENSLETS_MM`] in
+/// front of `display`'s lenslet plane, naming `source` and `field`; every method and stage checks it.
+pub fn check_eye_in_front(display: &Display, eye_z: f64, source: &str, field: &str) -> Result<()> {
+    let lenslets = display.lenslet_z();
+    let limit = lenslets - MIN_EYE_TO_LENSLETS_MM;
+    if eye_z <= limit {
+        return Ok(());
+    }
+    Err(Error::invalid(
+        source,
+        field,
+        format!(
+            "the eye at z = {eye_z} mm is at or beyond the lenslet plane (z = {lenslets} mm, eye_to_lenslets of the \
+             display): it must be in front of it, at z <= {limit} mm"
+        ),
+    ))
+}
+
 /// Errors when PupilCenter has no answer for this display and eye position.
 pub fn check_pupil_center(display: &Display, eye: DVec3) -> Result<()> {
     let l = display.lenslet_z() - eye.z;

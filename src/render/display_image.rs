@@ -26,7 +26,7 @@ use rayon::prelude::*;
 use super::field::{BundleSum, RadianceField, RayBundle, Sample};
 use crate::error::{Error, Result};
 use crate::optics::eye::stratified;
-use crate::optics::transfer::{camera_ray, check_pupil_center, pupil_center_point};
+use crate::optics::transfer::{camera_ray, check_eye_in_front, check_pupil_center, pupil_center_point};
 use crate::optics::Display;
 use crate::progress::Progress;
 use crate::raster::RgbImage;
@@ -250,6 +250,7 @@ fn render_into<R: RadianceField + ?Sized>(
     dst: &mut [[f32; 3]],
     mut depth: Vec<f32>,
 ) -> Result<(Vec<f32>, bool)> {
+    check_eye_in_front(display, settings.eye_position.z, "display render settings", "eye_position")?;
     if method == Method::PupilCenter {
         check_pupil_center(display, settings.eye_position)?;
     }
@@ -277,8 +278,10 @@ fn render_into<R: RadianceField + ?Sized>(
     let reach = display.lenslet_z() - z_ref;
     let bundle = match method {
         Method::LensletAverage { grid } => {
-            let offsets: Vec<DVec2> =
-                stratified(grid).into_iter().map(|f| display.lenslets.matrix * (f - DVec2::splat(0.5))).collect();
+            let offsets: Vec<DVec2> = stratified(grid)
+                .into_iter()
+                .map(|f| display.lenslets.reduced_matrix() * (f - DVec2::splat(0.5)))
+                .collect();
             RayBundle::lenslet_points(&offsets, gain, reach)
         }
         _ => RayBundle::new(vec![(DVec2::ZERO, DVec2::ZERO)]),

@@ -71,6 +71,7 @@ pub fn simulate_stack(
     stack: &DisplayStack,
     progress: &Progress,
 ) -> Result<Vec<RgbImage>> {
+    crate::optics::transfer::check_eye_in_front(display, eye.position.z, "eye", "position")?;
     if stack.width() != display.lcd.columns() || stack.height() != display.lcd.rows() {
         return Err(Error::Mismatch("display stack does not match the display's LCD resolution".into()));
     }

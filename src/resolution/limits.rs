@@ -89,7 +89,7 @@ pub fn display_limits(display: &Display, pupil_diameter: f64) -> DisplayLimits {
     let d = display_design(display, pupil_diameter);
     let cdp = display.central_depth_plane();
     let v1 = display.eye_to_lenslets;
-    let lenslet = display.lenslets.matrix;
+    let lenslet = display.lenslets.reduced_matrix();
     let pitch = [lenslet.x_axis.length(), lenslet.y_axis.length()];
     // Rays from (0, 0, z) through lenslet centres c reach the pupil plane at c z / (z - v1).
     let scale = cdp.map(|z| z / (z - v1));

@@ -35,7 +35,7 @@ use crate::render::{render_display_image, DisplayRenderSettings};
 /// lenslet centre can be from a point it is nearest to) errs on the side of a larger crop.
 pub fn crop_display(display: &Display, half_tangent: DVec2, pupil_radius: f64, max_vergence: f64) -> Display {
     let (v1, v2) = (display.eye_to_lenslets, display.lenslets_to_lcd);
-    let m = display.lenslets.matrix;
+    let m = display.lenslets.reduced_matrix();
     // A point is at most half the two basis vectors' lengths from its nearest centre.
     let cell = 0.5 * (m.x_axis.abs() + m.y_axis.abs());
     let slope = half_tangent + DVec2::splat(pupil_radius * max_vergence.abs());

@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use serde_json::json;
 
 use super::plots::{write_plots, PlotRow};
-use super::store::{PointRecord, Store};
+use super::store::{PointRecord, RecordState, Store};
 use super::Sweep;
 use crate::error::{Error, Result};
 use crate::io::csv_table::CsvTable;
@@ -22,8 +22,10 @@ use crate::settings::Resolved;
 pub struct Collected {
     /// Points with a record.
     pub complete: usize,
-    /// Indices of the points without a record.
+    /// Indices of the points without a complete record (missing or invalid).
     pub missing: Vec<usize>,
+    /// The points whose record is there but cannot count, and why (also in `missing`).
+    pub invalid: Vec<(usize, String)>,
     /// Rows of `sweep.csv`.
     pub rows: usize,
     /// `sweep.csv`, written.
@@ -37,10 +39,27 @@ pub struct Collected {
 /// Writes `sweep.csv`, `sweep.json` and the plots into the sweep's folder from the records
 /// there. `resolved` are the sweep's points, resolved (see [`Sweep::resolve`]).
 pub fn collect(sweep: &Sweep, resolved: &[Resolved], store: &Store) -> Result<Collected> {
-    let records: Vec<Option<PointRecord>> = resolved.iter().map(|r| store.read(&r.id)).collect();
+    let states: Vec<RecordState> = resolved.iter().map(|r| store.state(r)).collect();
+    let mut invalid = Vec::new();
+    for (p, st) in sweep.points.iter().zip(&states) {
+        if let RecordState::Invalid(why) = st {
+            invalid.push((p.index, why.clone()));
+        }
+    }
+    let records: Vec<Option<PointRecord>> = states
+        .into_iter()
+        .map(|st| match st {
+            RecordState::Complete(rec) => Some(rec),
+            _ => None,
+        })
+        .collect();
     let keys = sweep.spec.keys();
-    let mut out =
-        Collected { csv: store.root().join("sweep.csv"), json: store.root().join("sweep.json"), ..Default::default() };
+    let mut out = Collected {
+        csv: store.root().join("sweep.csv"),
+        json: store.root().join("sweep.json"),
+        invalid,
+        ..Default::default()
+    };
 
     let mut csv = CsvTable::new();
     let scores = ["method", "eye_case", "psnr_db", "psnr_ci95_db", "ssim", "ssim_ci95", "seconds"];
@@ -90,13 +109,18 @@ pub fn collect(sweep: &Sweep, resolved: &[Resolved], store: &Store) -> Result<Co
                 .iter()
                 .map(|(k, v)| (k.clone(), serde_json::to_value(v).unwrap_or(serde_json::Value::Null)))
                 .collect();
-            json!({
+            let mut point = json!({
                 "index": p.index,
                 "id": r.id,
                 "values": values,
                 "complete": rec.is_some(),
                 "assess_args": sweep.assess_args(p),
-            })
+            });
+            // Only for a record that cannot count, so sweeps without one are written as before.
+            if let Some((_, why)) = out.invalid.iter().find(|(i, _)| *i == p.index) {
+                point["invalid_record"] = json!(why);
+            }
+            point
         })
         .collect();
     let axes: Vec<serde_json::Value> = sweep

@@ -144,6 +144,12 @@ fn summary(sweep: &Sweep, c: &Collected) -> String {
         c.json.display(),
         c.plots.len()
     );
+    if !c.invalid.is_empty() {
+        s.push_str(&format!("{} point record(s) cannot count (they run again on the next run):\n", c.invalid.len()));
+        for (i, why) in c.invalid.iter().take(50) {
+            s.push_str(&format!("  point {i}: {why}\n"));
+        }
+    }
     if !c.missing.is_empty() {
         s.push_str(&format!("missing {} point(s):\n", c.missing.len()));
         let values = sweep.value_texts();

@@ -19,7 +19,7 @@ pub use command::{execute, SweepCommand};
 pub use run::{run_points, validate, LocalOptions, RunSummary};
 pub use slurm::{submit, wait_for, SlurmOptions, Submission};
 pub use spec::{format_selection, parse_selection, Axis, AxisKey, Point, SweepSpec};
-pub use store::{PointRecord, ScoreRow, Store};
+pub use store::{PointRecord, RecordState, ScoreRow, Store, RECORD_FORMAT};
 
 use std::path::{Path, PathBuf};
 

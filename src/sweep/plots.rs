@@ -85,12 +85,14 @@ pub fn write_plots(dir: &Path, keys: &[String], rows: &[PlotRow]) -> Result<Vec<
             for ext in ["png", "svg"] {
                 let path = dir.join(format!("{name}.{ext}"));
                 let size = (900, 600);
-                let drawn = if ext == "png" {
-                    draw(BitMapBackend::new(&path, size).into_drawing_area(), key, k, rows, metric)
-                } else {
-                    draw(SVGBackend::new(&path, size).into_drawing_area(), key, k, rows, metric)
-                };
-                drawn.map_err(|e| Error::draw(path.display(), "plot", e))?;
+                crate::io::output::write_atomic(&path, |tmp| {
+                    let drawn = if ext == "png" {
+                        draw(BitMapBackend::new(tmp, size).into_drawing_area(), key, k, rows, metric)
+                    } else {
+                        draw(SVGBackend::new(tmp, size).into_drawing_area(), key, k, rows, metric)
+                    };
+                    drawn.map_err(|e| Error::draw(path.display(), "plot", e))
+                })?;
                 if ext == "png" {
                     written.push(path);
                 }

@@ -109,7 +109,7 @@ pub fn run_points(
     let todo: Vec<usize> = selection
         .iter()
         .copied()
-        .filter(|&i| seen.insert(resolved[i].id.clone()) && store.read(&resolved[i].id).is_none())
+        .filter(|&i| seen.insert(resolved[i].id.clone()) && store.record_of(&resolved[i]).is_none())
         .collect();
     summary.already_complete = selection.len() - todo.len();
     let (scenes, warnings) = build(resolved, values, &todo)?;
@@ -142,6 +142,7 @@ fn run_with_images(job: &Job, store: &Store, local: LocalOptions) -> Result<()> 
 
 fn record(job: &Job, scores: &[Score], elapsed: Duration, backend: &str) -> PointRecord {
     PointRecord {
+        format: super::store::RECORD_FORMAT,
         id: job.id.clone(),
         index: job.index,
         values: job.values.clone(),

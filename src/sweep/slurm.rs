@@ -38,6 +38,10 @@ pub struct SlurmOptions {
     pub images: bool,
     /// Compression of those images.
     pub exr_compression: crate::io::exr::ExrCompression,
+    /// `--threads` at submission: each task runs that many (else `--cpus-per-task`, else all).
+    pub threads: Option<usize>,
+    /// `--max-memory` at submission, bytes: each task gets the same limit.
+    pub max_memory: Option<u64>,
 }
 
 impl Default for SlurmOptions {
@@ -52,6 +56,8 @@ impl Default for SlurmOptions {
             backend: BackendChoice::Auto,
             images: false,
             exr_compression: Default::default(),
+            threads: None,
+            max_memory: None,
         }
     }
 }
@@ -77,12 +83,13 @@ pub fn submit(sweep: &Sweep, resolved: &[Resolved], store: &Store, opts: &SlurmO
     if opts.array_max == 0 {
         return Err(Error::invalid("command line", "--array-max", "must be at least 1"));
     }
+    validate_options(opts)?;
     let mut seen = std::collections::HashSet::new();
     let missing: Vec<usize> = sweep
         .points
         .iter()
         .map(|p| p.index)
-        .filter(|&i| seen.insert(resolved[i].id.clone()) && store.read(&resolved[i].id).is_none())
+        .filter(|&i| seen.insert(resolved[i].id.clone()) && store.record_of(&resolved[i]).is_none())
         .collect();
     let chunks = split(&missing, opts.array_max);
     let mut sub = Submission { job_id: None, points: missing, chunks, script: String::new(), script_path: None };
@@ -97,7 +104,7 @@ pub fn submit(sweep: &Sweep, resolved: &[Resolved], store: &Store, opts: &SlurmO
     let dir = store.root().join("slurm");
     std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
     let path = dir.join(format!("submit-{}-{}.sbatch", super::store::unix_now(), std::process::id()));
-    std::fs::write(&path, &sub.script).map_err(|e| Error::io(&path, e))?;
+    crate::io::output::write_atomic(&path, |tmp| std::fs::write(tmp, &sub.script).map_err(|e| Error::io(tmp, e)))?;
     let out = Command::new("sbatch").arg("--parsable").arg(&path).output().map_err(|e| {
         Error::External {
             program: "sbatch",
@@ -131,7 +138,7 @@ pub fn wait_for(job: &str, resolved: &[Resolved], points: &[usize], store: &Stor
     let mut shown = 0;
     let mut failures = 0;
     loop {
-        let done = points.iter().filter(|&&i| store.read(&resolved[i].id).is_some()).count();
+        let done = points.iter().filter(|&&i| store.record_of(&resolved[i]).is_some()).count();
         if done > shown {
             progress.inc((done - shown) as u64);
             shown = done;
@@ -198,11 +205,18 @@ fn script(sweep: &Sweep, chunks: &[String], id: &str, out: &Path, opts: &SlurmOp
         .map_err(|e| Error::External { program: "current_dir", message: format!("no current directory: {e}") })?;
     let sweep_file = absolute(&sweep.spec.path)?;
     let out = absolute(out)?;
+    for (flag, path) in [("--out", &out), ("SWEEP", &sweep_file), ("current directory", &cwd), ("program", &exe)] {
+        script_path_text(flag, path)?;
+    }
+    for o in &sweep.overrides {
+        script_text("--set", &o.to_arg())?;
+    }
     let mut s = String::from("#!/bin/bash\n");
     s.push_str(&format!("#SBATCH --job-name=inimtrace-{}\n", sweep.spec.name));
     let throttle = opts.max_running.map(|m| format!("%{m}")).unwrap_or_default();
     s.push_str(&format!("#SBATCH --array=0-{}{throttle}\n", chunks.len() - 1));
-    s.push_str(&format!("#SBATCH --output={}/slurm/%A_%a.out\n", out.display()));
+    let log = format!("{}/slurm/", slurm_pattern_literal(&script_path_text("--out", &out)?));
+    s.push_str(&format!("#SBATCH --output={}\n", sbatch_quote(&format!("{log}%A_%a.out"))));
     if let Some(p) = &opts.partition {
         s.push_str(&format!("#SBATCH --partition={p}\n"));
     }
@@ -231,12 +245,16 @@ fn script(sweep: &Sweep, chunks: &[String], id: &str, out: &Path, opts: &SlurmOp
     }
     s.push_str(")\n");
     s.push_str(&format!("cd {}\n", quote(&cwd.display().to_string())));
-    s.push_str(
-        "THREADS=()\nif [ -n \"${SLURM_CPUS_PER_TASK:-}\" ]; then THREADS=(--threads \"$SLURM_CPUS_PER_TASK\"); fi\n",
-    );
+    match opts.threads {
+        Some(n) => s.push_str(&format!("THREADS=(--threads {n})\n")),
+        None => s.push_str(
+            "THREADS=()\nif [ -n \"${SLURM_CPUS_PER_TASK:-}\" ]; then THREADS=(--threads \"$SLURM_CPUS_PER_TASK\"); fi\n",
+        ),
+    }
+    let memory = opts.max_memory.map(|b| format!(" --max-memory {b}")).unwrap_or_default();
     let mut lines = vec![
         format!(
-            "exec {} --quiet \"${{THREADS[@]}}\" sweep {}",
+            "exec {} --quiet \"${{THREADS[@]}}\"{memory} sweep {}",
             quote(&exe.display().to_string()),
             quote(&sweep_file.display().to_string())
         ),
@@ -254,9 +272,164 @@ fn script(sweep: &Sweep, chunks: &[String], id: &str, out: &Path, opts: &SlurmOp
     Ok(s)
 }
 
+/// Checks every option that goes into the batch script, naming the flag.
+fn validate_options(opts: &SlurmOptions) -> Result<()> {
+    if let Some(t) = &opts.time {
+        check_time(t).map_err(|m| Error::invalid("command line", "--time", m))?;
+    }
+    if let Some(p) = &opts.partition {
+        check_partition(p).map_err(|m| Error::invalid("command line", "--partition", m))?;
+    }
+    for (flag, v) in [("--cpus-per-task", opts.cpus_per_task), ("--max-running", opts.max_running)] {
+        if v == Some(0) {
+            return Err(Error::invalid("command line", flag, "must be at least 1"));
+        }
+    }
+    Ok(())
+}
+
+/// A Slurm time limit: `minutes`, `minutes:seconds`, `hours:minutes:seconds`, `days-hours`,
+/// `days-hours:minutes`, `days-hours:minutes:seconds` (each part decimal digits), or
+/// `INFINITE` / `UNLIMITED`.
+fn check_time(t: &str) -> std::result::Result<(), String> {
+    let shown = t.escape_debug();
+    let number = |p: &str| !p.is_empty() && p.len() <= 9 && p.bytes().all(|b| b.is_ascii_digit());
+    let ok = if matches!(t, "INFINITE" | "UNLIMITED" | "infinite" | "unlimited") {
+        true
+    } else if let Some((days, rest)) = t.split_once('-') {
+        let parts: Vec<&str> = rest.split(':').collect();
+        number(days) && parts.len() <= 3 && parts.iter().all(|p| number(p))
+    } else {
+        let parts: Vec<&str> = t.split(':').collect();
+        parts.len() <= 3 && parts.iter().all(|p| number(p))
+    };
+    if ok {
+        Ok(())
+    } else {
+        Err(format!(
+            "`{shown}` is not a Slurm time limit (minutes, minutes:seconds, hours:minutes:seconds, days-hours, \
+             days-hours:minutes or days-hours:minutes:seconds, e.g. 30, 2:00:00, 1-0)"
+        ))
+    }
+}
+
+/// A partition name, or a comma-separated list of them: letters, digits, `_`, `.` and `-`.
+fn check_partition(p: &str) -> std::result::Result<(), String> {
+    let name =
+        |n: &str| !n.is_empty() && n.bytes().all(|b| b.is_ascii_alphanumeric() || matches!(b, b'_' | b'.' | b'-'));
+    if p.split(',').all(name) {
+        Ok(())
+    } else {
+        Err(format!(
+            "`{}` is not a partition name (letters, digits, _, . and -; several separated by commas)",
+            p.escape_debug()
+        ))
+    }
+}
+
+/// `text`, refused if it holds a line break or another control character (it would end a line of
+/// the batch script).
+fn script_text(flag: &str, text: &str) -> Result<()> {
+    match text.chars().find(|c| c.is_control()) {
+        Some(c) => Err(Error::invalid(
+            "command line",
+            flag,
+            format!(
+                "`{}` holds the control character {:?}, which cannot go into a batch script",
+                text.escape_debug(),
+                c
+            ),
+        )),
+        None => Ok(()),
+    }
+}
+
+/// A path as UTF-8 text for the batch script (see [`script_text`]).
+fn script_path_text(flag: &str, path: &Path) -> Result<String> {
+    let text = path
+        .to_str()
+        .ok_or_else(|| Error::invalid("command line", flag, format!("`{}` is not UTF-8 text", path.display())))?;
+    script_text(flag, text)?;
+    Ok(text.to_string())
+}
+
+/// A literal part of a Slurm file name pattern: `%` doubled, so that `%A`-like text in a folder
+/// name is not replaced.
+fn slurm_pattern_literal(s: &str) -> String {
+    s.replace('%', "%%")
+}
+
+/// A value of an `#SBATCH` line: double-quoted, with `\` and `"` escaped by a backslash (sbatch
+/// reads such a line as a shell-like word: quotes group, a backslash escapes, `#` outside quotes
+/// starts a comment).
+fn sbatch_quote(s: &str) -> String {
+    let mut out = String::from("\"");
+    for c in s.chars() {
+        if matches!(c, '\\' | '"') {
+            out.push('\\');
+        }
+        out.push(c);
+    }
+    out.push('"');
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn time_limits_follow_slurms_grammar() {
+        for good in ["30", "30:00", "2:00:00", "1-0", "1-12", "1-12:30", "1-12:30:15", "INFINITE", "0"] {
+            assert!(check_time(good).is_ok(), "{good}");
+        }
+        for bad in [
+            "",
+            "1:2:3:4",
+            "1-",
+            "-1",
+            "1-2-3",
+            "1-1:1:1:1",
+            "2h",
+            "1 0",
+            "30\n#SBATCH --uid=0",
+            "30;rm",
+            "1-0\n",
+            ":",
+            "1::2",
+            "１２",
+            "+5",
+        ] {
+            let e = check_time(bad).unwrap_err();
+            assert!(e.contains("Slurm time limit"), "{bad}: {e}");
+        }
+    }
+
+    #[test]
+    fn partitions_are_conservative_names() {
+        for good in ["local", "gpu-a100", "short,long", "p_1.x"] {
+            assert!(check_partition(good).is_ok(), "{good}");
+        }
+        for bad in ["", "a,,b", ",a", "a b", "a\n#SBATCH --x", "a;b", "$(id)", "a'b", "a\"b"] {
+            assert!(check_partition(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn script_values_refuse_control_characters_and_quote_for_sbatch() {
+        assert!(script_text("--out", "/a b/c").is_ok());
+        for bad in ["/a\nb", "/a\rb", "/a\tb", "/a\u{1b}b", "/a\0b"] {
+            let e = script_text("--out", bad).unwrap_err().to_string();
+            assert!(e.contains("--out") && e.contains("control character"), "{e}");
+        }
+        assert_eq!(sbatch_quote("/a b/%A_%a.out"), "\"/a b/%A_%a.out\"");
+        assert_eq!(sbatch_quote("/q\"x\\y #z"), "\"/q\\\"x\\\\y #z\"");
+        assert_eq!(slurm_pattern_literal("/100%A/"), "/100%%A/");
+        let o = SlurmOptions { time: Some("1:00\n".into()), ..Default::default() };
+        assert!(validate_options(&o).unwrap_err().to_string().contains("--time"));
+        let o = SlurmOptions { partition: Some("x\ny".into()), ..Default::default() };
+        assert!(validate_options(&o).unwrap_err().to_string().contains("--partition"));
+    }
 
     #[test]
     fn missing_points_split_into_even_contiguous_chunks() {

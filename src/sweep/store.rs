@@ -14,7 +14,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::experiment::Score;
-use crate::io::output::{write_atomic, TEMP_PREFIX};
+use crate::io::output::{read_regular, write_atomic, TEMP_PREFIX};
+use crate::render::Method;
+use crate::settings::Resolved;
 
 /// One score row of a point: a method under an eye case. PSNR in dB (`inf` for identical
 /// images); the 95% half-widths are present when the experiment's measurement gives them.
@@ -53,9 +55,21 @@ impl From<&Score> for ScoreRow {
     }
 }
 
+/// The format of a point record. A record of another format (or none that parses) is not
+/// complete: the point runs again on resume and is reported by a collection.
+pub const RECORD_FORMAT: u32 = 1;
+
+/// Records written before the format was stated are of format 1.
+fn format_one() -> u32 {
+    1
+}
+
 /// What one point produced.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PointRecord {
+    /// The record's format, [`RECORD_FORMAT`].
+    #[serde(default = "format_one")]
+    pub format: u32,
     /// Content hash of the point's resolved settings.
     pub id: String,
     /// Index of the point in the sweep when it ran.
@@ -78,6 +92,69 @@ pub struct PointRecord {
     pub version: String,
 }
 
+impl PointRecord {
+    /// Why this record cannot be the complete record of the point `r`, if it cannot: another
+    /// format, another point's settings hash, a method or eye case the point does not have (or
+    /// one of its rows missing), a score that is not a number or out of its range.
+    pub fn problem(&self, r: &Resolved) -> Option<String> {
+        if self.format != RECORD_FORMAT {
+            return Some(format!("record format {} (this inimtrace reads format {RECORD_FORMAT})", self.format));
+        }
+        if self.id != r.id {
+            return Some(format!("it records the settings hash {}, not this point's {}", self.id, r.id));
+        }
+        let mut expected = Vec::new();
+        for m in &r.experiment.methods {
+            let Ok(method) = m.parse::<Method>() else {
+                return Some(format!("the point's method `{m}` is not known"));
+            };
+            for c in &r.experiment.eye_cases {
+                expected.push((method.name(), c.name.clone()));
+            }
+        }
+        for row in &self.scores {
+            if row.method.parse::<Method>().map(|m| m.name() != row.method).unwrap_or(true) {
+                return Some(format!("unknown method `{}`", row.method.escape_debug()));
+            }
+            if !expected.iter().any(|(m, c)| *m == row.method && *c == row.eye_case) {
+                return Some(format!(
+                    "a score of {} under `{}`, which the point does not run",
+                    row.method, row.eye_case
+                ));
+            }
+            let psnr_ok = !row.psnr_db.is_nan() && row.psnr_db != f64::NEG_INFINITY;
+            let ssim_ok = row.ssim.is_finite() && (-1.0..=1.0).contains(&row.ssim);
+            let ci_ok = |c: Option<f64>| c.is_none_or(|c| c.is_finite() && c >= 0.0);
+            if !(psnr_ok && ssim_ok && ci_ok(row.psnr_ci95_db) && ci_ok(row.ssim_ci95)) {
+                return Some(format!(
+                    "the score of {} under {} is not valid (PSNR {} dB, SSIM {})",
+                    row.method, row.eye_case, row.psnr_db, row.ssim
+                ));
+            }
+        }
+        let have =
+            |(m, c): &(String, String)| self.scores.iter().filter(|s| s.method == *m && s.eye_case == *c).count();
+        if let Some((m, c)) = expected.iter().find(|e| have(e) != 1) {
+            return Some(format!("{} score(s) of {m} under {c}, not one", have(&(m.clone(), c.clone()))));
+        }
+        if !(self.seconds.is_finite() && self.seconds >= 0.0) {
+            return Some(format!("its time {} s is not valid", self.seconds));
+        }
+        None
+    }
+}
+
+/// What the store holds for one point.
+#[derive(Clone, Debug, PartialEq)]
+pub enum RecordState {
+    /// No record.
+    Missing,
+    /// A record that cannot count (it cannot be read, or [`PointRecord::problem`] says why).
+    Invalid(String),
+    /// The point's complete record.
+    Complete(PointRecord),
+}
+
 /// The folder of a sweep.
 #[derive(Clone, Debug)]
 pub struct Store {
@@ -90,8 +167,11 @@ impl Store {
     pub fn open(root: &Path) -> Result<Self> {
         let points = root.join("points");
         fs::create_dir_all(&points).map_err(|e| Error::io(&points, e))?;
-        let probe = points.join(format!("{TEMP_PREFIX}{}-probe", std::process::id()));
-        fs::write(&probe, b"").map_err(|e| Error::io(&points, e))?;
+        let probe = points.join(format!("{TEMP_PREFIX}probe-{}", std::process::id()));
+        write_atomic(&probe, |tmp| fs::write(tmp, b"").map_err(|e| Error::io(tmp, e))).map_err(|e| match e {
+            Error::Io { source, .. } => Error::io(&points, source),
+            other => other,
+        })?;
         let _ = fs::remove_file(&probe);
         Ok(Self { root: root.to_path_buf() })
     }
@@ -113,8 +193,34 @@ impl Store {
     /// The record of point `id`, if it is complete. A record that cannot be read or does not
     /// belong to `id` counts as missing (the point runs again and replaces it).
     pub fn read(&self, id: &str) -> Option<PointRecord> {
-        let bytes = fs::read(self.record_path(id)).ok()?;
+        // Never through a link, never blocking on a FIFO: such a record counts as missing.
+        let bytes = read_regular(&self.record_path(id)).ok()??;
         serde_json::from_slice::<PointRecord>(&bytes).ok().filter(|r| r.id == id)
+    }
+
+    /// What the store holds for the point `r`: its record checked against the point's settings.
+    pub fn state(&self, r: &Resolved) -> RecordState {
+        let path = self.record_path(&r.id);
+        let bytes = match read_regular(&path) {
+            Ok(Some(b)) => b,
+            Ok(None) => return RecordState::Missing,
+            Err(e) => return RecordState::Invalid(e.to_string()),
+        };
+        match serde_json::from_slice::<PointRecord>(&bytes) {
+            Err(e) => RecordState::Invalid(format!("not a point record: {e}")),
+            Ok(rec) => match rec.problem(r) {
+                Some(why) => RecordState::Invalid(why),
+                None => RecordState::Complete(rec),
+            },
+        }
+    }
+
+    /// The complete, checked record of the point `r` (see [`Store::state`]).
+    pub fn record_of(&self, r: &Resolved) -> Option<PointRecord> {
+        match self.state(r) {
+            RecordState::Complete(rec) => Some(rec),
+            _ => None,
+        }
     }
 
     /// The ids among `ids` whose points are complete.
@@ -186,6 +292,7 @@ mod tests {
 
     fn record(id: &str) -> PointRecord {
         PointRecord {
+            format: RECORD_FORMAT,
             id: id.into(),
             index: 3,
             values: vec!["eye.pupil_diameter=2".into()],

@@ -1,0 +1,176 @@
+//! Slurm submission that cannot be injected (issue #30, round two), without a running Slurm:
+//! the batch script of `sweep --slurm --dry-run` quotes every path for bash and for sbatch's
+//! `#SBATCH` lines, refuses values that would end a line or are not in Slurm's grammar, naming
+//! the flag, and passes `--threads` and `--max-memory` on to the tasks.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn inimtrace(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_inimtrace")).args(args).output().expect("run inimtrace")
+}
+
+fn tiny() -> String {
+    format!("{}/sweeps/tiny.toml", env!("CARGO_MANIFEST_DIR"))
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// The words of an `#SBATCH` line's options as sbatch reads them: whitespace separates, double
+/// quotes group, a backslash escapes the next character, `#` outside quotes ends the line.
+fn sbatch_words(line: &str) -> Vec<String> {
+    let mut words = Vec::new();
+    let (mut word, mut quoted, mut escaped, mut any) = (String::new(), false, false, false);
+    for c in line.chars() {
+        if escaped {
+            word.push(c);
+            escaped = false;
+        } else if c == '\\' {
+            escaped = true;
+            any = true;
+        } else if c == '"' {
+            quoted = !quoted;
+            any = true;
+        } else if c == '#' && !quoted {
+            break;
+        } else if c.is_whitespace() && !quoted {
+            if any {
+                words.push(std::mem::take(&mut word));
+                any = false;
+            }
+        } else {
+            word.push(c);
+            any = true;
+        }
+    }
+    assert!(!quoted && !escaped, "unbalanced #SBATCH line: {line}");
+    if any {
+        words.push(word);
+    }
+    words
+}
+
+/// The arguments the script's task 0 would run inimtrace with, as bash parses them (the `exec`
+/// of the program replaced by printing each argument on its own line).
+fn task_arguments(script: &str, dir: &Path) -> Vec<String> {
+    let body: String = script
+        .lines()
+        .map(|l| match l.strip_prefix("exec ") {
+            Some(rest) => format!("printf '%s\\n' {rest}"),
+            None => l.to_string(),
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    let file = dir.join("task.sh");
+    std::fs::write(&file, body).unwrap();
+    let o = Command::new("bash")
+        .arg(&file)
+        .env("SLURM_ARRAY_TASK_ID", "0")
+        .env_remove("SLURM_CPUS_PER_TASK")
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "the script does not run under bash: {}", stderr(&o));
+    String::from_utf8(o.stdout).unwrap().lines().map(String::from).collect()
+}
+
+#[test]
+fn an_out_folder_with_spaces_quotes_and_percent_signs_is_quoted_for_sbatch_and_bash() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("my sweep \"x\" 100%A #1 $(id) 'q'");
+    let out_s = out.to_str().unwrap();
+    let o = inimtrace(&[
+        "--threads",
+        "3",
+        "--max-memory",
+        "2G",
+        "sweep",
+        &tiny(),
+        "--out",
+        out_s,
+        "--slurm",
+        "--dry-run",
+        "--time",
+        "1-02:03:04",
+        "--partition",
+        "short,long",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let script = String::from_utf8(o.stdout).unwrap();
+    let sbatch: Vec<&str> = script.lines().filter(|l| l.starts_with("#SBATCH")).collect();
+    let option = |name: &str| -> String {
+        let line = sbatch.iter().find(|l| l.starts_with(&format!("#SBATCH --{name}="))).unwrap_or_else(|| {
+            panic!("no #SBATCH --{name}: {script}");
+        });
+        let words = sbatch_words(&line["#SBATCH".len()..]);
+        assert_eq!(words.len(), 1, "{line} is read as {words:?}");
+        words[0][name.len() + 3..].to_string()
+    };
+    // The log pattern is the folder itself (its `%` doubled, so that `%A` in it stays literal).
+    let abs = std::path::absolute(&out).unwrap();
+    assert_eq!(option("output"), format!("{}/slurm/%A_%a.out", abs.to_str().unwrap().replace('%', "%%")));
+    assert_eq!(option("time"), "1-02:03:04");
+    assert_eq!(option("partition"), "short,long");
+    // bash reads the folder as one word, unexpanded; the task gets --threads and --max-memory.
+    let args = task_arguments(&script, dir.path());
+    let at = |flag: &str| args.iter().position(|a| a == flag).map(|i| args[i + 1].clone());
+    assert_eq!(at("--out").as_deref(), abs.to_str(), "{args:?}");
+    assert_eq!(at("--threads").as_deref(), Some("3"), "{args:?}");
+    assert_eq!(at("--max-memory").as_deref(), Some(&(2u64 << 30).to_string()[..]), "{args:?}");
+    assert_eq!(at("--points").as_deref(), Some("0"), "{args:?}");
+}
+
+#[test]
+fn without_threads_the_task_runs_its_cpus_per_task() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o");
+    let o =
+        inimtrace(&["sweep", &tiny(), "--out", out.to_str().unwrap(), "--slurm", "--dry-run", "--cpus-per-task", "2"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let script = String::from_utf8(o.stdout).unwrap();
+    assert!(script.contains("SLURM_CPUS_PER_TASK") && !script.contains("--max-memory"), "{script}");
+}
+
+#[test]
+fn values_that_would_break_the_script_are_refused_naming_the_flag() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o");
+    let out_s = out.to_str().unwrap();
+    let base = ["sweep", &tiny(), "--out", out_s, "--slurm", "--dry-run"];
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["--time", "30\n#SBATCH --uid=0"], "--time"),
+        (vec!["--time", "2h"], "--time"),
+        (vec!["--time", "1:2:3:4"], "--time"),
+        (vec!["--partition", "local\n#SBATCH --uid=0"], "--partition"),
+        (vec!["--partition", "a b"], "--partition"),
+        (vec!["--partition", "$(reboot)"], "--partition"),
+        (vec!["--cpus-per-task", "0"], "--cpus-per-task"),
+        (vec!["--set", "description=\"\"\"a\n#SBATCH --uid=0\"\"\""], "--set"),
+    ];
+    for (extra, flag) in cases {
+        let mut args: Vec<&str> = base.to_vec();
+        args.extend(extra.iter().copied());
+        let o = inimtrace(&args);
+        let e = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{extra:?} was accepted: {}", String::from_utf8_lossy(&o.stdout));
+        assert!(e.contains(flag) && !e.contains("panicked"), "{extra:?}: {e}");
+        assert!(o.stdout.is_empty(), "{extra:?}: a script was printed");
+    }
+    // A folder whose name holds a line break.
+    let bad = dir.path().join("a\nb");
+    let o = inimtrace(&["sweep", &tiny(), "--out", bad.to_str().unwrap(), "--slurm", "--dry-run"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("--out") && stderr(&o).contains("control character"), "{}", stderr(&o));
+}
+
+#[test]
+fn slurm_local_stop_cancels_only_its_own_clusters_jobs() {
+    let text = std::fs::read_to_string(format!("{}/scripts/slurm-local.sh", env!("CARGO_MANIFEST_DIR"))).unwrap();
+    let cancels: Vec<&str> = text.lines().filter(|l| l.contains("scancel ")).collect();
+    assert!(!cancels.is_empty());
+    for l in cancels {
+        assert!(!l.contains("--user") && !l.contains("-u "), "cancels by user: {l}");
+        assert!(l.contains("--partition=\"$PARTITION\""), "not limited to its own partition: {l}");
+    }
+}
