@@ -420,9 +420,11 @@ fn run() -> Result<()> {
             let model = inimtrace::optics::eye::EyeModel::parse(&model, None, "--eye")?;
             let focus = match focus_diopters {
                 Some(f) => f,
-                None => inimtrace::optics::eye::SchematicEye::new(&model, model.accommodation_range().0, "--eye")?
-                    .paraxial(555.0)
-                    .conjugate_vergence_d,
+                None => {
+                    inimtrace::optics::eye::SchematicEye::new(&model, model.accommodation_range().0, "--eye")?
+                        .paraxial(555.0)
+                        .conjugate_vergence_d
+                }
             };
             let criterion = inimtrace::optics::eye::FocusCriterion::Paraxial;
             let d = inimtrace::optics::eye::describe::describe(&model, focus, pupil, criterion, 555.0)?;

@@ -18,8 +18,8 @@ use inimtrace::optics::spectrum::Primaries;
 use inimtrace::optics::{Display, Eye, Focus, Retina};
 use inimtrace::overrides::Override;
 use inimtrace::progress::Progress;
-use inimtrace::ray::Ray;
 use inimtrace::raster::RgbImage;
+use inimtrace::ray::Ray;
 use inimtrace::render::retina::{ground_truth, DisplayStack};
 use inimtrace::render::RadianceField;
 use inimtrace::settings::load_experiment;
@@ -98,7 +98,10 @@ fn a_uniform_scene_and_a_uniform_display_look_uniform_in_the_converged_measureme
         for k in 0..2 {
             let img = reps.mean_image(k);
             for p in &img.pixels {
-                assert!((p[0] - 0.25).abs() < 1e-6 && (p[1] - 0.5).abs() < 1e-6 && (p[2] - 1.0).abs() < 1e-6, "{k}: {p:?}");
+                assert!(
+                    (p[0] - 0.25).abs() < 1e-6 && (p[1] - 0.5).abs() < 1e-6 && (p[2] - 1.0).abs() < 1e-6,
+                    "{k}: {p:?}"
+                );
             }
         }
     }
@@ -128,13 +131,15 @@ fn small_paper(extra: &[String]) -> Vec<Override> {
 
 #[test]
 fn a_thin_aberration_free_schematic_eye_reproduces_the_thin_lens_within_the_intervals() {
-    // A reduced eye (one refracting surface, the iris at its vertex) whose surface is the
+    // A reduced eye (one refracting surface, the iris just in front of it) whose surface is the
     // ellipsoid Q = -1/n^2 that images infinity without aberration onto the axis (Descartes'
     // oval for infinity), a flat retina at its focal distance n R / (n - 1): focused at
     // infinity, free of spherical aberration, thin (the stop at the surface).
     let (n, r) = (1.336f64, 5.55f64);
+    // The iris 0.05 mm in front of the surface, behind a plane "window" of air.
     let user = format!(
-        "eye.user={{ retina_radius = 0.0, iris = {{ after = \"0\", distance = 0.0 }}, surfaces = [\
+        "eye.user={{ retina_radius = 0.0, iris = {{ after = \"0\", distance = 0.05 }}, surfaces = [\
+         {{ radius = 0.0, thickness = 0.1, semi_diameter = 5.0, medium = {{ constant = 1.0 }} }}, \
          {{ radius = {r}, conic = {}, thickness = {}, semi_diameter = 5.0, medium = {{ constant = {n} }} }}] }}",
         -1.0 / (n * n),
         n * r / (n - 1.0)
@@ -156,7 +161,13 @@ fn a_thin_aberration_free_schematic_eye_reproduces_the_thin_lens_within_the_inte
         // Independent samples (different eyes, same seeds): agreement within the combined
         // interval, with a floor for the eyes' residual differences (thickness, distortion).
         let bound = 2.0 * (cx * cx + cy * cy).sqrt() + 0.05;
-        assert!((x.psnr.mean - y.psnr.mean).abs() < bound, "{}: {} vs {} (bound {bound})", x.method, x.psnr.mean, y.psnr.mean);
+        assert!(
+            (x.psnr.mean - y.psnr.mean).abs() < bound,
+            "{}: {} vs {} (bound {bound})",
+            x.method,
+            x.psnr.mean,
+            y.psnr.mean
+        );
         let (sx, sy) = (x.ssim.ci95.unwrap(), y.ssim.ci95.unwrap());
         let bound = 2.0 * (sx * sx + sy * sy).sqrt() + 0.002;
         assert!((x.ssim.mean - y.ssim.mean).abs() < bound, "{}: {} vs {}", x.method, x.ssim.mean, y.ssim.mean);
@@ -196,15 +207,58 @@ fn the_thin_lens_through_the_generic_path_equals_its_fast_path() {
 }
 
 #[test]
-fn zz_debug_le_grand() {
+fn ray_aiming_finds_every_ray_inside_the_iris_over_the_field_and_the_visible() {
+    // Every retina point of the field (tangents to 0.42, many tiny ones near the axis) through
+    // every iris point of a 6 mm entrance pupil, at wavelengths across the primaries: ray aiming
+    // must find the ray (nothing in these eyes blocks it), so no sample turns black by a failed
+    // aim. Then it traces back in to the same retina point.
     use inimtrace::optics::eye::SchematicEye;
-    let e = SchematicEye::new(&EyeModel::LeGrand, 0.0, "t").unwrap();
-    for t in [0.0, 0.005, 0.0125, 0.0375, 0.1] {
-        let tan = DVec2::new(-t, t);
-        let r = e.retina_point(tan);
-        for nm in [450.0, 535.0, 555.0, 610.0] {
-            println!("t {t} nm {nm}: {:?}", e.ray_out(r, DVec2::ZERO, nm));
+    for model in [EyeModel::Navarro1985, EyeModel::Navarro1999, EyeModel::Arizona, EyeModel::LeGrand] {
+        let eye = SchematicEye::new(&model, 0.0, "t").unwrap();
+        let iris_r = 0.5 * eye.iris_diameter(6.0);
+        let mut failed = 0;
+        let mut total = 0;
+        for nm in [440.0, 480.0, 535.0, 555.0, 610.0, 650.0] {
+            let at = eye.at(nm);
+            for it in 0..40 {
+                let tau = if it < 10 { 1e-4 * it as f64 } else { 0.42 * (it - 9) as f64 / 30.0 };
+                for ia in 0..7 {
+                    let angle = 0.9 * ia as f64;
+                    let tangent = tau * DVec2::new(angle.cos(), angle.sin());
+                    let retina = eye.retina_point(tangent);
+                    for ip in 0..25 {
+                        let (px, py) = ((ip % 5) as f64 / 2.0 - 1.0, (ip / 5) as f64 / 2.0 - 1.0);
+                        let iris = DVec2::new(px, py) * iris_r * 0.7;
+                        total += 1;
+                        match at.ray_out(retina, iris) {
+                            None => {
+                                if failed < 6 {
+                                    eprintln!("FAIL {model:?} {nm} {tangent} {iris}");
+                                }
+                                failed += 1
+                            }
+                            Some(ray) => {
+                                let (back, _) = at.ray_in(ray).expect("the found ray comes back in");
+                                assert!((back - retina).length() < 1e-9, "{model:?} {nm} {tangent} {iris}");
+                            }
+                        }
+                    }
+                }
+            }
         }
+        assert_eq!(failed, 0, "{model:?}: {failed} of {total} aims failed");
     }
-    panic!();
+}
+
+#[test]
+fn an_eye_that_blocks_its_axial_rays_is_refused_naming_the_model() {
+    // The iris behind the vertex of a surface convex toward the air: every ray off the axis
+    // meets the surface before the iris plane, so no ray reaches the air through the iris.
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/paper.toml");
+    let user = "eye.user={ retina_radius = 0.0, iris = { after = \"0\", distance = 0.0 }, surfaces = [\
+                { radius = 5.55, conic = -0.56, thickness = 22.07, semi_diameter = 5.0, medium = { constant = 1.336 } }] }";
+    let set =
+        overrides(&["eye.model=\"user\"".into(), user.into(), r#"eye_cases=[{ name = "P", pinhole = true }]"#.into()]);
+    let err = load_experiment(Some(&path), None, &set).unwrap_err().to_string();
+    assert!(err.contains("eye.model") && err.contains("blocks its own axial rays"), "{err}");
 }

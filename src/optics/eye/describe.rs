@@ -45,7 +45,13 @@ pub struct EyeDescription {
 }
 
 /// The description of `model` focused at `focus_d` D with an entrance pupil of `pupil` mm.
-pub fn describe(model: &EyeModel, focus_d: f64, pupil: f64, criterion: FocusCriterion, nm: f64) -> Result<EyeDescription> {
+pub fn describe(
+    model: &EyeModel,
+    focus_d: f64,
+    pupil: f64,
+    criterion: FocusCriterion,
+    nm: f64,
+) -> Result<EyeDescription> {
     let range = model.accommodation_range();
     let at = |a: f64| -> Result<f64> {
         Ok(SchematicEye::new(model, a, "info --eye")?.best_focus_vergence(nm, criterion, pupil).unwrap_or(f64::NAN))

@@ -257,6 +257,27 @@ impl EyeOptics {
                 }
             };
             let iris = eye.iris_diameter(pupil_diameter);
+            // An eye that blocks its own axial rays would give black images and a PSNR of inf.
+            // Checked: the axis, the pupil's edge (at least 0.5 mm out) and a chief ray 0.1 off it.
+            let axis = eye.retina_point(DVec2::ZERO);
+            let edge = DVec2::new((0.5 * iris * (1.0 - 1e-9)).max(0.5), 0.0);
+            let field = eye.retina_point(DVec2::new(0.1, 0.0));
+            let nm = spec.reference_nm;
+            if eye.ray_out(axis, DVec2::ZERO, nm).is_none()
+                || eye.ray_out(axis, edge, nm).is_none()
+                || eye.ray_out(field, DVec2::ZERO, nm).is_none()
+            {
+                return Err(Error::invalid(
+                    source,
+                    "eye.model",
+                    format!(
+                        "the {} eye blocks its own axial rays (or the chief ray 0.1 off the axis) \
+                         through a {pupil_diameter} mm pupil (check the iris position and the \
+                         surfaces' semi-diameters)",
+                        spec.model.name()
+                    ),
+                ));
+            }
             (Lens::Schematic(Box::new(eye)), Some(a), iris)
         };
         let spectrum = if spec.primaries && !thin {

@@ -21,6 +21,9 @@ use crate::optics::PlaneRay;
 const AIM_TOLERANCE: f64 = 1e-11;
 /// Rays crossing the iris this far beyond its radius still pass `ray_in`, mm.
 const IRIS_SLACK: f64 = 1e-9;
+/// How far (mm along the ray) the iris plane may lie behind the last surface point, for the
+/// rounding of a crossing at a vertex that lies in the iris plane.
+const PLANE_SLACK: f64 = 1e-9;
 /// Iterations before ray aiming gives up.
 const AIM_ITERATIONS: usize = 40;
 /// The object-space start plane of inward rays, mm in front of the cornea vertex.
@@ -94,7 +97,9 @@ impl EyeAtWavelength<'_> {
     #[inline]
     fn iris_crossing(&self, p: DVec3, d: DVec3) -> Option<DVec3> {
         let s = (self.eye.iris_t - p.z) / d.z;
-        if !(s >= 0.0 && s.is_finite()) {
+        // The iris lies in the plane of the lens's front vertex: an axial ray meets both at once,
+        // and rounding may put the plane a hair behind the surface point.
+        if !(s >= -PLANE_SLACK && s.is_finite()) {
             return None;
         }
         let q = p + s * d;
@@ -132,7 +137,7 @@ impl EyeAtWavelength<'_> {
         let d = DVec3::new(u.x, u.y, -1.0).normalize();
         let (p, d) = self.backward(p, d, self.eye.surfaces.len(), self.eye.iris_after + 1)?;
         let s = (self.eye.iris_t - p.z) / d.z;
-        (s >= 0.0).then(|| (p + s * d, d))
+        (s >= -PLANE_SLACK).then(|| (p + s * d, d))
     }
 
     /// Ray aiming: the ray from retina point `retina` (this frame) through iris point `iris`,
@@ -185,14 +190,26 @@ impl EyeAtWavelength<'_> {
             let (r1, q1, d1) = next?;
             let dr = r1 - r;
             let s2 = step.length_squared();
-            if s2 > 0.0 {
+            let progress = r1.length_squared() <= 0.25 * r.length_squared();
+            u += step;
+            (r, q, d) = (r1, q1, d1);
+            if !progress {
+                // Broyden's secant update stalls when a step is poor (seen near the axis, where
+                // the rank-one updates lose one direction): start again from the Jacobian by
+                // central differences at the new point, which makes the next step Newton's.
+                let h = 1e-6;
+                let col = |e: DVec2| -> Option<DVec2> {
+                    let (a, _, _) = residual(u + e * h)?;
+                    let (b, _, _) = residual(u - e * h)?;
+                    Some((a - b) / (2.0 * h))
+                };
+                jac = [col(DVec2::X)?, col(DVec2::Y)?];
+            } else if s2 > 0.0 {
                 let js = jac[0] * step.x + jac[1] * step.y;
                 let corr = (dr - js) / s2;
                 jac[0] += corr * step.x;
                 jac[1] += corr * step.y;
             }
-            u += step;
-            (r, q, d) = (r1, q1, d1);
         }
         let (p, d) = self.backward(q, d, eye.iris_after + 1, 0)?;
         // Into the frame: z = origin_t - t, so the direction's z flips.
