@@ -27,11 +27,9 @@ impl<F: RadianceField + ?Sized> DisplaySource<'_, F> {
         let mut rays = Vec::with_capacity(samples.len() * 3);
         for sr in &all {
             let n = if sr.single { 1 } else { 3 };
-            for r in &sr.rays[..n] {
-                if let Some(r) = r {
-                    let w = world(*r);
-                    rays.push(Ray { origin: w.position.extend(z), dir: w.slope.extend(1.0) });
-                }
+            for r in sr.rays[..n].iter().flatten() {
+                let w = world(*r);
+                rays.push(Ray { origin: w.position.extend(z), dir: w.slope.extend(1.0) });
             }
         }
         let mut hits = vec![Sample::default(); rays.len()];
