@@ -58,7 +58,7 @@ impl StilesCrawford {
         if peak != DVec2::ZERO && radius > 0.0 {
             // The mean over the disk of the off-centre factor under the centred density, by a
             // product Gauss-Legendre rule in (s = r^2 / a^2, angle): smooth integrand, 1e-13.
-            let (nodes, weights) = gauss_legendre_64();
+            let (nodes, weights) = super::accommodation::gauss_legendre(64);
             let mut total = 0.0;
             for (&u, &wu) in nodes.iter().zip(&weights) {
                 for (&v, &wv) in nodes.iter().zip(&weights) {
@@ -107,40 +107,6 @@ impl StilesCrawford {
 fn polar(s: f64, angle: f64, radius: f64) -> DVec2 {
     let r = radius * s.sqrt();
     DVec2::new(r * angle.cos(), r * angle.sin())
-}
-
-/// Nodes and weights of the 64-point Gauss-Legendre rule on [-1, 1] (Newton on the Legendre
-/// recurrence).
-fn gauss_legendre_64() -> (Vec<f64>, Vec<f64>) {
-    let n = 64;
-    let (mut x, mut w) = (vec![0.0; n], vec![0.0; n]);
-    for i in 0..n {
-        let mut z = (std::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
-        for _ in 0..100 {
-            let (mut p0, mut p1) = (1.0, z);
-            for k in 2..=n {
-                let p2 = ((2 * k - 1) as f64 * z * p1 - (k - 1) as f64 * p0) / k as f64;
-                p0 = p1;
-                p1 = p2;
-            }
-            let dp = n as f64 * (z * p1 - p0) / (z * z - 1.0);
-            let dz = p1 / dp;
-            z -= dz;
-            if dz.abs() < 1e-16 {
-                let (mut p0, mut p1) = (1.0, z);
-                for k in 2..=n {
-                    let p2 = ((2 * k - 1) as f64 * z * p1 - (k - 1) as f64 * p0) / k as f64;
-                    p0 = p1;
-                    p1 = p2;
-                }
-                let dp = n as f64 * (z * p1 - p0) / (z * z - 1.0);
-                x[i] = z;
-                w[i] = 2.0 / ((1.0 - z * z) * dp * dp);
-                break;
-            }
-        }
-    }
-    (x, w)
 }
 
 /// The lens the rays go through.
@@ -411,7 +377,7 @@ mod tests {
 
     #[test]
     fn gauss_legendre_integrates_polynomials_exactly() {
-        let (x, w) = gauss_legendre_64();
+        let (x, w) = super::super::accommodation::gauss_legendre(64);
         assert!((w.iter().sum::<f64>() - 2.0).abs() < 1e-13);
         let i: f64 = x.iter().zip(&w).map(|(x, w)| w * x.powi(10)).sum();
         assert!((i - 2.0 / 11.0).abs() < 1e-13, "{i}");
