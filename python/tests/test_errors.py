@@ -80,16 +80,25 @@ def test_a_bad_image_file_is_an_image_error(cli, files):
 
 
 def test_an_impossible_optical_configuration_is_an_optics_error(cli, tmp_path):
-    scene, display = inimtrace.Scene.paper(), inimtrace.Display.paper(set={"display.lcd.resolution": [54, 54]})
+    # v2 with 1/v1 + 1/v2 = 1/f: the lenslets image the pupil centre onto the LCD, so PupilCenter
+    # is undefined for the eye at the origin (an eye at or beyond the lenslets is refused earlier,
+    # as a setting).
+    v2 = 1.0 / (1.0 / 6.427 - 1.0 / 20.0)
+    scene = inimtrace.Scene.paper()
+    display = inimtrace.Display.paper(set={"display.lcd.resolution": [54, 54], "display.lenslets_to_lcd": v2})
     with pytest.raises(inimtrace.OpticsError) as e:
-        inimtrace.render_display(scene, display, "PC", eye_position=(0.0, 0.0, 30.0))
+        inimtrace.render_display(scene, display, "PC")
     assert str(e.value) == cli_message(
-        cli, "render-display", "--method", "PC", "--eye-position", "0,0,30",
-        "--set", "display.lcd.resolution=[54, 54]", "--out", tmp_path / "p.exr",
+        cli, "render-display", "--method", "PC",
+        "--set", "display.lcd.resolution=[54, 54]", "--set", f"display.lenslets_to_lcd={v2!r}",
+        "--out", tmp_path / "p.exr",
     )
     with pytest.raises(inimtrace.OpticsError) as e:
-        inimtrace.Experiment.paper(set={"eye.position": [0.0, 0.0, 30.0]})
+        inimtrace.Experiment.paper(set={"display.lenslets_to_lcd": v2})
     assert "PupilCenter" in str(e.value) and "eye.position" in str(e.value)
+    with pytest.raises(inimtrace.ConfigError) as e:
+        inimtrace.Experiment.paper(set={"eye.position": [0.0, 0.0, 30.0]})
+    assert "eye.position" in str(e.value) and "lenslet plane" in str(e.value)
 
 
 def test_bad_eye_values_name_the_field():
