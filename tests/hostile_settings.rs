@@ -87,3 +87,13 @@ fn the_library_stages_refuse_it_too() {
     assert!(inimtrace::optics::transfer::check_eye_in_front(&display, f64::NAN, "eye", "position").is_err());
     assert!(inimtrace::optics::transfer::check_eye_in_front(&display, 19.99, "eye", "position").is_ok());
 }
+
+#[test]
+fn a_retina_smaller_than_the_ssim_window_is_refused_before_any_image_naming_the_field() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/paper.toml");
+    let set: Vec<inimtrace::overrides::Override> = vec!["eye.retina_resolution=8".parse().unwrap()];
+    let err = inimtrace::settings::load_experiment(Some(&path), None, &set).unwrap_err().to_string();
+    assert!(err.contains("eye.retina_resolution") && err.contains("SSIM") && err.contains("got 8"), "{err}");
+    let set: Vec<inimtrace::overrides::Override> = vec!["eye.retina_resolution=11".parse().unwrap()];
+    inimtrace::settings::load_experiment(Some(&path), None, &set).unwrap();
+}

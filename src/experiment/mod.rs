@@ -491,6 +491,18 @@ impl Experiment {
             samples_per_pixel: e.retina_samples,
         };
         retina.validate(source).map_err(|err| prefix_field(err, "eye."))?;
+        if retina.resolution < crate::metrics::SSIM_WINDOW {
+            // Table 1's SSIM needs its window inside the image: refused here, before any image.
+            return Err(Error::invalid(
+                source,
+                "eye.retina_resolution",
+                format!(
+                    "must be at least {0} pixels for SSIM's {0} x {0} window, got {1}",
+                    crate::metrics::SSIM_WINDOW,
+                    retina.resolution
+                ),
+            ));
+        }
         if spec.eye_cases.is_empty() {
             return Err(Error::invalid(source, "eye_cases", "list at least one eye case"));
         }
