@@ -76,6 +76,18 @@ pub(crate) struct EyeArgs {
     /// Pupil centre, mm.
     #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true, default_value = "0,0,0")]
     pub(crate) eye_position: DVec3,
+    /// The eye model, as `[eye] model` (thin-lens, navarro, navarro-1999, arizona, le-grand;
+    /// docs/EYE.md): a schematic eye focused at --focus-mm / --focus-diopters (--pupil is its
+    /// entrance pupil).
+    #[arg(long)]
+    pub(crate) eye_model: Option<String>,
+    /// As `[eye] spectrum`: "primaries" (a schematic eye's default; the default display
+    /// primaries) or "single".
+    #[arg(long)]
+    pub(crate) spectrum: Option<String>,
+    /// As `[eye] stiles_crawford_rho`, 1/mm^2.
+    #[arg(long)]
+    pub(crate) stiles_crawford_rho: Option<f64>,
 }
 
 impl EyeArgs {
@@ -83,7 +95,7 @@ impl EyeArgs {
         let Some(aperture) = Aperture::stated(self.pinhole, self.focus_mm, self.focus_diopters, self.pupil) else {
             bail!("give exactly one of --pinhole, --focus-mm or --focus-diopters")
         };
-        let eye = Eye {
+        let mut eye = Eye {
             retina_distance: self.retina_distance,
             aperture,
             pupil_grid: self.pupil_grid,
@@ -91,6 +103,14 @@ impl EyeArgs {
             optics: None,
         };
         eye.validate("command line")?;
+        let model = inimtrace::experiment::EyeModelSettings {
+            model: self.eye_model.clone(),
+            spectrum: self.spectrum.clone(),
+            stiles_crawford_rho: self.stiles_crawford_rho,
+            ..Default::default()
+        };
+        let focus = if self.focus_mm.is_some() { "--focus-mm" } else { "--focus-diopters" };
+        eye.optics = model.optics_for(&eye, "command line", focus)?;
         let retina =
             Retina { resolution: self.retina, half_tangent: self.half_tangent, samples_per_pixel: self.retina_samples };
         retina.validate("command line")?;

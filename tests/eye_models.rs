@@ -262,3 +262,23 @@ fn an_eye_that_blocks_its_axial_rays_is_refused_naming_the_model() {
     let err = load_experiment(Some(&path), None, &set).unwrap_err().to_string();
     assert!(err.contains("eye.model") && err.contains("blocks its own axial rays"), "{err}");
 }
+
+#[test]
+fn the_single_stage_commands_take_the_eye_model_and_name_an_unreachable_focus() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |args: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_inimtrace")).arg("--quiet").args(args).output().unwrap()
+    };
+    let (navarro, thin) = (dir.path().join("n.exr"), dir.path().join("t.exr"));
+    let base = ["ground-truth", "--focus-diopters", "2.5", "--retina", "24", "--pupil-grid", "3"];
+    let n = run(&[&base[..], &["--eye-model", "navarro", "--out", navarro.to_str().unwrap()]].concat());
+    assert!(n.status.success(), "{}", String::from_utf8_lossy(&n.stderr));
+    assert!(run(&[&base[..], &["--out", thin.to_str().unwrap()]].concat()).status.success());
+    // The real eye's chromatic and spherical aberration blur the chart: not the thin lens's image.
+    assert_ne!(std::fs::read(&navarro).unwrap(), std::fs::read(&thin).unwrap());
+    let far =
+        run(&["ground-truth", "--focus-diopters", "0", "--retina", "24", "--eye-model", "navarro", "--out", "x.exr"]);
+    let err = String::from_utf8_lossy(&far.stderr);
+    assert_eq!(far.status.code(), Some(1));
+    assert!(err.contains("--focus-diopters") && err.contains("out of reach"), "{err}");
+}

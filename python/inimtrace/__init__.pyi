@@ -74,6 +74,9 @@ class Eye:
         retina_samples: int = 1,
         retina_distance: float = 17.0,
         position: Tuple[float, float, float] = (0.0, 0.0, 0.0),
+        model: Optional[str] = None,
+        spectrum: Optional[str] = None,
+        stiles_crawford_rho: Optional[float] = None,
     ) -> None: ...
     @property
     def pinhole(self) -> bool: ...

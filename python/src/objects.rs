@@ -129,8 +129,12 @@ impl PyEye {
     /// side), `half_tangent`, `retina_samples` (k x k per pixel), `retina_distance` (v0, mm) and
     /// `position` (pupil centre, mm) default to the CLI's defaults.
     #[new]
+    /// `model` (`[eye] model`: "thin-lens", "navarro", "navarro-1999", "arizona", "le-grand"),
+    /// `spectrum` ("primaries" or "single") and `stiles_crawford_rho` choose the eye as an
+    /// experiment's `[eye]` does (docs/EYE.md).
     #[pyo3(signature = (*, pinhole=false, focus_mm=None, focus_diopters=None, pupil=5.0, pupil_grid=8, retina=512,
-        half_tangent=0.3, retina_samples=1, retina_distance=17.0, position=(0.0, 0.0, 0.0)))]
+        half_tangent=0.3, retina_samples=1, retina_distance=17.0, position=(0.0, 0.0, 0.0), model=None,
+        spectrum=None, stiles_crawford_rho=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         pinhole: bool,
@@ -143,10 +147,13 @@ impl PyEye {
         retina_samples: usize,
         retina_distance: f64,
         position: (f64, f64, f64),
+        model: Option<String>,
+        spectrum: Option<String>,
+        stiles_crawford_rho: Option<f64>,
     ) -> PyResult<Self> {
         let aperture = Aperture::stated(pinhole, focus_mm, focus_diopters, pupil)
             .ok_or_else(|| value_error("Eye: give exactly one of pinhole=True, focus_mm or focus_diopters"))?;
-        let eye = Eye {
+        let mut eye = Eye {
             retina_distance,
             aperture,
             pupil_grid,
@@ -154,6 +161,10 @@ impl PyEye {
             optics: None,
         };
         eye.validate("Eye()").py_err()?;
+        let settings =
+            inimtrace::experiment::EyeModelSettings { model, spectrum, stiles_crawford_rho, ..Default::default() };
+        let focus = if focus_mm.is_some() { "focus_mm" } else { "focus_diopters" };
+        eye.optics = settings.optics_for(&eye, "Eye()", focus).py_err()?;
         let retina = Retina { resolution: retina, half_tangent, samples_per_pixel: retina_samples };
         retina.validate("Eye()").py_err()?;
         Ok(Self { eye, retina })

@@ -55,6 +55,9 @@ def test_render_display_settings_equal_cli(cli, tmp_path, small):
         (["--pinhole"], dict(pinhole=True)),
         (["--focus-mm", 400, "--pupil", 3], dict(focus_mm=400, pupil=3)),
         (["--focus-diopters", 1.5, "--retina-samples", 2, "--half-tangent", 0.25], dict(focus_diopters=1.5, retina_samples=2, half_tangent=0.25)),
+        # A schematic eye (docs/EYE.md), polychromatic by default, with Stiles-Crawford.
+        (["--focus-diopters", 2.5, "--eye-model", "navarro", "--stiles-crawford-rho", 0.05],
+         dict(focus_diopters=2.5, model="navarro", stiles_crawford_rho=0.05)),
     ],
 )
 def test_ground_truth_and_simulate_equal_cli(cli, tmp_path, small, flags, eye):

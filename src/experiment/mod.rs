@@ -229,6 +229,22 @@ impl EyeModelSettings {
     }
 }
 
+impl EyeModelSettings {
+    /// The optics these settings give `eye` (its aperture and focus), with the default display
+    /// primaries: what the single-stage commands' `--eye-model` flags and Python's `Eye(model=...)`
+    /// build. `None` for the thin lens without Stiles-Crawford.
+    /// `focus_field` names the focus in errors (an unreachable focus).
+    pub fn optics_for(&self, eye: &Eye, source: &str, focus_field: &str) -> Result<Option<std::sync::Arc<EyeOptics>>> {
+        let pupil = match eye.aperture {
+            Aperture::Pinhole => 0.0,
+            Aperture::ThinLens { pupil_diameter, .. } => pupil_diameter,
+        };
+        let spec = self.optics_spec(pupil, source, "eye.")?;
+        let primaries = crate::optics::spectrum::Primaries::default();
+        EyeOptics::build(&spec, &eye.aperture, eye.retina_distance, &primaries, source, focus_field)
+    }
+}
+
 /// An error of the model's own fields (`eye.model`, `eye.user...`) renamed under `prefix`.
 fn prefix_model_field(e: Error, prefix: &str) -> Error {
     match e {
