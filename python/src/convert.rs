@@ -71,6 +71,25 @@ pub fn numpy_to_image(obj: &Bound<'_, PyAny>, name: &str, expected: Option<(usiz
             view.outer_iter().flat_map(|row| row.outer_iter().map(|p| [p[0], p[1], p[2]]).collect::<Vec<_>>()).collect()
         }
     };
+    // The CLI's EXR reader's rule: linear RGB is finite and non-negative.
+    if let Some((i, c, v)) = pixels
+        .iter()
+        .enumerate()
+        .find_map(|(i, p)| p.iter().enumerate().find(|(_, v)| !v.is_finite() || **v < 0.0).map(|(c, v)| (i, c, *v)))
+    {
+        let kind = if v.is_nan() {
+            "NaN"
+        } else if v.is_infinite() {
+            "infinite"
+        } else {
+            "negative"
+        };
+        return Err(value_error(format!(
+            "{name}[{}, {}, {c}] is {kind} ({v}); linear RGB samples must be finite and non-negative",
+            i / shape[1],
+            i % shape[1]
+        )));
+    }
     Ok(RgbImage { width: shape[1], height: shape[0], pixels })
 }
 

@@ -157,3 +157,16 @@ def test_values_outside_closed_sets_are_value_errors():
         inimtrace.compare(np.zeros((16, 16, 3), np.float32), np.zeros((16, 16, 3), np.float32), ssim="other")
     with pytest.raises(ValueError, match="set"):
         inimtrace.Display.paper(set="display.lenslets.pitch=1")
+
+
+@pytest.mark.parametrize("bad", [float("nan"), float("inf"), -0.5])
+def test_array_inputs_get_the_clis_checks_nan_infinite_and_negative_are_refused(bad):
+    display = inimtrace.Display.paper(set={"display.lcd.resolution": [54, 54]})
+    img = np.full((54, 54, 3), 0.5, dtype=np.float32)
+    img[3, 7, 1] = bad
+    eye = inimtrace.Eye(focus_mm=400, retina=16, pupil_grid=2)
+    with pytest.raises(ValueError) as e:
+        inimtrace.simulate(img, display, eye)
+    assert "display_image[3, 7, 1]" in str(e.value) and "finite and non-negative" in str(e.value)
+    with pytest.raises(ValueError):
+        inimtrace.compare(img, np.full((54, 54, 3), 0.5, dtype=np.float32))
