@@ -115,6 +115,21 @@ impl<'a> From<&'a RgbImage> for RgbView<'a> {
     }
 }
 
+/// What is wrong with a linear RGB sample read from outside (an EXR file, a NumPy array):
+/// "NaN", "infinite" or "negative"; `None` when it is finite and non-negative. The one rule for
+/// every input image.
+pub fn bad_sample(v: f32) -> Option<&'static str> {
+    if v.is_nan() {
+        Some("NaN")
+    } else if v.is_infinite() {
+        Some("infinite")
+    } else if v < 0.0 {
+        Some("negative")
+    } else {
+        None
+    }
+}
+
 /// Decodes an sRGB-encoded component in `[0, 1]` to linear (IEC 61966-2-1).
 pub fn srgb_to_linear(c: f64) -> f64 {
     if c <= 0.04045 {

@@ -72,18 +72,10 @@ pub fn numpy_to_image(obj: &Bound<'_, PyAny>, name: &str, expected: Option<(usiz
         }
     };
     // The CLI's EXR reader's rule: linear RGB is finite and non-negative.
-    if let Some((i, c, v)) = pixels
-        .iter()
-        .enumerate()
-        .find_map(|(i, p)| p.iter().enumerate().find(|(_, v)| !v.is_finite() || **v < 0.0).map(|(c, v)| (i, c, *v)))
-    {
-        let kind = if v.is_nan() {
-            "NaN"
-        } else if v.is_infinite() {
-            "infinite"
-        } else {
-            "negative"
-        };
+    let bad = |(i, p): (usize, &[f32; 3])| {
+        p.iter().enumerate().find_map(|(c, &v)| inimtrace::raster::bad_sample(v).map(|kind| (i, c, v, kind)))
+    };
+    if let Some((i, c, v, kind)) = pixels.iter().enumerate().find_map(bad) {
         return Err(value_error(format!(
             "{name}[{}, {}, {c}] is {kind} ({v}); linear RGB samples must be finite and non-negative",
             i / shape[1],

@@ -403,14 +403,7 @@ pub fn read_rgb_depth(path: &Path) -> Result<(RgbImage, Option<Vec<f32>>)> {
             FlatSamples::U32(v) => v.into_iter().map(|u| u as f32).collect(),
         };
         for (i, (px, v)) in img.pixels.iter_mut().zip(values).enumerate() {
-            if !v.is_finite() || v < 0.0 {
-                let kind = if v.is_nan() {
-                    "NaN"
-                } else if v.is_infinite() {
-                    "infinite"
-                } else {
-                    "negative"
-                };
+            if let Some(kind) = crate::raster::bad_sample(v) {
                 return Err(Error::parse(
                     path,
                     format!(
