@@ -110,7 +110,7 @@ impl EyeArgs {
             ..Default::default()
         };
         let focus = if self.focus_mm.is_some() { "--focus-mm" } else { "--focus-diopters" };
-        eye.optics = model.optics_for(&eye, "command line", focus)?;
+        eye.optics = model.optics_for(&eye, self.half_tangent, "command line", focus)?;
         let retina =
             Retina { resolution: self.retina, half_tangent: self.half_tangent, samples_per_pixel: self.retina_samples };
         retina.validate("command line")?;

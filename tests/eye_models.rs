@@ -46,7 +46,7 @@ fn spec(model: EyeModel, primaries: bool, stiles_crawford: Option<(f64, DVec2)>)
 
 fn eye_with(spec: &EyeOpticsSpec, focus_diopters: f64) -> Eye {
     let mut eye = Eye::thin_lens(5.0, Focus::Diopters(focus_diopters), 4);
-    eye.optics = EyeOptics::build(spec, &eye.aperture, 17.0, &Primaries::default(), "test", "focus").unwrap();
+    eye.optics = EyeOptics::build(spec, &eye.aperture, 17.0, &Primaries::default(), 0.5, "test", "focus").unwrap();
     eye
 }
 
@@ -72,7 +72,7 @@ fn a_uniform_scene_looks_uniform_through_every_eye_model() {
     // Le Grand does not accommodate: at its own focus.
     let s = spec(EyeModel::LeGrand, true, sc);
     let mut eye = Eye::pinhole();
-    eye.optics = EyeOptics::build(&s, &eye.aperture, 17.0, &Primaries::default(), "test", "focus").unwrap();
+    eye.optics = EyeOptics::build(&s, &eye.aperture, 17.0, &Primaries::default(), 0.5, "test", "focus").unwrap();
     let gt = ground_truth(&eye, &retina, &field, &Progress::hidden());
     for (i, p) in gt.pixels.iter().enumerate() {
         assert!((f64::from(p[1]) - 0.5).abs() < 1e-6, "pixel {i}: {p:?}");

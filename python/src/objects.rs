@@ -164,7 +164,7 @@ impl PyEye {
         let settings =
             inimtrace::experiment::EyeModelSettings { model, spectrum, stiles_crawford_rho, ..Default::default() };
         let focus = if focus_mm.is_some() { "focus_mm" } else { "focus_diopters" };
-        eye.optics = settings.optics_for(&eye, "Eye()", focus).py_err()?;
+        eye.optics = settings.optics_for(&eye, half_tangent, "Eye()", focus).py_err()?;
         let retina = Retina { resolution: retina, half_tangent, samples_per_pixel: retina_samples };
         retina.validate("Eye()").py_err()?;
         Ok(Self { eye, retina })

@@ -233,15 +233,30 @@ impl EyeModelSettings {
     /// The optics these settings give `eye` (its aperture and focus), with the default display
     /// primaries: what the single-stage commands' `--eye-model` flags and Python's `Eye(model=...)`
     /// build. `None` for the thin lens without Stiles-Crawford.
-    /// `focus_field` names the focus in errors (an unreachable focus).
-    pub fn optics_for(&self, eye: &Eye, source: &str, focus_field: &str) -> Result<Option<std::sync::Arc<EyeOptics>>> {
+    /// `focus_field` names the focus in errors (an unreachable focus); `half_tangent` is the
+    /// retina's half field per axis (the fitted ray map covers it).
+    pub fn optics_for(
+        &self,
+        eye: &Eye,
+        half_tangent: f64,
+        source: &str,
+        focus_field: &str,
+    ) -> Result<Option<std::sync::Arc<EyeOptics>>> {
         let pupil = match eye.aperture {
             Aperture::Pinhole => 0.0,
             Aperture::ThinLens { pupil_diameter, .. } => pupil_diameter,
         };
         let spec = self.optics_spec(pupil, source, "eye.")?;
         let primaries = crate::optics::spectrum::Primaries::default();
-        EyeOptics::build(&spec, &eye.aperture, eye.retina_distance, &primaries, source, focus_field)
+        EyeOptics::build(
+            &spec,
+            &eye.aperture,
+            eye.retina_distance,
+            &primaries,
+            half_tangent * std::f64::consts::SQRT_2,
+            source,
+            focus_field,
+        )
     }
 }
 
@@ -550,8 +565,15 @@ impl Experiment {
             eye.validate(source).map_err(|err| prefix_field(err, &format!("{field} / eye.")))?;
             let focus_field =
                 if c.focus_mm.is_some() { format!("{field}.focus_mm") } else { format!("{field}.focus_diopters") };
-            eye.optics =
-                EyeOptics::build(&optics_spec, &aperture, e.retina_distance, &primaries, source, &focus_field)?;
+            eye.optics = EyeOptics::build(
+                &optics_spec,
+                &aperture,
+                e.retina_distance,
+                &primaries,
+                e.retina_half_tangent * std::f64::consts::SQRT_2,
+                source,
+                &focus_field,
+            )?;
             cases.push(EyeCase { name: c.name.clone(), eye });
         }
         if methods.contains(&Method::PupilCenter) {

@@ -162,6 +162,7 @@ pub fn run_study(study: &Study, quiet: bool) -> Result<StudyResults> {
                 &eye.aperture,
                 eye.retina_distance,
                 &primaries,
+                half.length() * 1.02,
                 &study.source,
                 &format!("focus_diopters[{i}]"),
             )?;

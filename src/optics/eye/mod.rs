@@ -21,6 +21,7 @@ pub mod medium;
 pub mod model;
 pub mod navarro;
 pub mod paraxial;
+pub mod ray_map;
 pub mod refract;
 pub mod schematic;
 pub mod trace;

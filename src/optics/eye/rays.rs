@@ -26,6 +26,7 @@ use std::sync::Arc;
 
 use glam::DVec2;
 
+use super::ray_map::RayMap;
 use super::{Aperture, EyeModel, FocusCriterion, SchematicEye};
 use crate::error::{Error, Result};
 use crate::optics::spectrum::{Primaries, SpectrumSampler};
@@ -139,6 +140,9 @@ pub struct EyeOpticsSpec {
 #[derive(Clone, Debug)]
 pub struct EyeOptics {
     lens: Lens,
+    /// The schematic eye's fitted ray map over the measurement's field, when it is within its
+    /// tolerances of the exact aim (else every ray is aimed).
+    map: Option<RayMap>,
     /// The model.
     pub model: EyeModel,
     /// The solved accommodation, D (schematic eyes).
@@ -187,11 +191,14 @@ pub struct SampleRays {
 impl EyeOptics {
     /// The optics of an eye case with aperture `aperture`, or `None` when the eye is the paper's
     /// thin lens without Stiles-Crawford (the fast paths). `field` names the case for errors.
+    /// `max_tangent` is the largest retina tangent |t| the measurement asks for: a schematic
+    /// eye's fitted ray map ([`RayMap`]) covers it (0: every ray is aimed exactly).
     pub fn build(
         spec: &EyeOpticsSpec,
         aperture: &Aperture,
         retina_distance: f64,
         primaries: &Primaries,
+        max_tangent: f64,
         source: &str,
         field: &str,
     ) -> Result<Option<Arc<EyeOptics>>> {
@@ -251,6 +258,19 @@ impl EyeOptics {
         } else {
             Spectrum::Single(spec.reference_nm)
         };
+        let map = match &lens {
+            Lens::Schematic(eye) if max_tangent > 0.0 && max_tangent.is_finite() => {
+                let range = match &spectrum {
+                    Spectrum::Single(nm) => (*nm, *nm),
+                    Spectrum::Primaries(s) => s.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), s| {
+                        (lo.min(s.wavelength(0.0)), hi.max(s.wavelength(1.0)))
+                    }),
+                };
+                let scale = if pupil_diameter > 0.0 { iris_diameter / pupil_diameter } else { 0.0 };
+                RayMap::fit(eye, max_tangent, 0.5 * pupil_diameter, scale, range)
+            }
+            _ => None,
+        };
         if spec.wavelength_samples == 0 || spec.wavelength_samples > 64 {
             return Err(Error::invalid(
                 source,
@@ -262,6 +282,7 @@ impl EyeOptics {
             spec.stiles_crawford.map(|(rho, peak)| StilesCrawford::new(rho, peak, 0.5 * pupil_diameter));
         Ok(Some(Arc::new(EyeOptics {
             lens,
+            map,
             model: spec.model.clone(),
             accommodation,
             pupil_diameter,
@@ -272,6 +293,12 @@ impl EyeOptics {
             criterion: spec.criterion,
             reference_nm: spec.reference_nm,
         })))
+    }
+
+    /// The fitted ray map's largest errors against the exact aim on its check set (position at
+    /// z = 0 in mm, slope), when the map is used.
+    pub fn ray_map_error(&self) -> Option<(f64, f64)> {
+        self.map.as_ref().map(|m| m.check_error)
     }
 
     /// The schematic eye, if this is one.
@@ -325,6 +352,17 @@ impl EyeOptics {
                 SampleRays { rays: [Some(ray); 3], single: true, weight }
             }
             Lens::Schematic(eye) => {
+                if let Some(map) = &self.map {
+                    let fitted = match &self.spectrum {
+                        Spectrum::Single(nm) => map.ray(tangent, pupil, [*nm; 1]).map(|[r]| (r, r, r, true)),
+                        Spectrum::Primaries(s) => map
+                            .ray(tangent, pupil, [s[0].wavelength(u), s[1].wavelength(u), s[2].wavelength(u)])
+                            .map(|[r, g, b]| (r, g, b, false)),
+                    };
+                    if let Some((r, g, b, single)) = fitted {
+                        return SampleRays { rays: [Some(r), Some(g), Some(b)], single, weight };
+                    }
+                }
                 let retina = eye.retina_point(tangent);
                 let scale = if self.pupil_diameter > 0.0 { self.iris_diameter / self.pupil_diameter } else { 0.0 };
                 let iris = pupil * scale;
