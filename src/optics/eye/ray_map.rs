@@ -84,10 +84,10 @@ fn monomials(a: f64, b: f64, c: f64) -> [f64; TERMS] {
         pc[d] = pc[d - 1] * c;
     }
     let mut n = 0;
-    for i in 0..=DEGREE {
-        for j in 0..=DEGREE - i {
-            for k in 0..=DEGREE - i - j {
-                m[n] = pa[i] * pb[j] * pc[k];
+    for (i, a) in pa.iter().enumerate() {
+        for (j, b) in pb[..=DEGREE - i].iter().enumerate() {
+            for c in &pc[..=DEGREE - i - j] {
+                m[n] = a * b * c;
                 n += 1;
             }
         }
