@@ -295,12 +295,6 @@ impl EyeOptics {
         })))
     }
 
-    /// The fitted ray map's largest errors against the exact aim on its check set (position at
-    /// z = 0 in mm, slope), when the map is used.
-    pub fn ray_map_error(&self) -> Option<(f64, f64)> {
-        self.map.as_ref().map(|m| m.check_error)
-    }
-
     /// The schematic eye, if this is one.
     pub fn schematic(&self) -> Option<&SchematicEye> {
         match &self.lens {
