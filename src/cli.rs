@@ -81,8 +81,8 @@ pub(crate) struct EyeArgs {
     /// entrance pupil).
     #[arg(long)]
     pub(crate) eye_model: Option<String>,
-    /// As `[eye] spectrum`: "primaries" (a schematic eye's default; the default display
-    /// primaries) or "single".
+    /// As `[eye] spectrum`: "primaries" (a schematic eye's default; the display file's
+    /// `[primaries]`, or the default LCD's) or "single".
     #[arg(long)]
     pub(crate) spectrum: Option<String>,
     /// As `[eye] stiles_crawford_rho`, 1/mm^2.
@@ -91,7 +91,8 @@ pub(crate) struct EyeArgs {
 }
 
 impl EyeArgs {
-    pub(crate) fn eye(&self) -> Result<(Eye, Retina)> {
+    /// The eye and retina; a schematic eye's channels take `display`'s primaries.
+    pub(crate) fn eye(&self, display: &inimtrace::optics::Display) -> Result<(Eye, Retina)> {
         let Some(aperture) = Aperture::stated(self.pinhole, self.focus_mm, self.focus_diopters, self.pupil) else {
             bail!("give exactly one of --pinhole, --focus-mm or --focus-diopters")
         };
@@ -110,7 +111,8 @@ impl EyeArgs {
             ..Default::default()
         };
         let focus = if self.focus_mm.is_some() { "--focus-mm" } else { "--focus-diopters" };
-        eye.optics = model.optics_for(&eye, self.half_tangent, "command line", focus)?;
+        let primaries = display.primaries.clone().unwrap_or_default();
+        eye.optics = model.optics_for(&eye, self.half_tangent, &primaries, "command line", focus)?;
         let retina =
             Retina { resolution: self.retina, half_tangent: self.half_tangent, samples_per_pixel: self.retina_samples };
         retina.validate("command line")?;

@@ -520,7 +520,7 @@ fn render_display(
 fn simulate_command(g: &Globals, display_image: PathBuf, setup: Setup, eye: EyeArgs, out: PathBuf) -> Result<bool> {
     let (set, quiet) = (&g.set[..], g.quiet);
     let (_, display) = load_setup(&setup, set)?;
-    let (eye, retina) = eye.eye()?;
+    let (eye, retina) = eye.eye(&display)?;
     inimtrace::optics::transfer::check_eye_in_front(&display, eye.position.z, "command line", "--eye-position")?;
     check_memory("the retinal image", "--retina", retina.resolution * retina.resolution, 24)?;
     let img = inimtrace::io::exr::read_rgb(&display_image)?;
@@ -543,8 +543,8 @@ fn simulate_command(g: &Globals, display_image: PathBuf, setup: Setup, eye: EyeA
 fn ground_truth_command(g: &Globals, setup: Setup, eye: EyeArgs, out: PathBuf, backend: BackendArg) -> Result<bool> {
     let (set, quiet) = (&g.set[..], g.quiet);
     let backend = backend.choice()?;
-    let (scene, _) = load_setup(&setup, set)?;
-    let (eye, retina) = eye.eye()?;
+    let (scene, display) = load_setup(&setup, set)?;
+    let (eye, retina) = eye.eye(&display)?;
     check_memory("the retinal image", "--retina", retina.resolution * retina.resolution, 24)?;
     announce(&scene, backend, quiet);
     let (img, name) = with_field(&scene, backend, |fields| {

@@ -282,3 +282,38 @@ fn the_single_stage_commands_take_the_eye_model_and_name_an_unreachable_focus() 
     assert_eq!(far.status.code(), Some(1));
     assert!(err.contains("--focus-diopters") && err.contains("out of reach"), "{err}");
 }
+
+#[test]
+fn the_single_stage_commands_take_the_display_files_primaries() {
+    // A display whose three primaries are all one narrow line at 555 nm: a polychromatic
+    // schematic eye then sees every channel at 555 nm, so its ground truth is the
+    // single-wavelength one at 555 nm (to the line's 1 nm width), while the default primaries
+    // (610 / 535 / 450 nm) give the eye's chromatic aberration.
+    let dir = tempfile::tempdir().unwrap();
+    let display = dir.path().join("narrow.toml");
+    let base = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/displays/paper.toml")).unwrap();
+    let line = "{ peak_nm = 555.0, fwhm_nm = 1.0 }";
+    std::fs::write(&display, format!("{base}\n[primaries]\nred = {line}\ngreen = {line}\nblue = {line}\n")).unwrap();
+    let run = |args: &[&str]| {
+        let out =
+            std::process::Command::new(env!("CARGO_BIN_EXE_inimtrace")).arg("--quiet").args(args).output().unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    };
+    let image = |name: &str| inimtrace::io::exr::read_rgb(&dir.path().join(name)).unwrap();
+    let common =
+        ["ground-truth", "--focus-diopters", "2.5", "--retina", "24", "--pupil-grid", "3", "--eye-model", "navarro"];
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let d = display.to_str().unwrap();
+    run(&[&common[..], &["--display", d, "--spectrum", "primaries", "--out", &path("p.exr")]].concat());
+    run(&[&common[..], &["--display", d, "--spectrum", "single", "--out", &path("s.exr")]].concat());
+    run(&[&common[..], &["--spectrum", "primaries", "--out", &path("d.exr")]].concat());
+    let (p, s, default) = (image("p.exr"), image("s.exr"), image("d.exr"));
+    // Mean absolute differences (a sample of the grid estimator's 3 x 3 x 3 crossing a bar's
+    // edge moves a pixel by 1/27).
+    let mean = |a: &inimtrace::raster::RgbImage, b: &inimtrace::raster::RgbImage| {
+        let d: f32 = a.pixels.iter().flatten().zip(b.pixels.iter().flatten()).map(|(x, y)| (x - y).abs()).sum();
+        d / (3 * a.pixels.len()) as f32
+    };
+    let (narrow, wide) = (mean(&p, &s), mean(&default, &s));
+    assert!(wide > 1e-2 && narrow < 0.05 * wide, "{narrow} {wide}");
+}

@@ -170,7 +170,13 @@ def simulate(
     display_image: _Image, display: Display, eye: Eye, *, threads: Optional[int] = None, progress: _Progress = None
 ) -> _Image: ...
 def ground_truth(
-    scene: Scene, eye: Eye, backend: str = "auto", *, threads: Optional[int] = None, progress: _Progress = None
+    scene: Scene,
+    eye: Eye,
+    backend: str = "auto",
+    *,
+    display: Optional[Display] = None,
+    threads: Optional[int] = None,
+    progress: _Progress = None,
 ) -> _Image: ...
 def compare(a: _Image, b: _Image, ssim: str = "wang2004") -> Dict[str, Any]: ...
 def read_exr(path: _Path) -> Tuple[_Image, Optional[npt.NDArray[np.float32]]]: ...

@@ -120,6 +120,23 @@ impl PyDisplay {
 pub struct PyEye {
     pub eye: Eye,
     pub retina: Retina,
+    /// How a schematic eye's optics are rebuilt for a display's own primaries (None: the eye of
+    /// an experiment's case, built with its display's primaries already).
+    pub rebuild: Option<(inimtrace::experiment::EyeModelSettings, &'static str)>,
+}
+
+impl PyEye {
+    /// The eye seen with `display`: a polychromatic schematic eye's channels take the display's
+    /// `[primaries]` (the eye was built with the default primaries, not knowing the display).
+    pub fn for_display(&self, display: Option<&inimtrace::optics::Display>) -> PyResult<Eye> {
+        let mut eye = self.eye.clone();
+        let primaries = display.and_then(|d| d.primaries.as_ref());
+        let polychromatic = eye.optics.as_ref().is_some_and(|o| !o.is_single_wavelength());
+        if let (Some(primaries), Some((settings, focus)), true) = (primaries, &self.rebuild, polychromatic) {
+            eye.optics = settings.optics_for(&eye, self.retina.half_tangent, primaries, "Eye()", focus).py_err()?;
+        }
+        Ok(eye)
+    }
 }
 
 #[pymethods]
@@ -164,10 +181,11 @@ impl PyEye {
         let settings =
             inimtrace::experiment::EyeModelSettings { model, spectrum, stiles_crawford_rho, ..Default::default() };
         let focus = if focus_mm.is_some() { "focus_mm" } else { "focus_diopters" };
-        eye.optics = settings.optics_for(&eye, half_tangent, "Eye()", focus).py_err()?;
+        let primaries = inimtrace::optics::spectrum::Primaries::default();
+        eye.optics = settings.optics_for(&eye, half_tangent, &primaries, "Eye()", focus).py_err()?;
         let retina = Retina { resolution: retina, half_tangent, samples_per_pixel: retina_samples };
         retina.validate("Eye()").py_err()?;
-        Ok(Self { eye, retina })
+        Ok(Self { eye, retina, rebuild: Some((settings, focus)) })
     }
 
     #[getter]
@@ -346,7 +364,7 @@ impl PyExperiment {
         self.inner
             .cases
             .iter()
-            .map(|c| (c.name.clone(), PyEye { eye: c.eye.clone(), retina: self.inner.retina }))
+            .map(|c| (c.name.clone(), PyEye { eye: c.eye.clone(), retina: self.inner.retina, rebuild: None }))
             .collect()
     }
     /// "converged" or "grid".

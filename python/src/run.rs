@@ -180,7 +180,8 @@ pub fn simulate<'py>(
     let img = numpy_to_image(display_image, "display_image", Some((display.lcd.rows(), display.lcd.columns())))?;
     let n = eye.retina.resolution;
     check_memory("the retinal image", "retina", n * n, 24, "simulate()")?;
-    let (e, retina) = (&eye.eye, &eye.retina);
+    let e = &eye.for_display(Some(display))?;
+    let retina = &eye.retina;
     let mut sims = detached(py, threads, progress, || {
         let p = Progress::new(n as u64, "simulate", true);
         let sims = simulate_images(display, e, retina, &[&img], &p)?;
@@ -191,21 +192,25 @@ pub fn simulate<'py>(
 }
 
 /// The ground-truth retinal image of `scene` seen by `eye`, as `inimtrace ground-truth`: a
-/// `(n, n, 3)` float32 array.
+/// `(n, n, 3)` float32 array. A polychromatic schematic eye takes `display`'s primaries when it
+/// is given (else the default primaries).
 #[pyfunction]
-#[pyo3(signature = (scene, eye, backend="auto", *, threads=None, progress=None))]
+#[pyo3(signature = (scene, eye, backend="auto", *, display=None, threads=None, progress=None))]
+#[allow(clippy::too_many_arguments)]
 pub fn ground_truth<'py>(
     py: Python<'py>,
     scene: &PyScene,
     eye: &PyEye,
     backend: &str,
+    display: Option<&PyDisplay>,
     threads: Option<usize>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let backend = parse_backend(backend)?;
     let n = eye.retina.resolution;
     check_memory("the retinal image", "retina", n * n, 24, "ground_truth()")?;
-    let (scene, e, retina) = (&scene.inner, &eye.eye, &eye.retina);
+    let e = &eye.for_display(display.map(|d| &d.inner))?;
+    let (scene, retina) = (&scene.inner, &eye.retina);
     let img = detached(py, threads, progress, || {
         with_fields(scene, backend, |fields| {
             let p = Progress::new(n as u64, "ground truth", true);

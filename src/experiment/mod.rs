@@ -230,15 +230,17 @@ impl EyeModelSettings {
 }
 
 impl EyeModelSettings {
-    /// The optics these settings give `eye` (its aperture and focus), with the default display
-    /// primaries: what the single-stage commands' `--eye-model` flags and Python's `Eye(model=...)`
-    /// build. `None` for the thin lens without Stiles-Crawford.
+    /// The optics these settings give `eye` (its aperture and focus), with the display's
+    /// `primaries` (its `[primaries]`, or the default's): what the single-stage commands'
+    /// `--eye-model` flags and Python's `Eye(model=...)` build. `None` for the thin lens without
+    /// Stiles-Crawford.
     /// `focus_field` names the focus in errors (an unreachable focus); `half_tangent` is the
     /// retina's half field per axis (the fitted ray map covers it).
     pub fn optics_for(
         &self,
         eye: &Eye,
         half_tangent: f64,
+        primaries: &crate::optics::spectrum::Primaries,
         source: &str,
         focus_field: &str,
     ) -> Result<Option<std::sync::Arc<EyeOptics>>> {
@@ -247,12 +249,11 @@ impl EyeModelSettings {
             Aperture::ThinLens { pupil_diameter, .. } => pupil_diameter,
         };
         let spec = self.optics_spec(pupil, source, "eye.")?;
-        let primaries = crate::optics::spectrum::Primaries::default();
         EyeOptics::build(
             &spec,
             &eye.aperture,
             eye.retina_distance,
-            &primaries,
+            primaries,
             half_tangent * std::f64::consts::SQRT_2,
             source,
             focus_field,
