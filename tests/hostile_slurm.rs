@@ -1,7 +1,9 @@
 //! Slurm submission that cannot be injected (issue #30, round two), without a running Slurm:
 //! the batch script of `sweep --slurm --dry-run` quotes every path for bash and for sbatch's
 //! `#SBATCH` lines, refuses values that would end a line or are not in Slurm's grammar, naming
-//! the flag, and passes `--threads` and `--max-memory` on to the tasks.
+//! the flag, and passes `--threads` and `--max-memory` on to the tasks. With a fake `sbatch` and
+//! `squeue` first on `PATH`: a resource request the cluster refuses under `sbatch --test-only` is
+//! never submitted, and `--wait` stops on a job pending for a reason that cannot clear.
 
 use std::path::Path;
 use std::process::{Command, Output};
@@ -173,4 +175,86 @@ fn slurm_local_stop_cancels_only_its_own_clusters_jobs() {
         assert!(!l.contains("--user") && !l.contains("-u "), "cancels by user: {l}");
         assert!(l.contains("--partition=\"$PARTITION\""), "not limited to its own partition: {l}");
     }
+}
+
+/// A folder holding fake `sbatch` and `squeue` (shell scripts) that log their arguments to
+/// `calls.log` beside them.
+fn fake_slurm(dir: &Path, sbatch: &str, squeue: &str) -> std::path::PathBuf {
+    use std::os::unix::fs::PermissionsExt;
+    let bin = dir.join("bin");
+    std::fs::create_dir_all(&bin).unwrap();
+    for (name, body) in [("sbatch", sbatch), ("squeue", squeue)] {
+        let file = bin.join(name);
+        let log = bin.join("calls.log");
+        let text = format!("#!/bin/sh\necho \"{name} $*\" >> '{}'\n{body}\n", log.display());
+        std::fs::write(&file, text).unwrap();
+        std::fs::set_permissions(&file, std::fs::Permissions::from_mode(0o755)).unwrap();
+    }
+    bin
+}
+
+fn with_path(bin: &Path, args: &[&str]) -> Output {
+    let path = format!("{}:{}", bin.display(), std::env::var("PATH").unwrap_or_default());
+    Command::new(env!("CARGO_BIN_EXE_inimtrace")).args(args).env("PATH", path).output().expect("run inimtrace")
+}
+
+#[test]
+fn a_request_the_cluster_cannot_satisfy_is_refused_before_submission() {
+    let dir = tempfile::tempdir().unwrap();
+    // Slurm's answer for 99 CPUs per task on a 2-CPU node.
+    let sbatch = r#"case " $* " in *" --test-only "*)
+  echo "allocation failure: Requested node configuration is not available" >&2; exit 1;;
+esac
+echo 4242"#;
+    let bin = fake_slurm(dir.path(), sbatch, "exit 0");
+    let out = dir.path().join("o");
+    let o = with_path(
+        &bin,
+        &["--quiet", "sweep", &tiny(), "--out", out.to_str().unwrap(), "--slurm", "--cpus-per-task", "99"],
+    );
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "accepted: {e}");
+    assert_eq!(e.trim().lines().count(), 1, "not one line: {e}");
+    assert!(e.contains("--cpus-per-task 99") && e.contains("Requested node configuration is not available"), "{e}");
+    let calls = std::fs::read_to_string(bin.join("calls.log")).unwrap();
+    assert_eq!(calls.lines().count(), 1, "{calls}");
+    assert!(calls.starts_with("sbatch --test-only "), "{calls}");
+    // No script is left behind for a job that was never submitted.
+    let scripts = std::fs::read_dir(out.join("slurm")).map(|d| d.count()).unwrap_or(0);
+    assert_eq!(scripts, 0);
+}
+
+#[test]
+fn wait_stops_on_a_job_pending_for_a_reason_that_cannot_clear() {
+    for reason in ["PartitionConfig", "ReqNodeNotAvail,_UnavailableNodes:vm", "BadConstraints", "PartitionNodeLimit"] {
+        let dir = tempfile::tempdir().unwrap();
+        let bin = fake_slurm(dir.path(), "echo 4242", &format!("echo 'PENDING {reason}'"));
+        let out = dir.path().join("o");
+        let o = with_path(&bin, &["--quiet", "sweep", &tiny(), "--out", out.to_str().unwrap(), "--slurm", "--wait"]);
+        let e = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{reason}: {e}");
+        let last = e.trim().lines().last().unwrap_or("");
+        assert!(last.contains("job 4242") && last.contains(reason) && last.contains("scancel 4242"), "{reason}: {e}");
+        let calls = std::fs::read_to_string(bin.join("calls.log")).unwrap();
+        assert!(calls.contains("sbatch --test-only") && calls.contains("sbatch --parsable"), "{calls}");
+    }
+}
+
+#[test]
+fn wait_keeps_waiting_on_a_reason_that_clears() {
+    // Pending on `Resources` for five polls (longer than the hopeless reasons are given), then
+    // gone: the wait ends normally and reports the points the (fake) job did not record.
+    let dir = tempfile::tempdir().unwrap();
+    let count = dir.path().join("polls");
+    let squeue = format!(
+        "n=$(cat '{0}' 2>/dev/null || echo 0); echo $((n+1)) > '{0}'; [ \"$n\" -lt 5 ] && echo 'PENDING Resources'; exit 0",
+        count.display()
+    );
+    let bin = fake_slurm(dir.path(), "echo 4242", &squeue);
+    let out = dir.path().join("o");
+    let o = with_path(&bin, &["--quiet", "sweep", &tiny(), "--out", out.to_str().unwrap(), "--slurm", "--wait"]);
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert!(e.contains("job 4242 ended with 12 of 12 points missing") && !e.contains("cannot clear"), "{e}");
+    assert_eq!(std::fs::read_to_string(&count).unwrap().trim(), "6");
 }

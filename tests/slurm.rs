@@ -1,6 +1,7 @@
 //! `inimtrace sweep --slurm` on a real (single-node) Slurm cluster, `scripts/slurm-local.sh`:
 //! the tiny sweep as an array of 4 tasks gives the local run's `sweep.csv`; a task cancelled
-//! mid-way with `scancel` leaves no partial point, and resubmitting runs only its missing points.
+//! mid-way with `scancel` leaves no partial point, and resubmitting runs only its missing points;
+//! a request the node cannot satisfy (99 CPUs per task) is refused before anything is submitted.
 //!
 //! These tests start the cluster when it is not running (and stop it again), and are skipped,
 //! saying so on the terminal, only where it cannot be started (no root, no slurm-wlm/munge).
@@ -239,4 +240,23 @@ fn a_cancelled_task_leaves_no_partial_point_and_a_resubmission_runs_only_its_poi
         .collect();
     assert_eq!(listed, missing, "the resubmission runs only the missing points");
     assert!(start.elapsed() < Duration::from_secs(600), "took {:?}", start.elapsed());
+}
+
+#[test]
+fn a_request_the_node_cannot_satisfy_is_refused_at_submission() {
+    let _one = CLUSTER.lock().unwrap_or_else(|p| p.into_inner());
+    let Some(_cluster) = cluster("a_request_the_node_cannot_satisfy_is_refused_at_submission") else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("slurm");
+    let queued = || {
+        let o = Command::new("squeue").args(["-h", "-o", "%i %j"]).output().unwrap();
+        String::from_utf8_lossy(&o.stdout).lines().filter(|l| l.contains("inimtrace-tiny")).count()
+    };
+    let before = queued();
+    let (ok, _, e) =
+        inimtrace(&["sweep", &tiny(), "--out", out.to_str().unwrap(), "--slurm", "--cpus-per-task", "99", "--wait"]);
+    assert!(!ok, "submitted: {e}");
+    assert_eq!(e.trim().lines().count(), 1, "not one line: {e}");
+    assert!(e.contains("--cpus-per-task 99") && e.contains("cannot run this job"), "{e}");
+    assert_eq!(queued(), before, "a job was queued");
 }

@@ -105,14 +105,11 @@ pub fn submit(sweep: &Sweep, resolved: &[Resolved], store: &Store, opts: &SlurmO
     std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
     let path = dir.join(format!("submit-{}-{}.sbatch", super::store::unix_now(), std::process::id()));
     crate::io::output::write_atomic(&path, |tmp| std::fs::write(tmp, &sub.script).map_err(|e| Error::io(tmp, e)))?;
-    let out = Command::new("sbatch").arg("--parsable").arg(&path).output().map_err(|e| {
-        Error::External {
-            program: "sbatch",
-            message: format!(
-            "cannot run `sbatch` ({e}): is this a Slurm cluster? (`scripts/slurm-local.sh start` brings up one on this machine)"
-        ),
-        }
-    })?;
+    if let Err(e) = test_only(&path, opts) {
+        let _ = std::fs::remove_file(&path);
+        return Err(e);
+    }
+    let out = run_sbatch(&["--parsable"], &path)?;
     if !out.status.success() {
         return Err(Error::External {
             program: "sbatch",
@@ -132,11 +129,101 @@ pub fn submit(sweep: &Sweep, resolved: &[Resolved], store: &Store, opts: &SlurmO
     Ok(sub)
 }
 
+/// Runs `sbatch ARGS SCRIPT`.
+fn run_sbatch(args: &[&str], script: &Path) -> Result<std::process::Output> {
+    Command::new("sbatch").args(args).arg(script).output().map_err(|e| Error::External {
+        program: "sbatch",
+        message: format!(
+            "cannot run `sbatch` ({e}): is this a Slurm cluster? (`scripts/slurm-local.sh start` brings up one on this machine)"
+        ),
+    })
+}
+
+/// Asks Slurm, with `sbatch --test-only`, whether the cluster can ever run the script as written
+/// (partition, time limit, CPUs per task): a request it cannot satisfy would otherwise stay
+/// pending for ever. The refusal is one line naming the requested resources and Slurm's reasons.
+fn test_only(script: &Path, opts: &SlurmOptions) -> Result<()> {
+    let out = run_sbatch(&["--test-only"], script)?;
+    if out.status.success() {
+        return Ok(());
+    }
+    let mut asked = Vec::new();
+    if let Some(p) = &opts.partition {
+        asked.push(format!("--partition {p}"));
+    }
+    if let Some(t) = &opts.time {
+        asked.push(format!("--time {t}"));
+    }
+    if let Some(c) = opts.cpus_per_task {
+        asked.push(format!("--cpus-per-task {c}"));
+    }
+    let asked = if asked.is_empty() { String::new() } else { format!(" ({})", asked.join(", ")) };
+    Err(Error::External {
+        program: "sbatch",
+        message: format!(
+            "the cluster cannot run this job as requested{asked}: {} (`sbatch --test-only` refused it; nothing was submitted)",
+            slurm_reasons(&String::from_utf8_lossy(&out.stderr))
+        ),
+    })
+}
+
+/// Slurm's error text as one line: its lines without the `sbatch: error:` and `allocation
+/// failure:` prefixes, each once, joined by `; `.
+fn slurm_reasons(stderr: &str) -> String {
+    let mut reasons: Vec<String> = Vec::new();
+    for line in stderr.lines() {
+        let mut l = line.trim();
+        for prefix in ["sbatch: error:", "sbatch:", "error:", "allocation failure:", "Batch job submission failed:"] {
+            l = l.strip_prefix(prefix).map(str::trim).unwrap_or(l);
+        }
+        let l: String = l.chars().filter(|c| !c.is_control()).collect();
+        if !l.is_empty() && !reasons.iter().any(|r| r.eq_ignore_ascii_case(&l)) {
+            reasons.push(l);
+        }
+    }
+    if reasons.is_empty() {
+        "sbatch gave no reason".to_string()
+    } else {
+        reasons.join("; ")
+    }
+}
+
+/// Whether a pending job's `squeue` reason (`%r`) is one that cannot clear by waiting: the job
+/// asks for more than its partition or the cluster has, for nodes that are not there, or for
+/// what its account or QOS may never have.
+fn reason_never_clears(reason: &str) -> bool {
+    const NEVER: [&str; 12] = [
+        "PartitionConfig",
+        "PartitionNodeLimit",
+        "PartitionTimeLimit",
+        "BadConstraints",
+        "ReqNodeNotAvail",
+        "InvalidAccount",
+        "InvalidQOS",
+        "DependencyNeverSatisfied",
+        "Nodes_required_for_job_are_DOWN",
+        "AssocMaxCpuPerJobLimit",
+        "AssocMaxNodePerJobLimit",
+        "AssocMaxWallDurationPerJobLimit",
+    ];
+    let r = reason.trim();
+    NEVER.iter().any(|n| r.starts_with(n))
+        || (r.starts_with("QOSMax") && r.ends_with("PerJobLimit"))
+        || (r.starts_with("QOSMin") && r.ends_with("Limit"))
+}
+
+/// How many polls in a row (half a second apart) a pending reason that cannot clear is seen
+/// before `--wait` gives up: one poll could catch the controller between two decisions.
+const HOPELESS_POLLS: usize = 3;
+
 /// Waits until job `job` has no task pending or running, showing the points recorded so far.
+/// A task pending for a reason that cannot clear ([`reason_never_clears`]) stops the wait with
+/// an error naming the reason (the job stays queued; `scancel` removes it).
 pub fn wait_for(job: &str, resolved: &[Resolved], points: &[usize], store: &Store, quiet: bool) -> Result<()> {
     let progress = Progress::new(points.len() as u64, &format!("slurm job {job}"), quiet);
     let mut shown = 0;
     let mut failures = 0;
+    let mut hopeless = 0;
     loop {
         let done = points.iter().filter(|&&i| store.record_of(&resolved[i]).is_some()).count();
         if done > shown {
@@ -144,14 +231,37 @@ pub fn wait_for(job: &str, resolved: &[Resolved], points: &[usize], store: &Stor
             shown = done;
         }
         let out = Command::new("squeue")
-            .args(["-h", "-j", job, "-o", "%T"])
+            .args(["-h", "-j", job, "-o", "%T %r"])
             .output()
             .map_err(|e| Error::External { program: "squeue", message: format!("cannot run `squeue` ({e})") })?;
         let stderr = String::from_utf8_lossy(&out.stderr);
         if out.status.success() {
             failures = 0;
-            if String::from_utf8_lossy(&out.stdout).trim().is_empty() {
+            let stdout = String::from_utf8_lossy(&out.stdout);
+            if stdout.trim().is_empty() {
                 break;
+            }
+            let stuck = stdout.lines().find_map(|l| {
+                let (state, reason) = l.trim().split_once(' ')?;
+                (state == "PENDING" && reason_never_clears(reason)).then(|| reason.trim().to_string())
+            });
+            match stuck {
+                Some(reason) => {
+                    hopeless += 1;
+                    if hopeless >= HOPELESS_POLLS {
+                        progress.finish();
+                        let reason: String = reason.chars().filter(|c| !c.is_control()).take(200).collect();
+                        return Err(Error::External {
+                            program: "squeue",
+                            message: format!(
+                                "job {job} is pending for a reason that cannot clear by waiting: {reason} \
+                                 (the cluster cannot give it what it asks for); it is still queued: \
+                                 `scancel {job}` removes it"
+                            ),
+                        });
+                    }
+                }
+                None => hopeless = 0,
             }
         } else if stderr.contains("Invalid job id") {
             break; // finished long enough ago that Slurm forgot it
@@ -438,6 +548,48 @@ mod tests {
         assert_eq!(split(&[3, 4, 5], 4), ["3", "4", "5"]);
         assert_eq!(split(&[1, 3, 4, 9], 1), ["1,3..5,9"]);
         assert!(split(&[], 4).is_empty());
+    }
+
+    #[test]
+    fn pending_reasons_that_cannot_clear_are_told_from_those_that_can() {
+        for never in [
+            "PartitionConfig",
+            "PartitionNodeLimit",
+            "PartitionTimeLimit",
+            "BadConstraints",
+            "ReqNodeNotAvail,_UnavailableNodes:vm",
+            "ReqNodeNotAvail(Unavailable)",
+            "InvalidQOS",
+            "QOSMaxCpuPerJobLimit",
+            "DependencyNeverSatisfied",
+        ] {
+            assert!(reason_never_clears(never), "{never}");
+        }
+        for clears in [
+            "None",
+            "Resources",
+            "Priority",
+            "JobArrayTaskLimit",
+            "BeginTime",
+            "Dependency",
+            "QOSMaxJobsPerUserLimit",
+            "",
+        ] {
+            assert!(!reason_never_clears(clears), "{clears}");
+        }
+    }
+
+    #[test]
+    fn slurms_refusal_becomes_one_line() {
+        let text = "allocation failure: Requested node configuration is not available\n";
+        assert_eq!(slurm_reasons(text), "Requested node configuration is not available");
+        let text = "sbatch: error: CPU count per node can not be satisfied\n\
+                    sbatch: error: Batch job submission failed: Requested node configuration is not available\n";
+        assert_eq!(
+            slurm_reasons(text),
+            "CPU count per node can not be satisfied; Requested node configuration is not available"
+        );
+        assert_eq!(slurm_reasons(""), "sbatch gave no reason");
     }
 
     #[test]
