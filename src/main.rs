@@ -86,6 +86,10 @@ enum Command {
         /// Scene TOML replacing the experiment's scene.
         #[arg(long)]
         scene: Option<PathBuf>,
+        /// Use an output folder that holds another command's results (e.g. `resolution`'s),
+        /// removing the files that command's report lists (and nothing else).
+        #[arg(long)]
+        force: bool,
         #[command(flatten)]
         backend: BackendArg,
     },
@@ -220,6 +224,10 @@ enum Command {
         /// Output directory (default: out/resolution-<study name>).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Use an output folder that holds another command's results (e.g. `assess`'s), removing
+        /// the files that command's report lists (and nothing else).
+        #[arg(long)]
+        force: bool,
     },
     /// Describe a display design (central depth plane, eye box, field of view, pixels per
     /// degree, views through the pupil) or a scene (objects, sizes, depth range), and write the
@@ -343,8 +351,8 @@ fn run() -> Result<()> {
     // `assess` and `bench` print their own total with --timings.
     let mut printed_total = false;
     match cli.command {
-        Command::Assess { experiment, out, scene, backend } => {
-            printed_total = assess(&g, experiment, out, scene, backend)?;
+        Command::Assess { experiment, out, scene, force, backend } => {
+            printed_total = assess(&g, experiment, out, scene, force, backend)?;
         }
         Command::RenderDisplay { method, setup, samples_per_pixel, reference_plane, eye_position, out, backend } => {
             printed_total =
@@ -407,8 +415,9 @@ fn run() -> Result<()> {
             let text = inimtrace::sweep::execute(&cmd, &mut |m| eprintln!("{m}"))?;
             out!("{text}");
         }
-        Command::Resolution { study, out } => {
-            let cmd = inimtrace::resolution::command::ResolutionCommand { study, out, overrides: set.clone(), quiet };
+        Command::Resolution { study, out, force } => {
+            let cmd =
+                inimtrace::resolution::command::ResolutionCommand { study, out, overrides: set.clone(), quiet, force };
             let run = inimtrace::resolution::command::execute(&cmd)?;
             if !quiet {
                 eprint!("{}", run.timings_text());
@@ -451,6 +460,7 @@ fn assess(
     experiment: Option<PathBuf>,
     out: Option<PathBuf>,
     scene: Option<PathBuf>,
+    force: bool,
     backend: BackendArg,
 ) -> Result<bool> {
     let (set, quiet) = (&g.set[..], g.quiet);
@@ -462,7 +472,7 @@ fn assess(
     if !quiet {
         eprintln!("{}", exp.display.summary());
     }
-    let options = RunOptions { quiet, backend, exr_compression: g.exr_compression };
+    let options = RunOptions { quiet, backend, exr_compression: g.exr_compression, force };
     let report = experiment::assess(&exp, &out, options)?;
     out!("{}", experiment::table_markdown(&report, &exp));
     if g.timings {

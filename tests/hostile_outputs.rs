@@ -78,7 +78,7 @@ fn a_symlinked_lock_is_refused_and_its_target_is_unchanged() {
     // A lock hard-linked to an outside file would be truncated as well: refused too.
     std::fs::remove_file(out.join(LOCK_FILE)).unwrap();
     std::fs::hard_link(&target, out.join(LOCK_FILE)).unwrap();
-    let e = OutputDir::open(&out).unwrap_err().to_string();
+    let e = OutputDir::open(&out, inimtrace::io::output::RunKind::Assess, false).unwrap_err().to_string();
     assert!(e.contains(LOCK_FILE) && e.contains("hard links"), "{e}");
     assert_eq!(std::fs::read(&target).unwrap(), b"do not touch");
 }
@@ -201,4 +201,73 @@ fn sweep_records_and_scripts_do_not_follow_links() {
         assert!(t.elapsed() < Duration::from_secs(5));
     }
     assert_eq!(std::fs::read(&target).unwrap(), b"do not touch");
+}
+
+/// Names in `dir`, sorted.
+fn listing(dir: &Path) -> Vec<String> {
+    let mut n: Vec<String> =
+        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+    n.sort();
+    n
+}
+
+fn resolution_into(out: &Path, force: bool) -> Output {
+    let mut args = vec!["--quiet", "resolution", "studies/tiny.toml", "--out", out.to_str().unwrap()];
+    if force {
+        args.push("--force");
+    }
+    Command::new(inimtrace()).args(&args).output().unwrap()
+}
+
+#[test]
+fn one_folder_holds_one_commands_results_and_force_removes_only_what_its_report_lists() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let o = assess_into(dir.path(), &out);
+    assert!(o.status.success(), "{}", stderr(&o));
+    std::fs::write(out.join("my-notes.md"), b"mine").unwrap();
+    let assessed = listing(&out);
+    assert!(assessed.iter().any(|n| n == "results.json"), "{assessed:?}");
+    assert!(!assessed.iter().any(|n| n.starts_with('.')), "the lock or a journal stayed behind: {assessed:?}");
+    let bytes: Vec<Vec<u8>> = assessed.iter().map(|n| std::fs::read(out.join(n)).unwrap()).collect();
+
+    // `resolution` refuses the folder, naming `assess` and --force, and nothing changes.
+    let o = resolution_into(&out, false);
+    assert_refused_naming(&o, "inimtrace assess");
+    assert!(stderr(&o).contains("--force"), "{}", stderr(&o));
+    assert_eq!(listing(&out), assessed, "a refused run changed the folder");
+    for (n, b) in assessed.iter().zip(&bytes) {
+        assert_eq!(&std::fs::read(out.join(n)).unwrap(), b, "{n} changed");
+    }
+
+    // Forced, it removes exactly the files results.json listed, keeps the user's, and writes its own.
+    let report: serde_json::Value =
+        serde_json::from_slice(&bytes[assessed.iter().position(|n| n == "results.json").unwrap()]).unwrap();
+    let listed: Vec<String> =
+        report["files"].as_array().unwrap().iter().map(|f| f["name"].as_str().unwrap().to_string()).collect();
+    assert!(!listed.is_empty());
+    let o = resolution_into(&out, true);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let after = listing(&out);
+    for n in &listed {
+        assert!(!after.contains(n), "{n} of the assess run is still there: {after:?}");
+    }
+    assert!(!after.iter().any(|n| n == "results.json"));
+    assert!(after.iter().any(|n| n == "my-notes.md") && after.iter().any(|n| n == "study.json"), "{after:?}");
+    assert_eq!(std::fs::read(out.join("my-notes.md")).unwrap(), b"mine");
+
+    // And `assess` now refuses the resolution folder.
+    let o = assess_into(dir.path(), &out);
+    assert_refused_naming(&o, "inimtrace resolution");
+}
+
+#[test]
+fn a_users_results_json_is_never_deleted() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    std::fs::write(out.join("results.json"), b"{\"mine\": 1}").unwrap();
+    let o = assess_into(dir.path(), &out);
+    assert_refused_naming(&o, "results.json");
+    assert_eq!(std::fs::read(out.join("results.json")).unwrap(), b"{\"mine\": 1}");
 }

@@ -264,7 +264,7 @@ pub fn assess<'py>(
     let backend = parse_backend(backend)?;
     let exr_compression = parse_compression(exr_compression)?;
     let exp = &experiment.inner;
-    let options = RunOptions { quiet: true, backend, exr_compression };
+    let options = RunOptions { quiet: true, backend, exr_compression, force: false };
     let Assessment { report, displays, depths, ground_truths, perceived } =
         detached(py, threads, progress, || assess_images(exp, out.as_deref(), options))?;
 
@@ -367,7 +367,7 @@ pub fn resolution<'py>(
     threads: Option<usize>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let cmd = ResolutionCommand { study, out, overrides: overrides(set)?, quiet: true };
+    let cmd = ResolutionCommand { study, out, overrides: overrides(set)?, quiet: true, force: false };
     let run = detached(py, threads, progress, || execute(&cmd))?;
     let result = PyDict::new(py);
     result.set_item("out", run.out.display().to_string())?;

@@ -14,7 +14,7 @@ use super::{AssessReport, Experiment};
 use crate::budget::Estimate;
 use crate::error::Result;
 use crate::io::exr::{Attributes, ExrCompression};
-use crate::io::output::OutputDir;
+use crate::io::output::{OutputDir, RunKind};
 use crate::optics::Aperture;
 use crate::raster::RgbImage;
 use crate::render::{with_scene_fields, BackendChoice, FieldUser, RadianceField};
@@ -32,6 +32,9 @@ pub struct RunOptions {
     pub backend: BackendChoice,
     /// Compression of the EXR files (default lossless ZIP).
     pub exr_compression: ExrCompression,
+    /// Replace another command's results in the output folder (`--force`; see
+    /// [`crate::io::output`]).
+    pub force: bool,
 }
 
 /// Everything an assessment computed: its report and its images, in the experiment's order.
@@ -82,7 +85,7 @@ fn run(exp: &Experiment, out: Option<&Path>, opts: RunOptions, keep: bool) -> Re
     }
     // The folder is owned by this run (a second run into it fails at once) and every file
     // appears under its final name only when complete; `results.json` comes last.
-    let dir = out.map(OutputDir::open).transpose()?;
+    let dir = out.map(|o| OutputDir::open(o, RunKind::Assess, opts.force)).transpose()?;
     let dir = dir.as_ref();
     // The fields `with_scene_fields` chooses (the paper's kind of scene: the fused planar
     // kernel), called with their concrete types: no virtual call per ray.
@@ -109,8 +112,8 @@ fn run(exp: &Experiment, out: Option<&Path>, opts: RunOptions, keep: bool) -> Re
 
 /// Creates the output directory and checks it can be written, before any long computation
 /// (and removes what an earlier run left there; see [`OutputDir::open`]).
-pub fn prepare_output_dir(out: &Path) -> Result<()> {
-    OutputDir::open(out).map(|_| ())
+pub fn prepare_output_dir(out: &Path, force: bool) -> Result<()> {
+    OutputDir::open(out, RunKind::Assess, force).map(|_| ())
 }
 
 /// Rays per second per thread assumed by the announcement of long runs (a conservative figure

@@ -14,9 +14,20 @@
 //!   directory or a device is refused with its name, before any work, and again before each
 //!   rename, so a planted link can neither be written through nor truncate its target.
 //! - **Manifest**: every file written is recorded with its size and CRC-32; the run's report
-//!   (`results.json`) is written last and lists them, so its presence marks a complete run and
-//!   a reader can verify the set. Opening a folder removes the previous run's report first, then
-//!   the files its manifest listed, so no earlier output stands next to a new report.
+//!   (`results.json` for `assess`, `study.json` for `resolution`) is written last and lists them,
+//!   so its presence marks a complete run and a reader can verify the set.
+//! - **One command per folder**: a folder holding another command's report (or the leftovers of
+//!   another command's interrupted run) is refused, naming that command, unless the run is forced
+//!   (`--force`); a report that is not an inimtrace report (no manifest) is always refused, never
+//!   deleted. Opening a folder removes the previous run's report first, then the files its
+//!   manifest listed, so no earlier output stands next to a new report. Files are only ever
+//!   removed because a manifest lists them.
+//! - **Journal**: before each file is renamed into place its name is added to a journal
+//!   (`.inimtrace-journal.json`, with the command), removed when the report is written. A killed
+//!   run therefore leaves a journal, and the next run into the folder removes exactly the files it
+//!   lists (or refuses, when another command left them).
+//! - **Released**: the lock file is removed when the run ends (the OS lock goes with the
+//!   process), so a finished folder holds only the run's files.
 //!
 //! Atomic renames protect against a killed process and a full disk, not against power loss
 //! (files are not fsynced, which would cost seconds per run).
@@ -34,6 +45,49 @@ use crate::error::{Error, Result};
 
 /// Name of the lock file inside an output folder.
 pub const LOCK_FILE: &str = ".inimtrace.lock";
+/// Name of the journal of the files a run has written so far (see the module documentation).
+pub const JOURNAL_FILE: &str = ".inimtrace-journal.json";
+
+/// The command whose results an output folder holds: each writes its own report.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RunKind {
+    /// `inimtrace assess`, whose report is `results.json`.
+    Assess,
+    /// `inimtrace resolution`, whose report is `study.json`.
+    Resolution,
+}
+
+impl RunKind {
+    const ALL: [RunKind; 2] = [RunKind::Assess, RunKind::Resolution];
+
+    /// The command, as users type it.
+    pub fn command(self) -> &'static str {
+        match self {
+            RunKind::Assess => "inimtrace assess",
+            RunKind::Resolution => "inimtrace resolution",
+        }
+    }
+
+    /// The name of the report the command writes last.
+    pub fn report(self) -> &'static str {
+        match self {
+            RunKind::Assess => "results.json",
+            RunKind::Resolution => "study.json",
+        }
+    }
+
+    fn from_command(command: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|k| k.command() == command)
+    }
+}
+
+/// The journal's content: the command of the run and the names of the files it has put (or is
+/// about to put) in the folder.
+#[derive(Debug, Default, Serialize, Deserialize)]
+struct Journal {
+    command: String,
+    files: Vec<String>,
+}
 /// Prefix of temporary folders inside an output folder.
 pub const TEMP_PREFIX: &str = ".inimtrace-tmp-";
 /// Extensions of the files runs write: an entry of the output folder with a plain name and one
@@ -55,16 +109,27 @@ pub struct OutputFile {
 #[derive(Debug)]
 pub struct OutputDir {
     root: PathBuf,
+    kind: RunKind,
     /// Held for the lifetime of the run: the OS lock lives as long as this handle.
     _lock: File,
     written: Mutex<Vec<OutputFile>>,
+    /// Every name put in the journal so far (guarded with the journal file's writes).
+    journal: Mutex<Vec<String>>,
+}
+
+impl Drop for OutputDir {
+    /// Removes the lock file while the lock is still held (the handle closes after this).
+    fn drop(&mut self) {
+        let _ = fs::remove_file(self.root.join(LOCK_FILE));
+    }
 }
 
 impl OutputDir {
-    /// Creates (if needed) and takes the folder `root`, removes what a previous run left there
-    /// (its report, the files its manifest listed, temporary files), and checks that it can be
-    /// written.
-    pub fn open(root: &Path) -> Result<Self> {
+    /// Creates (if needed) and takes the folder `root` for a run of `kind`, removes what a
+    /// previous run of the same command left there (its report, the files its manifest or
+    /// journal listed, temporary files), and checks that it can be written. A folder holding
+    /// another command's results is refused unless `force`.
+    pub fn open(root: &Path, run: RunKind, force: bool) -> Result<Self> {
         fs::create_dir_all(root).map_err(|e| Error::io(root, e))?;
         if !root.is_dir() {
             return Err(Error::io(root, std::io::Error::other("is not a directory")));
@@ -101,8 +166,14 @@ impl OutputDir {
         let holder =
             format!("inimtrace process {} ({})", std::process::id(), std::env::args().collect::<Vec<_>>().join(" "));
         lock.set_len(0).and_then(|_| lock.write_all(holder.as_bytes())).map_err(|e| Error::io(&lock_path, e))?;
-        let dir = Self { root: root.to_path_buf(), _lock: lock, written: Mutex::new(Vec::new()) };
-        dir.remove_previous_run()?;
+        let dir = Self {
+            root: root.to_path_buf(),
+            kind: run,
+            _lock: lock,
+            written: Mutex::new(Vec::new()),
+            journal: Mutex::new(Vec::new()),
+        };
+        dir.remove_previous_run(force)?;
         Ok(dir)
     }
 
@@ -120,6 +191,7 @@ impl OutputDir {
     /// leave a complete file there; it is then renamed to `name` and recorded in the manifest.
     /// On error the temporary file is removed and nothing appears under `name`.
     pub fn write_with(&self, name: &str, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+        self.journal(name)?;
         let mut entry = None;
         write_atomic(&self.root.join(name), |temp| {
             write(temp)?;
@@ -155,30 +227,104 @@ impl OutputDir {
     /// stays owned until this handle is dropped).
     pub fn finish_report(&self, name: &str, report: impl FnOnce(&[OutputFile]) -> Result<Vec<u8>>) -> Result<()> {
         let bytes = report(&self.manifest())?;
-        self.write_bytes(name, &bytes)
+        self.write_bytes(name, &bytes)?;
+        // The report lists every file now: the journal has done its work.
+        let journal = self.root.join(JOURNAL_FILE);
+        match fs::remove_file(&journal) {
+            Ok(()) => Ok(()),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
+            Err(e) => Err(Error::io(&journal, e)),
+        }
     }
 
-    /// Removes the previous run's report (`results.json`) first, so that nothing looks
-    /// complete, then every file its manifest listed, and left-over temporary files.
-    fn remove_previous_run(&self) -> Result<()> {
-        let report = self.root.join("results.json");
-        let listed: Vec<String> = read_regular(&report)?
-            .and_then(|b| serde_json::from_slice::<serde_json::Value>(&b).ok())
-            .and_then(|v| v.get("files").cloned())
-            .and_then(|f| serde_json::from_value::<Vec<OutputFile>>(f).ok())
-            .unwrap_or_default()
-            .into_iter()
-            .map(|f| f.name)
-            .collect();
-        match fs::remove_file(&report) {
-            Ok(()) => {}
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
-            Err(e) => return Err(Error::io(&report, e)),
+    /// Adds `name` to the journal (written atomically) before the file is put in place.
+    fn journal(&self, name: &str) -> Result<()> {
+        let mut names = self.journal.lock().unwrap_or_else(|p| p.into_inner());
+        if names.iter().any(|n| n == name) {
+            return Ok(());
         }
-        for name in listed {
-            // Only plain names inside the folder: a crafted manifest must not reach outside it.
-            if is_plain_name(&name) {
-                let _ = fs::remove_file(self.root.join(name));
+        names.push(name.to_string());
+        let journal = Journal { command: self.kind.command().to_string(), files: names.clone() };
+        let bytes =
+            serde_json::to_vec(&journal).map_err(|e| Error::parse(self.root.join(JOURNAL_FILE), e.to_string()))?;
+        write_atomic(&self.root.join(JOURNAL_FILE), |p| fs::write(p, &bytes).map_err(|e| Error::io(p, e)))
+    }
+
+    /// What earlier runs left in the folder: each command's report with the files its manifest
+    /// lists, and an interrupted run's journal. Refuses reports inimtrace did not write, and
+    /// (unless `force`) another command's results.
+    fn previous_runs(&self, force: bool) -> Result<Vec<(PathBuf, Vec<String>)>> {
+        let mut found = Vec::new();
+        let other = |path: &Path, kind: RunKind, what: &str| {
+            Error::io(
+                &self.root,
+                std::io::Error::other(format!(
+                    "holds {what} of `{}` ({}); choose a new --out for `{}`, or pass --force to replace them \
+                     (only the files that run listed are removed)",
+                    kind.command(),
+                    path.file_name().unwrap_or_default().to_string_lossy(),
+                    self.kind.command()
+                )),
+            )
+        };
+        for kind in RunKind::ALL {
+            let report = self.root.join(kind.report());
+            let Some(bytes) = read_regular(&report)? else { continue };
+            let files = serde_json::from_slice::<serde_json::Value>(&bytes)
+                .ok()
+                .and_then(|v| v.get("files").cloned())
+                .and_then(|f| serde_json::from_value::<Vec<OutputFile>>(f).ok())
+                .ok_or_else(|| {
+                    Error::io(
+                        &report,
+                        std::io::Error::other(
+                            "is not a report written by inimtrace (it lists no files), and inimtrace never \
+                             deletes a file it did not write: move it away or choose another --out",
+                        ),
+                    )
+                })?;
+            if kind != self.kind && !force {
+                return Err(other(&report, kind, "the results"));
+            }
+            found.push((report, files.into_iter().map(|f| f.name).collect()));
+        }
+        let journal_path = self.root.join(JOURNAL_FILE);
+        if let Some(bytes) = read_regular(&journal_path)? {
+            let journal: Journal = serde_json::from_slice(&bytes).map_err(|_| {
+                Error::parse(
+                    &journal_path,
+                    "is not an inimtrace journal (it cannot be read): remove it or choose another --out",
+                )
+            })?;
+            let kind = RunKind::from_command(&journal.command).ok_or_else(|| {
+                Error::parse(&journal_path, format!("names an unknown command {:?}", journal.command))
+            })?;
+            if kind != self.kind && !force {
+                return Err(other(&journal_path, kind, "the files of an interrupted run"));
+            }
+            found.push((journal_path, journal.files));
+        }
+        Ok(found)
+    }
+
+    /// Removes each previous run's report (or journal) first, so that nothing looks complete,
+    /// then every file it listed, and left-over temporary files.
+    fn remove_previous_run(&self, force: bool) -> Result<()> {
+        for (record, listed) in self.previous_runs(force)? {
+            match fs::remove_file(&record) {
+                Ok(()) => {}
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+                Err(e) => return Err(Error::io(&record, e)),
+            }
+            for name in listed {
+                // Only plain names inside the folder: a crafted manifest must not reach outside it.
+                if is_plain_name(&name) {
+                    let path = self.root.join(name);
+                    // Never through a link or at a special file (refused when the folder was opened).
+                    if fs::symlink_metadata(&path).is_ok_and(|m| m.is_file()) {
+                        let _ = fs::remove_file(path);
+                    }
+                }
             }
         }
         if let Ok(entries) = fs::read_dir(&self.root) {
@@ -189,9 +335,9 @@ impl OutputDir {
             }
         }
         // The folder can be written (before any long computation).
-        self.write_with(".inimtrace-write-test", |p| fs::write(p, b"").map_err(|e| Error::io(p, e)))?;
-        let _ = fs::remove_file(self.root.join(".inimtrace-write-test"));
-        self.written.lock().unwrap_or_else(|p| p.into_inner()).clear();
+        let probe = self.root.join(".inimtrace-write-test");
+        write_atomic(&probe, |p| fs::write(p, b"").map_err(|e| Error::io(p, e)))?;
+        let _ = fs::remove_file(probe);
         Ok(())
     }
 }
@@ -401,7 +547,7 @@ mod tests {
     #[test]
     fn files_appear_only_when_complete_and_are_listed() {
         let dir = tempfile::tempdir().unwrap();
-        let out = OutputDir::open(dir.path()).unwrap();
+        let out = OutputDir::open(dir.path(), RunKind::Assess, false).unwrap();
         out.write_bytes("a.txt", b"hello").unwrap();
         let err = out.write_with("b.txt", |p| {
             fs::write(p, b"half").unwrap();
@@ -423,27 +569,90 @@ mod tests {
     #[test]
     fn a_second_run_into_the_folder_fails_at_once_naming_the_holder() {
         let dir = tempfile::tempdir().unwrap();
-        let first = OutputDir::open(dir.path()).unwrap();
-        let e = OutputDir::open(dir.path()).unwrap_err().to_string();
+        let first = OutputDir::open(dir.path(), RunKind::Assess, false).unwrap();
+        let e = OutputDir::open(dir.path(), RunKind::Assess, false).unwrap_err().to_string();
         assert!(e.contains("in use by inimtrace process") && e.contains(&std::process::id().to_string()), "{e}");
         drop(first);
-        OutputDir::open(dir.path()).unwrap();
+        OutputDir::open(dir.path(), RunKind::Assess, false).unwrap();
     }
 
     #[test]
     fn a_new_run_removes_the_previous_runs_files_and_report() {
         let dir = tempfile::tempdir().unwrap();
-        let out = OutputDir::open(dir.path()).unwrap();
+        let out = OutputDir::open(dir.path(), RunKind::Assess, false).unwrap();
         out.write_bytes("old.exr", b"x").unwrap();
         out.finish("results.json", |files| Ok(serde_json::to_vec(&serde_json::json!({ "files": files })).unwrap()))
             .unwrap();
         fs::write(dir.path().join("users-notes.txt"), b"keep").unwrap();
         fs::write(dir.path().join(format!("{TEMP_PREFIX}1-x.exr")), b"partial").unwrap();
-        let _again = OutputDir::open(dir.path()).unwrap();
+        let _again = OutputDir::open(dir.path(), RunKind::Assess, false).unwrap();
         assert!(!dir.path().join("results.json").exists());
         assert!(!dir.path().join("old.exr").exists());
         assert!(!dir.path().join(format!("{TEMP_PREFIX}1-x.exr")).exists());
         assert!(dir.path().join("users-notes.txt").exists(), "a file no run wrote was removed");
+    }
+
+    fn names(dir: &Path) -> Vec<String> {
+        let mut n: Vec<String> =
+            fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+        n.sort();
+        n
+    }
+
+    fn report(files: &[OutputFile]) -> Result<Vec<u8>> {
+        Ok(serde_json::to_vec(&serde_json::json!({ "files": files })).unwrap())
+    }
+
+    #[test]
+    fn another_commands_folder_is_refused_and_kept_unless_forced() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = OutputDir::open(dir.path(), RunKind::Assess, false).unwrap();
+        out.write_bytes("sim_LC_Near.exr", b"x").unwrap();
+        out.finish(RunKind::Assess.report(), report).unwrap();
+        fs::write(dir.path().join("notes.txt"), b"mine").unwrap();
+        let before = names(dir.path());
+        assert_eq!(before, ["notes.txt", "results.json", "sim_LC_Near.exr"], "the lock stayed behind: {before:?}");
+        let e = OutputDir::open(dir.path(), RunKind::Resolution, false).unwrap_err().to_string();
+        assert!(e.contains("`inimtrace assess`") && e.contains("results.json") && e.contains("--force"), "{e}");
+        assert_eq!(names(dir.path()), before, "a refused run changed the folder");
+        // Forced: only what the first run's manifest listed goes.
+        let forced = OutputDir::open(dir.path(), RunKind::Resolution, true).unwrap();
+        forced.write_bytes("mtf.csv", b"m").unwrap();
+        forced.finish(RunKind::Resolution.report(), report).unwrap();
+        assert_eq!(names(dir.path()), ["mtf.csv", "notes.txt", "study.json"]);
+        // And back: assess refuses the resolution folder.
+        let e = OutputDir::open(dir.path(), RunKind::Assess, false).unwrap_err().to_string();
+        assert!(e.contains("`inimtrace resolution`") && e.contains("study.json"), "{e}");
+    }
+
+    #[test]
+    fn a_report_inimtrace_did_not_write_is_refused_and_never_deleted() {
+        let dir = tempfile::tempdir().unwrap();
+        fs::write(dir.path().join("results.json"), b"{\"my\": \"data\"}").unwrap();
+        for force in [false, true] {
+            let e = OutputDir::open(dir.path(), RunKind::Assess, force).unwrap_err().to_string();
+            assert!(e.contains("results.json") && e.contains("not a report written by inimtrace"), "{e}");
+            assert_eq!(fs::read(dir.path().join("results.json")).unwrap(), b"{\"my\": \"data\"}");
+        }
+    }
+
+    #[test]
+    fn an_interrupted_runs_files_are_removed_by_the_next_run_of_its_command_only() {
+        let dir = tempfile::tempdir().unwrap();
+        {
+            let out = OutputDir::open(dir.path(), RunKind::Resolution, false).unwrap();
+            out.write_bytes("mtf.csv", b"m").unwrap();
+            out.write_bytes("mtf.png", b"p").unwrap();
+            // Dropped without a report: an interrupted run.
+        }
+        fs::write(dir.path().join("notes.txt"), b"mine").unwrap();
+        assert_eq!(names(dir.path()), [JOURNAL_FILE, "mtf.csv", "mtf.png", "notes.txt"]);
+        let e = OutputDir::open(dir.path(), RunKind::Assess, false).unwrap_err().to_string();
+        assert!(e.contains("interrupted") && e.contains("`inimtrace resolution`"), "{e}");
+        let again = OutputDir::open(dir.path(), RunKind::Resolution, false).unwrap();
+        assert_eq!(names(dir.path()), [LOCK_FILE, "notes.txt"]);
+        drop(again);
+        assert_eq!(names(dir.path()), ["notes.txt"]);
     }
 
     #[test]

@@ -11,7 +11,7 @@ use super::report::{accommodation_csv, accommodation_rows, display_json, display
 use super::run::{run_study, StudyResults, Timing};
 use super::study::Study;
 use crate::error::Result;
-use crate::io::output::OutputDir;
+use crate::io::output::{OutputDir, RunKind};
 use crate::overrides::Override;
 
 /// What `inimtrace resolution` was asked.
@@ -25,6 +25,8 @@ pub struct ResolutionCommand {
     pub overrides: Vec<Override>,
     /// No progress bars.
     pub quiet: bool,
+    /// Replace another command's results in the output folder (`--force`).
+    pub force: bool,
 }
 
 /// What a run produced.
@@ -62,7 +64,7 @@ pub fn execute(cmd: &ResolutionCommand) -> Result<ResolutionRun> {
     let t = Instant::now();
     let study = load_study(cmd)?;
     let out = cmd.out.clone().unwrap_or_else(|| Path::new("out").join(format!("resolution-{}", study.name)));
-    let dir = OutputDir::open(&out)?;
+    let dir = OutputDir::open(&out, RunKind::Resolution, cmd.force)?;
     let setup = t.elapsed().as_secs_f64();
     let mut results = run_study(&study, cmd.quiet)?;
     let mut timings = vec![Timing { stage: "study and output folder".into(), seconds: setup }];

@@ -135,7 +135,12 @@ pub fn run_points(
 /// A full `assess` of one point into `points/<id>/`, then its record.
 fn run_with_images(job: &Job, store: &Store, local: LocalOptions) -> Result<()> {
     let t = Instant::now();
-    let opts = experiment::RunOptions { quiet: true, backend: local.backend, exr_compression: local.exr_compression };
+    let opts = experiment::RunOptions {
+        quiet: true,
+        backend: local.backend,
+        exr_compression: local.exr_compression,
+        force: false,
+    };
     let report = experiment::assess(&job.exp, &store.images_dir(&job.id), opts)?;
     store.write(&record(job, &report.scores, t.elapsed(), &report.backend))
 }
