@@ -132,12 +132,18 @@ pub(crate) fn parse_vec3(s: &str) -> std::result::Result<DVec3, String> {
     }
 }
 
+/// The scene and display of a single-stage command; the display's plausibility warnings go to
+/// stderr.
 pub(crate) fn load_setup(setup: &Setup, set: &[Override]) -> Result<(Scene, Display)> {
-    if !set.is_empty() {
-        return Ok(setup_with(setup.scene.as_deref(), setup.display.as_deref(), set)?);
+    let (scene, display) = if !set.is_empty() {
+        setup_with(setup.scene.as_deref(), setup.display.as_deref(), set)?
+    } else {
+        (load_scene_part(setup.scene.as_deref(), set)?, load_display_part(setup.display.as_deref(), set)?)
+    };
+    let source = setup.display.as_ref().map_or_else(|| "builtin:paper".to_string(), |p| p.display().to_string());
+    for w in inimtrace::optics::plausibility::display_warnings(&display, &source) {
+        eprintln!("warning: {w}");
     }
-    let scene = load_scene_part(setup.scene.as_deref(), set)?;
-    let display = load_display_part(setup.display.as_deref(), set)?;
     Ok((scene, display))
 }
 

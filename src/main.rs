@@ -467,6 +467,9 @@ fn assess(
     let mut printed_total = false;
     let backend = backend.choice()?;
     let exp = load_experiment(experiment.as_deref(), scene.as_deref(), set)?;
+    for w in exp.plausibility_warnings() {
+        eprintln!("warning: {w}");
+    }
     announce(&exp.scene, backend, quiet);
     let out = out.unwrap_or_else(|| PathBuf::from("out").join(&exp.name));
     if !quiet {
@@ -680,9 +683,13 @@ fn info(
     }
     let d = match display {
         _ if !set.is_empty() => display_with(display.as_deref(), set)?,
-        Some(p) => load_display(&p.to_string_lossy(), Path::new(""))?,
+        Some(ref p) => load_display(&p.to_string_lossy(), Path::new(""))?,
         None => Display::paper(),
     };
+    let source = display.as_ref().map_or_else(|| "builtin:paper".to_string(), |p| p.display().to_string());
+    for w in inimtrace::optics::plausibility::display_warnings(&d, &source) {
+        eprintln!("warning: {w}");
+    }
     let design = inimtrace::info::display_design(&d, pupil);
     match json {
         true => outln!("{}", serde_json::to_string_pretty(&design)?),

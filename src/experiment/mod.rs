@@ -31,7 +31,7 @@ use crate::io::{load_display, load_scene};
 use crate::measure::spec::MeasurementSpec;
 use crate::metrics::SsimConstants;
 use crate::optics::eye::{EyeModel, EyeOptics, EyeOpticsSpec, FocusCriterion, UserEye};
-use crate::optics::{Aperture, Display, Eye, Retina};
+use crate::optics::{Aperture, Display, Eye, Focus, Retina};
 use crate::render::{DisplayRenderSettings, Method};
 use crate::scene::Scene;
 
@@ -608,6 +608,30 @@ impl Experiment {
             measurement,
             spec,
         })
+    }
+
+    /// Values that are valid but implausible for a near-eye display and a human eye (a unit
+    /// mistake, most likely), each a line naming the file, the field and the likely unit
+    /// ([`crate::optics::plausibility`]). Never an error.
+    pub fn plausibility_warnings(&self) -> Vec<String> {
+        use crate::optics::plausibility::{check, display_warnings, focus_warning, PUPIL_DIAMETER};
+        let mut w = display_warnings(&self.display, &self.spec.display);
+        let mut pupil_checked = false;
+        for (i, case) in self.cases.iter().enumerate() {
+            if let Aperture::ThinLens { pupil_diameter, focus } = case.eye.aperture {
+                if !pupil_checked {
+                    w.extend(check(&self.source, "eye.pupil_diameter", pupil_diameter, PUPIL_DIAMETER));
+                    pupil_checked = true;
+                }
+                w.extend(match focus {
+                    Focus::Millimetres(z) => focus_warning(&self.source, &format!("eye_cases[{i}].focus_mm"), z, false),
+                    Focus::Diopters(d) => {
+                        focus_warning(&self.source, &format!("eye_cases[{i}].focus_diopters"), 1000.0 / d, true)
+                    }
+                });
+            }
+        }
+        w
     }
 
     /// Loads an experiment file.

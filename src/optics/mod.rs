@@ -4,6 +4,7 @@ pub mod display;
 pub mod eye;
 pub mod lattice;
 pub mod limits;
+pub mod plausibility;
 pub mod spectrum;
 pub mod transfer;
 

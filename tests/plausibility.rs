@@ -1,0 +1,90 @@
+//! Unit mistakes pass validation (the values are positive and finite) but not unnoticed: a
+//! lenslet pitch in micrometres, a focal length in metres, an LCD size in centimetres and
+//! `focus_mm = 1.5` each give a warning naming the file, the field and the likely unit, and the
+//! run goes on (exit 0). The paper's own files give none.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn inimtrace(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_inimtrace")).args(args).output().unwrap()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// The paper's display file with `key = value` replaced in the line that starts with `key`.
+fn display_with(dir: &Path, name: &str, key: &str, value: &str) -> String {
+    let text = std::fs::read_to_string("displays/paper.toml").unwrap();
+    let mut hit = false;
+    let text: String = text
+        .lines()
+        .map(|l| {
+            if l.starts_with(&format!("{key} ")) && !hit {
+                hit = true;
+                format!("{key} = {value}\n")
+            } else {
+                format!("{l}\n")
+            }
+        })
+        .collect();
+    assert!(hit, "{key} not in displays/paper.toml");
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p.to_str().unwrap().to_string()
+}
+
+#[test]
+fn display_unit_mistakes_are_warned_naming_field_and_unit() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = [
+        ("pitch-um.toml", "pitch", "1200", "lenslets.pitch", "micrometres? 1200 µm = 1.2 mm"),
+        ("f-m.toml", "focal_length", "0.006427", "lenslets.focal_length", "metres? 0.006427 m = 6.427 mm"),
+        ("lcd-cm.toml", "size", "[2.16, 2.16]", "lcd.size", "centimetres? 2.16 cm = 21.6 mm"),
+    ];
+    for (file, key, value, field, unit) in cases {
+        let p = display_with(dir.path(), file, key, value);
+        let o = inimtrace(&["info", "--display", &p]);
+        let e = stderr(&o);
+        assert!(o.status.success(), "{file}: {e}");
+        let line = e
+            .lines()
+            .find(|l| l.starts_with("warning:") && l.contains(field))
+            .unwrap_or_else(|| panic!("{file}: no warning on {field}: {e}"));
+        assert!(line.contains(file) && line.contains(unit), "{file}: {line}");
+    }
+    // The paper's display: no warning.
+    let o = inimtrace(&["info", "--display", "displays/paper.toml"]);
+    assert!(o.status.success() && !stderr(&o).contains("warning"), "{}", stderr(&o));
+}
+
+#[test]
+fn a_central_depth_plane_at_infinity_or_real_is_flagged() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = display_with(dir.path(), "inf.toml", "lenslets_to_lcd", "6.427");
+    let e = stderr(&inimtrace(&["info", "--display", &p]));
+    assert!(e.contains("warning:") && e.contains("central depth plane is at infinity"), "{e}");
+    let p = display_with(dir.path(), "real.toml", "lenslets_to_lcd", "7.0");
+    let e = stderr(&inimtrace(&["info", "--display", &p]));
+    assert!(e.contains("warning:") && e.contains("no virtual central depth plane"), "{e}");
+}
+
+#[test]
+fn focus_mm_of_one_and_a_half_is_warned_as_metres_or_diopters() {
+    let dir = tempfile::tempdir().unwrap();
+    let exp = dir.path().join("exp.toml");
+    std::fs::write(
+        &exp,
+        "name = \"tiny\"\nscene = \"builtin:paper\"\ndisplay = \"builtin:paper\"\nmethods = [\"LC\"]\n\
+         [eye]\nretina_resolution = 16\n[[eye_cases]]\nname = \"Near\"\nfocus_mm = 1.5\n",
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let o = inimtrace(&["--quiet", "assess", exp.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    let e = stderr(&o);
+    assert!(o.status.success(), "{e}");
+    let line = e.lines().find(|l| l.contains("eye_cases[0].focus_mm")).unwrap_or_else(|| panic!("no warning: {e}"));
+    assert!(line.starts_with("warning:") && line.contains("exp.toml"), "{line}");
+    assert!(line.contains("metres? 1.5 m = 1500 mm") && line.contains("focus_diopters = 1.5"), "{line}");
+}
