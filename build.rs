@@ -13,6 +13,13 @@
 //! names the source it was built from. It reruns when HEAD moves or a source file changes; the
 //! Embree bindings are then reused from the previous run when their inputs are unchanged.
 //!
+//! With the `embree4` feature the bindings come from the `embree4-sys` crate instead (no
+//! `wrapper.h`, no Embree headers needed); this script then only finds `libembree4.so`
+//! (`build/embree4_lib.rs`: `EMBREE4_DIR`, the system linker path, or `target/embree4/` from
+//! `scripts/embree4-from-wheel.sh`), adds its folder to the link search path and the binaries'
+//! rpath, and sets `cfg(embree4)`; when it finds none it stops with one error naming
+//! `EMBREE4_DIR` and the script.
+//!
 //! Where Embree is looked for: `$EMBREE_DIR/include/embree{4,3}` with libraries in
 //! `$EMBREE_DIR/lib` (or `lib64`) when `EMBREE_DIR` is set; otherwise the system include
 //! directories. Embree 4 is preferred when both versions are installed.
@@ -27,8 +34,48 @@ fn main() {
     // Cargo compiles build scripts with the package's features, so `cfg(feature = "embree")` here
     // is the same switch as the `CARGO_FEATURE_EMBREE` environment variable; bindgen (an optional
     // build-dependency) only exists when it is on.
-    #[cfg(feature = "embree")]
+    #[cfg(all(feature = "embree", not(feature = "embree4")))]
     embree::generate();
+    #[cfg(feature = "embree4")]
+    embree4::link();
+}
+
+#[cfg(feature = "embree4")]
+#[path = "build/embree4_lib.rs"]
+mod embree4_lib;
+
+#[cfg(feature = "embree4")]
+mod embree4 {
+    use super::embree4_lib::{locate, system_dirs, Embree4Lib};
+    use std::path::PathBuf;
+
+    /// Finds libembree4 and tells the linker where it is (the `embree4-sys` crate itself asks for
+    /// `-lembree4`); sets `cfg(embree4)`.
+    pub fn link() {
+        println!("cargo::rerun-if-env-changed=EMBREE4_DIR");
+        println!("cargo::rerun-if-env-changed=LIBRARY_PATH");
+        let manifest = PathBuf::from(std::env::var_os("CARGO_MANIFEST_DIR").unwrap_or_default());
+        let fallback = manifest.join("target").join("embree4");
+        println!("cargo::rerun-if-changed={}", fallback.display());
+        let env_dir = std::env::var_os("EMBREE4_DIR").filter(|d| !d.is_empty()).map(PathBuf::from);
+        let library_path = std::env::var_os("LIBRARY_PATH");
+        match locate(env_dir.as_deref(), &system_dirs(library_path.as_deref()), &fallback) {
+            Ok(Embree4Lib::System(_)) => {}
+            Ok(Embree4Lib::Dir(dir)) => {
+                let dir = std::fs::canonicalize(&dir).unwrap_or(dir);
+                println!("cargo::rustc-link-search=native={}", dir.display());
+                // The binaries, tests and examples find it at run time without LD_LIBRARY_PATH.
+                println!("cargo::rustc-link-arg=-Wl,-rpath,{}", dir.display());
+            }
+            Err(message) => {
+                println!("cargo::warning={message}");
+                // One clear line, no link-error wall (a panic would add a backtrace hint).
+                eprintln!("error: {message}");
+                std::process::exit(1);
+            }
+        }
+        println!("cargo::rustc-cfg=embree4");
+    }
 }
 
 mod revision {
@@ -68,7 +115,7 @@ mod revision {
     }
 }
 
-#[cfg(feature = "embree")]
+#[cfg(all(feature = "embree", not(feature = "embree4")))]
 mod embree {
     use std::env;
     use std::path::{Path, PathBuf};

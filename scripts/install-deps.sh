@@ -12,6 +12,10 @@
 #                                a single-node Slurm cluster on this machine
 #   qemu-user                    tests/cpu.rs and python/tests: the binary and the Python module
 #                                on emulated older CPUs say what they lack (no "illegal instruction")
+#   (no package)                 `cargo build --features embree4` needs Embree 4, which Debian 12 lacks:
+#                                scripts/embree4-from-wheel.sh puts the library of PyPI's `embreex`
+#                                wheel into target/embree4/ when the system has no libembree4.so
+#                                (only a warning when PyPI cannot be reached)
 #   time util-linux              tests/memory_limits.rs: /usr/bin/time -v measures a run's peak
 #                                memory, prlimit caps its address space
 #   python3-venv                 a venv under target/venv-exr with OpenEXR's Python bindings
@@ -35,4 +39,8 @@ if [ ! -x target/venv-exr/bin/python ] || ! target/venv-exr/bin/python -c "impor
     mkdir -p target
     { python3 -m venv target/venv-exr && target/venv-exr/bin/pip install --quiet OpenEXR numpy; } \
         || echo "warning: could not install OpenEXR's Python bindings; tests/exr_output.rs will skip its OpenEXR check" >&2
+fi
+if ! ldconfig -p 2>/dev/null | grep -q 'libembree4\.so '; then
+    scripts/embree4-from-wheel.sh \
+        || echo "warning: could not fetch Embree 4 into target/embree4; \`--features embree4\` builds need EMBREE4_DIR" >&2
 fi

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
-use clap::{Args, Parser, Subcommand, ValueEnum};
+use clap::{Args, CommandFactory, FromArgMatches, Parser, Subcommand, ValueEnum};
 use glam::DVec3;
 
 use inimtrace::experiment::{self, metadata, ExperimentSpec, RunOptions};
@@ -159,11 +159,23 @@ enum Command {
         /// Scene TOML (default: the paper's scene). Rectangle-only scenes run on the analytic
         /// backends and the mesh backends; scenes with meshes on the mesh backends only (slow at
         /// full size: the LA reference traces 1,024 camera rays per display pixel; try --quick).
+        /// With --backends: repeatable (default: scenes/bunny.toml and scenes/spheres-2m.toml).
         #[arg(long)]
-        scene: Option<PathBuf>,
-        /// Output directory (default: out/bench or out/bench-quick).
+        scene: Vec<PathBuf>,
+        /// Output directory (default: out/bench or out/bench-quick; out/bench-backends with --backends).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Compare the mesh backends instead (Embree, bvh, brute): build time, nearest-hit and
+        /// occlusion rays/s, whole-process time of an LA display image (backends.md, .csv, .json).
+        #[arg(long)]
+        backends: bool,
+        /// With --backends: also measure the Embree of this other inimtrace binary (e.g. the
+        /// Embree 3 build beside an Embree 4 one), and score its LA image against this one's.
+        #[arg(long, requires = "backends", value_name = "BINARY")]
+        also: Option<PathBuf>,
+        /// With --backends: Embree only (what --also asks of the other binary).
+        #[arg(long, requires = "backends", hide = true)]
+        embree_only: bool,
     },
     /// Run an experiment over the points of a sweep file (axes of --set values) on all cores, or
     /// as a Slurm job array; resumable. Writes sweep.csv, sweep.json, plots and points/.
@@ -336,7 +348,12 @@ struct Globals {
 }
 
 fn run() -> Result<()> {
-    let cli = Cli::parse();
+    let mut command = Cli::command();
+    // Only `--version` starts Embree to ask the loaded library's version (after `main`'s CPU check).
+    if std::env::args_os().skip(1).any(|a| a == "--version" || a == "-V") {
+        command = command.version(&*Box::leak(inimtrace::version::long().into_boxed_str()));
+    }
+    let cli = Cli::from_arg_matches(&command.get_matches()).unwrap_or_else(|e| e.exit());
     if let Some(n) = cli.threads {
         inimtrace::budget::check_threads("--threads", n).map_err(anyhow::Error::msg)?;
         rayon::ThreadPoolBuilder::new().num_threads(n).build_global().context("cannot start the thread pool")?;
@@ -367,8 +384,24 @@ fn run() -> Result<()> {
         Command::Compare { a, b, ssim: constants, json } => {
             printed_total = compare(&g, a, b, constants, json)?;
         }
-        Command::Bench { quick, scene, out } => {
-            printed_total = bench(&g, quick, scene, out)?;
+        Command::Bench { quick, scene, out, backends: true, also, embree_only } => {
+            let scenes = match scene.is_empty() {
+                true => vec![PathBuf::from("scenes/bunny.toml"), PathBuf::from("scenes/spheres-2m.toml")],
+                false => scene,
+            };
+            let out = out.unwrap_or_else(|| PathBuf::from("out/bench-backends"));
+            let opts = inimtrace::bench::BackendsOptions { scenes, quick, also, embree_only, out: out.clone() };
+            let rows = inimtrace::bench::backends::run(&opts)?;
+            out!("{}", inimtrace::bench::backends::markdown(&rows));
+            if !g.quiet {
+                eprintln!("wrote {}", out.display());
+            }
+        }
+        Command::Bench { quick, scene, out, .. } => {
+            if scene.len() > 1 {
+                bail!("--scene is given {} times; bench takes one scene (several only with --backends)", scene.len());
+            }
+            printed_total = bench(&g, quick, scene.into_iter().next(), out)?;
         }
         Command::Sweep {
             sweep,
@@ -674,7 +707,10 @@ fn info(
         let summary = inimtrace::info::scene_summary(&scene);
         match json {
             true => outln!("{}", serde_json::to_string_pretty(&summary)?),
-            false => out!("{}", inimtrace::info::scene_summary_text(&summary)),
+            false => {
+                out!("{}", inimtrace::info::scene_summary_text(&summary));
+                outln!("backend library: {}", inimtrace::version::embree_loaded());
+            }
         }
         return Ok(true);
     }
@@ -693,7 +729,10 @@ fn info(
     let design = inimtrace::info::display_design(&d, pupil);
     match json {
         true => outln!("{}", serde_json::to_string_pretty(&design)?),
-        false => out!("{}", inimtrace::info::display_design_text(&design, &d.summary())),
+        false => {
+            out!("{}", inimtrace::info::display_design_text(&design, &d.summary()));
+            outln!("backend library: {}", inimtrace::version::embree_loaded());
+        }
     }
     Ok(false)
 }

@@ -30,3 +30,27 @@ pub const TOOL: Tool = Tool { name: "inimtrace", version: VERSION, git_revision:
 pub fn software() -> String {
     format!("inimtrace {VERSION} (git {GIT_REVISION})")
 }
+
+/// The Embree library this process loads, as `inimtrace --version` and `inimtrace info` print
+/// it: `"Embree 4.4.0"` (the version the library itself reports through
+/// `rtcGetDeviceProperty`, which starts an Embree device), `"without Embree"` without the
+/// `embree` feature, or why it cannot start.
+pub fn embree_loaded() -> String {
+    #[cfg(feature = "embree")]
+    {
+        match crate::accel::embree::Device::with_config("threads=1") {
+            Ok(device) => format!("Embree {}", device.version_text()),
+            Err(e) => format!("Embree {}.x: cannot start ({e})", crate::accel::embree::EMBREE_MAJOR),
+        }
+    }
+    #[cfg(not(feature = "embree"))]
+    {
+        "without Embree".to_string()
+    }
+}
+
+/// The text of `inimtrace --version` after the program's name: the package version, the git
+/// revision and the Embree library loaded (`"0.1.0 (git abc1234; Embree 4.4.0)"`).
+pub fn long() -> String {
+    format!("{VERSION} (git {GIT_REVISION}; {})", embree_loaded())
+}

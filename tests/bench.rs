@@ -148,3 +148,51 @@ fn mesh_scene_runs_on_the_mesh_backends_only() {
     assert_eq!(p.reached.len(), 4 * PRECISION_TARGETS_DB.len());
     assert!(dir.path().join("precision.svg").is_file() && dir.path().join("precision.png").is_file());
 }
+
+/// `bench --backends` on a small generated mesh scene, with `--also` naming this same binary:
+/// every backend is measured, Embree and the BVH find the same hits, and the other binary's
+/// Embree row scores its LA image as identical to this one's.
+#[test]
+#[cfg(feature = "embree")]
+fn backends_comparison_measures_every_backend_and_the_other_binary() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("spheres.toml");
+    std::fs::write(
+        &scene,
+        "name = \"spheres\"\nbackground = [0.0, 0.0, 0.0]\n[light]\ntype = \"distant\"\ndirection = [0.3, -0.4, 1.0]\n\
+         radiance = [1.0, 1.0, 1.0]\n[[objects]]\nname = \"spheres\"\ntype = \"sphere-grid\"\ncenter = [0.0, 0.0, 420.0]\n\
+         count = [3, 3]\nspacing = 20.0\nradius = 9.0\nsegments = 16\nmaterial = { albedo = [0.9, 0.85, 0.7] }\n",
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let bin = env!("CARGO_BIN_EXE_inimtrace");
+    let o = std::process::Command::new(bin)
+        .args(["--quiet", "bench", "--backends", "--quick", "--scene"])
+        .arg(&scene)
+        .arg("--also")
+        .arg(bin)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let rows: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("backends.json")).unwrap()).unwrap();
+    let rows = rows.as_array().unwrap();
+    let backends: Vec<&str> = rows.iter().map(|r| r["backend"].as_str().unwrap()).collect();
+    assert_eq!(backends, ["embree", "bvh", "brute", "embree"]);
+    let hits = |i: usize| rows[i]["hits"].as_u64().unwrap();
+    let rays = rows[0]["rays"].as_u64().unwrap();
+    assert!(hits(0) > rays / 20 && hits(0) < rays, "the spheres are seen, not everywhere: {} of {rays}", hits(0));
+    // f32 (Embree) and f64 (BVH) tests may differ only on grazing rays.
+    assert!(hits(0).abs_diff(hits(1)) * 1000 <= rays, "embree {} vs bvh {}", hits(0), hits(1));
+    assert_eq!(hits(0), hits(3), "the same binary twice");
+    assert!(rows[0]["library"].as_str().unwrap().starts_with("Embree "), "{}", rows[0]);
+    assert!(rows[2]["la_process_s"].is_null(), "brute renders no LA image");
+    assert!(rows[0]["la_process_s"].as_f64().unwrap() > 0.0);
+    assert_eq!(rows[3]["la_identical_to_this_embree"], true, "{}", rows[3]);
+    assert!(rows[0]["la_identical_to_this_embree"].is_null(), "{}", rows[0]);
+    for name in ["backends.csv", "backends.md"] {
+        assert!(out.join(name).is_file(), "{name}");
+    }
+}

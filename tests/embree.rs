@@ -554,3 +554,25 @@ fn invalid_meshes_are_rejected_naming_the_element() {
     let acc = EmbreeIntersector::new(&[], BuildQuality::Low).unwrap();
     assert_eq!(acc.triangle_count(), 0);
 }
+
+#[test]
+fn the_loaded_library_has_the_major_version_the_bindings_were_made_for() {
+    let _guard = shared();
+    let device = Device::new().expect("device");
+    let version = device.version();
+    assert_eq!(version / 10000, i64::from(inimtrace::accel::embree::EMBREE_MAJOR), "{}", device.version_text());
+    if cfg!(feature = "embree4") {
+        assert!(version >= 40000, "{version}");
+    }
+    assert_eq!(inimtrace::accel::embree::version_text(40400), "4.4.0");
+    assert_eq!(inimtrace::accel::embree::version_text(31305), "3.13.5");
+    // A library of another major version is refused in one line naming where it comes from.
+    assert!(inimtrace::accel::embree::check_version(40400, 4).is_ok());
+    assert!(inimtrace::accel::embree::check_version(31305, 3).is_ok());
+    let variable = if cfg!(feature = "embree4") { "EMBREE4_DIR" } else { "EMBREE_DIR" };
+    for (found, wanted) in [(31305, 4), (40400, 3), (50000, 4)] {
+        let message = inimtrace::accel::embree::check_version(found, wanted).unwrap_err().to_string();
+        assert_eq!(message.lines().count(), 1, "{message}");
+        assert!(message.contains(variable) && message.contains(&format!("Embree {wanted}.x")), "{message}");
+    }
+}

@@ -38,8 +38,10 @@
 //! the paper's experiment with one sampling setting changed (`pipeline`). The parts: `options`
 //! (sizes and the typed rows), `runs` (backends, builds, the method and convergence series),
 //! `precision` (the cost of precision), `summary` (rates and settings within tolerance), `report`
-//! (CSV, JSON, the console table), `markdown` and `plots`.
+//! (CSV, JSON, the console table), `markdown` and `plots`; `backends` is `bench --backends`, the
+//! mesh backends (and Embree builds) side by side.
 
+pub mod backends;
 mod markdown;
 mod options;
 mod pipeline;
@@ -53,6 +55,7 @@ use std::time::Instant;
 
 use serde::Serialize;
 
+pub use backends::BackendsOptions;
 pub use options::{
     Backend, BenchOptions, BenchRow, BuildRecord, Estimator, MethodLabel, Parameter, Quantity, Series, Sizes,
 };

@@ -1,22 +1,52 @@
-//! The few places where Embree 3 and Embree 4 differ, behind one set of functions.
+//! The few places where Embree 3 and Embree 4 differ, behind one set of functions: the ray-query
+//! arguments, the argument order of the queries, the hit records' size, the version check at
+//! device creation, and the spelling of enums in the two sources of bindings.
 //!
 //! Embree 3 passes an `RTCIntersectContext` (initialised by the header-only
-//! `rtcInitIntersectContext`, which bindgen cannot emit) to every ray query; Embree 4 drops the
-//! context argument in favour of an optional `RTCIntersectArguments` (initialised by the
-//! header-only `rtcInitIntersectArguments`). The Rust equivalents of both initialisers live here.
-//! Embree 4 also gives occlusion queries their own `RTCOccludedArguments`.
-//! `build.rs` sets `cfg(embree4)` when it bound against Embree 4.
+//! `rtcInitIntersectContext`, which bindgen cannot emit) to every ray query, before the ray;
+//! Embree 4 drops the context argument in favour of an optional `RTCIntersectArguments`
+//! (initialised by the header-only `rtcInitIntersectArguments`) after the ray, and gives
+//! occlusion queries their own optional `RTCOccludedArguments`. The Rust equivalents of both
+//! initialisers live here. inimtrace registers no filter or user-geometry callbacks, so the
+//! filter-function differences (`RTCFilterFunctionNArguments` gained a ray-query context in 4)
+//! never arise: both versions get "no filter".
+//!
+//! Embree 4.3 and later write more of the hit record than the 4.2 headers of the `embree4-sys`
+//! crate declare (`instPrimID`: 4 bytes past `RTCRayHit`, 64 past `RTCRayHit16`), so under
+//! Embree 4 every hit record handed to a query sits in a [`Padded`] copy with spare bytes.
+//!
+//! `build.rs` sets `cfg(embree4)` when it bound against Embree 4 (system headers through
+//! `wrapper.h`, or the `embree4` feature, which takes the bindings from `embree4-sys`).
 
 use super::sys;
+use crate::error::{Error, Result};
+
+/// Which Embree major version the crate was bound against.
+pub const EMBREE_MAJOR: u32 = if cfg!(embree4) { 4 } else { 3 };
+
+/// The variable that says where the library is, named by the version check's error.
+const LIBRARY_VARIABLE: &str = if cfg!(feature = "embree4") { "EMBREE4_DIR" } else { "EMBREE_DIR" };
+
+/// A C struct followed by spare bytes that a newer Embree than the headers may write into.
+#[cfg(embree4)]
+#[repr(C, align(64))]
+struct Padded<T> {
+    value: T,
+    spare: [u8; 128],
+}
+
+#[cfg(embree4)]
+impl<T> Padded<T> {
+    fn new(value: T) -> Padded<T> {
+        Padded { value, spare: [0; 128] }
+    }
+}
 
 /// Per-query state: Embree 3's intersection context or Embree 4's intersect arguments.
 #[cfg(not(embree4))]
 type QueryArgs = sys::RTCIntersectContext;
 #[cfg(embree4)]
-type QueryArgs = sys::RTCIntersectArguments;
-
-/// Which Embree major version the crate was bound against.
-pub const EMBREE_MAJOR: u32 = if cfg!(embree4) { 4 } else { 3 };
+type QueryArgs = Padded<sys::RTCIntersectArguments>;
 
 /// Rust equivalent of `rtcInitIntersectContext` (Embree 3): no filter, no instance on the
 /// stack, and the coherence hint. (Debian's build has `RTC_MAX_INSTANCE_LEVEL_COUNT == 1` and
@@ -34,10 +64,10 @@ fn query_args(coherent: bool) -> QueryArgs {
     ctx
 }
 
-/// Rust equivalent of `rtcInitIntersectArguments` (Embree 4): all traversal features, no
-/// ray-query context, no filter or user-geometry callbacks (the zeroed default), plus the
-/// coherence hint.
-#[cfg(embree4)]
+/// Rust equivalent of `rtcInitIntersectArguments` (Embree 4, system headers): all traversal
+/// features, no ray-query context, no filter or user-geometry callbacks (the zeroed default),
+/// plus the coherence hint. Spare zero bytes follow, should the library's struct be longer.
+#[cfg(all(embree4, not(feature = "embree4")))]
 #[allow(clippy::field_reassign_with_default)] // the struct's fields depend on Embree's build options
 fn query_args(coherent: bool) -> QueryArgs {
     let mut args = sys::RTCIntersectArguments::default();
@@ -45,31 +75,104 @@ fn query_args(coherent: bool) -> QueryArgs {
     args.feature_mask = sys::RTC_FEATURE_FLAG_ALL;
     args.context = std::ptr::null_mut();
     args.filter = None;
-    args
+    Padded::new(args)
+}
+
+/// As above, over `embree4-sys`'s struct (the 4.2 layout, no `minWidthDistanceFactor`).
+#[cfg(feature = "embree4")]
+fn query_args(coherent: bool) -> QueryArgs {
+    Padded::new(sys::RTCIntersectArguments {
+        flags: if coherent { sys::RTC_RAY_QUERY_FLAG_COHERENT } else { sys::RTC_RAY_QUERY_FLAG_INCOHERENT },
+        feature_mask: sys::RTC_FEATURE_FLAG_ALL,
+        context: std::ptr::null_mut(),
+        filter: None,
+        intersect: None,
+    })
+}
+
+/// An `RTCError` as the number `error.rs` names.
+#[cfg(not(feature = "embree4"))]
+pub(super) fn error_code(code: sys::RTCError) -> u32 {
+    code
+}
+
+/// An `RTCError` as the number `error.rs` names.
+#[cfg(feature = "embree4")]
+pub(super) fn error_code(code: sys::RTCError) -> u32 {
+    code as u32
+}
+
+/// `rtcGetDeviceError` as a number (`sys::RTC_ERROR_NONE` when the last call succeeded).
+///
+/// # Safety
+/// `device` must be a live device, or NULL for the error of a failed `rtcNewDevice`.
+/// (Under `embree4-sys` the result is a Rust enum of the codes 0-6; Embree 4 adds code 7 only
+/// for SYCL devices, which inimtrace never creates.)
+pub(super) unsafe fn device_error(device: sys::RTCDevice) -> u32 {
+    // SAFETY: forwarded from this function's contract.
+    error_code(unsafe { sys::rtcGetDeviceError(device) })
+}
+
+/// `rtcGetDeviceProperty(RTC_DEVICE_PROPERTY_VERSION)`: the loaded library's version as
+/// `10000 major + 100 minor + patch` (40400 for 4.4.0).
+///
+/// # Safety
+/// `device` must be a live device.
+pub(super) unsafe fn device_version(device: sys::RTCDevice) -> i64 {
+    // SAFETY: forwarded from this function's contract; the property is valid in every release.
+    let version = unsafe { sys::rtcGetDeviceProperty(device, sys::RTC_DEVICE_PROPERTY_VERSION) };
+    version as i64
+}
+
+/// `"4.4.0"` from Embree's version number `40400`.
+pub fn version_text(version: i64) -> String {
+    format!("{}.{}.{}", version / 10000, version / 100 % 100, version % 100)
+}
+
+/// Checks that the loaded library's `version` has the major version the bindings were made for
+/// (`expected_major`); else one error naming the variable that chooses the library.
+pub fn check_version(version: i64, expected_major: u32) -> Result<()> {
+    if version / 10000 == i64::from(expected_major) {
+        return Ok(());
+    }
+    Err(Error::Embree {
+        code: "RTC_ERROR_UNKNOWN".into(),
+        message: format!(
+            "the Embree library loaded reports version {}, but inimtrace was built for Embree {expected_major}.x: \
+             point {LIBRARY_VARIABLE} at an Embree {expected_major} library and rebuild (or remove the \
+             LD_LIBRARY_PATH / LD_PRELOAD that loads another one)",
+            version_text(version)
+        ),
+    })
 }
 
 /// `rtcIntersect1` for either version (incoherent-ray hint).
 ///
 /// # Safety
-/// `scene` must be a live, committed scene, and `rayhit` must point to a valid, 16-byte aligned
-/// `RTCRayHit` that nothing else accesses during the call.
+/// `scene` must be a live, committed scene.
 #[inline]
-pub(super) unsafe fn intersect1(scene: sys::RTCScene, rayhit: *mut sys::RTCRayHit) {
+pub(super) unsafe fn intersect1(scene: sys::RTCScene, rayhit: &mut sys::RTCRayHit) {
     let mut args = query_args(false);
-    // SAFETY: forwarded from this function's contract; `args` is a fully initialised local
-    // that outlives the call.
+    // SAFETY: forwarded from this function's contract; `args` and the ray-hit record are fully
+    // initialised locals, aligned as Embree requires (`RTCRayHit` is `repr(align(16))`,
+    // `Padded` 64), that outlive the call; under Embree 4 the record has spare bytes after it
+    // for a library that writes a longer hit.
     unsafe {
         #[cfg(not(embree4))]
         sys::rtcIntersect1(scene, &mut args, rayhit);
         #[cfg(embree4)]
-        sys::rtcIntersect1(scene, rayhit, &mut args);
+        {
+            let mut padded = Padded::new(*rayhit);
+            sys::rtcIntersect1(scene, &mut padded.value, &mut args.value);
+            *rayhit = padded.value;
+        }
     }
 }
 
 /// `rtcOccluded1` for either version (incoherent-ray hint).
 ///
 /// # Safety
-/// As for [`intersect1`], with a 16-byte aligned `RTCRay`.
+/// `scene` must be a live, committed scene; `ray` must be 16-byte aligned.
 #[inline]
 pub(super) unsafe fn occluded1(scene: sys::RTCScene, ray: *mut sys::RTCRay) {
     #[cfg(not(embree4))]
@@ -79,7 +182,8 @@ pub(super) unsafe fn occluded1(scene: sys::RTCScene, ray: *mut sys::RTCRay) {
         unsafe { sys::rtcOccluded1(scene, &mut ctx, ray) };
     }
     // Embree 4 takes a separate, optional `RTCOccludedArguments`; NULL means the defaults
-    // (incoherent hint, all features, no filter), which is what we want.
+    // (incoherent hint, all features, no filter), which is what we want. An occlusion query
+    // writes only the ray's `tfar`, whose layout is the same in every Embree 4.
     #[cfg(embree4)]
     {
         // SAFETY: forwarded from this function's contract; the arguments pointer may be NULL.
@@ -87,25 +191,35 @@ pub(super) unsafe fn occluded1(scene: sys::RTCScene, ray: *mut sys::RTCRay) {
     }
 }
 
+/// A 16-ray packet with every field zero (rays and hits), ready to fill.
+pub(super) fn blank_packet() -> sys::RTCRayHit16 {
+    sys::RTCRayHit16 { ray: sys::RTCRay16::default(), hit: sys::RTCHit16::default() }
+}
+
 /// `rtcIntersect16` for either version, with the coherent-ray hint when `coherent`.
 ///
 /// # Safety
 /// `scene` must be a live, committed scene; `valid` must point to 16 `int`s aligned to 64 bytes
-/// (0 = inactive lane, -1 = active); `rayhit` must point to a valid, 64-byte aligned
-/// `RTCRayHit16` that nothing else accesses during the call.
+/// (0 = inactive lane, -1 = active).
 #[inline]
 pub(super) unsafe fn intersect16(
     valid: *const i32,
     scene: sys::RTCScene,
-    rayhit: *mut sys::RTCRayHit16,
+    rayhit: &mut sys::RTCRayHit16,
     coherent: bool,
 ) {
     let mut args = query_args(coherent);
-    // SAFETY: forwarded from this function's contract; `args` is valid for the whole call.
+    // SAFETY: forwarded from this function's contract; `args` and the packet are fully
+    // initialised, 64-byte aligned locals valid for the whole call; under Embree 4 the packet
+    // has spare bytes after it for a library that writes a longer hit.
     unsafe {
         #[cfg(not(embree4))]
         sys::rtcIntersect16(valid, scene, &mut args, rayhit);
         #[cfg(embree4)]
-        sys::rtcIntersect16(valid, scene, rayhit, &mut args);
+        {
+            let mut padded = Padded::new(*rayhit);
+            sys::rtcIntersect16(valid, scene, &mut padded.value, &mut args.value);
+            *rayhit = padded.value;
+        }
     }
 }

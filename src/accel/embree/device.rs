@@ -4,7 +4,7 @@
 use std::ffi::{c_void, CString};
 use std::sync::{Arc, Mutex};
 
-use super::compat::EMBREE_MAJOR;
+use super::compat::{self, EMBREE_MAJOR};
 use super::error::{embree_error, error_callback, ErrorSink};
 use super::live::{live_dec, live_inc};
 use super::sys;
@@ -65,7 +65,7 @@ impl Device {
         if raw.is_null() {
             // SAFETY: passing NULL asks for the error of the failed device construction, which
             // the Embree API documents as the way to query it.
-            let code = unsafe { sys::rtcGetDeviceError(std::ptr::null_mut()) };
+            let code = unsafe { compat::device_error(std::ptr::null_mut()) };
             return Err(embree_error(code, None, &format!("rtcNewDevice(\"{config}\")")));
         }
         live_inc();
@@ -74,7 +74,23 @@ impl Device {
         // SAFETY: `raw` is the live device just created; the sink pointer stays valid until
         // `DeviceInner::drop` unregisters the callback (the box is never moved out or replaced).
         unsafe { sys::rtcSetDeviceErrorFunction(raw, Some(error_callback), sink_ptr) };
-        Ok(Device { inner: Arc::new(inner) })
+        let device = Device { inner: Arc::new(inner) };
+        // The library found at run time must be the major version the bindings were made for
+        // (an LD_LIBRARY_PATH can swap it): else one error naming where the library comes from.
+        compat::check_version(device.version(), EMBREE_MAJOR)?;
+        Ok(device)
+    }
+
+    /// The loaded Embree library's version number (`rtcGetDeviceProperty`): `10000 major +
+    /// 100 minor + patch`, e.g. 31305 for 3.13.5.
+    pub fn version(&self) -> i64 {
+        // SAFETY: `raw` is a live device.
+        unsafe { compat::device_version(self.raw()) }
+    }
+
+    /// The loaded Embree library's version as text, e.g. `"4.4.0"`.
+    pub fn version_text(&self) -> String {
+        compat::version_text(self.version())
     }
 
     pub(super) fn raw(&self) -> sys::RTCDevice {
@@ -86,7 +102,7 @@ impl Device {
     pub(super) fn check(&self, during: &str) -> Result<()> {
         // SAFETY: `raw` is a live device; `rtcGetDeviceError` only reads and clears this
         // thread's error code for it.
-        let code = unsafe { sys::rtcGetDeviceError(self.raw()) };
+        let code = unsafe { compat::device_error(self.raw()) };
         if code == sys::RTC_ERROR_NONE {
             return Ok(());
         }

@@ -64,5 +64,5 @@ pub(super) unsafe extern "C" fn error_callback(user_ptr: *mut c_void, code: sys:
     if guard.len() >= 16 {
         guard.remove(0);
     }
-    guard.push((code, text));
+    guard.push((super::compat::error_code(code), text));
 }

@@ -3,8 +3,10 @@
 //!
 //! This module owns the crate's only `unsafe` code (the crate root denies it everywhere else).
 //! One RAII handle per file:
-//! - `sys`: raw bindings that `build.rs` generates with bindgen from `wrapper.h`;
-//! - `compat`: the few differences between Embree 3 and Embree 4;
+//! - `sys`: raw bindings that `build.rs` generates with bindgen from `wrapper.h`, or those of
+//!   the `embree4-sys` crate (feature `embree4`);
+//! - `compat`: the few differences between Embree 3 and Embree 4 (query arguments, padded hit
+//!   records, the loaded library's version check);
 //! - `device`: [`Device`], the Embree device, with its error callback (`error`: Embree errors
 //!   as [`crate::Error::Embree`]);
 //! - `geometry`: [`TriangleGeometry`], one committed triangle mesh;
@@ -28,7 +30,7 @@ mod ray;
 mod scene;
 mod sys;
 
-pub use compat::EMBREE_MAJOR;
+pub use compat::{check_version, version_text, EMBREE_MAJOR};
 pub use device::Device;
 pub use error::{embree_error, error_code_name};
 pub use geometry::TriangleGeometry;

@@ -185,7 +185,7 @@ impl Scene {
         assert!(rays.len() <= 16, "intersect16: {} rays given, at most 16 fit a packet", rays.len());
         assert_eq!(rays.len(), hits.len(), "intersect16: rays and hits differ in length");
         let mut valid = Valid16([0; 16]);
-        let mut packet = sys::RTCRayHit16::default();
+        let mut packet = compat::blank_packet();
         for (lane, ray) in rays.iter().enumerate() {
             packet.hit.geomID[lane] = sys::RTC_INVALID_GEOMETRY_ID;
             for level in packet.hit.instID.iter_mut() {
