@@ -343,11 +343,14 @@ impl Estimate {
             Some(p) => (p.setting.clone(), format!("; the largest part is {} ({})", p.what, Bytes(p.bytes))),
             None => ("settings".to_string(), String::new()),
         };
-        Err(Error::invalid(
-            source,
+        Err(Error::Memory {
+            source_name: source.to_string(),
             field,
-            format!("the run would need about {} of memory, more than the limit of {budget}{detail}", Bytes(total),),
-        ))
+            message: format!(
+                "the run would need about {} of memory, more than the limit of {budget}{detail}",
+                Bytes(total)
+            ),
+        })
     }
 
     /// Seconds the run's rays take at `rays_per_second`.

@@ -97,6 +97,24 @@ pub enum Error {
     #[error("{0}")]
     Alloc(String),
 
+    /// Settings or inputs whose estimated memory exceeds the memory budget (`--max-memory` and the
+    /// system's limits, `crate::budget`), refused before anything was allocated: the field whose
+    /// value makes the largest part, and the estimate against the limit.
+    #[error("{source_name}: field `{field}`: {message}")]
+    Memory {
+        /// The file, or what stands for one (`command line`, `simulate()`).
+        source_name: String,
+        /// The setting that makes the largest part of the estimate.
+        field: String,
+        /// The estimate, the limit and the largest part.
+        message: String,
+    },
+
+    /// The caller cancelled the run through its progress sink (`crate::progress::ProgressSink::cancelled`,
+    /// the Python package's Ctrl-C): the work stopped early and its results were discarded.
+    #[error("cancelled")]
+    Cancelled,
+
     /// A scene that the chosen intersection backend cannot render (`--backend`).
     #[error("{message}")]
     Backend {
@@ -219,6 +237,7 @@ impl Error {
                 (Some(path.display().to_string()), None)
             }
             Error::Invalid { source_name, field, .. }
+            | Error::Memory { source_name, field, .. }
             | Error::Lattice { source_name, field, .. }
             | Error::Load { source_name, field, .. }
             | Error::InField { source_name, field, .. } => (Some(source_name.clone()), Some(field.clone())),

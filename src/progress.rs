@@ -1,6 +1,9 @@
 //! Progress reporting for long stages: bars on stderr, hidden when stderr is not a terminal or
 //! when the user asked for quiet; or, for a caller that installed a [`ProgressSink`] (the Python
-//! package's progress callback), rate-limited reports to that sink instead.
+//! package's progress callback), rate-limited reports to that sink instead. A sink may also
+//! cancel the run ([`ProgressSink::cancelled`]): the long loops ask their [`Progress`] at each row,
+//! band or tile and skip the rest of their work, and the stage then returns
+//! [`Error::Cancelled`]. Without a sink (the CLI) nothing is ever cancelled.
 
 use std::cell::RefCell;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -9,12 +12,21 @@ use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
+use crate::error::{Error, Result};
+
 /// Receives the progress of every stage started while it is installed ([`with_sink`]).
 /// `update` may be called from any worker thread, never more often than every
 /// [`SINK_INTERVAL`] per stage, and once more when the stage finishes.
 pub trait ProgressSink: Send + Sync {
     /// `stage` (e.g. "display image LA", "ground truth Pin") has done `done` of `total` steps.
     fn update(&self, stage: &str, done: u64, total: u64);
+
+    /// Whether the caller wants the run stopped (e.g. Python's Ctrl-C). Asked by worker threads
+    /// at every row, band or tile of the long loops, so it must be cheap (an atomic load); once
+    /// it is true it should stay true. By default never.
+    fn cancelled(&self) -> bool {
+        false
+    }
 }
 
 /// The least time between two reports of one stage to a [`ProgressSink`].
@@ -36,6 +48,34 @@ pub fn with_sink<T>(sink: Arc<dyn ProgressSink>, f: impl FnOnce() -> T) -> T {
     }
     let _restore = Restore(SINK.with(|s| s.borrow_mut().replace(sink)));
     f()
+}
+
+/// The [`ProgressSink`] installed on this thread, to install with [`with_installed`] on the
+/// threads that work is handed to (file writes run on rayon's workers).
+pub fn installed() -> Option<Arc<dyn ProgressSink>> {
+    SINK.with(|s| s.borrow().clone())
+}
+
+/// [`with_sink`] when `sink` is given, else `f` alone.
+pub fn with_installed<T>(sink: Option<Arc<dyn ProgressSink>>, f: impl FnOnce() -> T) -> T {
+    match sink {
+        Some(sink) => with_sink(sink, f),
+        None => f(),
+    }
+}
+
+/// Whether the [`ProgressSink`] installed on this thread cancelled the run (never without one).
+pub fn cancelled() -> bool {
+    SINK.with(|s| s.borrow().as_ref().is_some_and(|s| s.cancelled()))
+}
+
+/// [`Error::Cancelled`] when the [`ProgressSink`] installed on this thread cancelled the run: the
+/// check between stages, on the thread that installed the sink.
+pub fn check_cancelled() -> Result<()> {
+    if cancelled() {
+        return Err(Error::Cancelled);
+    }
+    Ok(())
 }
 
 /// A stage reporting to a sink: counts steps atomically, reports at most every
@@ -117,6 +157,23 @@ impl Progress {
         }
     }
 
+    /// Whether the run was cancelled ([`ProgressSink::cancelled`] of the sink this stage reports
+    /// to; never for a bar or a hidden stage). The long loops ask at each row, band or tile and
+    /// skip the rest of their work once it is true.
+    #[inline]
+    pub fn cancelled(&self) -> bool {
+        self.sink.as_ref().is_some_and(|s| s.sink.cancelled())
+    }
+
+    /// [`Error::Cancelled`] when the run was cancelled: asked after a loop that may have skipped
+    /// work, so that no partial result is used.
+    pub fn check(&self) -> Result<()> {
+        if self.cancelled() {
+            return Err(Error::Cancelled);
+        }
+        Ok(())
+    }
+
     /// Finishes and clears the bar.
     pub fn finish(&self) {
         if let Some(b) = &self.bar {
@@ -159,6 +216,30 @@ mod tests {
         p.inc(5);
         p.finish();
         assert_eq!(record.0.lock().unwrap().len(), 1);
+    }
+
+    /// A sink that cancels once asked `after` times.
+    struct CancelAfter(AtomicU64, u64);
+
+    impl ProgressSink for CancelAfter {
+        fn update(&self, _: &str, _: u64, _: u64) {}
+        fn cancelled(&self) -> bool {
+            self.0.fetch_add(1, Ordering::Relaxed) >= self.1
+        }
+    }
+
+    #[test]
+    fn a_sink_cancels_the_stages_and_the_checks_between_them_only_while_installed() {
+        let sink: Arc<dyn ProgressSink> = Arc::new(CancelAfter(AtomicU64::new(0), 2));
+        with_sink(sink, || {
+            let p = Progress::new(10, "stage", true);
+            assert!(!p.cancelled() && p.check().is_ok());
+            assert!(p.cancelled() && matches!(p.check(), Err(Error::Cancelled)));
+            assert!(matches!(check_cancelled(), Err(Error::Cancelled)));
+        });
+        // Without a sink (the CLI), and for a bar or a hidden stage, nothing is ever cancelled.
+        assert!(!cancelled() && check_cancelled().is_ok());
+        assert!(!Progress::new(10, "stage", true).cancelled() && !Progress::hidden().cancelled());
     }
 
     #[test]

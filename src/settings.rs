@@ -313,6 +313,9 @@ impl Resolved {
             Error::Lattice { field, message, .. } if o.changed => {
                 Error::Lattice { source_name: self.source.clone(), field: format!("{part}.{field}"), message }
             }
+            Error::Memory { field, message, .. } if o.changed => {
+                Error::Memory { source_name: self.source.clone(), field: format!("{part}.{field}"), message }
+            }
             e => Error::load(&self.source, part, &o.reference, e),
         }
     }

@@ -18,8 +18,9 @@ arrays in and out. Every function runs the same library code as the CLI command 
 
 Units are millimetres; images are (rows, columns, 3) float32 arrays of linear radiance, row 0 at
 the top. Rendering releases the GIL; `threads=` sets the worker threads of one call (default:
-all cores); `progress=` takes a callable `progress(stage, done, total)`. Errors raise
-`inimtrace.Error` subclasses with the CLI's messages. See docs/PYTHON.md.
+all cores); `progress=` takes a callable `progress(stage, done, total)`; Ctrl-C stops a call
+within a second (KeyboardInterrupt). Errors raise `inimtrace.Error` subclasses with the CLI's
+messages (`OutOfMemoryError` is also a `MemoryError`). See docs/PYTHON.md.
 """
 
 from dataclasses import dataclass, field
@@ -35,6 +36,7 @@ from ._inimtrace import (
     ImageError,
     MeshError,
     OpticsError,
+    OutOfMemoryError,
     Scene,
     __version__,
     _assess,
@@ -58,6 +60,7 @@ __all__ = [
     "ImageError",
     "MeshError",
     "OpticsError",
+    "OutOfMemoryError",
     "Scene",
     "__version__",
     "assess",

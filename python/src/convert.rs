@@ -10,7 +10,7 @@ use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 use inimtrace::overrides::Override;
 use inimtrace::raster::RgbImage;
 
-use crate::errors::value_error;
+use crate::errors::{memory_error, value_error, IntoPy};
 
 /// An image as a `(rows, columns, 3)` float32 array that owns the image's own buffer: the
 /// pixels are reinterpreted in place (`[f32; 3]` -> 3 x `f32`), never copied.
@@ -45,8 +45,16 @@ fn describe(obj: &Bound<'_, PyAny>) -> String {
 }
 
 /// A `(rows, columns, 3)` float32 NumPy array as an image (one copy into the library's
-/// layout). `name` and `expected` (e.g. the display's LCD) make the `ValueError` clear.
-pub fn numpy_to_image(obj: &Bound<'_, PyAny>, name: &str, expected: Option<(usize, usize)>) -> PyResult<RgbImage> {
+/// layout). `name` and `expected` (e.g. the display's LCD) make the `ValueError` clear; `caller`
+/// (`simulate()`) names the call in a memory refusal. Masked arrays are refused (the library
+/// would ignore the mask), and the copy is checked against the memory budget before it is made
+/// and allocated fallibly: an array too large is an `OutOfMemoryError` (a `MemoryError`).
+pub fn numpy_to_image(
+    obj: &Bound<'_, PyAny>,
+    name: &str,
+    expected: Option<(usize, usize)>,
+    caller: &str,
+) -> PyResult<RgbImage> {
     let want = match expected {
         Some((rows, columns)) => format!("({rows}, {columns}, 3)"),
         None => "(rows, columns, 3)".to_string(),
@@ -58,19 +66,44 @@ pub fn numpy_to_image(obj: &Bound<'_, PyAny>, name: &str, expected: Option<(usiz
         ))
     };
     let array = obj.cast::<PyArray3<f32>>().map_err(|_| bad())?;
+    let masked = obj.py().import("numpy.ma")?.getattr("MaskedArray")?;
+    if obj.is_instance(&masked)? {
+        return Err(value_error(format!(
+            "{name} is a masked array (numpy.ma.MaskedArray), whose mask would be ignored; pass \
+             {name}.filled(value) or a plain array"
+        )));
+    }
     let shape = array.shape().to_vec();
     if shape[2] != 3 || expected.is_some_and(|(r, c)| shape[0] != r || shape[1] != c) || shape[0] == 0 || shape[1] == 0
     {
         return Err(bad());
     }
+    let count = shape[0].saturating_mul(shape[1]);
+    inimtrace::budget::check_buffer(
+        &format!("the copy of `{name}`"),
+        name,
+        count,
+        std::mem::size_of::<[f32; 3]>() as u64,
+        caller,
+    )
+    .py_err()?;
     let readonly = array.try_readonly().map_err(|e| value_error(format!("{name}: {e}")))?;
     let view = readonly.as_array();
-    let pixels: Vec<[f32; 3]> = match view.as_slice() {
-        Some(flat) => bytemuck::cast_slice::<f32, [f32; 3]>(flat).to_vec(),
+    let mut pixels: Vec<[f32; 3]> = Vec::new();
+    pixels.try_reserve_exact(count).map_err(|_| {
+        memory_error(format!(
+            "{caller}: cannot allocate {} for the copy of `{name}`: the system refused the memory",
+            inimtrace::budget::Bytes((count as u64).saturating_mul(12))
+        ))
+    })?;
+    match view.as_slice() {
+        Some(flat) => pixels.extend_from_slice(bytemuck::cast_slice::<f32, [f32; 3]>(flat)),
         None => {
-            view.outer_iter().flat_map(|row| row.outer_iter().map(|p| [p[0], p[1], p[2]]).collect::<Vec<_>>()).collect()
+            for row in view.outer_iter() {
+                pixels.extend(row.outer_iter().map(|p| [p[0], p[1], p[2]]));
+            }
         }
-    };
+    }
     // The CLI's EXR reader's rule: linear RGB is finite and non-negative.
     let bad = |(i, p): (usize, &[f32; 3])| {
         p.iter().enumerate().find_map(|(c, &v)| inimtrace::raster::bad_sample(v).map(|kind| (i, c, v, kind)))
@@ -85,8 +118,18 @@ pub fn numpy_to_image(obj: &Bound<'_, PyAny>, name: &str, expected: Option<(usiz
     Ok(RgbImage { width: shape[1], height: shape[0], pixels })
 }
 
-/// A Python value as a TOML value: bool, int, float, str, list/tuple, dict with str keys.
+/// How deep `set=` values may nest (lists and dicts inside each other): far beyond any setting,
+/// and shallow enough that neither this conversion nor the TOML behind it can exhaust the stack.
+pub const MAX_SET_DEPTH: usize = 64;
+
+/// A Python value as a TOML value: bool, int, float, str, list/tuple, dict with str keys, nested
+/// at most [`MAX_SET_DEPTH`] deep; a list or dict that contains itself is a `ValueError`.
 pub fn to_toml(value: &Bound<'_, PyAny>, key: &str) -> PyResult<toml::Value> {
+    to_toml_in(value, key, &mut Vec::new())
+}
+
+/// [`to_toml`] inside the containers of `open` (their addresses, outermost first).
+fn to_toml_in(value: &Bound<'_, PyAny>, key: &str, open: &mut Vec<usize>) -> PyResult<toml::Value> {
     if value.is_instance_of::<PyBool>() {
         return Ok(toml::Value::Boolean(value.extract()?));
     }
@@ -101,19 +144,31 @@ pub fn to_toml(value: &Bound<'_, PyAny>, key: &str) -> PyResult<toml::Value> {
     if value.is_instance_of::<PyString>() {
         return Ok(toml::Value::String(value.extract()?));
     }
-    if let Ok(d) = value.cast::<PyDict>() {
-        let mut table = toml::Table::new();
-        for (k, v) in d.iter() {
-            let k: String =
-                k.extract().map_err(|_| value_error(format!("set: `{key}`: table keys must be strings")))?;
-            let v = to_toml(&v, &format!("{key}.{k}"))?;
-            table.insert(k, v);
+    let is_dict = value.is_instance_of::<PyDict>();
+    if is_dict || value.is_instance_of::<PyList>() || value.is_instance_of::<PyTuple>() {
+        let id = value.as_ptr() as usize;
+        if open.contains(&id) {
+            return Err(value_error(format!("set: `{key}`: the value contains itself (a list or dict inside itself)")));
         }
-        return Ok(toml::Value::Table(table));
-    }
-    if value.is_instance_of::<PyList>() || value.is_instance_of::<PyTuple>() {
-        let items = value.try_iter()?.map(|v| to_toml(&v?, key)).collect::<PyResult<Vec<_>>>()?;
-        return Ok(toml::Value::Array(items));
+        if open.len() == MAX_SET_DEPTH {
+            return Err(value_error(format!("set: `{key}`: lists and dicts nested more than {MAX_SET_DEPTH} deep")));
+        }
+        open.push(id);
+        let converted = if let Ok(d) = value.cast::<PyDict>() {
+            let mut table = toml::Table::new();
+            for (k, v) in d.iter() {
+                let k: String =
+                    k.extract().map_err(|_| value_error(format!("set: `{key}`: table keys must be strings")))?;
+                let v = to_toml_in(&v, &format!("{key}.{k}"), open)?;
+                table.insert(k, v);
+            }
+            toml::Value::Table(table)
+        } else {
+            let items = value.try_iter()?.map(|v| to_toml_in(&v?, key, open)).collect::<PyResult<Vec<_>>>()?;
+            toml::Value::Array(items)
+        };
+        open.pop();
+        return Ok(converted);
     }
     // NumPy scalars and other numbers: through float or int.
     if let Ok(i) = value.call_method0("__index__").and_then(|i| i.extract::<i64>()) {

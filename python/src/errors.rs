@@ -1,9 +1,13 @@
 //! The Python exceptions of the library's errors (`inimtrace::Error`, which names the file and
 //! field): one class per kind of input that was wrong, each carrying the CLI's message and, as
-//! attributes, the file (`source`) and the field when the error names them.
+//! attributes, the file (`source`) and the field when the error names them. Memory refusals and
+//! allocation failures are `OutOfMemoryError`, a subclass of both `inimtrace.Error` and Python's
+//! `MemoryError`; a cancelled run is Python's `KeyboardInterrupt`.
 
-use pyo3::exceptions::{PyException, PyValueError};
+use pyo3::exceptions::{PyException, PyKeyboardInterrupt, PyMemoryError, PyValueError};
 use pyo3::prelude::*;
+use pyo3::sync::PyOnceLock;
+use pyo3::types::{PyDict, PyTuple, PyType};
 
 use inimtrace::Error as LibError;
 
@@ -34,6 +38,14 @@ pyo3::create_exception!(
     "An optical configuration for which the computation has no answer (e.g. PupilCenter when the lenslet images the pupil centre onto the LCD)."
 );
 
+/// `OutOfMemoryError(Error, MemoryError)`: made when the module is loaded (a class with two bases,
+/// which `create_exception!` cannot make).
+static OUT_OF_MEMORY: PyOnceLock<Py<PyType>> = PyOnceLock::new();
+
+const OUT_OF_MEMORY_DOC: &str = "Settings or arrays that need more memory than the budget allows (`--max-memory`, the \
+     machine's free memory, the process's limits), refused before anything is allocated, or a buffer the system \
+     would not allocate. A subclass of both `inimtrace.Error` and Python's `MemoryError`.";
+
 /// Which exception class an error becomes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Class {
@@ -42,6 +54,8 @@ enum Class {
     Mesh,
     Image,
     Optics,
+    Memory,
+    Cancelled,
 }
 
 const MESH_EXTENSIONS: [&str; 7] = ["obj", "mtl", "ply", "stl", "gltf", "glb", "bin"];
@@ -65,9 +79,9 @@ fn file_class(path: &str) -> Option<Class> {
 fn classify(e: &LibError) -> Class {
     match e.innermost() {
         LibError::Singular(_) | LibError::Lattice { .. } => Class::Optics,
-        LibError::Embree { .. } | LibError::Alloc(_) | LibError::External { .. } | LibError::Incomplete(_) => {
-            Class::Base
-        }
+        LibError::Alloc(_) | LibError::Memory { .. } => Class::Memory,
+        LibError::Cancelled => Class::Cancelled,
+        LibError::Embree { .. } | LibError::External { .. } | LibError::Incomplete(_) => Class::Base,
         LibError::Io { path, .. } | LibError::Parse { path, .. } | LibError::UnknownFormat { path, .. } => {
             file_class(&path.to_string_lossy()).unwrap_or(Class::Config)
         }
@@ -82,21 +96,32 @@ fn classify(e: &LibError) -> Class {
 pub fn to_py(e: LibError) -> PyErr {
     let message = e.to_string();
     let (source, field) = e.source_and_field();
-    let err = match classify(&e) {
-        Class::Base => Error::new_err(message),
-        Class::Config => ConfigError::new_err(message),
-        Class::Mesh => MeshError::new_err(message),
-        Class::Image => ImageError::new_err(message),
-        Class::Optics => OpticsError::new_err(message),
-    };
     Python::attach(|py| {
+        let err = match classify(&e) {
+            Class::Base => Error::new_err(message),
+            Class::Config => ConfigError::new_err(message),
+            Class::Mesh => MeshError::new_err(message),
+            Class::Image => ImageError::new_err(message),
+            Class::Optics => OpticsError::new_err(message),
+            Class::Memory => match OUT_OF_MEMORY.get(py) {
+                Some(class) => PyErr::from_type(class.bind(py).clone(), message),
+                None => PyMemoryError::new_err(message),
+            },
+            Class::Cancelled => return PyKeyboardInterrupt::new_err(message),
+        };
         let value = err.value(py);
         // Setting attributes on a fresh exception object cannot fail short of memory exhaustion;
         // the exception is raised either way.
         let _ = value.setattr("source", source);
         let _ = value.setattr("field", field);
-    });
-    err
+        err
+    })
+}
+
+/// An `OutOfMemoryError` of the module's own (an array input over the budget, a copy the system
+/// refused), with `source` and `field` `None`.
+pub fn memory_error(message: impl Into<String>) -> PyErr {
+    to_py(LibError::Alloc(message.into()))
 }
 
 /// `Result<T, inimtrace::Error>` into a Python result.
@@ -123,5 +148,14 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("MeshError", py.get_type::<MeshError>())?;
     m.add("ImageError", py.get_type::<ImageError>())?;
     m.add("OpticsError", py.get_type::<OpticsError>())?;
+    let class = OUT_OF_MEMORY.get_or_try_init(py, || -> PyResult<Py<PyType>> {
+        let bases = PyTuple::new(py, [py.get_type::<Error>(), py.get_type::<PyMemoryError>()])?;
+        let namespace = PyDict::new(py);
+        namespace.set_item("__doc__", OUT_OF_MEMORY_DOC)?;
+        namespace.set_item("__module__", "inimtrace")?;
+        let class = py.get_type::<PyType>().call1(("OutOfMemoryError", bases, namespace))?;
+        Ok(class.cast_into::<PyType>()?.unbind())
+    })?;
+    m.add("OutOfMemoryError", class.bind(py))?;
     Ok(())
 }

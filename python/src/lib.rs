@@ -8,6 +8,8 @@
 //! JSON-like values), `objects.rs` (`Display`, `Eye`, `Scene`, `Experiment`), `run.rs` (the
 //! stages, the GIL, threads and progress).
 
+use numpy::PyArrayMethods;
+use pyo3::exceptions::PyImportError;
 use pyo3::prelude::*;
 
 mod convert;
@@ -15,13 +17,29 @@ mod errors;
 mod objects;
 mod run;
 
+/// Imports NumPy and loads its C API now, so that a missing or unusable NumPy is an
+/// `ImportError` at `import inimtrace` rather than a panic at the first array (the `numpy` crate
+/// loads its APIs on first use, importing Python modules then, which a pending Ctrl-C would
+/// interrupt).
+fn load_numpy(py: Python<'_>) -> PyResult<()> {
+    py.import("numpy").map_err(|e| PyImportError::new_err(format!("inimtrace needs NumPy (numpy>=1.21): {e}")))?;
+    // The array API (`dtype`) and the borrow-checking API (a readonly borrow), both loaded on
+    // first use.
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        numpy::dtype::<f32>(py);
+        drop(numpy::PyArray1::<f32>::zeros(py, 1, false).readonly());
+    }))
+    .map_err(|_| PyImportError::new_err("inimtrace cannot load the C API of the installed NumPy"))
+}
+
 #[pymodule]
 fn _inimtrace(m: &Bound<'_, PyModule>) -> PyResult<()> {
     // First: a static text (no formatting), so that a CPU without what the build assumes gets
     // an ImportError rather than "illegal instruction" (see `inimtrace::cpu`).
     if inimtrace::cpu::lacks_assumed_features() {
-        return Err(pyo3::exceptions::PyImportError::new_err(inimtrace::cpu::UNSUPPORTED));
+        return Err(PyImportError::new_err(inimtrace::cpu::UNSUPPORTED));
     }
+    load_numpy(m.py())?;
     errors::register(m)?;
     m.add_class::<objects::PyDisplay>()?;
     m.add_class::<objects::PyEye>()?;

@@ -5,9 +5,12 @@
 //! optional Python callable.
 
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
+use std::time::Duration;
 
 use glam::DVec3;
+use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
@@ -24,31 +27,60 @@ use crate::convert::{depth_to_numpy, image_to_numpy, numpy_to_image, overrides, 
 use crate::errors::{value_error, IntoPy};
 use crate::objects::{PyDisplay, PyExperiment, PyEye, PyScene};
 
-/// Reports progress to a Python callable `callback(stage, done, total)`, taking the GIL only for
-/// the call (at most every 0.1 s per stage, see `inimtrace::progress`). The first exception the
-/// callable raises is kept, later reports are dropped, and the exception is raised when the
-/// work ends.
-struct PyProgress {
-    callback: Py<PyAny>,
+/// The progress sink of every call: reports progress to an optional Python callable
+/// `callback(stage, done, total)`, taking the GIL only for the call (at most every 0.1 s per
+/// stage, see `inimtrace::progress`), and cancels the run once the caller's thread saw Ctrl-C.
+/// The first exception the callable raises is kept, later reports are dropped, and the exception
+/// is raised when the work ends.
+struct PySink {
+    callback: Option<Py<PyAny>>,
     error: Mutex<Option<PyErr>>,
+    cancelled: AtomicBool,
 }
 
-impl ProgressSink for PyProgress {
+impl ProgressSink for PySink {
     fn update(&self, stage: &str, done: u64, total: u64) {
+        let Some(callback) = &self.callback else { return };
         let Ok(mut error) = self.error.lock() else { return };
         if error.is_some() {
             return;
         }
         Python::attach(|py| {
-            if let Err(e) = self.callback.call1(py, (stage, done, total)) {
+            if let Err(e) = callback.call1(py, (stage, done, total)) {
                 *error = Some(e);
             }
         });
     }
+
+    fn cancelled(&self) -> bool {
+        self.cancelled.load(Ordering::Relaxed)
+    }
+}
+
+/// How often the calling thread looks for Ctrl-C (Python's signal handlers) while a call works.
+const SIGNAL_INTERVAL: Duration = Duration::from_millis(50);
+
+/// The stack of the thread that runs a call's work: the size of a main thread's (the work ran
+/// on the caller's thread before, and deep inputs such as nested YAML recurse there).
+const WORK_STACK: usize = 8 << 20;
+
+/// Wakes the calling thread when the work's thread ends (normally or by a panic).
+struct WakeOnDrop(std::thread::Thread);
+
+impl Drop for WakeOnDrop {
+    fn drop(&mut self) {
+        self.0.unpark();
+    }
 }
 
 /// Runs `work` with the GIL released: on a pool of `threads` workers (`None`: the global pool,
-/// all cores), with `progress` receiving the progress of every stage.
+/// all cores), with `progress` receiving the progress of every stage. The work runs on a thread
+/// of its own while the calling thread, when it is Python's main thread (the only one that runs
+/// signal handlers), runs them every [`SIGNAL_INTERVAL`]:
+/// Ctrl-C (or any handler that raises) cancels the work through its progress sink, which the
+/// library's loops ask at each row, band or tile, and the handler's exception
+/// (`KeyboardInterrupt`) is raised as soon as the work has stopped; its partial results are
+/// dropped.
 fn detached<T: Send>(
     py: Python<'_>,
     threads: Option<usize>,
@@ -72,19 +104,46 @@ fn detached<T: Send>(
             return Err(value_error("progress must be a callable progress(stage, done, total) or None"));
         }
     }
-    let sink = progress.map(|callback| Arc::new(PyProgress { callback, error: Mutex::new(None) }));
-    let installed = sink.clone().map(|s| s as Arc<dyn ProgressSink>);
-    let result = py.detach(move || {
-        let run = move || match installed {
-            Some(s) => with_sink(s, work),
-            None => work(),
-        };
-        match pool {
-            Some(pool) => pool.install(run),
-            None => run(),
+    let sink = Arc::new(PySink { callback: progress, error: Mutex::new(None), cancelled: AtomicBool::new(false) });
+    let installed: Arc<dyn ProgressSink> = sink.clone();
+    // Python runs signal handlers on its main thread only: elsewhere the caller just waits.
+    let threading = py.import("threading")?;
+    let main = threading.call_method0("current_thread")?.is(&threading.call_method0("main_thread")?);
+    let caller = std::thread::current();
+    let mut interrupt = None;
+    let joined = std::thread::scope(|scope| -> PyResult<_> {
+        let worker = std::thread::Builder::new()
+            .name("inimtrace".into())
+            .stack_size(WORK_STACK)
+            .spawn_scoped(scope, move || {
+                let _wake = WakeOnDrop(caller);
+                let run = move || with_sink(installed, work);
+                match pool {
+                    Some(pool) => pool.install(run),
+                    None => run(),
+                }
+            })
+            .map_err(|e| PyRuntimeError::new_err(format!("cannot start a thread for the work: {e}")))?;
+        while !worker.is_finished() {
+            if !main {
+                py.detach(std::thread::park);
+                continue;
+            }
+            py.detach(|| std::thread::park_timeout(SIGNAL_INTERVAL));
+            if interrupt.is_none() {
+                if let Err(e) = py.check_signals() {
+                    sink.cancelled.store(true, Ordering::Relaxed);
+                    interrupt = Some(e);
+                }
+            }
         }
-    });
-    if let Some(e) = sink.and_then(|s| s.error.lock().ok().and_then(|mut e| e.take())) {
+        Ok(worker.join())
+    })?;
+    let result = joined.unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+    if let Some(e) = interrupt {
+        return Err(e);
+    }
+    if let Some(e) = sink.error.lock().ok().and_then(|mut e| e.take()) {
         return Err(e);
     }
     result.py_err()
@@ -177,7 +236,12 @@ pub fn simulate<'py>(
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let display = &display.inner;
-    let img = numpy_to_image(display_image, "display_image", Some((display.lcd.rows(), display.lcd.columns())))?;
+    let img = numpy_to_image(
+        display_image,
+        "display_image",
+        Some((display.lcd.rows(), display.lcd.columns())),
+        "simulate()",
+    )?;
     let n = eye.retina.resolution;
     check_memory("the retinal image", "retina", n * n, 24, "simulate()")?;
     let e = &eye.for_display(Some(display))?;
@@ -319,8 +383,8 @@ pub fn compare<'py>(
     ssim: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     let constants: SsimConstants = ssim.parse().map_err(|e: inimtrace::Error| value_error(e.to_string()))?;
-    let ia = numpy_to_image(a, "a", None)?;
-    let ib = numpy_to_image(b, "b", Some((ia.height, ia.width)))?;
+    let ia = numpy_to_image(a, "a", None, "compare()")?;
+    let ib = numpy_to_image(b, "b", Some((ia.height, ia.width)), "compare()")?;
     let (p, s) = detached(py, None, None, || Ok((metrics::psnr(&ia, &ib)?, metrics::ssim(&ia, &ib, constants)?)))?;
     let channels = |v: [f64; 3], mean: f64| -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);

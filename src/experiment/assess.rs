@@ -16,6 +16,7 @@ use crate::error::Result;
 use crate::io::exr::{Attributes, ExrCompression};
 use crate::io::output::{OutputDir, RunKind};
 use crate::optics::Aperture;
+use crate::progress::with_installed;
 use crate::raster::RgbImage;
 use crate::render::{with_scene_fields, BackendChoice, FieldUser, RadianceField};
 
@@ -192,13 +193,21 @@ fn assess_with<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
         let mut attributes = metadata::common("display image", name);
         attributes.extend(metadata::display_image(m, display, &exp.render, backend_name, depth.is_some()));
         let stem = format!("display_{}", m.name());
+        // The writes run on rayon's workers: they carry the progress sink, which may cancel them.
+        let sink = crate::progress::installed();
         let (exr, png) = rayon::join(
             || {
-                dir.write_with(&format!("{stem}.exr"), |p| {
-                    crate::io::exr::write_view(p, image, depth, &attributes, opts.exr_compression)
+                with_installed(sink.clone(), || {
+                    dir.write_with(&format!("{stem}.exr"), |p| {
+                        crate::io::exr::write_view(p, image, depth, &attributes, opts.exr_compression)
+                    })
                 })
             },
-            || dir.write_with(&format!("{stem}.png"), |p| crate::io::png::write_preview_view(p, image)),
+            || {
+                with_installed(sink.clone(), || {
+                    dir.write_with(&format!("{stem}.png"), |p| crate::io::png::write_preview_view(p, image))
+                })
+            },
         );
         exr?;
         png
@@ -285,11 +294,15 @@ fn write_case(
             measured(metadata::perceived(name, Some(*m), Some(&case.name), &case.eye, &exp.retina, &exp.display, None));
         jobs.push(Job { stem: format!("sim_{}_{}", m.name(), case.name), image, attributes });
     }
+    // The writes run on rayon's workers: they carry the progress sink, which may cancel them.
+    let sink = crate::progress::installed();
     jobs.par_iter().try_for_each(|j| -> Result<()> {
-        dir.write_with(&format!("{}.exr", j.stem), |p| {
-            crate::io::exr::write_rgb_with(p, j.image, None, &j.attributes, opts.exr_compression)
-        })?;
-        dir.write_with(&format!("{}.png", j.stem), |p| crate::io::png::write_preview(p, j.image))
+        with_installed(sink.clone(), || {
+            dir.write_with(&format!("{}.exr", j.stem), |p| {
+                crate::io::exr::write_rgb_with(p, j.image, None, &j.attributes, opts.exr_compression)
+            })?;
+            dir.write_with(&format!("{}.png", j.stem), |p| crate::io::png::write_preview(p, j.image))
+        })
     })
 }
 

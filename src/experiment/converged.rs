@@ -116,6 +116,7 @@ pub fn table1_each<F: RadianceField + ?Sized>(
         let progress = Progress::new(exp.retina.resolution as u64, &label, quiet);
         let measured = measure_case(&source, &sampler, &exp.retina, exp.ssim, &precision, &progress, storage.take());
         progress.finish();
+        progress.check()?;
         let (gt, case_sims, case_scores) = case_outputs(exp, case, &measured);
         for (stage, seconds) in [
             ("converged_sampling", measured.rounds.iter().map(|r| r.sample_seconds).sum::<f64>()),

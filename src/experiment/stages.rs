@@ -85,6 +85,7 @@ pub fn render_display_stack<D: RadianceField + ?Sized>(
         let t = Instant::now();
         finished(k, RgbView::from(&image), known.then_some(depth.as_slice()))?;
         stage_time(stages, "write_display_image", Some(m.name().as_str()), None, t);
+        crate::progress::check_cancelled()?;
         let t = Instant::now();
         stack.push(RgbView::from(&image))?;
         stage_time(stages, "pack_display_images", Some(m.name().as_str()), None, t);
@@ -190,6 +191,8 @@ pub fn table1_each<S: RadianceField + ?Sized>(
     }
     for (c, case) in exp.cases.iter().enumerate() {
         let gt = ground_truth_image(exp, case, shade, quiet, stages);
+        // A cancelled ground truth skipped rows (`crate::progress`): stop before it is used.
+        crate::progress::check_cancelled()?;
         let sims = perceived_images(exp, case, stack, quiet, stages)?;
         let t = Instant::now();
         let scores = case_scores(exp, c, &gt, &sims)?;

@@ -212,6 +212,10 @@ pub(super) fn write(path: &Path, headers: Headers, img: RgbView<'_>, depth: Opti
             let mut start = 0;
             let mut ready = encode_blocks(&layout, 0..batch.min(count));
             while !ready.is_empty() {
+                // A cancelled run (`crate::progress`) stops between batches; the file is removed.
+                if crate::progress::cancelled() {
+                    return Err(exr::error::Error::Aborted);
+                }
                 let next = start + ready.len();
                 let (stored, following) = rayon::join(
                     || {
@@ -238,6 +242,7 @@ pub(super) fn write(path: &Path, headers: Headers, img: RgbView<'_>, depth: Opti
     });
     written.map_err(|e| match e {
         exr::error::Error::Io(e) => Error::io(path, e),
+        exr::error::Error::Aborted => Error::Cancelled,
         other => invalid(format!("cannot write OpenEXR file: {other}")),
     })
 }

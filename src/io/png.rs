@@ -167,6 +167,8 @@ pub fn write_preview_view(path: &Path, img: RgbView<'_>) -> Result<()> {
     let row = img.width * 3;
     let mut band = vec![0u8; PREVIEW_BAND_ROWS * row];
     for y0 in (0..img.height).step_by(PREVIEW_BAND_ROWS) {
+        // A cancelled run (`crate::progress`) stops between bands.
+        crate::progress::check_cancelled()?;
         let rows = PREVIEW_BAND_ROWS.min(img.height - y0);
         band[..rows * row].par_chunks_mut(row).enumerate().for_each(|(dy, o)| {
             let first = (y0 + dy) * img.width;

@@ -127,6 +127,10 @@ pub fn measure_case<S: PairedSource + ?Sized>(
     loop {
         let t = Instant::now();
         reps.extend(source, sampler, retina, n, progress);
+        if progress.cancelled() {
+            // Tiles were skipped: no scores; the caller discards the measurement.
+            return CaseMeasurement { replicates: reps, cells: Vec::new(), rounds, stopped_by: "cancelled" };
+        }
         let sample_seconds = t.elapsed().as_secs_f64();
         let t = Instant::now();
         let psnr = psnr_estimates(&reps);

@@ -473,6 +473,9 @@ impl Replicates {
                 }
             };
             for col0 in (0..n).step_by(TILE) {
+                if progress.cancelled() {
+                    return;
+                }
                 let cols = TILE.min(n - col0);
                 for dr in 0..rows {
                     for dc in 0..cols {

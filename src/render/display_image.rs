@@ -305,6 +305,9 @@ fn render_into<R: RadianceField + ?Sized>(
     if tracer.prefers_batches() {
         // Blocks of a row's pixels, ordered sample-major, so that packets see neighbouring rays.
         dst.par_chunks_mut(nx).zip(depth.par_chunks_mut(nx)).enumerate().for_each(|(row, (out, zout))| {
+            if progress.cancelled() {
+                return;
+            }
             let mut rays = Vec::with_capacity(per_pixel * BLOCK);
             let mut samples = Vec::with_capacity(per_pixel * BLOCK);
             for col0 in (0..nx).step_by(BLOCK) {
@@ -346,6 +349,9 @@ fn render_into<R: RadianceField + ?Sized>(
         dst.par_chunks_mut(nx).zip(depth.par_chunks_mut(nx)).enumerate().for_each_init(
             RowRays::default,
             |s, (row, (out, zout))| {
+                if progress.cancelled() {
+                    return;
+                }
                 s.sums.clear();
                 s.sums.resize(nx, BundleSum::default());
                 for frac in &pixel_samples {
@@ -368,6 +374,8 @@ fn render_into<R: RadianceField + ?Sized>(
             },
         );
     }
+    // A cancelled render skipped rows: its image is not returned.
+    progress.check()?;
     Ok((depth, depth_known.into_inner()))
 }
 

@@ -86,7 +86,10 @@ pub fn simulate_stack(
     let mut images: Vec<RgbImage> =
         (0..m).map(|_| RgbImage::try_new(n, n, "a retinal image")).collect::<Result<_>>()?;
     if let Some(optics) = &eye.optics {
-        return Ok(through_optics::simulate_stack(display, eye, optics, retina, stack, images, progress));
+        let images = through_optics::simulate_stack(display, eye, optics, retina, stack, images, progress);
+        // A cancelled simulation skipped pixels: its images are not returned.
+        progress.check()?;
+        return Ok(images);
     }
     let mut rows = crate::budget::try_vec(n * n * stride, 0f32, "the retinal images' rows")?;
     if stride == 0 {
@@ -106,6 +109,9 @@ pub fn simulate_stack(
         // lcd[k * T2 + p]: the LCD pixel of tile pixel p through pupil sample k.
         let (mut lcd, mut scratch) = (vec![0u32; T2 * pupil.len()], Vec::new());
         for col0 in (0..n).step_by(TILE) {
+            if progress.cancelled() {
+                return;
+            }
             let tile_cols = TILE.min(n - col0);
             acc.iter_mut().for_each(|a| *a = 0.0);
             for frac in &subpixels {
@@ -138,6 +144,7 @@ pub fn simulate_stack(
         }
         progress.inc(band_rows as u64);
     });
+    progress.check()?;
     for (i, px) in rows.chunks_exact(stride).enumerate() {
         for (k, img) in images.iter_mut().enumerate() {
             img.pixels[i] = [px[3 * k], px[3 * k + 1], px[3 * k + 2]];
@@ -224,6 +231,9 @@ pub fn ground_truth<R: RadianceField + ?Sized>(
         let pupil_box = bounds(pupil.iter().copied());
         let frac_box = bounds(subpixels.iter().copied());
         image.pixels.par_chunks_mut(n).enumerate().for_each(|(row, out)| {
+            if progress.cancelled() {
+                return;
+            }
             // (colour, its sum over a pixel's samples): the same additions as adding it ray by ray.
             let mut last_sum = (DVec3::NAN, DVec3::NAN);
             for (col, px) in out.iter_mut().enumerate() {
@@ -252,6 +262,9 @@ pub fn ground_truth<R: RadianceField + ?Sized>(
     }
     let block = 128;
     image.pixels.par_chunks_mut(n).enumerate().for_each(|(row, out)| {
+        if progress.cancelled() {
+            return;
+        }
         let mut rays = Vec::with_capacity(per_pixel * block);
         let mut samples = Vec::with_capacity(per_pixel * block);
         for col0 in (0..n).step_by(block) {

@@ -209,6 +209,7 @@ pub fn run_study(study: &Study, quiet: bool) -> Result<StudyResults> {
             let source = DisplaySource::new(&display, eye, &field, &stack);
             let sampler = Sampler::new(study.measurement.seed, (di * nf + fi) as u64, Some(radius));
             let windows = measure_windows(&source, &sampler, &chart, reps, spp, &measure_bar);
+            measure_bar.check()?;
             eye_rays += windows.iter().map(|w| (w.cols * w.rows * reps) as u64 * u64::from(spp)).sum::<u64>();
             t_measure += t.elapsed().as_secs_f64();
             let t = Instant::now();

@@ -140,6 +140,10 @@ pub fn measure_windows<S: PairedSource + ?Sized>(
             for r in 0..replicates {
                 sums.iter_mut().for_each(|s| *s = 0.0);
                 for dr in 0..rows {
+                    // A cancelled run (`crate::progress`) skips the rest; the caller discards it.
+                    if progress.cancelled() {
+                        break;
+                    }
                     let row = row0 + dr;
                     for c in 0..p.cols {
                         let pixel = offsets[w] + (row * p.cols + c) as u64;

@@ -81,6 +81,10 @@ pub(super) fn simulate_stack(
         .map(|row| {
             let mut out = vec![0.0f64; n * 3 * m];
             for col in 0..n {
+                // Pixel by pixel (each traces many rays): a cancelled run stops within a pixel.
+                if progress.cancelled() {
+                    break;
+                }
                 let acc = &mut out[col * 3 * m..(col + 1) * 3 * m];
                 for sr in pixel_samples(optics, eye, retina, row, col) {
                     each_ray(&sr, |channels, r| {
@@ -124,6 +128,9 @@ pub(super) fn ground_truth<R: RadianceField + ?Sized>(
     let mut image = RgbImage::new(n, n);
     image.pixels.par_chunks_mut(n).enumerate().for_each(|(row, out)| {
         for (col, px) in out.iter_mut().enumerate() {
+            if progress.cancelled() {
+                break;
+            }
             let mut sum = DVec3::ZERO;
             for sr in pixel_samples(optics, eye, retina, row, col) {
                 each_ray(&sr, |channels, r| {
