@@ -317,3 +317,97 @@ fn the_single_stage_commands_take_the_display_files_primaries() {
     let (narrow, wide) = (mean(&p, &s), mean(&default, &s));
     assert!(wide > 1e-2 && narrow < 0.05 * wide, "{narrow} {wide}");
 }
+
+#[test]
+fn two_samples_at_once_give_the_rays_of_one_at_a_time_bit_for_bit() {
+    // The slow twin is `EyeOptics::rays`. Every kind of eye that reaches it: schematic with the
+    // fitted map (one wavelength, primaries, Stiles-Crawford with an off-centre peak), samples
+    // beyond the map's field (aimed exactly), and the thin lens with Stiles-Crawford.
+    let sc = Some((0.05, DVec2::new(0.4, -0.2)));
+    let specs = [
+        spec(EyeModel::Navarro1985, false, None),
+        spec(EyeModel::Navarro1985, true, None),
+        spec(EyeModel::Navarro1985, true, sc),
+        spec(EyeModel::ThinLens, false, sc),
+    ];
+    let bits = |r: &Option<inimtrace::optics::PlaneRay>| {
+        r.map(|r| [r.position.x, r.position.y, r.slope.x, r.slope.y].map(f64::to_bits))
+    };
+    for s in &specs {
+        let eye = eye_with(s, 2.5);
+        let optics = eye.optics.as_ref().expect("not the thin lens's fast path");
+        let mut h = 5u64;
+        let mut next = || {
+            h = h.wrapping_add(0x9e37_79b9_7f4a_7c15); // splitmix64
+            let mut z = h;
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            z ^= z >> 31;
+            (z >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for i in 0..300 {
+            let mut sample = || {
+                let reach = if i % 5 == 0 { 0.7 } else { 0.45 }; // beyond the map's 0.5 at times
+                let t = DVec2::new(reach * (2.0 * next() - 1.0), reach * (2.0 * next() - 1.0));
+                let p = 2.5 * next().sqrt() * DVec2::from_angle(std::f64::consts::TAU * next());
+                (t, p, next())
+            };
+            let (a, b) = (sample(), sample());
+            let pair = optics.rays2(a, b);
+            for (got, (t, p, u)) in pair.iter().zip([a, b]) {
+                let want = optics.rays(t, p, u);
+                assert_eq!(got.single, want.single);
+                assert_eq!(got.weight.to_bits(), want.weight.to_bits());
+                for (g, w) in got.rays.iter().zip(&want.rays) {
+                    assert_eq!(bits(g), bits(w), "{:?} {t} {p} {u}", s.model);
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn the_ray_maps_lockstep_evaluation_equals_one_sample_at_a_time_bit_for_bit() {
+    // The slow twin: `RayMap::ray`, one sample at a time. Lanes of 2 and 3, one and three
+    // wavelengths, and a lane outside the field (that lane declines, the others agree).
+    use inimtrace::optics::eye::ray_map::RayMap;
+    use inimtrace::optics::eye::SchematicEye;
+    let pupil = 5.0;
+    let (eye, _) =
+        SchematicEye::focused(&EyeModel::Navarro1985, 3.0, 555.0, FocusCriterion::Paraxial, pupil, "t", "f").unwrap();
+    let scale = eye.iris_diameter(pupil) / pupil;
+    let map = RayMap::fit(&eye, 0.43, 0.5 * pupil, scale, (420.0, 680.0)).expect("the map is within tolerance");
+    let bits = |r: &inimtrace::optics::PlaneRay| [r.position.x, r.position.y, r.slope.x, r.slope.y].map(f64::to_bits);
+    // Weyl sequences (golden ratio and its square's fraction): points spread over the domain.
+    let frac = |i: usize, a: f64| (0.5 + a * i as f64).fract();
+    let point = |i: usize| {
+        let t = DVec2::new(0.6 * frac(i, 0.754_877_666) - 0.3, 0.6 * frac(i, 0.569_840_290) - 0.3);
+        let p = 2.5 * frac(i, 0.618_033_989).sqrt() * DVec2::from_angle(std::f64::consts::TAU * frac(i, 0.414_213_562));
+        let nm = [430.0 + 0.37 * i as f64, 540.0 + 0.11 * i as f64, 610.0 + 0.23 * i as f64];
+        (t, p, nm)
+    };
+    for i in 0..200 {
+        let [a, b, mut c] = [point(3 * i), point(3 * i + 1), point(3 * i + 2)];
+        if i % 7 == 0 {
+            c.0 = DVec2::new(0.44, 0.0); // outside the field
+        }
+        let three = map.rays([a.0, b.0, c.0], [a.1, b.1, c.1], [a.2, b.2, c.2]);
+        let two = map.rays([a.0, b.0], [a.1, b.1], [[a.2[1]], [b.2[1]]]);
+        for (lane, (t, p, nm)) in [a, b, c].into_iter().enumerate() {
+            match (map.ray(t, p, nm), three[lane]) {
+                (Some(one), Some(lock)) => {
+                    for (x, y) in one.iter().zip(&lock) {
+                        assert_eq!(bits(x), bits(y), "lane {lane} of point {i}");
+                    }
+                }
+                (None, None) => assert_eq!(lane, 2),
+                _ => panic!("lane {lane} of point {i}: one inside, the other outside"),
+            }
+            if lane < 2 {
+                let [one] = map.ray(t, p, [nm[1]]).unwrap();
+                let [lock] = two[lane].unwrap();
+                assert_eq!(bits(&one), bits(&lock), "lane {lane} of point {i}, one wavelength");
+            }
+        }
+    }
+}

@@ -23,7 +23,15 @@ impl<F: RadianceField + ?Sized> DisplaySource<'_, F> {
         let z = self.eye.position.z;
         let world = |r: PlaneRay| PlaneRay { position: r.position + eye_xy, slope: r.slope };
         // Every sample's rays (1 or 3), the scene traced in one batch when the field wants it.
-        let all: Vec<_> = samples.iter().map(|s| optics.rays(s.tangent, s.pupil, s.spectral)).collect();
+        // Two at a time: a schematic eye's ray map shares its coefficients between them (bit for
+        // bit `rays` one by one).
+        let mut all = Vec::with_capacity(samples.len());
+        let mut pairs = samples.chunks_exact(2);
+        for pair in &mut pairs {
+            let (a, b) = (&pair[0], &pair[1]);
+            all.extend(optics.rays2((a.tangent, a.pupil, a.spectral), (b.tangent, b.pupil, b.spectral)));
+        }
+        all.extend(pairs.remainder().iter().map(|s| optics.rays(s.tangent, s.pupil, s.spectral)));
         let mut rays = Vec::with_capacity(samples.len() * 3);
         for sr in &all {
             let n = if sr.single { 1 } else { 3 };

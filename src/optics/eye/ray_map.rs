@@ -353,6 +353,52 @@ impl RayMap {
         y[..W].copy_from_slice(&acc);
     }
 
+    /// [`Self::accumulate`] for `L` points in lockstep: each coefficient is loaded once for
+    /// every point, and the points' sums are independent chains, so the fused multiply-adds
+    /// overlap instead of waiting on one another. The columns go in passes of at most 16 (the
+    /// accumulators of two points then fit in the registers); each output still sums its
+    /// monomials in the same order from the same start, so every point's result is bit for
+    /// bit [`Self::accumulate`]'s.
+    #[inline(always)]
+    fn accumulate_lanes<const W: usize, const L: usize>(y: &mut [[f64; 4 * NODES]; L], m: [&[f64]; L], rows: &[f64]) {
+        let mut col = 0;
+        while col + 16 <= W {
+            Self::pass::<16, L>(y, m, rows, W, col);
+            col += 16;
+        }
+        match W - col {
+            0 => {}
+            4 => Self::pass::<4, L>(y, m, rows, W, col),
+            8 => Self::pass::<8, L>(y, m, rows, W, col),
+            12 => Self::pass::<12, L>(y, m, rows, W, col),
+            _ => unreachable!("rows are whole Chebyshev terms of four outputs"),
+        }
+    }
+
+    /// Columns `col .. col + C` of rows `w` wide, for `L` points (see [`Self::accumulate_lanes`]).
+    #[inline(always)]
+    fn pass<const C: usize, const L: usize>(
+        y: &mut [[f64; 4 * NODES]; L],
+        m: [&[f64]; L],
+        rows: &[f64],
+        w: usize,
+        col: usize,
+    ) {
+        let mut acc: [[f64; C]; L] = std::array::from_fn(|l| std::array::from_fn(|i| y[l][col + i]));
+        for (j, row) in rows.chunks_exact(w).enumerate() {
+            let c: &[f64; C] = row[col..col + C].try_into().expect("C columns");
+            for (a, ml) in acc.iter_mut().zip(&m) {
+                let mk = ml[j];
+                for (ai, ci) in a.iter_mut().zip(c) {
+                    *ai = mk.mul_add(*ci, *ai);
+                }
+            }
+        }
+        for (yl, a) in y.iter_mut().zip(&acc) {
+            yl[col..col + C].copy_from_slice(a);
+        }
+    }
+
     /// Chebyshev terms in wavelength the map uses (1 for a single wavelength).
     pub fn wavelength_terms(&self) -> usize {
         self.degree1
@@ -366,6 +412,110 @@ impl RayMap {
             return None;
         }
         Some(self.eval(t, p, nm))
+    }
+
+    /// [`Self::ray`] for `L` samples at once, bit for bit the same rays (the coefficients are
+    /// shared in lockstep, [`Self::accumulate_lanes`]); None for a sample outside the map's
+    /// field.
+    #[inline]
+    pub fn rays<const L: usize, const N: usize>(
+        &self,
+        t: [DVec2; L],
+        p: [DVec2; L],
+        nm: [[f64; N]; L],
+    ) -> [Option<[PlaneRay; N]>; L] {
+        let inside = t.map(|t| t.length_squared() <= self.tau_max * self.tau_max);
+        if inside.iter().all(|&i| i) {
+            return self.eval_lanes(t, p, nm).map(Some);
+        }
+        std::array::from_fn(|l| inside[l].then(|| self.eval(t[l], p[l], nm[l])))
+    }
+
+    /// The slow twin of the lockstep evaluation is [`Self::eval`], one sample at a time.
+    #[inline]
+    fn eval_lanes<const L: usize, const N: usize>(
+        &self,
+        t: [DVec2; L],
+        p: [DVec2; L],
+        nm: [[f64; N]; L],
+    ) -> [[PlaneRay; N]; L] {
+        const MAX: usize = NODES;
+        let ts = t.map(|t| t / self.tau_max);
+        let ps = p.map(|p| p / self.radius);
+        let m: [[f64; TERMS]; L] =
+            std::array::from_fn(|l| monomials(ts[l].length_squared(), ts[l].dot(ps[l]), ps[l].length_squared()));
+        let mut y = [[0.0; 4 * MAX]; L];
+        let (mut term, mut offset) = (0, 0);
+        for (g, &keep) in self.kept.iter().enumerate() {
+            let count = (g + 1) * (g + 2) / 2;
+            let ms: [&[f64]; L] = std::array::from_fn(|l| &m[l][term..term + count]);
+            let rows = &self.coef[offset..offset + 4 * keep * count];
+            macro_rules! widths {
+                ($($n:literal)*) => {
+                    match keep {
+                        0 => {}
+                        $($n => Self::accumulate_lanes::<{ 4 * $n }, L>(&mut y, ms, rows),)*
+                        _ => unreachable!("at most NODES Chebyshev terms"),
+                    }
+                };
+            }
+            widths!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17);
+            term += count;
+            offset += 4 * keep * count;
+        }
+        self.sum_series(&y, ts, ps, nm)
+    }
+
+    /// Each sample's and wavelength's ray from the samples' Chebyshev coefficients
+    /// `y[l][4 d + k]`: the operations of [`Self::eval`]'s series, for every (sample,
+    /// wavelength) in one loop over the degree, so the recurrences and sums of all of them are
+    /// independent chains that overlap (bit for bit the same numbers).
+    #[inline(always)]
+    fn sum_series<const L: usize, const N: usize>(
+        &self,
+        y: &[[f64; 4 * NODES]; L],
+        ts: [DVec2; L],
+        ps: [DVec2; L],
+        nm: [[f64; N]; L],
+    ) -> [[PlaneRay; N]; L] {
+        let n1 = self.degree1;
+        let mut s = [[0.0; N]; L];
+        for (sl, nl) in s.iter_mut().zip(&nm) {
+            for (sw, &w) in sl.iter_mut().zip(nl) {
+                *sw = ((inv2(w) - self.x_mid) / self.x_half).clamp(-1.0, 1.0);
+            }
+        }
+        // T_{d-2}, T_{d-1} and the sums, as `chebyshev` and `eval` form them.
+        let (mut t0, mut t1) = ([[1.0; N]; L], s);
+        let mut v = [[[0.0; 4]; N]; L];
+        for d in 0..n1 {
+            let lanes = v.iter_mut().zip(y).zip(&s).zip(t0.iter_mut()).zip(t1.iter_mut());
+            for ((((vl, yl), sl), t0l), t1l) in lanes {
+                let yd: &[f64; 4] = yl[4 * d..4 * d + 4].try_into().expect("four outputs");
+                for (((vw, &sw), t0w), t1w) in vl.iter_mut().zip(sl).zip(t0l.iter_mut()).zip(t1l.iter_mut()) {
+                    let td = match d {
+                        0 => 1.0,
+                        1 => sw,
+                        _ => {
+                            let t = 2.0 * sw * *t1w - *t0w;
+                            *t0w = *t1w;
+                            *t1w = t;
+                            t
+                        }
+                    };
+                    for (vk, yk) in vw.iter_mut().zip(yd) {
+                        *vk = yk.mul_add(td, *vk);
+                    }
+                }
+            }
+        }
+        let mut out = [[PlaneRay { position: DVec2::ZERO, slope: DVec2::ZERO }; N]; L];
+        for (((ol, vl), t), p) in out.iter_mut().zip(&v).zip(ts).zip(ps) {
+            for (o, v) in ol.iter_mut().zip(vl) {
+                *o = PlaneRay { position: t * v[0] + p * v[1], slope: t * v[2] + p * v[3] };
+            }
+        }
+        out
     }
 
     #[inline]

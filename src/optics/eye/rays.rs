@@ -375,6 +375,38 @@ impl EyeOptics {
         }
     }
 
+    /// [`Self::rays`] of two samples `(tangent, pupil, u)` at once, bit for bit the same: a
+    /// schematic eye's ray map evaluates them in lockstep ([`RayMap::rays`]), sharing its
+    /// coefficients. `rays` stays the slow twin (and serves what the map does not cover).
+    #[inline]
+    pub fn rays2(&self, a: (DVec2, DVec2, f64), b: (DVec2, DVec2, f64)) -> [SampleRays; 2] {
+        let (Lens::Schematic(_), Some(map)) = (&self.lens, &self.map) else {
+            return [self.rays(a.0, a.1, a.2), self.rays(b.0, b.1, b.2)];
+        };
+        let warp = |(t, p, u): (DVec2, DVec2, f64)| match &self.stiles_crawford {
+            Some(sc) => {
+                let p = sc.warp(p, 0.5 * self.pupil_diameter);
+                (t, p, u, sc.weight(p))
+            }
+            None => (t, p, u, 1.0),
+        };
+        let (wa, wb) = (warp(a), warp(b));
+        let (t, p) = ([wa.0, wb.0], [wa.1, wb.1]);
+        let fitted: [Option<([PlaneRay; 3], bool)>; 2] = match &self.spectrum {
+            Spectrum::Single(nm) => map.rays(t, p, [[*nm]; 2]).map(|o| o.map(|[r]| ([r; 3], true))),
+            Spectrum::Primaries(s) => {
+                let nm = |u: f64| [s[0].wavelength(u), s[1].wavelength(u), s[2].wavelength(u)];
+                map.rays(t, p, [nm(wa.2), nm(wb.2)]).map(|o| o.map(|r| (r, false)))
+            }
+        };
+        let [fa, fb] = fitted;
+        let one = |f: Option<([PlaneRay; 3], bool)>, weight: f64, input: (DVec2, DVec2, f64)| match f {
+            Some((r, single)) => SampleRays { rays: r.map(Some), single, weight },
+            None => self.rays(input.0, input.1, input.2),
+        };
+        [one(fa, wa.3, a), one(fb, wb.3, b)]
+    }
+
     /// One line for reports: the model, its accommodation, the pupils and the colour.
     pub fn describe(&self) -> String {
         let mut s = self.model.name().to_string();
