@@ -93,7 +93,7 @@ fn scene_for(dir: &Path, name: &str, mesh: &Path) -> PathBuf {
     let file = toml_string(&mesh.to_string_lossy());
     std::fs::write(
         &path,
-        format!("[[objects]]\ntype = \"mesh\"\nfile = {file}\nfit = {{ size = 100.0, center = [0, 0, 400] }}\n"),
+        format!("allow_outside_paths = true\n[[objects]]\ntype = \"mesh\"\nfile = {file}\nfit = {{ size = 100.0, center = [0, 0, 400] }}\n"),
     )
     .unwrap();
     path

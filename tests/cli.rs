@@ -254,7 +254,7 @@ fn every_file_in_tests_data_bad_fails_cleanly() {
         let p = dir.path().join(format!("scene_{mesh}.toml"));
         std::fs::write(
             &p,
-            format!("name = \"m\"\n[[objects]]\ntype = \"mesh\"\nfile = \"{}\"\nmaterial = {{ albedo = [1.0, 1.0, 1.0] }}\n", f(mesh)),
+            format!("name = \"m\"\nallow_outside_paths = true\n[[objects]]\ntype = \"mesh\"\nfile = \"{}\"\nmaterial = {{ albedo = [1.0, 1.0, 1.0] }}\n", f(mesh)),
         )
         .unwrap();
         p.display().to_string()

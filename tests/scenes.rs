@@ -158,6 +158,7 @@ fn embree_and_brute_force_agree_on_a_small_lit_mesh_scene() {
     let pyramid = root().join("tests/data/meshes/pyramid.obj");
     let text = format!(
         r#"name = "small"
+allow_outside_paths = true
 background = [0.05, 0.05, 0.05]
 [light]
 type = "distant"
@@ -319,7 +320,7 @@ fn mesh_objects_load_with_transform_and_materials() {
     let ply = root().join("tests/data/meshes/pyramid_le.ply");
     let scene = load(
         &format!(
-            "name = \"m\"\n[[objects]]\ntype = \"mesh\"\nfile = \"{}\"\ntransform = {{ scale = [2, 2, 2], translation = [0, 0, 100] }}\nmaterial = {{ albedo = [0.5, 0.5, 0.5] }}\n",
+            "name = \"m\"\nallow_outside_paths = true\n[[objects]]\ntype = \"mesh\"\nfile = \"{}\"\ntransform = {{ scale = [2, 2, 2], translation = [0, 0, 100] }}\nmaterial = {{ albedo = [0.5, 0.5, 0.5] }}\n",
             ply.display()
         ),
         dir.path(),
@@ -397,7 +398,7 @@ fn bad_mesh_scenes_name_the_file_and_field() {
     let dir = tempfile::tempdir().unwrap();
     let scene_path = dir.path().join("scene.toml");
     let obj = |file: &str, material: &str| {
-        format!("name = \"b\"\n[[objects]]\ntype = \"mesh\"\nfile = \"{file}\"\nmaterial = {material}\n")
+        format!("name = \"b\"\nallow_outside_paths = true\n[[objects]]\ntype = \"mesh\"\nfile = \"{file}\"\nmaterial = {material}\n")
     };
     let bad = root().join("tests/data/bad");
     // A mesh with neither vertex colours nor uvs.
@@ -431,7 +432,7 @@ fn bad_mesh_scenes_name_the_file_and_field() {
         ),
         (
             format!(
-                "name = \"b\"\n[[objects]]\ntype = \"mesh\"\nfile = \"{}\"\ntransform = {{ scale = [0, 1, 1] }}\nmaterial = {{ albedo = [1, 1, 1] }}\n",
+                "name = \"b\"\nallow_outside_paths = true\n[[objects]]\ntype = \"mesh\"\nfile = \"{}\"\ntransform = {{ scale = [0, 1, 1] }}\nmaterial = {{ albedo = [1, 1, 1] }}\n",
                 root().join("tests/data/meshes/pyramid.obj").display()
             ),
             vec!["objects[0].transform.scale".into()],

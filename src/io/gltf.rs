@@ -30,6 +30,7 @@ use glam::{DMat3, DMat4, DQuat, DVec2, DVec3};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 
+use super::input::Reach;
 use super::gltf_accessor::{Elements, Reader, FLOAT, UNORM16, UNORM8};
 use super::mesh::{FileMaterial, FileTexture, Loaded, MeshPart, TextureSource};
 use crate::error::{Error, Result};
@@ -39,7 +40,7 @@ use crate::scene::mesh::Mesh;
 /// Most mesh instances a node hierarchy may expand to (guards against exponential node graphs).
 const MAX_INSTANCES: usize = 1_000_000;
 
-pub(super) fn load_gltf(path: &Path, bytes: &[u8]) -> Result<Loaded> {
+pub(super) fn load_gltf(path: &Path, bytes: &[u8], reach: &Reach) -> Result<Loaded> {
     let gltf = gltf::Gltf::from_slice_without_validation(bytes)
         .map_err(|e| Error::parse(path, format!("not a readable glTF/GLB file: {e}")))?;
     let doc = &gltf.document;
@@ -50,8 +51,8 @@ pub(super) fn load_gltf(path: &Path, bytes: &[u8]) -> Result<Loaded> {
         .map(|ext| format!("{}: glTF extension {ext} is used by the file and ignored", path.display()))
         .collect();
     let buffers =
-        doc.buffers().map(|b| load_buffer(path, base, &b, gltf.blob.as_deref())).collect::<Result<Vec<Vec<u8>>>>()?;
-    let reader = Reader { path, buffers: &buffers };
+        doc.buffers().map(|b| load_buffer(path, base, reach, &b, gltf.blob.as_deref())).collect::<Result<Vec<Vec<u8>>>>()?;
+    let reader = Reader { path, buffers: &buffers, reach };
 
     let instances = instances(path, doc)?;
     let mut out = Builder::default();
@@ -141,7 +142,7 @@ enum UriTarget {
     File(PathBuf),
 }
 
-fn resolve_uri(path: &Path, base: &Path, at: &str, uri: &str) -> Result<UriTarget> {
+fn resolve_uri(path: &Path, base: &Path, reach: &Reach, at: &str, uri: &str) -> Result<UriTarget> {
     if let Some(rest) = uri.strip_prefix("data:") {
         let Some((header, data)) = rest.split_once(',') else {
             return Err(Error::parse(path, format!("{at}: malformed data URI (no comma)")));
@@ -157,7 +158,8 @@ fn resolve_uri(path: &Path, base: &Path, at: &str, uri: &str) -> Result<UriTarge
     if uri.contains("://") {
         return Err(Error::parse(path, format!("{at}: URI `{uri}` is not a relative file path or data URI")));
     }
-    Ok(UriTarget::File(base.join(percent_decode(uri))))
+    let file = PathBuf::from(percent_decode(uri));
+    reach.resolve(base, &file).map(UriTarget::File).map_err(|why| Error::parse(path, format!("{at}: {why}")))
 }
 
 /// Decodes `%XX` escapes of a URI path (invalid escapes are kept as they are).
@@ -180,16 +182,16 @@ fn percent_decode(s: &str) -> String {
     String::from_utf8_lossy(&out).into_owned()
 }
 
-fn load_buffer(path: &Path, base: &Path, buffer: &gltf::Buffer, blob: Option<&[u8]>) -> Result<Vec<u8>> {
+fn load_buffer(path: &Path, base: &Path, reach: &Reach, buffer: &gltf::Buffer, blob: Option<&[u8]>) -> Result<Vec<u8>> {
     let at = format!("buffers[{}]", buffer.index());
     let data = match buffer.source() {
         gltf::buffer::Source::Bin => blob
             .ok_or_else(|| Error::parse(path, format!("{at}: refers to the GLB binary chunk, which the file lacks")))?
             .to_vec(),
-        gltf::buffer::Source::Uri(uri) => match resolve_uri(path, base, &at, uri)? {
+        gltf::buffer::Source::Uri(uri) => match resolve_uri(path, base, reach, &at, uri)? {
             UriTarget::Data(d) => d,
-            UriTarget::File(file) => std::fs::read(&file)
-                .map_err(|e| Error::parse(path, format!("{at}: cannot read `{}`: {e}", file.display())))?,
+            UriTarget::File(file) => crate::io::input::read_regular(&file)
+                .map_err(|e| Error::parse(path, format!("{at}: cannot read it: {e}")))?,
         },
     };
     if data.len() < buffer.length() {
@@ -201,9 +203,10 @@ fn load_buffer(path: &Path, base: &Path, buffer: &gltf::Buffer, blob: Option<&[u
     Ok(data)
 }
 
-/// Every node of the scene with its world matrix, depth first.
-fn instances<'a>(path: &Path, doc: &'a gltf::Document) -> Result<Vec<(gltf::Node<'a>, DMat4)>> {
-    let roots: Vec<gltf::Node> = match doc.default_scene().or_else(|| doc.scenes().next()) {
+/// The nodes the scene starts from: the default scene's (else the first scene's; else every
+/// node that is no other node's child).
+fn roots(doc: &gltf::Document) -> Vec<gltf::Node<'_>> {
+    match doc.default_scene().or_else(|| doc.scenes().next()) {
         Some(scene) => scene.nodes().collect(),
         None => {
             let mut is_child = vec![false; doc.nodes().count()];
@@ -214,7 +217,12 @@ fn instances<'a>(path: &Path, doc: &'a gltf::Document) -> Result<Vec<(gltf::Node
             }
             doc.nodes().filter(|n| !is_child[n.index()]).collect()
         }
-    };
+    }
+}
+
+/// Every node of the scene with its world matrix, depth first.
+fn instances<'a>(path: &Path, doc: &'a gltf::Document) -> Result<Vec<(gltf::Node<'a>, DMat4)>> {
+    let roots = roots(doc);
     let mut out = Vec::new();
     let mut on_path = vec![false; doc.nodes().count()];
     for root in roots {
@@ -566,9 +574,13 @@ fn file_material(
                     }
                 }
                 gltf::image::Source::Uri { uri, .. } => {
-                    match resolve_uri(path, path.parent().unwrap_or(Path::new("")), &at_img, uri) {
+                    match resolve_uri(path, path.parent().unwrap_or(Path::new("")), r.reach, &at_img, uri) {
                         Ok(UriTarget::Data(bytes)) => Ok(TextureSource::Embedded { name: at_img.clone(), bytes }),
                         Ok(UriTarget::File(file)) => Ok(TextureSource::File(file)),
+                        // A file outside the scene's folder is refused, not lost with a warning.
+                        Err(e @ Error::Parse { .. }) if !uri.starts_with("data:") && !uri.contains("://") => {
+                            return Err(e)
+                        }
                         Err(Error::Parse { message, .. }) => Err(message),
                         Err(e) => Err(e.to_string()),
                     }

@@ -31,6 +31,8 @@ impl Elements {
 pub(super) struct Reader<'a> {
     pub(super) path: &'a Path,
     pub(super) buffers: &'a [Vec<u8>],
+    /// Where the files the glTF names may be.
+    pub(super) reach: &'a super::input::Reach,
 }
 
 impl Reader<'_> {

@@ -38,6 +38,7 @@ use std::path::{Path, PathBuf};
 use glam::DVec3;
 
 use super::gltf::load_gltf;
+use super::input::Reach;
 use super::obj::load_obj;
 use super::ply::load_ply;
 use super::stl::load_stl;
@@ -146,6 +147,14 @@ impl Loaded {
 /// ([`Error::UnknownFormat`]); malformed content, index out of range, non-finite vertex, or no
 /// triangles left ([`Error::Parse`], with the line or element).
 pub fn load_mesh(path: &Path) -> Result<MeshLoad> {
+    let folder = path.parent().unwrap_or(Path::new(""));
+    load_mesh_within(path, &Reach::within(folder))
+}
+
+/// [`load_mesh`], with the files the mesh names (glTF buffers and images, OBJ `mtllib` and
+/// `map_Kd`) kept to `reach` (a scene's folder, see [`Reach`]): a reference outside it is an
+/// error saying so.
+pub(crate) fn load_mesh_within(path: &Path, reach: &Reach) -> Result<MeshLoad> {
     let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
     if meta.is_dir() {
         return Err(Error::io(
@@ -156,10 +165,10 @@ pub fn load_mesh(path: &Path) -> Result<MeshLoad> {
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     let bytes = crate::io::input::read_regular(path)?;
     let loaded = match ext.as_deref() {
-        Some("obj") => load_obj(path, &bytes)?,
+        Some("obj") => load_obj(path, &bytes, reach)?,
         Some("ply") => load_ply(path, &bytes)?,
         Some("stl") => Loaded::plain(load_stl(path, &bytes)?),
-        Some("gltf") | Some("glb") => load_gltf(path, &bytes)?,
+        Some("gltf") | Some("glb") => load_gltf(path, &bytes, reach)?,
         _ => {
             return Err(Error::UnknownFormat {
                 path: path.to_path_buf(),

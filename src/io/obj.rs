@@ -14,6 +14,7 @@ use std::path::Path;
 
 use glam::{DVec2, DVec3};
 
+use super::input::Reach;
 use super::mesh::{srgb_to_linear, FileMaterial, FileTexture, Loaded, MeshPart, TextureSource};
 use crate::error::{Error, Result};
 use crate::scene::mesh::Mesh;
@@ -23,7 +24,7 @@ fn tf<F: Into<f64>>(x: F) -> f64 {
     x.into()
 }
 
-pub(super) fn load_obj(path: &Path, bytes: &[u8]) -> Result<Loaded> {
+pub(super) fn load_obj(path: &Path, bytes: &[u8], reach: &Reach) -> Result<Loaded> {
     let mut warnings = Vec::new();
     let text = decode_text(path, bytes, &mut warnings)?;
     let text = match validate_obj_text(path, &text)? {
@@ -47,13 +48,29 @@ pub(super) fn load_obj(path: &Path, bytes: &[u8]) -> Result<Loaded> {
     let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     // A missing or broken .mtl loses its materials, with a warning.
     let mtl_warnings = RefCell::new(Vec::new());
+    // The first reference that leaves the reach (`mtllib`, `map_Kd`): the load's error.
+    let refused: RefCell<Option<String>> = RefCell::new(None);
+    let within = |what: &str, name: &str| -> std::path::PathBuf {
+        let file = super::mesh::file_name_path(Path::new(""), name);
+        reach.resolve(&base_dir, &file).unwrap_or_else(|why| {
+            refused.borrow_mut().get_or_insert_with(|| format!("{what}: {why}"));
+            base_dir.join(file)
+        })
+    };
     let (models, materials) = tobj::load_obj_buf(&mut Cursor::new(text.as_bytes()), &options, |mtl| {
-        load_mtl(path, &super::mesh::file_name_path(&base_dir, &mtl.to_string_lossy()), &mut mtl_warnings.borrow_mut())
+        let file = within("mtllib", &mtl.to_string_lossy());
+        if refused.borrow().is_some() {
+            return Err(tobj::LoadError::OpenFileFailed);
+        }
+        load_mtl(path, &file, &mut mtl_warnings.borrow_mut())
     })
     .map_err(|e| Error::parse(path, format!("OBJ: {e}")))?;
+    if let Some(why) = refused.borrow_mut().take() {
+        return Err(Error::parse(path, why));
+    }
     warnings.extend(mtl_warnings.into_inner());
     let materials = materials.unwrap_or_default();
-    let texture_path = |t: &str| super::mesh::file_name_path(&base_dir, texture_file_name(t));
+    let texture_path = |t: &str| within("map_Kd", texture_file_name(t));
 
     let mut mesh = Mesh::default();
     let (mut normals, mut uvs, mut colors) = (Some(Vec::new()), Some(Vec::new()), Some(Vec::new()));
@@ -146,6 +163,9 @@ pub(super) fn load_obj(path: &Path, bytes: &[u8]) -> Result<Loaded> {
     let mut parts: Vec<MeshPart> = parts.into_iter().map(|(_, p)| p).filter(|p| !p.triangles.is_empty()).collect();
     for p in &mut parts {
         p.material.vertex_colors = mesh.colors.is_some();
+    }
+    if let Some(why) = refused.into_inner() {
+        return Err(Error::parse(path, why));
     }
     Ok(Loaded { mesh, parts, texture, warnings })
 }

@@ -19,6 +19,7 @@ use serde::{Deserialize, Serialize};
 
 pub use super::scene_mesh::{FitSpec, DEFAULT_ALBEDO};
 pub use super::scene_target::{EdgeSpec, GratingSpec};
+use super::input::Reach;
 use super::text::{read_text, toml_error};
 use crate::error::{Error, Result};
 use crate::scene::image_texture::{Filter, Wrap};
@@ -186,6 +187,10 @@ pub struct SceneSpec {
     /// `[[objects]]`, in order.
     #[serde(rename = "objects")]
     pub objects: Vec<ObjectSpec>,
+    /// Files the scene names (meshes, textures, bar lists, and the files a mesh names) may be
+    /// outside the scene file's folder, or absolute paths (default `false`: refused).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub allow_outside_paths: bool,
 }
 
 /// A `[light]`'s `type`.
@@ -252,8 +257,9 @@ impl SceneSpec {
         let mut objects = Vec::with_capacity(self.objects.len());
         let mut framework_chart = None;
         let mut warnings = Vec::new();
+        let reach = Reach::for_scene(base, self.allow_outside_paths);
         for (index, spec) in self.objects.iter().enumerate() {
-            let o = ObjectInput { src, base, index, spec };
+            let o = ObjectInput { src, base, reach: &reach, index, spec };
             let shape = match spec.kind {
                 ShapeKind::Mesh => {
                     objects.extend(o.mesh_objects(&mut framework_chart, &mut warnings)?);
@@ -316,6 +322,7 @@ impl SceneSpec {
             name: Some("paper".into()),
             background: [0.0; 3],
             light: None,
+            allow_outside_paths: false,
             objects: vec![
                 chart("near chart", [-45.0, -45.0, 300.0], 90.0),
                 chart("centre chart", [0.0, 0.0, 400.0], 120.0),
@@ -338,6 +345,8 @@ impl SceneSpec {
 pub(super) struct ObjectInput<'a> {
     pub(super) src: &'a str,
     pub(super) base: &'a Path,
+    /// Where the files the scene names may be.
+    pub(super) reach: &'a Reach,
     pub(super) index: usize,
     pub(super) spec: &'a ObjectSpec,
 }
@@ -515,7 +524,7 @@ impl ObjectInput<'_> {
         let path = if texture.as_os_str() == "mtl" {
             mesh_texture.ok_or_else(|| Error::invalid(src, &field, "\"mtl\": the OBJ's material has no map_Kd"))?
         } else {
-            self.base.join(texture)
+            self.reach.resolve(self.base, texture).map_err(|why| Error::invalid(src, &field, why))?
         };
         if mesh.uvs.is_none() {
             return Err(Error::invalid(
@@ -564,7 +573,8 @@ impl ObjectInput<'_> {
                     .file
                     .as_ref()
                     .ok_or_else(|| Error::invalid(src, f("material.file"), "chart = \"file\" needs `file`"))?;
-                let path = self.base.join(file);
+                let path =
+                    self.reach.resolve(self.base, file).map_err(|why| Error::invalid(src, f("material.file"), why))?;
                 let text = read_text(&path)?;
                 Arc::new(BarChart::new(usaf::parse_bar_list(&text, &path.display().to_string())?))
             }

@@ -16,7 +16,7 @@ use std::sync::Arc;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
-use super::mesh::{load_mesh, remove_degenerate_in_parts, FileMaterial, MeshPart, TextureSource};
+use super::mesh::{load_mesh_within, remove_degenerate_in_parts, FileMaterial, MeshPart, TextureSource};
 use super::scene_file::ObjectInput;
 use crate::error::{Error, Result};
 use crate::scene::image_texture::{Filter, ImageTexture, Wrap};
@@ -153,9 +153,9 @@ impl ObjectInput<'_> {
                 "missing (a mesh needs `file = \"model.obj\"`: .obj, .ply, .stl, .gltf or .glb)",
             )
         })?;
-        let path = self.base.join(file);
+        let path = self.reach.resolve(self.base, file).map_err(|why| Error::invalid(src, f("file"), why))?;
         // Name the scene file and field as well as the mesh file and its line/element.
-        let loaded = load_mesh(&path).map_err(|e| Error::in_field(src, f("file"), e))?;
+        let loaded = load_mesh_within(&path, self.reach).map_err(|e| Error::in_field(src, f("file"), e))?;
         warnings.extend(loaded.warnings.iter().map(|w| format!("{w} (objects[{i}])")));
         if loaded.dropped_degenerate > 0 {
             warnings.push(format!(
