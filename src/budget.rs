@@ -15,6 +15,12 @@ static MEMORY_LIMIT: AtomicU64 = AtomicU64::new(0);
 /// textures, see [`Held`]); they count against `--max-memory`.
 static HELD: AtomicU64 = AtomicU64::new(0);
 
+/// Bytes a mesh's triangle takes once loaded: its indices and its share of an acceleration
+/// structure over it.
+pub const MESH_BYTES_PER_TRIANGLE: u64 = 100;
+/// Bytes a mesh's vertex takes once loaded: position, normal, texture coordinate and colour.
+pub const MESH_BYTES_PER_VERTEX: u64 = 88;
+
 /// The most worker threads `--threads` (and Python's `threads=`) accepts.
 pub const MAX_THREADS: usize = 1024;
 

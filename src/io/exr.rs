@@ -317,12 +317,15 @@ fn check_readable_file(path: &Path) -> Result<u64> {
 fn check_claimed_size(path: &Path, file_size: u64) -> Result<()> {
     let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| exr_error(path, e))?;
     let limit = crate::budget::memory_limit();
+    // Every part is decoded: their sizes are summed, not checked one by one.
+    let mut all_parts = 0u64;
     for header in &meta.headers {
         let (w, h) = (header.layer_size.0 as u64, header.layer_size.1 as u64);
         let pixels = w.saturating_mul(h);
         let channels = header.channels.list.len() as u64;
         // Decoded samples are f32 (4 bytes each); our image and depth add 16 bytes per pixel.
         let decoded = pixels.saturating_mul(channels.saturating_mul(4).saturating_add(16));
+        all_parts = all_parts.saturating_add(decoded);
         if decoded > limit {
             return Err(Error::parse(
                 path,
@@ -346,6 +349,17 @@ fn check_claimed_size(path: &Path, file_size: u64) -> Result<()> {
                 ),
             ));
         }
+    }
+    if all_parts > limit {
+        return Err(Error::parse(
+            path,
+            format!(
+                "its {} parts would need {} to decode together, more than the memory limit of {} (--max-memory)",
+                meta.headers.len(),
+                crate::budget::Bytes(all_parts),
+                crate::budget::Bytes(limit)
+            ),
+        ));
     }
     Ok(())
 }

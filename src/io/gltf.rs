@@ -30,8 +30,8 @@ use glam::{DMat3, DMat4, DQuat, DVec2, DVec3};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 
-use super::input::Reach;
 use super::gltf_accessor::{Elements, Reader, FLOAT, UNORM16, UNORM8};
+use super::input::Reach;
 use super::mesh::{FileMaterial, FileTexture, Loaded, MeshPart, TextureSource};
 use crate::error::{Error, Result};
 use crate::scene::image_texture::{Filter, Wrap};
@@ -50,10 +50,13 @@ pub(super) fn load_gltf(path: &Path, bytes: &[u8], reach: &Reach) -> Result<Load
         .extensions_used()
         .map(|ext| format!("{}: glTF extension {ext} is used by the file and ignored", path.display()))
         .collect();
-    let buffers =
-        doc.buffers().map(|b| load_buffer(path, base, reach, &b, gltf.blob.as_deref())).collect::<Result<Vec<Vec<u8>>>>()?;
+    let buffers = doc
+        .buffers()
+        .map(|b| load_buffer(path, base, reach, &b, gltf.blob.as_deref()))
+        .collect::<Result<Vec<Vec<u8>>>>()?;
     let reader = Reader { path, buffers: &buffers, reach };
 
+    check_expanded_size(path, doc)?;
     let instances = instances(path, doc)?;
     let mut out = Builder::default();
     for (node, world) in &instances {
@@ -218,6 +221,102 @@ fn roots(doc: &gltf::Document) -> Vec<gltf::Node<'_>> {
             doc.nodes().filter(|n| !is_child[n.index()]).collect()
         }
     }
+}
+
+/// What a node's subtree expands to: mesh instances, triangles and vertices.
+#[derive(Clone, Copy, Default)]
+struct Expanded {
+    instances: u64,
+    triangles: u64,
+    vertices: u64,
+}
+
+impl Expanded {
+    fn add(self, o: Expanded) -> Expanded {
+        Expanded {
+            instances: self.instances.saturating_add(o.instances),
+            triangles: self.triangles.saturating_add(o.triangles),
+            vertices: self.vertices.saturating_add(o.vertices),
+        }
+    }
+}
+
+/// The triangles and vertices of one instance of `mesh`, from its accessors' counts.
+fn mesh_size(mesh: &gltf::Mesh) -> Expanded {
+    let mut e = Expanded { instances: 1, ..Default::default() };
+    for prim in mesh.primitives() {
+        let vertices = prim.get(&gltf::Semantic::Positions).map_or(0, |a| a.count() as u64);
+        let corners = prim.indices().map_or(vertices, |a| a.count() as u64);
+        let triangles = match prim.mode() {
+            Mode::Triangles => corners / 3,
+            Mode::TriangleStrip | Mode::TriangleFan => corners.saturating_sub(2),
+            _ => 0,
+        };
+        e.triangles = e.triangles.saturating_add(triangles);
+        e.vertices = e.vertices.saturating_add(vertices);
+    }
+    e
+}
+
+/// Refuses a node graph whose expansion (every mesh instance as triangles) would not fit in
+/// the memory budget, or has over [`MAX_INSTANCES`] nodes. The graph is walked with counts
+/// (each node's subtree summed once, children first), never expanded: a graph that instances a
+/// mesh 2^18 times through doubling nodes costs one step per node and edge.
+fn check_expanded_size(path: &Path, doc: &gltf::Document) -> Result<()> {
+    let nodes: Vec<gltf::Node> = doc.nodes().collect();
+    let mut size: Vec<Option<Expanded>> = vec![None; nodes.len()];
+    let mut on_path = vec![false; nodes.len()];
+    let mut total = Expanded::default();
+    for root in roots(doc) {
+        // Iterative depth-first walk: (node, whether its children are done).
+        let mut stack = vec![(root.index(), false)];
+        while let Some((i, children_done)) = stack.pop() {
+            if children_done {
+                on_path[i] = false;
+                let own = nodes[i].mesh().map_or(Expanded { instances: 1, ..Default::default() }, |m| mesh_size(&m));
+                let sum = nodes[i].children().fold(own, |acc, c| acc.add(size[c.index()].unwrap_or_default()));
+                size[i] = Some(sum);
+                continue;
+            }
+            if size[i].is_some() {
+                continue;
+            }
+            if on_path[i] {
+                return Err(Error::parse(
+                    path,
+                    format!("nodes[{i}]: is its own ancestor (the node hierarchy has a cycle)"),
+                ));
+            }
+            on_path[i] = true;
+            stack.push((i, true));
+            for c in nodes[i].children() {
+                if on_path[c.index()] {
+                    return Err(Error::parse(
+                        path,
+                        format!("nodes[{}]: is its own ancestor (the node hierarchy has a cycle)", c.index()),
+                    ));
+                }
+                if size[c.index()].is_none() {
+                    stack.push((c.index(), false));
+                }
+            }
+        }
+        total = total.add(size[root.index()].unwrap_or_default());
+    }
+    if total.instances > MAX_INSTANCES as u64 {
+        return Err(Error::parse(
+            path,
+            format!("nodes: the node hierarchy expands to over {MAX_INSTANCES} nodes ({} counted)", total.instances),
+        ));
+    }
+    let mut estimate = crate::budget::Estimate::default();
+    let what = format!(
+        "the meshes of every node instance expanded ({} triangles, {} vertices)",
+        total.triangles, total.vertices
+    );
+    estimate.add(what.clone(), "nodes", total.triangles, crate::budget::MESH_BYTES_PER_TRIANGLE);
+    estimate.add(what, "nodes", total.vertices, crate::budget::MESH_BYTES_PER_VERTEX);
+    estimate.check_memory(&crate::budget::memory_budget(), &path.display().to_string())
 }
 
 /// Every node of the scene with its world matrix, depth first.

@@ -166,11 +166,7 @@ impl Reach {
             return Ok(joined);
         }
         let how = if lexical.starts_with(real_root) { "leads (through a link)" } else { "leads" };
-        Err(format!(
-            "`{}` {how} outside the scene's folder `{}`; {allow}",
-            reference.display(),
-            shown.display()
-        ))
+        Err(format!("`{}` {how} outside the scene's folder `{}`; {allow}", reference.display(), shown.display()))
     }
 }
 

@@ -36,9 +36,8 @@ pub fn toml_error(path: &Path, text: &str, e: &toml::de::Error) -> Error {
 /// The key path of the key-value line starting at `line_start` (`eye.pupil_diameter`, with the
 /// table above it), when the line is one: a bare or dotted key of at most 100 characters.
 fn field_at(text: &str, line_start: usize) -> Option<String> {
-    let is_key = |k: &str| {
-        !k.is_empty() && k.len() <= 100 && k.chars().all(|c| c.is_ascii_alphanumeric() || "_-. ".contains(c))
-    };
+    let is_key =
+        |k: &str| !k.is_empty() && k.len() <= 100 && k.chars().all(|c| c.is_ascii_alphanumeric() || "_-. ".contains(c));
     let line = text[line_start..].lines().next()?;
     let key = line.split_once('=')?.0.trim();
     if !is_key(key) {
