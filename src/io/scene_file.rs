@@ -17,9 +17,10 @@ use std::sync::Arc;
 use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
+use super::input::Reach;
+use super::scene_mesh::SceneTextures;
 pub use super::scene_mesh::{FitSpec, DEFAULT_ALBEDO};
 pub use super::scene_target::{EdgeSpec, GratingSpec};
-use super::input::Reach;
 use super::text::{read_text, toml_error};
 use crate::error::{Error, Result};
 use crate::scene::image_texture::{Filter, Wrap};
@@ -258,8 +259,9 @@ impl SceneSpec {
         let mut framework_chart = None;
         let mut warnings = Vec::new();
         let reach = Reach::for_scene(base, self.allow_outside_paths);
+        let textures = SceneTextures::default();
         for (index, spec) in self.objects.iter().enumerate() {
-            let o = ObjectInput { src, base, reach: &reach, index, spec };
+            let o = ObjectInput { src, base, reach: &reach, textures: &textures, index, spec };
             let shape = match spec.kind {
                 ShapeKind::Mesh => {
                     objects.extend(o.mesh_objects(&mut framework_chart, &mut warnings)?);
@@ -347,6 +349,8 @@ pub(super) struct ObjectInput<'a> {
     pub(super) base: &'a Path,
     /// Where the files the scene names may be.
     pub(super) reach: &'a Reach,
+    /// The scene's image textures, each decoded once.
+    pub(super) textures: &'a SceneTextures,
     pub(super) index: usize,
     pub(super) spec: &'a ObjectSpec,
 }
@@ -533,7 +537,9 @@ impl ObjectInput<'_> {
                 "the mesh file has no texture coordinates (vt / u v) to look the texture up with",
             ));
         }
-        let tex = crate::io::png::load_texture(&path, m.filter.unwrap_or_default(), m.wrap.unwrap_or_default())
+        let tex = self
+            .textures
+            .load(&path, m.filter.unwrap_or_default(), m.wrap.unwrap_or_default())
             .map_err(|e| Error::in_field(src, &field, e))?;
         Ok(Material::Texture(Arc::new(tex)))
     }

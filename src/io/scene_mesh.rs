@@ -85,13 +85,45 @@ impl FitSpec {
     }
 }
 
-/// The textures of one mesh file already read (or found unreadable: `Err`), by source and
-/// sampler: a texture that many parts use is decoded, or warned about, once.
+/// The image files a scene's textures come from, each decoded once for the whole scene (by the
+/// file it is, after links): every material that uses one shares its texels, and the memory
+/// budget counts them once.
+#[derive(Default)]
+pub(super) struct SceneTextures(std::cell::RefCell<Vec<(std::path::PathBuf, Arc<ImageTexture>)>>);
+
+impl SceneTextures {
+    /// The texture in the image file `path`, sampled with `filter` and `wrap`: decoded at its
+    /// first use, shared after.
+    pub(super) fn load(&self, path: &Path, filter: Filter, wrap: Wrap) -> Result<ImageTexture> {
+        let key = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
+        let found = self.0.borrow().iter().find(|(k, _)| *k == key).map(|(_, t)| t.clone());
+        let image = match found {
+            Some(image) => image,
+            None => {
+                let image = Arc::new(crate::io::png::load_texture(path, filter, wrap)?);
+                self.0.borrow_mut().push((key, image.clone()));
+                image
+            }
+        };
+        Ok(sampled(&image, filter, wrap))
+    }
+}
+
+/// A copy of `image` (its texels shared) sampled with `filter` and `wrap`.
+fn sampled(image: &ImageTexture, filter: Filter, wrap: Wrap) -> ImageTexture {
+    let mut t = image.clone();
+    t.filter = filter;
+    t.wrap = wrap;
+    t
+}
+
+/// The textures of one mesh file already read (or found unreadable: `Err`), by source: a
+/// texture that many parts use is decoded, or warned about, once.
 #[derive(Default)]
 struct TextureCache(Vec<(TextureKey, CachedTexture)>);
 
-/// An image and how it is sampled.
-type TextureKey = (TextureSource, Filter, Wrap);
+/// An image.
+type TextureKey = TextureSource;
 /// A texture read, or `Err` when it could not be (the warning is already given).
 type CachedTexture = std::result::Result<Arc<ImageTexture>, ()>;
 
@@ -257,12 +289,12 @@ impl ObjectInput<'_> {
         if let Some(tex) = &fm.texture {
             if mesh.uvs.is_some() {
                 let (filter, wrap) = (tex.filter.unwrap_or_default(), tex.wrap.unwrap_or_default());
-                let key = (tex.source.clone(), filter, wrap);
+                let key = tex.source.clone();
                 let image = match textures.get(&key) {
                     Some(image) => image.clone(),
                     None => {
                         let image = match &tex.source {
-                            TextureSource::File(p) => crate::io::png::load_texture(p, filter, wrap),
+                            TextureSource::File(p) => self.textures.load(p, filter, wrap),
                             TextureSource::Embedded { name, bytes } => {
                                 ImageTexture::decode(bytes, &format!("{} ({name})", mesh_file.display()), filter, wrap)
                             }
@@ -281,8 +313,10 @@ impl ObjectInput<'_> {
                     }
                 };
                 match image {
-                    Ok(image) if factor == DVec3::ONE => return Ok(Material::Texture(image)),
-                    Ok(image) => return Ok(Material::Texture(Arc::new((*image).clone().scaled(factor)))),
+                    Ok(image) if factor == DVec3::ONE && (image.filter, image.wrap) == (filter, wrap) => {
+                        return Ok(Material::Texture(image))
+                    }
+                    Ok(image) => return Ok(Material::Texture(Arc::new(sampled(&image, filter, wrap).scaled(factor)))),
                     Err(()) => {
                         let untextured = FileMaterial {
                             texture: None,

@@ -65,7 +65,8 @@ pub struct ImageTexture {
     pub width: usize,
     /// Rows.
     pub height: usize,
-    texels: Texels,
+    /// Shared by every copy (a texture used by many materials is decoded and held once).
+    texels: std::sync::Arc<Texels>,
     /// Filtering.
     pub filter: Filter,
     /// What UVs outside [0, 1] do.
@@ -74,8 +75,8 @@ pub struct ImageTexture {
     factor: DVec3,
     /// Mean of all (unscaled) texels, computed at the first non-finite UV.
     mean: std::sync::OnceLock<DVec3>,
-    /// The decoded samples' bytes, counted against `--max-memory` while the texture lives.
-    _held: Option<crate::budget::Held>,
+    /// The decoded samples' bytes, counted against `--max-memory` once while any copy lives.
+    _held: Option<std::sync::Arc<crate::budget::Held>>,
 }
 
 /// The linear value of each 8-bit (256 entries) or 16-bit (65536 entries) sample of an image of
@@ -116,13 +117,14 @@ impl ImageTexture {
     }
 
     fn with(width: usize, height: usize, texels: Texels, filter: Filter, wrap: Wrap, held: Option<u64>) -> Self {
-        let held = held.map(crate::budget::Held::new);
+        let held = held.map(|b| std::sync::Arc::new(crate::budget::Held::new(b)));
+        let texels = std::sync::Arc::new(texels);
         Self { width, height, texels, filter, wrap, factor: DVec3::ONE, mean: Default::default(), _held: held }
     }
 
     /// The bytes the texels take.
     pub fn bytes(&self) -> u64 {
-        match &self.texels {
+        match self.texels.as_ref() {
             Texels::Linear(t) => (t.len() * std::mem::size_of::<DVec3>()) as u64,
             Texels::Encoded { data, .. } => data.len() as u64,
         }
@@ -212,7 +214,7 @@ impl ImageTexture {
     /// Texel `k` (row-major index), linear, before the factor.
     #[inline]
     fn unscaled(&self, k: usize) -> DVec3 {
-        match &self.texels {
+        match self.texels.as_ref() {
             Texels::Linear(t) => t[k],
             Texels::Encoded { data, channels, bytes, table } => {
                 let (c, b) = (*channels, *bytes);
