@@ -54,11 +54,8 @@ fn gltf(uri: &str, image: Option<&str>) -> String {
     };
     let uv = if image.is_some() { r#", "TEXCOORD_0": 1"# } else { "" };
     let mat = if image.is_some() { r#", "material": 0"# } else { "" };
-    let uv_accessor = if image.is_some() {
-        r#", {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC2"}"#
-    } else {
-        ""
-    };
+    let uv_accessor =
+        if image.is_some() { r#", {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC2"}"# } else { "" };
     format!(
         r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [0]}}], "nodes": [{{"mesh": 0}}],
   "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0{uv}}}{mat}}}]}}],
@@ -158,7 +155,11 @@ fn obj_material_libraries_and_textures_outside_the_folder_are_refused() {
     let s = folder.join("scene.toml");
     std::fs::write(&s, "name = \"s\"\n[[objects]]\ntype = \"mesh\"\nfile = \"m.obj\"\n").unwrap();
     std::fs::write(dir.path().join("outside.mtl"), "newmtl Red\nKd 1 0 0\n").unwrap();
-    let obj = |mtllib: &str| format!("mtllib {mtllib}\nv 0 0 400\nv 50 0 400\nv 0 50 400\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl Red\nf 1/1 2/2 3/3\n");
+    let obj = |mtllib: &str| {
+        format!(
+            "mtllib {mtllib}\nv 0 0 400\nv 50 0 400\nv 0 50 400\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl Red\nf 1/1 2/2 3/3\n"
+        )
+    };
     for (lib, says) in [
         ("../outside.mtl", "outside the scene's folder"),
         ("../../../../../../../../../etc/hostname", "outside the scene's folder"),
@@ -246,5 +247,150 @@ fn files_named_by_set_are_gated_and_never_echoed() {
         for leak in ["VmRSS", "Name:", "hunter2", "root:x", "PATH="] {
             assert!(!e.contains(leak), "{set}: the error echoes the file ({leak}): {e}");
         }
+    }
+}
+
+/// Runs `inimtrace args` under `prlimit --as=4G` with `--max-memory 3G`, with a 60 s timeout.
+fn run_budget(args: &[&str]) -> Output {
+    Command::new("prlimit")
+        .args(["--as=4294967296", "timeout", "60", inimtrace(), "--max-memory", "3G"])
+        .args(args)
+        .output()
+        .expect("run inimtrace under prlimit")
+}
+
+/// A glTF whose node graph instances one mesh of `triangles` triangles `2^depth` times
+/// through doubling nodes (node k has node k + 1 twice as its child), its buffer in `mesh.bin`.
+fn doubling_gltf(folder: &Path, triangles: usize, depth: usize) {
+    let positions: Vec<u8> = (0..triangles)
+        .flat_map(|t| {
+            let x = t as f32 * 0.01;
+            [x, 0.0, 400.0, x + 0.01, 0.0, 400.0, x, 0.01, 400.0]
+        })
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    std::fs::write(folder.join("mesh.bin"), &positions).unwrap();
+    let mut nodes: Vec<String> = (0..depth).map(|k| format!("{{\"children\": [{}, {}]}}", k + 1, k + 1)).collect();
+    nodes.push("{\"mesh\": 0}".into());
+    let doc = format!(
+        r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [0]}}], "nodes": [{}],
+  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}}}]}}],
+  "buffers": [{{"byteLength": {n}, "uri": "mesh.bin"}}],
+  "bufferViews": [{{"buffer": 0, "byteOffset": 0, "byteLength": {n}}}],
+  "accessors": [{{"bufferView": 0, "componentType": 5126, "count": {v}, "type": "VEC3"}}]}}"#,
+        nodes.join(", "),
+        n = positions.len(),
+        v = 3 * triangles
+    );
+    std::fs::write(folder.join("m.gltf"), doc).unwrap();
+}
+
+#[test]
+fn a_node_graph_instancing_a_mesh_262144_times_is_counted_not_expanded() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = scene(dir.path(), "m.gltf", false);
+    let folder = s.parent().unwrap();
+    // 1,000 triangles x 2^18 instances: 262,144,000 triangles, tens of GB expanded.
+    doubling_gltf(folder, 1000, 18);
+    let o = run_budget(&["info", "--scene", s.to_str().unwrap()]);
+    assert_refused(&o, &["m.gltf", "nodes", "262144000 triangles", "more than the limit"]);
+    // The same graph 2^4 deep fits and loads, with every instance's triangles.
+    doubling_gltf(folder, 1000, 4);
+    let o = run_budget(&["info", "--scene", s.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("16000"), "{}", String::from_utf8_lossy(&o.stdout));
+}
+
+#[test]
+fn one_large_texture_shared_by_40_materials_is_decoded_once() {
+    use image::ImageEncoder;
+    let dir = tempfile::tempdir().unwrap();
+    let s = scene(dir.path(), "m.gltf", false);
+    let folder = s.parent().unwrap();
+    // 12,000 x 12,000 RGB: 432 MB decoded; 40 copies would be 17 GB.
+    let n = 12_000u32;
+    let file = std::io::BufWriter::new(std::fs::File::create(folder.join("big.png")).unwrap());
+    let encoder = image::codecs::png::PngEncoder::new_with_quality(
+        file,
+        image::codecs::png::CompressionType::Fast,
+        image::codecs::png::FilterType::NoFilter,
+    );
+    let pixels = vec![128u8; (n * n * 3) as usize];
+    encoder.write_image(&pixels, n, n, image::ExtendedColorType::Rgb8).unwrap();
+    drop(pixels);
+    // 40 triangles, each its own primitive and material (its own base colour) on one image.
+    let k = 40;
+    let mut bin = Vec::new();
+    for t in 0..k {
+        let x = t as f32 * 2.0;
+        for v in [x, 0.0, 400.0, x + 1.0, 0.0, 400.0, x, 1.0, 400.0] {
+            bin.extend_from_slice(&v.to_le_bytes());
+        }
+    }
+    for v in [0.0f32, 0.0, 1.0, 0.0, 0.0, 1.0] {
+        bin.extend_from_slice(&v.to_le_bytes());
+    }
+    std::fs::write(folder.join("m.bin"), &bin).unwrap();
+    let prims: Vec<String> = (0..k)
+        .map(|t| format!(r#"{{"attributes": {{"POSITION": {t}, "TEXCOORD_0": {k}}}, "material": {t}}}"#))
+        .collect();
+    let materials: Vec<String> = (0..k)
+        .map(|t| {
+            format!(
+                r#"{{"pbrMetallicRoughness": {{"baseColorFactor": [{}, 1, 1, 1], "baseColorTexture": {{"index": 0}}}}}}"#,
+                (t + 1) as f64 / k as f64
+            )
+        })
+        .collect();
+    let mut views: Vec<String> =
+        (0..k).map(|t| format!(r#"{{"buffer": 0, "byteOffset": {}, "byteLength": 36}}"#, 36 * t)).collect();
+    views.push(format!(r#"{{"buffer": 0, "byteOffset": {}, "byteLength": 24}}"#, 36 * k));
+    let mut accessors: Vec<String> = (0..k)
+        .map(|t| format!(r#"{{"bufferView": {t}, "componentType": 5126, "count": 3, "type": "VEC3"}}"#))
+        .collect();
+    accessors.push(format!(r#"{{"bufferView": {k}, "componentType": 5126, "count": 3, "type": "VEC2"}}"#));
+    let doc = format!(
+        r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [0]}}], "nodes": [{{"mesh": 0}}],
+  "meshes": [{{"primitives": [{}]}}], "materials": [{}],
+  "textures": [{{"source": 0}}], "images": [{{"uri": "big.png"}}],
+  "buffers": [{{"byteLength": {}, "uri": "m.bin"}}], "bufferViews": [{}], "accessors": [{}]}}"#,
+        prims.join(", "),
+        materials.join(", "),
+        bin.len(),
+        views.join(", "),
+        accessors.join(", ")
+    );
+    std::fs::write(folder.join("m.gltf"), doc).unwrap();
+    // The scene's own material is left out: the file's 40 materials are used.
+    std::fs::write(&s, "name = \"s\"\n[[objects]]\ntype = \"mesh\"\nfile = \"m.gltf\"\n").unwrap();
+    let o = run_budget(&["info", "--scene", s.to_str().unwrap()]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{:?}: {}", o.status, stderr(&o));
+    assert!(out.contains("40 object(s)") && !out.contains("warning"), "{out}");
+}
+
+#[test]
+fn a_sweep_of_a_million_points_is_estimated_before_it_is_expanded() {
+    let dir = tempfile::tempdir().unwrap();
+    let experiment = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/paper.toml");
+    let sweep = dir.path().join("big.toml");
+    std::fs::write(
+        &sweep,
+        format!(
+            "name = \"big\"\nexperiment = \"{}\"\n[[axes]]\n\"eye.pupil_diameter\" = {{ from = 1.0, to = 6.0, count = 1000 }}\n\
+             [[axes]]\n\"eye.retina_resolution\" = {{ from = 100, to = 1099, count = 1000 }}\n",
+            experiment.display()
+        ),
+    )
+    .unwrap();
+    let (sw, out) = (sweep.to_str().unwrap(), dir.path().join("out"));
+    let out = out.to_str().unwrap();
+    for args in [
+        vec!["sweep", sw, "--collect", "--out", out],
+        vec!["sweep", sw, "--slurm", "--dry-run", "--out", out],
+        vec!["sweep", sw, "--out", out],
+    ] {
+        let o = run_budget(&args);
+        assert_refused(&o, &["big.toml", "axes", "1000000 points", "more than the limit"]);
     }
 }

@@ -181,26 +181,32 @@ impl SweepSpec {
         base_dir(&self.path)
     }
 
+    /// How many points the axes make (their product; checked on load to be at most
+    /// [`MAX_POINTS`]).
+    pub fn point_count(&self) -> usize {
+        self.axes.iter().map(Axis::len).product()
+    }
+
+    /// Point `index` of the expansion (below [`SweepSpec::point_count`]).
+    pub fn point(&self, index: usize) -> Point {
+        let mut rest = index;
+        let mut picks = vec![0; self.axes.len()];
+        for (a, axis) in self.axes.iter().enumerate().rev() {
+            picks[a] = rest % axis.len();
+            rest /= axis.len();
+        }
+        let values = self
+            .axes
+            .iter()
+            .zip(&picks)
+            .flat_map(|(axis, &i)| axis.keys.iter().map(move |k| (k.key.clone(), k.values[i].clone())))
+            .collect();
+        Point { index, values }
+    }
+
     /// Every point, in order: the product of the axes, the first axis varying slowest.
     pub fn points(&self) -> Vec<Point> {
-        let n: usize = self.axes.iter().map(Axis::len).product();
-        (0..n)
-            .map(|index| {
-                let mut rest = index;
-                let mut picks = vec![0; self.axes.len()];
-                for (a, axis) in self.axes.iter().enumerate().rev() {
-                    picks[a] = rest % axis.len();
-                    rest /= axis.len();
-                }
-                let values = self
-                    .axes
-                    .iter()
-                    .zip(&picks)
-                    .flat_map(|(axis, &i)| axis.keys.iter().map(move |k| (k.key.clone(), k.values[i].clone())))
-                    .collect();
-                Point { index, values }
-            })
-            .collect()
+        (0..self.point_count()).map(|index| self.point(index)).collect()
     }
 
     /// Every swept key, in axis order.
