@@ -119,6 +119,9 @@ enum Command {
     Simulate {
         /// Display image (EXR).
         display_image: PathBuf,
+        /// The part of a multipart EXR to read, by name (default: its only part with R, G and B).
+        #[arg(long, value_name = "NAME")]
+        part: Option<String>,
         #[command(flatten)]
         setup: Setup,
         #[command(flatten)]
@@ -141,6 +144,10 @@ enum Command {
     Compare {
         a: PathBuf,
         b: PathBuf,
+        /// The part of multipart EXRs to read, by name, in both files (default: each file's only
+        /// part with R, G and B).
+        #[arg(long, value_name = "NAME")]
+        part: Option<String>,
         /// SSIM constants.
         #[arg(long, value_parser = cli::values::ssim_constants(), default_value_t = SsimConstants::Wang2004)]
         ssim: SsimConstants,
@@ -375,14 +382,14 @@ fn run() -> Result<()> {
             printed_total =
                 render_display(&g, method, setup, samples_per_pixel, reference_plane, eye_position, out, backend)?;
         }
-        Command::Simulate { display_image, setup, eye, out } => {
-            printed_total = simulate_command(&g, display_image, setup, eye, out)?;
+        Command::Simulate { display_image, part, setup, eye, out } => {
+            printed_total = simulate_command(&g, display_image, part.as_deref(), setup, eye, out)?;
         }
         Command::GroundTruth { setup, eye, out, backend } => {
             printed_total = ground_truth_command(&g, setup, eye, out, backend)?;
         }
-        Command::Compare { a, b, ssim: constants, json } => {
-            printed_total = compare(&g, a, b, constants, json)?;
+        Command::Compare { a, b, part, ssim: constants, json } => {
+            printed_total = compare(&g, a, b, part.as_deref(), constants, json)?;
         }
         Command::Bench { quick, scene, out, backends: true, also, embree_only } => {
             let scenes = match scene.is_empty() {
@@ -563,13 +570,20 @@ fn render_display(
 }
 
 /// `inimtrace simulate`; returns whether it printed its own total time.
-fn simulate_command(g: &Globals, display_image: PathBuf, setup: Setup, eye: EyeArgs, out: PathBuf) -> Result<bool> {
+fn simulate_command(
+    g: &Globals,
+    display_image: PathBuf,
+    part: Option<&str>,
+    setup: Setup,
+    eye: EyeArgs,
+    out: PathBuf,
+) -> Result<bool> {
     let (set, quiet) = (&g.set[..], g.quiet);
     let (_, display) = load_setup(&setup, set)?;
     let (eye, retina) = eye.eye(&display)?;
     inimtrace::optics::transfer::check_eye_in_front(&display, eye.position.z, "command line", "--eye-position")?;
     check_memory("the retinal image", "--retina", retina.resolution * retina.resolution, 24)?;
-    let img = inimtrace::io::exr::read_rgb(&display_image)?;
+    let img = read_exr_input(&display_image, part)?;
     // The method, when the display image says which.
     let method = inimtrace::io::exr::read_attributes(&display_image)?
         .into_iter()
@@ -605,13 +619,30 @@ fn ground_truth_command(g: &Globals, setup: Setup, eye: EyeArgs, out: PathBuf, b
 }
 
 /// `inimtrace compare`; returns whether it printed its own total time.
-fn compare(g: &Globals, a: PathBuf, b: PathBuf, constants: SsimConstants, json: bool) -> Result<bool> {
+/// The RGB image of an input EXR (of part `part`), printing the reader's note on a multipart
+/// file.
+fn read_exr_input(path: &std::path::Path, part: Option<&str>) -> Result<inimtrace::raster::RgbImage> {
+    let input = inimtrace::io::exr::read_input(path, part)?;
+    if let Some(note) = input.note {
+        eprintln!("{note}");
+    }
+    Ok(input.image)
+}
+
+fn compare(
+    g: &Globals,
+    a: PathBuf,
+    b: PathBuf,
+    part: Option<&str>,
+    constants: SsimConstants,
+    json: bool,
+) -> Result<bool> {
     let set = &g.set[..];
     if !set.is_empty() {
         bail!("--set does not apply to compare (it reads no experiment, scene or display)");
     }
-    let ia = inimtrace::io::exr::read_rgb(&a)?;
-    let ib = inimtrace::io::exr::read_rgb(&b)?;
+    let ia = read_exr_input(&a, part)?;
+    let ib = read_exr_input(&b, part)?;
     let p = metrics::psnr(&ia, &ib).with_context(|| format!("comparing {} and {}", a.display(), b.display()))?;
     let s =
         metrics::ssim(&ia, &ib, constants).with_context(|| format!("comparing {} and {}", a.display(), b.display()))?;

@@ -14,9 +14,12 @@
 //! `inimtrace:version`, `inimtrace:git_revision` and the standard `software` attribute
 //! ([`crate::version`]). Sample values are written as given.
 //!
-//! **Reading** ([`read_rgb`], [`read_rgb_depth`]): the first layer that has `R`, `G` and `B`
-//! channels; each may be stored as `f16`, `f32` or `u32` and is converted to `f32`. `Z` is
-//! returned by [`read_rgb_depth`] (`+inf` allowed: no hit); other channels are ignored.
+//! **Reading** ([`read_rgb`], [`read_rgb_depth`], [`read_input`], by `exr_read.rs`): one part
+//! with `R`, `G` and `B` channels (named by `--part` in a multipart file, or the only such part,
+//! with a note); each stored as `f16` or `f32` (`u32` is refused: integers are not radiance) and
+//! converted to `f32`. Its data window must be its display window, and every block must be
+//! present once and intact (ZIP blocks' Adler-32 checked). `Z` is returned by
+//! [`read_rgb_depth`] (`+inf` allowed: no hit); other channels are ignored.
 //!
 //! **Input policy:** every `R`, `G`, `B` sample read must be finite and non-negative (a linear
 //! radiance). A `NaN`, infinite or negative sample is not clamped or repaired: reading fails
@@ -28,13 +31,14 @@ use std::collections::HashMap;
 use std::path::Path;
 
 use exr::image::write::layers::WritableLayers;
-use exr::image::{AnyChannels, Encoding, FlatSamples, Image, Layer, SpecificChannels};
+use exr::image::{Encoding, Image, Layer, SpecificChannels};
 use exr::math::Vec2;
 use exr::meta::attribute::Text;
 use exr::meta::header::{standard_names, LayerAttributes};
-use exr::prelude::{read, Blocks, Compression, LineOrder, ReadChannels, ReadLayers, WritableImage};
+use exr::prelude::{Blocks, Compression, LineOrder, WritableImage};
 
 pub use super::exr_attributes::{AttrValue, Attributes};
+pub use super::exr_read::ExrInput;
 use crate::error::{Error, Result};
 use crate::raster::{RgbImage, RgbView};
 
@@ -117,7 +121,7 @@ impl std::str::FromStr for ExrCompression {
     }
 }
 
-fn exr_error(path: &Path, err: exr::error::Error) -> Error {
+pub(super) fn exr_error(path: &Path, err: exr::error::Error) -> Error {
     match err {
         exr::error::Error::Io(e) if e.kind() != std::io::ErrorKind::UnexpectedEof => Error::io(path, e),
         other => {
@@ -374,49 +378,21 @@ pub fn read_rgb(path: &Path) -> Result<RgbImage> {
 /// one value per pixel, as written by [`write_rgb`]). `Z` samples may be `+inf` (no hit) but
 /// not `NaN` or negative; such a sample is an error naming the file, pixel and channel.
 pub fn read_rgb_depth(path: &Path) -> Result<(RgbImage, Option<Vec<f32>>)> {
+    read_input(path, None).map(|input| (input.image, input.depth))
+}
+
+/// [`read_rgb_depth`] of part `part` (by name) of a multipart file, or of the only part with
+/// R, G and B; the returned note says which part was read when the file had several and none
+/// was named. See [`super::exr_read`] for the part choice and the checks of windows, channel
+/// types and blocks, and the module comment for the input policy.
+pub fn read_input(path: &Path, part: Option<&str>) -> Result<ExrInput> {
     let size = check_readable_file(path)?;
     check_claimed_size(path, size)?;
-    let image = read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .all_channels()
-        .all_layers()
-        .all_attributes()
-        .from_file(path)
-        .map_err(|e| exr_error(path, e))?;
-
-    let find = |layer: &Layer<AnyChannels<FlatSamples>>, name: &str| {
-        layer.channel_data.list.iter().find(|c| c.name == *name).map(|c| c.sample_data.clone())
-    };
-    let layer =
-        image.layer_data.iter().find(|l| ["R", "G", "B"].iter().all(|n| find(l, n).is_some())).ok_or_else(|| {
-            let names: Vec<String> =
-                image.layer_data.iter().flat_map(|l| l.channel_data.list.iter().map(|c| c.name.to_string())).collect();
-            Error::parse(path, format!("no layer with R, G and B channels (channels found: {})", names.join(", ")))
-        })?;
-    let (width, height) = (layer.size.0, layer.size.1);
-    let n = width * height;
-    if n == 0 {
-        return Err(Error::parse(path, "image has no pixels"));
-    }
-    let mut img = RgbImage::new(width, height);
+    let ExrInput { image: img, depth, note } = super::exr_read::read(path, part)?;
+    let width = img.width;
     for (c, name) in ["R", "G", "B"].into_iter().enumerate() {
-        let samples = find(layer, name).expect("channel presence checked above");
-        if samples.len() != n {
-            return Err(Error::parse(
-                path,
-                format!(
-                    "channel {name} has {} samples for {width}x{height} pixels (subsampled channels are not supported)",
-                    samples.len()
-                ),
-            ));
-        }
-        let values: Vec<f32> = match samples {
-            FlatSamples::F16(v) => v.into_iter().map(|h| h.to_f32()).collect(),
-            FlatSamples::F32(v) => v,
-            FlatSamples::U32(v) => v.into_iter().map(|u| u as f32).collect(),
-        };
-        for (i, (px, v)) in img.pixels.iter_mut().zip(values).enumerate() {
+        for (i, px) in img.pixels.iter().enumerate() {
+            let v = px[c];
             if let Some(kind) = crate::raster::bad_sample(v) {
                 return Err(Error::parse(
                     path,
@@ -427,34 +403,22 @@ pub fn read_rgb_depth(path: &Path) -> Result<(RgbImage, Option<Vec<f32>>)> {
                     ),
                 ));
             }
-            px[c] = v;
         }
     }
-    let depth = match find(layer, "Z") {
-        None => None,
-        Some(samples) => {
-            if samples.len() != n {
-                return Err(Error::parse(
-                    path,
-                    format!("channel Z has {} samples for {width}x{height} pixels", samples.len()),
-                ));
-            }
-            let z: Vec<f32> = samples.values_as_f32().collect();
-            if let Some(i) = z.iter().position(|v| v.is_nan() || *v < 0.0) {
-                return Err(Error::parse(
-                    path,
-                    format!(
-                        "pixel (row {}, col {}) channel Z is {}; depth must be non-negative (+inf for no hit)",
-                        i / width,
-                        i % width,
-                        z[i]
-                    ),
-                ));
-            }
-            Some(z)
+    if let Some(z) = &depth {
+        if let Some(i) = z.iter().position(|v| v.is_nan() || *v < 0.0) {
+            return Err(Error::parse(
+                path,
+                format!(
+                    "pixel (row {}, col {}) channel Z is {}; depth must be non-negative (+inf for no hit)",
+                    i / width,
+                    i % width,
+                    z[i]
+                ),
+            ));
         }
-    };
-    Ok((img, depth))
+    }
+    Ok(ExrInput { image: img, depth, note })
 }
 
 /// The attributes in the headers of an OpenEXR file as text, `(name, value)` pairs sorted by

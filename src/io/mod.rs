@@ -7,6 +7,7 @@ pub mod csv_table;
 pub mod display_file;
 pub mod exr;
 mod exr_attributes;
+mod exr_read;
 mod exr_zip;
 pub mod figure;
 mod gltf;
