@@ -457,13 +457,14 @@ impl Experiment {
         check_name(&spec, source)?;
         let dr = &spec.display_render;
         let mut methods = Vec::new();
+        let mut method_names = std::collections::HashSet::new();
         for (i, m) in spec.methods.iter().enumerate() {
             let method: Method = m.parse().map_err(|e: String| Error::invalid(source, format!("methods[{i}]"), e))?;
             let method = match (method, m.trim().eq_ignore_ascii_case("LA")) {
                 (Method::LensletAverage { .. }, true) => Method::LensletAverage { grid: dr.la_grid },
                 (other, _) => other,
             };
-            if methods.iter().any(|x: &Method| x.name() == method.name()) {
+            if !method_names.insert(method.name()) {
                 return Err(Error::invalid(
                     source,
                     format!("methods[{i}]"),
@@ -541,6 +542,7 @@ impl Experiment {
         let optics_spec = e.optics_spec(source)?;
         let primaries = display.primaries.clone().unwrap_or_default();
         let mut cases = Vec::new();
+        let mut names = std::collections::HashSet::new();
         for (i, c) in spec.eye_cases.iter().enumerate() {
             let field = format!("eye_cases[{i}]");
             if c.name.is_empty() || !c.name.chars().all(|ch| ch.is_ascii_alphanumeric() || ch == '-' || ch == '_') {
@@ -550,7 +552,7 @@ impl Experiment {
                     format!("`{}` must be non-empty and use only letters, digits, - and _ (it names files)", c.name),
                 ));
             }
-            if cases.iter().any(|x: &EyeCase| x.name == c.name) {
+            if !names.insert(c.name.as_str()) {
                 return Err(Error::invalid(source, format!("{field}.name"), format!("`{}` appears twice", c.name)));
             }
             let aperture =

@@ -190,11 +190,78 @@ pub fn is_opencv_yaml(text: &str, path: &Path) -> bool {
     text.trim_start().starts_with("%YAML") || matches!(path.extension().and_then(|e| e.to_str()), Some("yaml" | "yml"))
 }
 
+/// The deepest nesting [`parse_opencv_display`] reads: the YAML parser's time grows with the
+/// square of the depth, and the framework's display file is 2 levels deep.
+pub const MAX_YAML_NESTING: usize = 128;
+
+/// An upper bound on the nesting depth of a YAML text, in one pass over its bytes, before any
+/// parsing: block levels (distinct indentations open on the stack, plus `- ` and `? ` entries
+/// that open a collection on the same line) and flow levels (`[` and `{` open outside quoted
+/// scalars and comments) add up.
+fn yaml_nesting(text: &str) -> usize {
+    let (mut indents, mut flow, mut deepest) = (Vec::<usize>::new(), 0usize, 0usize);
+    for line in text.lines() {
+        let content = line.trim_start_matches(' ');
+        let indent = line.len() - content.len();
+        if flow == 0 && !content.is_empty() && !content.starts_with('#') {
+            while indents.last().is_some_and(|&i| i >= indent) {
+                indents.pop();
+            }
+            indents.push(indent);
+            let (mut rest, mut entries) = (content, 0);
+            while let Some(r) = rest.strip_prefix("- ").or_else(|| rest.strip_prefix("? ")) {
+                entries += 1;
+                rest = r.trim_start_matches(' ');
+            }
+            deepest = deepest.max(indents.len() + entries);
+        }
+        let (mut quote, mut previous) = (None::<u8>, b' ');
+        let mut bytes = content.bytes().peekable();
+        while let Some(b) = bytes.next() {
+            match quote {
+                Some(b'"') if b == b'\\' => {
+                    bytes.next();
+                }
+                Some(q) if b == q => {
+                    // '' inside a single-quoted scalar is an escaped quote.
+                    if q == b'\'' && bytes.peek() == Some(&b'\'') {
+                        bytes.next();
+                    } else {
+                        quote = None;
+                    }
+                }
+                Some(_) => {}
+                None => match b {
+                    b'"' | b'\'' if matches!(previous, b' ' | b'\t' | b':' | b',' | b'[' | b'{' | b'-') => {
+                        quote = Some(b)
+                    }
+                    b'#' if matches!(previous, b' ' | b'\t') => break,
+                    b'[' | b'{' => {
+                        flow += 1;
+                        deepest = deepest.max(indents.len() + flow);
+                    }
+                    b']' | b'}' => flow = flow.saturating_sub(1),
+                    _ => {}
+                },
+            }
+            previous = b;
+        }
+    }
+    deepest
+}
+
 /// Parses the paper framework's display file (OpenCV FileStorage YAML; keys `lenslettolcd`,
 /// `lenslettoorigin`, `sizelcd`, `resolutionlcd`, `islensletvertical`, `lensletshift`,
 /// `lensletorientation` (row-major 2x2), `lensletfocallength`, `eishift`, `eiorientation`).
 pub fn parse_opencv_display(text: &str, path: &Path) -> Result<Display> {
     use serde_yaml_ng::Value;
+    let depth = yaml_nesting(text);
+    if depth > MAX_YAML_NESTING {
+        return Err(Error::parse(
+            path,
+            format!("YAML nested {depth} levels deep: at most {MAX_YAML_NESTING} are read (a display file needs 2)"),
+        ));
+    }
     // OpenCV writes a YAML 1.0 directive (`%YAML:1.0`) that YAML 1.2 parsers reject.
     let body: String = text
         .lines()
@@ -307,4 +374,22 @@ pub fn parse_opencv_display(text: &str, path: &Path) -> Result<Display> {
         other => other,
     })?;
     Ok(d)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn yaml_nesting_counts_block_and_flow_levels_outside_quotes_and_comments() {
+        let paper = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/data/lensletdisplay.yaml")).unwrap();
+        assert!((2..=4).contains(&yaml_nesting(&paper)), "{}", yaml_nesting(&paper));
+        assert_eq!(yaml_nesting("a: 1\nb:\n  c:\n    d: 2\ne: 3\n"), 3);
+        assert_eq!(yaml_nesting("a: [1, [2, {b: 3}]]\n"), 4);
+        assert_eq!(yaml_nesting("a: \"[[[[\" # [[[[\nb: '[{''[' \n"), 1);
+        assert_eq!(yaml_nesting(&format!("a: {}1{}\n", "[".repeat(500), "]".repeat(500))), 501);
+        assert_eq!(yaml_nesting(&format!("{}x\n", "- ".repeat(300))), 301);
+        let deep: String = (0..200).map(|i| format!("{}k{i}:\n", " ".repeat(i))).collect();
+        assert_eq!(yaml_nesting(&deep), 200);
+    }
 }

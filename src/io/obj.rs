@@ -76,6 +76,8 @@ pub(super) fn load_obj(path: &Path, bytes: &[u8], reach: &Reach) -> Result<Loade
     let (mut normals, mut uvs, mut colors) = (Some(Vec::new()), Some(Vec::new()), Some(Vec::new()));
     let mut texture = None;
     let mut parts: Vec<(Option<usize>, MeshPart)> = Vec::new();
+    // Faces counted across the file's objects, from 0, for errors.
+    let mut face = 0usize;
     for model in &models {
         let m = &model.mesh;
         let first = mesh.triangles.len();
@@ -122,7 +124,9 @@ pub(super) fn load_obj(path: &Path, bytes: &[u8], reach: &Reach) -> Result<Loade
             corners.clear();
             corners.extend(m.indices[start..start + arity].iter().map(|&i| i + offset_u32));
             start += arity;
-            crate::scene::polygon::triangulate(&mesh.positions, &corners, &mut mesh.triangles);
+            crate::scene::polygon::triangulate(&mesh.positions, &corners, &mut mesh.triangles)
+                .map_err(|m| Error::parse(path, format!("face {face}: {m}")))?;
+            face += 1;
         }
         if m.normals.len() == 3 * nv {
             if let Some(n) = &mut normals {

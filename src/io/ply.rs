@@ -615,7 +615,8 @@ fn read_ply_body(
         }
         // Convex faces: the fan (0, i, i + 1); concave ones: ear clipping.
         let corners: Vec<u32> = idx.iter().map(|&v| v as u32).collect();
-        crate::scene::polygon::triangulate(&mesh.positions, &corners, &mut mesh.triangles);
+        crate::scene::polygon::triangulate(&mesh.positions, &corners, &mut mesh.triangles)
+            .map_err(|m| Error::parse(path, format!("face {face}: {m}")))?;
     }
     if layout.normal.is_some() {
         mesh.normals = Some(normals);

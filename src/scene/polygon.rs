@@ -6,16 +6,27 @@
 //! face (or a non-planar one, which has no unique triangulation) is projected onto the plane
 //! of its Newell normal and cut into ears by the `earcut` crate, so a concave ring is not
 //! filled in. Every triangle keeps the face's winding (its normal points along the face's).
+//!
+//! Ear clipping is quadratic in the corners of a face in the worst case (seconds at 10^5
+//! corners), so a concave face may have at most [`MAX_CONCAVE_CORNERS`] corners; a larger one
+//! is refused (the reader names the file and the face). Convex faces of any size are a fan, in
+//! linear time.
 
 use glam::{DVec2, DVec3};
 
+/// The most corners of a concave (or non-planar) face: ear clipping beyond it could take
+/// seconds. Real meshes' faces have a handful of corners; a font outline a few hundred.
+pub const MAX_CONCAVE_CORNERS: usize = 20_000;
+
 /// Appends the triangles of polygon `face` (indices into `positions`, in winding order) to
 /// `out`. Faces with fewer than three corners add nothing. Indices must be in range (callers
-/// check them first, to name the file and line).
-pub fn triangulate(positions: &[DVec3], face: &[u32], out: &mut Vec<[u32; 3]>) {
+/// check them first, to name the file and line). A concave face of more than
+/// [`MAX_CONCAVE_CORNERS`] corners adds nothing and is an error message (the caller names the
+/// file and the face).
+pub fn triangulate(positions: &[DVec3], face: &[u32], out: &mut Vec<[u32; 3]>) -> Result<(), String> {
     let n = face.len();
     if n < 3 {
-        return;
+        return Ok(());
     }
     let fan = |out: &mut Vec<[u32; 3]>| {
         for i in 1..n - 1 {
@@ -24,23 +35,28 @@ pub fn triangulate(positions: &[DVec3], face: &[u32], out: &mut Vec<[u32; 3]>) {
     };
     if n == 3 {
         fan(out);
-        return;
+        return Ok(());
     }
     let Some(projected) = project(positions, face) else {
         // No plane (all corners on a line, or non-finite): every triangle would be degenerate
         // and is dropped later anyway.
         fan(out);
-        return;
+        return Ok(());
     };
     if is_convex(&projected) {
         fan(out);
-        return;
+        return Ok(());
+    }
+    if n > MAX_CONCAVE_CORNERS {
+        return Err(format!(
+            "a concave face of {n} corners: at most {MAX_CONCAVE_CORNERS} are triangulated (split the face)"
+        ));
     }
     let mut local: Vec<u32> = Vec::with_capacity(3 * (n - 2));
     earcut::Earcut::new().earcut(projected.iter().map(|p| [p.x, p.y]), &[] as &[u32], &mut local);
     if local.is_empty() {
         fan(out);
-        return;
+        return Ok(());
     }
     for t in local.chunks_exact(3) {
         let (a, b, c) = (t[0] as usize, t[1] as usize, t[2] as usize);
@@ -52,6 +68,7 @@ pub fn triangulate(positions: &[DVec3], face: &[u32], out: &mut Vec<[u32; 3]>) {
             out.push([face[a], face[c], face[b]]);
         }
     }
+    Ok(())
 }
 
 /// The face's corners in 2-D: the plane perpendicular to the largest component of the Newell
@@ -147,7 +164,7 @@ mod tests {
         let positions: Vec<DVec3> = poly.iter().map(|p| p.extend(0.0)).collect();
         let face: Vec<u32> = (0..poly.len() as u32).collect();
         let mut tris = Vec::new();
-        triangulate(&positions, &face, &mut tris);
+        triangulate(&positions, &face, &mut tris).unwrap();
         assert_eq!(tris.len(), poly.len() - 2, "{poly:?}");
         let mut area = 0.0;
         for t in &tris {
@@ -168,7 +185,7 @@ mod tests {
         let positions =
             [DVec3::new(0.0, 0.0, 0.0), DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y, DVec3::new(-0.5, 0.5, 0.0)];
         let mut tris = Vec::new();
-        triangulate(&positions, &[0, 1, 2, 3, 4], &mut tris);
+        triangulate(&positions, &[0, 1, 2, 3, 4], &mut tris).unwrap();
         assert_eq!(tris, vec![[0, 1, 2], [0, 2, 3], [0, 3, 4]]);
     }
 
@@ -190,7 +207,7 @@ mod tests {
             let rev: Vec<DVec2> = poly.iter().rev().copied().collect();
             let positions: Vec<DVec3> = rev.iter().map(|p| p.extend(0.0)).collect();
             let mut tris = Vec::new();
-            triangulate(&positions, &(0..n as u32).collect::<Vec<_>>(), &mut tris);
+            triangulate(&positions, &(0..n as u32).collect::<Vec<_>>(), &mut tris).unwrap();
             let area: f64 = tris
                 .iter()
                 .map(|t| signed_area(rev[t[0] as usize], rev[t[1] as usize], rev[t[2] as usize]) / 2.0)
@@ -214,7 +231,7 @@ mod tests {
         check_planar(&poly);
         let positions: Vec<DVec3> = poly.iter().map(|p| p.extend(0.0)).collect();
         let mut tris = Vec::new();
-        triangulate(&positions, &(0..poly.len() as u32).collect::<Vec<_>>(), &mut tris);
+        triangulate(&positions, &(0..poly.len() as u32).collect::<Vec<_>>(), &mut tris).unwrap();
         // The centre of the ring is in no triangle.
         for t in &tris {
             let (a, b, c) = (poly[t[0] as usize], poly[t[1] as usize], poly[t[2] as usize]);
@@ -238,7 +255,7 @@ mod tests {
                 positions.reverse();
             }
             let mut tris = Vec::new();
-            triangulate(&positions, &[0, 1, 2, 3, 4, 5], &mut tris);
+            triangulate(&positions, &[0, 1, 2, 3, 4, 5], &mut tris).unwrap();
             assert_eq!(tris.len(), 4);
             let mut area = 0.0;
             for t in &tris {
@@ -256,9 +273,43 @@ mod tests {
     fn degenerate_faces_do_not_panic() {
         let positions = [DVec3::ZERO, DVec3::X, DVec3::new(2.0, 0.0, 0.0), DVec3::new(3.0, 0.0, 0.0), DVec3::NAN];
         let mut tris = Vec::new();
-        triangulate(&positions, &[0, 1, 2, 3], &mut tris);
-        triangulate(&positions, &[0, 1, 4, 2], &mut tris);
-        triangulate(&positions, &[0, 1], &mut tris);
+        triangulate(&positions, &[0, 1, 2, 3], &mut tris).unwrap();
+        triangulate(&positions, &[0, 1, 4, 2], &mut tris).unwrap();
+        triangulate(&positions, &[0, 1], &mut tris).unwrap();
         assert!(tris.iter().flatten().all(|&i| i < 5));
+    }
+
+    /// A comb: a concave polygon of `n` corners (`n` even) along the x axis, teeth up.
+    fn comb(n: usize) -> Vec<DVec3> {
+        let teeth = n / 2;
+        let mut p: Vec<DVec3> =
+            (0..teeth).map(|i| DVec3::new(i as f64, if i % 2 == 0 { 0.0 } else { 0.5 }, 0.0)).collect();
+        p.extend((0..teeth).rev().map(|i| DVec3::new(i as f64, 2.0 + (i % 3) as f64, 0.0)));
+        p
+    }
+
+    #[test]
+    fn concave_faces_beyond_the_limit_are_refused_and_convex_ones_of_any_size_are_a_fan() {
+        let ok = comb(1000);
+        let mut tris = Vec::new();
+        triangulate(&ok, &(0..ok.len() as u32).collect::<Vec<_>>(), &mut tris).unwrap();
+        assert_eq!(tris.len(), ok.len() - 2);
+        let big = comb(MAX_CONCAVE_CORNERS + 2);
+        let mut tris = Vec::new();
+        let e = triangulate(&big, &(0..big.len() as u32).collect::<Vec<_>>(), &mut tris).unwrap_err();
+        assert!(e.contains(&format!("{} corners", MAX_CONCAVE_CORNERS + 2)) && e.contains("20000"), "{e}");
+        assert!(tris.is_empty());
+        // 200,000 corners on a circle: convex, a fan, linear.
+        let n = 200_000;
+        let circle: Vec<DVec3> = (0..n)
+            .map(|i| {
+                let a = std::f64::consts::TAU * i as f64 / n as f64;
+                DVec3::new(a.cos(), a.sin(), 0.0)
+            })
+            .collect();
+        let mut tris = Vec::new();
+        triangulate(&circle, &(0..n as u32).collect::<Vec<_>>(), &mut tris).unwrap();
+        assert_eq!(tris.len(), n - 2);
+        assert!(tris.iter().all(|t| t[0] == 0));
     }
 }
