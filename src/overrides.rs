@@ -192,6 +192,16 @@ pub fn parse_value(text: &str) -> Result<toml::Value, String> {
         Ok(mut t) if t.len() == 1 => return Ok(t.remove("value").expect("one key")),
         Ok(_) => {}
         Err(e) => {
+            let digits = trimmed.strip_prefix(['+', '-']).unwrap_or(trimmed);
+            if digits.starts_with(|c: char| c.is_ascii_digit())
+                && digits.bytes().all(|b| b.is_ascii_digit() || b == b'_')
+            {
+                return Err(format!(
+                    "`{trimmed}` is an integer out of range (integers are 64-bit: {} to {})",
+                    i64::MIN,
+                    i64::MAX
+                ));
+            }
             let bare = !trimmed.contains(|c: char| "[]{}\"'=,#".contains(c) || c.is_whitespace());
             if bare {
                 return Ok(toml::Value::String(trimmed.to_string()));

@@ -127,6 +127,8 @@ fn parse_ply_header(path: &Path, bytes: &[u8]) -> Result<PlyHeader> {
     let mut line_no = 0;
     let mut format = None;
     let mut elements: Vec<Element> = Vec::new();
+    // (element number, property name) of every property declared so far.
+    let mut property_names = std::collections::HashSet::new();
     let mut warnings = Vec::new();
     loop {
         if pos >= bytes.len() {
@@ -172,6 +174,7 @@ fn parse_ply_header(path: &Path, bytes: &[u8]) -> Result<PlyHeader> {
                 elements.push(Element { name: words[1].to_string(), count, props: Vec::new() });
             }
             Some("property") => {
+                let elements_seen = elements.len();
                 let Some(element) = elements.last_mut() else {
                     return Err(bad(line_no, "property before any element".into()));
                 };
@@ -189,6 +192,12 @@ fn parse_ply_header(path: &Path, bytes: &[u8]) -> Result<PlyHeader> {
                     ["property", ty, name] => Property { name: name.to_string(), kind: PropKind::Scalar(scalar(ty)?) },
                     _ => return Err(bad(line_no, format!("malformed property line '{text}'"))),
                 };
+                if !property_names.insert((elements_seen, prop.name.clone())) {
+                    return Err(bad(
+                        line_no,
+                        format!("element '{}' declares property '{}' twice", element.name, prop.name),
+                    ));
+                }
                 element.props.push(prop);
             }
             Some("end_header") => break,

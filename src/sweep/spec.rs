@@ -147,6 +147,33 @@ impl SweepSpec {
                 keys.push(AxisKey { key: key.clone(), values });
             }
             let n = keys[0].values.len();
+            // The same point twice would run once and be counted twice.
+            let mut points = std::collections::HashMap::new();
+            for j in 0..n {
+                let tuple: Vec<String> =
+                    keys.iter().map(|k| k.values.get(j).map(same_value).unwrap_or_default()).collect();
+                if let Some(first) = points.insert(tuple, j) {
+                    let shown: Vec<String> = keys
+                        .iter()
+                        .filter_map(|k| k.values.get(j).map(|v| (k, v)))
+                        .map(|(k, v)| {
+                            if keys.len() == 1 {
+                                crate::overrides::value_text(v)
+                            } else {
+                                format!("{} = {}", k.key, crate::overrides::value_text(v))
+                            }
+                        })
+                        .collect();
+                    return Err(Error::invalid(
+                        &src,
+                        format!("axes[{i}]"),
+                        format!(
+                            "duplicate value {} in axis {i} (values {first} and {j}): each value must appear once",
+                            shown.join(", ")
+                        ),
+                    ));
+                }
+            }
             if let Some(k) = keys.iter().find(|k| k.values.len() != n) {
                 return Err(Error::invalid(
                     &src,
@@ -272,10 +299,12 @@ fn range(t: &toml::Table) -> std::result::Result<Vec<toml::Value>, String> {
             if s == 0.0 || (to - from) * s < 0.0 {
                 return Err(format!("range `step` {s} never gets from {from} to {to}"));
             }
-            let n = ((to - from) / s * (1.0 + 1e-12) + 1e-9).floor() as usize + 1;
-            if n > MAX_POINTS {
-                return Err(format!("the range has more than {MAX_POINTS} values"));
+            let count = ((to - from) / s * (1.0 + 1e-12) + 1e-9).floor() + 1.0;
+            if count.is_nan() || count > MAX_POINTS as f64 {
+                let count = if count < 1e15 { format!("{}", count as u64) } else { format!("{count:.3e}") };
+                return Err(format!("the range would have {count} values, more than the limit of {MAX_POINTS}"));
             }
+            let n = count as usize;
             ((0..n).map(|i| from + s * i as f64).collect(), from_int && to_int && s_int)
         }
         (Some((c, false)), None) => return Err(format!("range `count` must be a whole number, got {c}")),
@@ -285,6 +314,15 @@ fn range(t: &toml::Table) -> std::result::Result<Vec<toml::Value>, String> {
         .into_iter()
         .map(|x| if all_int { toml::Value::Integer(x.round() as i64) } else { toml::Value::Float(round12(x)) })
         .collect())
+}
+
+/// A value as a sweep point sees it: numbers by their value (`1` and `1.0` are one point).
+fn same_value(v: &toml::Value) -> String {
+    match v {
+        toml::Value::Integer(i) => format!("{}", *i as f64),
+        toml::Value::Float(f) => format!("{f}"),
+        other => other.to_string(),
+    }
 }
 
 /// `x` rounded to 12 significant digits: 2 + 3 * 0.8 is 4.4, not 4.3999999999999995.
