@@ -88,6 +88,7 @@ pub mod experiment;
 pub mod fixtures;
 pub mod info;
 pub mod io;
+pub mod long_run;
 pub mod measure;
 pub mod metrics;
 pub mod optics;

@@ -557,6 +557,15 @@ fn render_display(
     )?;
     inimtrace::optics::transfer::check_eye_in_front(&display, eye_position.z, "command line", "--eye-position")?;
     let settings = DisplayRenderSettings { samples_per_pixel, reference_plane_z: reference_plane, eye_position };
+    let per_pixel = match method {
+        Method::LensletAverage { grid } => grid as u64 * grid as u64,
+        _ => 1,
+    };
+    inimtrace::long_run::announce(
+        (display.lcd.pixel_count() as u64)
+            .saturating_mul((samples_per_pixel as u64).saturating_pow(2))
+            .saturating_mul(per_pixel),
+    );
     let (img, depth, name) = with_field(&scene, backend, |fields| {
         let p = Progress::new(display.lcd.rows() as u64, &format!("display image {}", method.name()), quiet);
         let (img, depth) = render_display_image_with_depth(&display, method, &settings, fields.with_depth, &p)?;
@@ -584,6 +593,13 @@ fn simulate_command(
     inimtrace::optics::transfer::check_eye_in_front(&display, eye.position.z, "command line", "--eye-position")?;
     check_memory("the retinal image", "--retina", retina.resolution * retina.resolution, 24)?;
     let img = read_exr_input(&display_image, part)?;
+    let pupil = eye.pupil_samples().len();
+    inimtrace::long_run::announce(inimtrace::long_run::retina_rays(
+        retina.resolution,
+        retina.samples_per_pixel,
+        pupil,
+        1,
+    ));
     // The method, when the display image says which.
     let method = inimtrace::io::exr::read_attributes(&display_image)?
         .into_iter()
@@ -606,6 +622,13 @@ fn ground_truth_command(g: &Globals, setup: Setup, eye: EyeArgs, out: PathBuf, b
     let (scene, display) = load_setup(&setup, set)?;
     let (eye, retina) = eye.eye(&display)?;
     check_memory("the retinal image", "--retina", retina.resolution * retina.resolution, 24)?;
+    let pupil = eye.pupil_samples().len();
+    inimtrace::long_run::announce(inimtrace::long_run::retina_rays(
+        retina.resolution,
+        retina.samples_per_pixel,
+        pupil,
+        1,
+    ));
     announce(&scene, backend, quiet);
     let (img, name) = with_field(&scene, backend, |fields| {
         let p = Progress::new(retina.resolution as u64, "ground truth", quiet);

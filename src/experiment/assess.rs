@@ -72,18 +72,7 @@ fn run(exp: &Experiment, out: Option<&Path>, opts: RunOptions, keep: bool) -> Re
     // run will be long, even when stderr is not a terminal.
     let estimate = estimate(exp);
     estimate.check_memory(&crate::budget::memory_budget(), &exp.source)?;
-    let seconds = estimate.seconds(RAYS_PER_SECOND * rayon::current_num_threads() as f64);
-    if seconds > 60.0 {
-        eprintln!(
-            "note: this run traces about {:.2e} rays: roughly {} on this machine",
-            estimate.rays as f64,
-            if seconds < 3600.0 {
-                format!("{:.0} minutes", seconds / 60.0)
-            } else {
-                format!("{:.1} hours", seconds / 3600.0)
-            }
-        );
-    }
+    crate::long_run::announce(estimate.rays);
     // The folder is owned by this run (a second run into it fails at once) and every file
     // appears under its final name only when complete; `results.json` comes last.
     let dir = out.map(|o| OutputDir::open(o, RunKind::Assess, opts.force)).transpose()?;
@@ -116,10 +105,6 @@ fn run(exp: &Experiment, out: Option<&Path>, opts: RunOptions, keep: bool) -> Re
 pub fn prepare_output_dir(out: &Path, force: bool) -> Result<()> {
     OutputDir::open(out, RunKind::Assess, force).map(|_| ())
 }
-
-/// Rays per second per thread assumed by the announcement of long runs (a conservative figure
-/// for the generic tracers; the fused planar kernel is faster).
-const RAYS_PER_SECOND: f64 = 10e6;
 
 /// The run's peak memory and its rays, from the settings alone (before anything is allocated).
 pub fn estimate(exp: &Experiment) -> Estimate {

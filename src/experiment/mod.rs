@@ -13,7 +13,7 @@ pub mod metadata;
 mod report;
 mod stages;
 
-pub use assess::{assess, assess_images, prepare_output_dir, Assessment, RunOptions, Z_CHANNEL_NOTE};
+pub use assess::{assess, assess_images, estimate, prepare_output_dir, Assessment, RunOptions, Z_CHANNEL_NOTE};
 pub use report::{table_markdown, AssessReport, Score, StageTime};
 pub use stages::{
     ground_truth_image, pack_display_images, perceived_images, render_display_images, render_display_stack, table1,

@@ -113,6 +113,11 @@ pub fn run_points(
         .collect();
     summary.already_complete = selection.len() - todo.len();
     let (scenes, warnings) = build(resolved, values, &todo)?;
+    let rays = scenes
+        .iter()
+        .flat_map(|(_, _, jobs)| jobs.iter())
+        .fold(0u64, |acc, job| acc.saturating_add(experiment::estimate(&job.exp).rays));
+    crate::long_run::announce(rays);
     summary.warnings = warnings;
     let progress = Progress::new(todo.len() as u64, "sweep points", opts.quiet);
     for (_, scene, jobs) in &scenes {
