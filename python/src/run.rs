@@ -126,7 +126,13 @@ fn detached<T: Send>(
             .map_err(|e| PyRuntimeError::new_err(format!("cannot start a thread for the work: {e}")))?;
         while !worker.is_finished() {
             if !main {
-                py.detach(std::thread::park);
+                // Parked with a timeout: the wake-up may come just before the thread counts as
+                // finished. The GIL stays released throughout.
+                py.detach(|| {
+                    while !worker.is_finished() {
+                        std::thread::park_timeout(SIGNAL_INTERVAL);
+                    }
+                });
                 continue;
             }
             py.detach(|| std::thread::park_timeout(SIGNAL_INTERVAL));
