@@ -36,10 +36,12 @@ fn refuse_system_path(path: &Path) -> Result<()> {
     }
 }
 
-/// What a non-regular file is, for its refusal.
-fn kind_of(meta: &std::fs::Metadata) -> &'static str {
-    let t = meta.file_type();
-    if t.is_dir() {
+/// What a non-regular file is, for its refusal (the one wording the input gate and the output
+/// folder share).
+pub(crate) fn file_kind(t: &std::fs::FileType) -> &'static str {
+    if t.is_symlink() {
+        "a symbolic link"
+    } else if t.is_dir() {
         "a directory"
     } else if t.is_fifo() {
         "a FIFO (named pipe)"
@@ -66,7 +68,7 @@ pub fn open_regular(path: &Path) -> Result<(File, u64)> {
         .map_err(|e| Error::io(path, e))?;
     let meta = file.metadata().map_err(|e| Error::io(path, e))?;
     if !meta.is_file() {
-        return Err(refuse(path, format!("is {}; expected a regular file", kind_of(&meta))));
+        return Err(refuse(path, format!("is {}; expected a regular file", file_kind(&meta.file_type()))));
     }
     if on_system_fs(&meta) {
         return Err(refuse(path, "is on /proc or /sys, which hold system state, not input files; refused"));

@@ -42,6 +42,7 @@ use std::sync::Mutex;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
+use crate::io::input::file_kind;
 
 /// Name of the lock file inside an output folder.
 pub const LOCK_FILE: &str = ".inimtrace.lock";
@@ -146,7 +147,8 @@ impl OutputDir {
             .map_err(|e| not_a_file_error(&lock_path).unwrap_or_else(|| Error::io(&lock_path, e)))?;
         let meta = lock.metadata().map_err(|e| Error::io(&lock_path, e))?;
         if !meta.is_file() || meta.nlink() != 1 {
-            let what = if meta.is_file() { "a regular file with other hard links" } else { kind(&meta.file_type()) };
+            let what =
+                if meta.is_file() { "a regular file with other hard links" } else { file_kind(&meta.file_type()) };
             return Err(refusal(&lock_path, what));
         }
         match lock.try_lock() {
@@ -406,24 +408,6 @@ fn remove_temporary(path: &Path) {
     }
 }
 
-/// What kind of entry a non-regular file is, for messages.
-fn kind(t: &fs::FileType) -> &'static str {
-    use std::os::unix::fs::FileTypeExt;
-    if t.is_symlink() {
-        "a symbolic link"
-    } else if t.is_dir() {
-        "a directory"
-    } else if t.is_fifo() {
-        "a FIFO"
-    } else if t.is_socket() {
-        "a socket"
-    } else if t.is_block_device() || t.is_char_device() {
-        "a device"
-    } else {
-        "not a regular file"
-    }
-}
-
 fn refusal(path: &Path, what: &str) -> Error {
     Error::io(
         path,
@@ -437,7 +421,7 @@ fn refusal(path: &Path, what: &str) -> Error {
 /// The refusal of `path` if it exists and is not a regular file.
 fn not_a_file_error(path: &Path) -> Option<Error> {
     let meta = fs::symlink_metadata(path).ok()?;
-    (!meta.is_file()).then(|| refusal(path, kind(&meta.file_type())))
+    (!meta.is_file()).then(|| refusal(path, file_kind(&meta.file_type())))
 }
 
 /// Refuses `path` if it exists and is not a regular file (a link is not followed).
@@ -471,7 +455,7 @@ pub fn open_regular(path: &Path) -> Result<File> {
         .map_err(|e| not_a_file_error(path).unwrap_or_else(|| Error::io(path, e)))?;
     let meta = file.metadata().map_err(|e| Error::io(path, e))?;
     if !meta.is_file() {
-        return Err(refusal(path, kind(&meta.file_type())));
+        return Err(refusal(path, file_kind(&meta.file_type())));
     }
     Ok(file)
 }
