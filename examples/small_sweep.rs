@@ -24,7 +24,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let start = Instant::now();
     // The library does not print: progress messages come to this closure.
     let summary = execute(&cmd, &mut |message| eprintln!("{message}"))?;
-    println!("{summary}");
+    println!("{}", summary.stdout);
     println!("sweep written to {} in {:.1} s", out.display(), start.elapsed().as_secs_f64());
     Ok(())
 }

@@ -90,6 +90,10 @@ enum Command {
         /// removing the files that command's report lists (and nothing else).
         #[arg(long)]
         force: bool,
+        /// Exit with status 3 when a score's 95% interval missed its precision target (the
+        /// results are still written; without it a miss is reported on stderr and exits 0).
+        #[arg(long)]
+        strict: bool,
         #[command(flatten)]
         backend: BackendArg,
     },
@@ -230,6 +234,10 @@ enum Command {
         /// The sweep's id at submission (array tasks refuse to run a changed sweep).
         #[arg(long, hide = true)]
         sweep_id: Option<String>,
+        /// Exit with status 3 when a score's 95% interval missed its precision target (the
+        /// results are still written; without it a miss is reported on stderr and exits 0).
+        #[arg(long)]
+        strict: bool,
         #[command(flatten)]
         backend: BackendArg,
     },
@@ -338,7 +346,7 @@ fn main() {
             std::process::exit(141);
         }
         eprintln!("error: {}", error_line(&e));
-        std::process::exit(1);
+        std::process::exit(if e.downcast_ref::<TargetsMissed>().is_some() { 3 } else { 1 });
     }
 }
 
@@ -375,8 +383,8 @@ fn run() -> Result<()> {
     // `assess` and `bench` print their own total with --timings.
     let mut printed_total = false;
     match cli.command {
-        Command::Assess { experiment, out, scene, force, backend } => {
-            printed_total = assess(&g, experiment, out, scene, force, backend)?;
+        Command::Assess { experiment, out, scene, force, strict, backend } => {
+            printed_total = assess(&g, experiment, out, scene, force, strict, backend)?;
         }
         Command::RenderDisplay { method, setup, samples_per_pixel, reference_plane, eye_position, out, backend } => {
             printed_total =
@@ -425,6 +433,7 @@ fn run() -> Result<()> {
             dry_run,
             wait,
             sweep_id,
+            strict,
             backend,
         } => {
             let slurm = slurm.then(|| inimtrace::sweep::SlurmOptions {
@@ -452,8 +461,14 @@ fn run() -> Result<()> {
                 wait,
                 sweep_id,
             };
-            let text = inimtrace::sweep::execute(&cmd, &mut |m| eprintln!("{m}"))?;
-            out!("{text}");
+            let output = inimtrace::sweep::execute(&cmd, &mut |m| eprintln!("{m}"))?;
+            out!("{}", output.stdout);
+            if let Some(note) = &output.missed_note {
+                eprintln!("warning: {note}");
+            }
+            if strict && output.missed_rows > 0 {
+                return Err(TargetsMissed(output.missed_rows).into());
+            }
         }
         Command::Resolution { study, out, force } => {
             let cmd =
@@ -495,12 +510,14 @@ fn run() -> Result<()> {
 }
 
 /// `inimtrace assess`; returns whether it printed its own total time.
+#[allow(clippy::too_many_arguments)] // the command's flags, as clap parsed them
 fn assess(
     g: &Globals,
     experiment: Option<PathBuf>,
     out: Option<PathBuf>,
     scene: Option<PathBuf>,
     force: bool,
+    strict: bool,
     backend: BackendArg,
 ) -> Result<bool> {
     let (set, quiet) = (&g.set[..], g.quiet);
@@ -529,8 +546,38 @@ fn assess(
     if !quiet {
         eprintln!("wrote {}", out.display());
     }
+    let missed = report.scores.iter().filter(|s| s.target_met == Some(false)).count();
+    if missed > 0 {
+        eprintln!(
+            "warning: {} of {} score(s) missed their precision target (PSNR ± {} dB, SSIM ± {}): marked * in {}, \
+             target_met = false in {}; the budget (measurement.max_seconds, measurement.max_samples_per_pixel) ran out \
+             first",
+            missed,
+            report.scores.len(),
+            exp.measurement.psnr_ci95_db,
+            exp.measurement.ssim_ci95,
+            out.join("table.md").display(),
+            out.join("results.json").display()
+        );
+        if strict {
+            return Err(TargetsMissed(missed).into());
+        }
+    }
     Ok(printed_total)
 }
+
+/// `--strict` and a score whose interval missed its target: exit status 3 (the results are
+/// written; the note said where).
+#[derive(Debug)]
+struct TargetsMissed(usize);
+
+impl std::fmt::Display for TargetsMissed {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "--strict: {} score(s) missed their precision target", self.0)
+    }
+}
+
+impl std::error::Error for TargetsMissed {}
 
 /// `inimtrace render-display`; returns whether it printed its own total time.
 #[allow(clippy::too_many_arguments)] // the command's flags, as clap parsed them

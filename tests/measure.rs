@@ -637,6 +637,45 @@ fn inimtrace(args: &[&str]) -> (bool, String, String) {
 }
 
 #[test]
+fn assess_that_misses_a_target_says_so_at_the_end_and_strict_exits_3() {
+    let dir = tempfile::tempdir().unwrap();
+    let exp = root().join("experiments/paper-converged.toml");
+    let out = dir.path().join("out");
+    let args = |strict: bool| {
+        let mut a: Vec<String> = ["assess", exp.to_str().unwrap(), "--out", out.to_str().unwrap(), "--quiet"]
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+        for set in [
+            "display.lcd.resolution=[540, 540]",
+            "eye.retina_resolution=32",
+            "methods=[\"LC\"]",
+            "eye_cases=[{ name = \"Eye\", focus_diopters = 2.5 }]",
+            "measurement.max_seconds=0.000001",
+        ] {
+            a.extend(["--set".to_string(), set.to_string()]);
+        }
+        if strict {
+            a.push("--strict".into());
+        }
+        std::process::Command::new(env!("CARGO_BIN_EXE_inimtrace")).args(a).output().unwrap()
+    };
+    let o = args(false);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{stderr}");
+    let note = stderr.lines().last().unwrap();
+    assert!(note.starts_with("warning: 1 of 1 score(s) missed their precision target (PSNR ± 0.02 dB"), "{stderr}");
+    assert!(note.contains(&out.join("table.md").display().to_string()), "{stderr}");
+    let table = std::fs::read_to_string(out.join("table.md")).unwrap();
+    assert!(table.contains("NOT met in 1 of 1 cells"), "{table}");
+    let o = args(true);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(3), "{stderr}");
+    assert!(stderr.contains("error: --strict: 1 score(s) missed their precision target"), "{stderr}");
+    assert!(out.join("results.json").is_file(), "the results are written all the same");
+}
+
+#[test]
 fn assess_reports_intervals_samples_and_targets_and_is_thread_count_independent() {
     let dir = tempfile::tempdir().unwrap();
     let display =
@@ -697,13 +736,18 @@ fn assess_reports_intervals_samples_and_targets_and_is_thread_count_independent(
     );
     assert_eq!((m["psnr_ci95_db"].as_f64(), m["ssim_ci95"].as_f64()), (Some(0.1), Some(0.01)));
 
-    // results.csv: the two interval columns, filled for every score row.
+    // results.csv: the two interval columns, filled for every score row; then the samples,
+    // replicates and whether the targets were met, as in results.json.
     let csv = std::fs::read_to_string(two.join("results.csv")).unwrap();
-    assert!(csv.lines().next().unwrap().ends_with(",psnr_ci95_db,ssim_ci95"));
+    assert!(csv.lines().next().unwrap().ends_with(",psnr_ci95_db,ssim_ci95,samples_per_pixel,replicates,target_met"));
     for l in csv.lines().filter(|l| l.starts_with("score,")) {
         let f: Vec<&str> = l.split(',').collect();
-        assert_eq!(f.len(), 11, "{l}");
+        assert_eq!(f.len(), 14, "{l}");
         assert!(f[9].parse::<f64>().unwrap() > 0.0 && f[10].parse::<f64>().unwrap() > 0.0, "{l}");
+        let s = scores.iter().find(|s| s["method"] == f[2] && s["eye_case"] == f[3]).unwrap();
+        assert_eq!(f[11], s["samples_per_pixel"].as_u64().unwrap().to_string(), "{l}");
+        assert_eq!(f[12], "8", "{l}");
+        assert_eq!(f[13], s["target_met"].as_bool().unwrap().to_string(), "{l}");
     }
 
     // EXRs: the replicates' mean, with the estimator and samples in their headers.

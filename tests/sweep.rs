@@ -205,9 +205,18 @@ fn a_local_sweep_is_a_product_of_zipped_axes_and_each_point_scores_as_assess_by_
             "psnr_ci95_db",
             "ssim",
             "ssim_ci95",
+            "samples_per_pixel",
+            "replicates",
+            "target_met",
             "seconds"
         ]
     );
+    // The grid estimator has no interval and no target: those columns are empty.
+    for r in &rows {
+        for col in ["psnr_ci95_db", "ssim_ci95", "samples_per_pixel", "replicates", "target_met"] {
+            assert_eq!(r[col], "", "{col} of {r:?}");
+        }
+    }
     assert_eq!(rows.len(), 12 * 3);
     // Product: every pupil x eye x position once; zipped: the name moves with the focus.
     let combos: BTreeSet<(String, String, String)> = rows
@@ -430,4 +439,94 @@ fn a_converged_sweep_carries_each_scores_interval_as_assess_gives_it() {
         compared += 1;
     }
     assert_eq!(compared, 2);
+}
+
+#[test]
+fn a_sweep_with_a_tiny_time_budget_marks_the_rows_that_missed_and_strict_exits_3() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("budget.toml");
+    let exp = root().join("experiments/paper-converged.toml");
+    // Point 0 has a microsecond to measure in (one round, wide intervals); point 1 ten minutes.
+    std::fs::write(
+        &file,
+        format!(
+            "name = \"budget\"\nexperiment = \"{}\"\n[set]\n\"display.lcd.resolution\" = [540, 540]\n\
+             \"eye.retina_resolution\" = 32\n\"eye_cases\" = [{{ name = \"Eye\", focus_diopters = 2.5 }}]\n\
+             \"methods\" = [\"LC\", \"LA\"]\n\"measurement.psnr_ci95_db\" = 0.5\n\"measurement.ssim_ci95\" = 0.05\n\
+             \"measurement.replicates\" = 4\n[[axes]]\n\"measurement.max_seconds\" = [0.000001, 600.0]\n",
+            exp.display()
+        ),
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let args = ["sweep", file.to_str().unwrap(), "--out", out.to_str().unwrap()];
+    let status = |extra: &[&str]| {
+        let o = Command::new(env!("CARGO_BIN_EXE_inimtrace"))
+            .current_dir(root())
+            .arg("--quiet")
+            .args(args)
+            .args(extra)
+            .output()
+            .unwrap();
+        (o.status.code(), String::from_utf8_lossy(&o.stderr).into_owned())
+    };
+    // A miss is a result: exit 0, said once at the end with the count and where to look.
+    let (code, stderr) = status(&[]);
+    assert_eq!(code, Some(0), "{stderr}");
+    let csv_path = out.join("sweep.csv").display().to_string();
+    let note = stderr.lines().last().unwrap();
+    assert!(note.starts_with("warning: sweep `budget`: 2 of 4 score row(s) missed their precision target"), "{stderr}");
+    assert!(note.contains("in 1 of 2 point(s) (index 0)") && note.contains(&csv_path), "{stderr}");
+
+    let (_, rows) = read_csv(&out.join("sweep.csv"));
+    assert_eq!(rows.len(), 4);
+    for r in &rows {
+        let (p, s): (f64, f64) = (r["psnr_ci95_db"].parse().unwrap(), r["ssim_ci95"].parse().unwrap());
+        let met = p <= 0.5 && s <= 0.05;
+        assert_eq!(r["target_met"], met.to_string(), "{r:?}");
+        assert_eq!(r["target_met"], (r["point"] == "1").to_string(), "only the starved point misses: {r:?}");
+        assert_eq!(r["replicates"], "4");
+        let spp: u64 = r["samples_per_pixel"].parse().unwrap();
+        // The starved point stops after its first round (4 samples per replicate).
+        if r["point"] == "0" {
+            assert_eq!(spp, 16, "{r:?}");
+        } else {
+            assert!(spp > 16 && spp.is_multiple_of(4), "{r:?}");
+        }
+    }
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("sweep.json")).unwrap()).unwrap();
+    assert_eq!(json["rows_missing_target"], 2);
+    assert_eq!(json["points_missing_target"], serde_json::json!([0]));
+    assert_eq!(json["points"][0]["targets_missed"], 2);
+    assert_eq!(json["points"][1]["targets_missed"], 0);
+    for (p, met) in [(0, false), (1, true)] {
+        for s in json["points"][p]["scores"].as_array().unwrap() {
+            assert_eq!(s["target_met"], met, "{s}");
+            assert!(s["psnr_ci95_db"].is_string() && s["samples_per_pixel"].is_u64(), "{s}");
+        }
+    }
+
+    // --strict: the same results (nothing runs again), exit status 3; also on --collect.
+    let before = std::fs::read(out.join("sweep.csv")).unwrap();
+    let (code, stderr) = status(&["--strict"]);
+    assert_eq!(code, Some(3), "{stderr}");
+    assert!(stderr.contains("2 already complete, 0 run") && stderr.contains("--strict: 2 score(s)"), "{stderr}");
+    assert_eq!(std::fs::read(out.join("sweep.csv")).unwrap(), before);
+    let (code, stderr) = status(&["--collect", "--strict"]);
+    assert_eq!(code, Some(3), "{stderr}");
+
+    // Targets the first round meets: --strict exits 0 and nothing is said of targets.
+    let met = dir.path().join("met");
+    let o = Command::new(env!("CARGO_BIN_EXE_inimtrace"))
+        .current_dir(root())
+        .args(["--quiet", "sweep", file.to_str().unwrap(), "--out", met.to_str().unwrap(), "--strict"])
+        .args(["--set", "measurement.psnr_ci95_db=50", "--set", "measurement.ssim_ci95=0.5"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{stderr}");
+    let (_, rows) = read_csv(&met.join("sweep.csv"));
+    assert!(rows.len() == 4 && rows.iter().all(|r| r["target_met"] == "true"), "{rows:?}");
+    assert!(!stderr.contains("precision target"), "{stderr}");
 }

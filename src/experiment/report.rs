@@ -178,7 +178,9 @@ pub fn table_markdown(report: &AssessReport, exp: &Experiment) -> String {
 pub(super) fn write_reports(report: &AssessReport, exp: &Experiment, dir: &OutputDir) -> Result<()> {
     let write = |name: &str, text: String| -> Result<()> { dir.write_bytes(name, text.as_bytes()) };
     write("table.md", table_markdown(report, exp))?;
-    // psnr_ci95_db and ssim_ci95 (last, empty for the grid estimator): 95% half-widths. Names
+    // psnr_ci95_db and ssim_ci95 (empty for the grid estimator): 95% half-widths; then the
+    // converged estimator's samples per retina pixel, replicates and whether both half-widths
+    // are within the targets (empty for the grid estimator and for stage rows). Names
     // (experiment, eye case) are quoted where they hold a comma, a quote or a line break.
     let mut csv = CsvTable::new();
     row(
@@ -195,11 +197,17 @@ pub(super) fn write_reports(report: &AssessReport, exp: &Experiment, dir: &Outpu
             "seconds",
             "psnr_ci95_db",
             "ssim_ci95",
+            "samples_per_pixel",
+            "replicates",
+            "target_met",
         ],
     );
     let ci = |h: Option<f64>| h.map(csv_db).unwrap_or_default();
     let e = report.experiment.as_str();
     for s in &report.scores {
+        let spp = s.samples_per_pixel.map(|n| n.to_string()).unwrap_or_default();
+        let reps = s.replicates.map(|n| n.to_string()).unwrap_or_default();
+        let met = s.target_met.map(|m| m.to_string()).unwrap_or_default();
         for (c, name) in ["R", "G", "B"].iter().enumerate() {
             row(
                 &mut csv,
@@ -215,6 +223,9 @@ pub(super) fn write_reports(report: &AssessReport, exp: &Experiment, dir: &Outpu
                     "",
                     &ci(s.psnr.channels_ci95.map(|h| h[c])),
                     &ci(s.ssim.channels_ci95.map(|h| h[c])),
+                    &spp,
+                    &reps,
+                    &met,
                 ],
             );
         }
@@ -232,6 +243,9 @@ pub(super) fn write_reports(report: &AssessReport, exp: &Experiment, dir: &Outpu
                 "",
                 &ci(s.psnr.ci95),
                 &ci(s.ssim.ci95),
+                &spp,
+                &reps,
+                &met,
             ],
         );
     }
@@ -250,10 +264,13 @@ pub(super) fn write_reports(report: &AssessReport, exp: &Experiment, dir: &Outpu
                 &st.seconds.to_string(),
                 "",
                 "",
+                "",
+                "",
+                "",
             ],
         );
     }
-    row(&mut csv, ["stage", e, "", "", "", "", "", "total", &report.total_seconds.to_string(), "", ""]);
+    row(&mut csv, ["stage", e, "", "", "", "", "", "total", &report.total_seconds.to_string(), "", "", "", "", ""]);
     let csv = csv.finish();
     write("results.csv", csv)?;
     // Last: its presence marks a complete run, and it lists every other file of the run with
@@ -265,8 +282,8 @@ pub(super) fn write_reports(report: &AssessReport, exp: &Experiment, dir: &Outpu
     })
 }
 
-/// One row of `results.csv` (its 11 columns).
-fn row(csv: &mut CsvTable, fields: [&str; 11]) {
+/// One row of `results.csv` (its 14 columns).
+fn row(csv: &mut CsvTable, fields: [&str; 14]) {
     csv.row(fields);
 }
 

@@ -34,6 +34,11 @@ pub struct Collected {
     pub json: PathBuf,
     /// The plots written.
     pub plots: Vec<PathBuf>,
+    /// Rows of `sweep.csv` whose 95% intervals are wider than the measurement's targets
+    /// (`target_met` false).
+    pub missed_rows: usize,
+    /// The points with such a row.
+    pub missed_points: Vec<usize>,
 }
 
 /// Writes `sweep.csv`, `sweep.json` and the plots into the sweep's folder from the records
@@ -62,7 +67,20 @@ pub fn collect(sweep: &Sweep, resolved: &[Resolved], store: &Store) -> Result<Co
     };
 
     let mut csv = CsvTable::new();
-    let scores = ["method", "eye_case", "psnr_db", "psnr_ci95_db", "ssim", "ssim_ci95", "seconds"];
+    // The precision of each row (empty under the grid estimator, which has no interval and no
+    // target), then the point's time last.
+    let scores = [
+        "method",
+        "eye_case",
+        "psnr_db",
+        "psnr_ci95_db",
+        "ssim",
+        "ssim_ci95",
+        "samples_per_pixel",
+        "replicates",
+        "target_met",
+        "seconds",
+    ];
     csv.row(["point", "id"].into_iter().chain(keys.iter().map(|k| k.as_str())).chain(scores));
     let mut plot_rows = Vec::new();
     for ((point, r), rec) in sweep.points.iter().zip(resolved).zip(&records) {
@@ -88,10 +106,19 @@ pub fn collect(sweep: &Sweep, resolved: &[Resolved], store: &Store) -> Result<Co
                 s.psnr_ci95_db.map(number_text).unwrap_or_default(),
                 number_text(s.ssim),
                 s.ssim_ci95.map(number_text).unwrap_or_default(),
+                s.samples_per_pixel.map(|n| n.to_string()).unwrap_or_default(),
+                s.replicates.map(|n| n.to_string()).unwrap_or_default(),
+                s.target_met.map(|m| m.to_string()).unwrap_or_default(),
                 rec.seconds.to_string(),
             ]);
             csv.row(row);
             out.rows += 1;
+            if s.missed() {
+                out.missed_rows += 1;
+                if out.missed_points.last() != Some(&point.index) {
+                    out.missed_points.push(point.index);
+                }
+            }
             plot_rows.push(PlotRow { xs: xs.clone(), score: s.clone() });
         }
     }
@@ -119,6 +146,11 @@ pub fn collect(sweep: &Sweep, resolved: &[Resolved], store: &Store) -> Result<Co
             // Only for a record that cannot count, so sweeps without one are written as before.
             if let Some((_, why)) = out.invalid.iter().find(|(i, _)| *i == p.index) {
                 point["invalid_record"] = json!(why);
+            }
+            // Every score row of the point with its precision, as in its record and sweep.csv.
+            if let Some(rec) = rec {
+                point["scores"] = serde_json::to_value(&rec.scores).unwrap_or_default();
+                point["targets_missed"] = json!(rec.scores.iter().filter(|s| s.missed()).count());
             }
             point
         })
@@ -153,6 +185,8 @@ pub fn collect(sweep: &Sweep, resolved: &[Resolved], store: &Store) -> Result<Co
         "point_count": sweep.points.len(),
         "complete": out.complete,
         "missing": out.missing,
+        "rows_missing_target": out.missed_rows,
+        "points_missing_target": out.missed_points,
         "points": points,
     });
     let text = serde_json::to_string_pretty(&doc).map_err(|e| Error::serialize("serialise sweep.json", e))?;

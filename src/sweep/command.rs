@@ -43,9 +43,53 @@ pub struct SweepCommand {
     pub sweep_id: Option<String>,
 }
 
+/// What the command produced.
+#[derive(Clone, Debug, Default)]
+pub struct SweepOutput {
+    /// What goes to stdout: the script of `--dry-run`, else the collection summary.
+    pub stdout: String,
+    /// Score rows of the collection whose intervals missed their targets (0 when nothing was
+    /// collected).
+    pub missed_rows: usize,
+    /// The note that says so, for the end of the run (stderr): the count and where to look.
+    pub missed_note: Option<String>,
+}
+
+impl From<String> for SweepOutput {
+    fn from(stdout: String) -> Self {
+        Self { stdout, ..Default::default() }
+    }
+}
+
+/// The note at the end of a collection with rows that missed their precision target.
+fn missed_note(sweep: &Sweep, c: &Collected) -> Option<String> {
+    if c.missed_rows == 0 {
+        return None;
+    }
+    let shown: Vec<String> = c.missed_points.iter().take(20).map(|i| i.to_string()).collect();
+    let more = if c.missed_points.len() > 20 { ", ..." } else { "" };
+    Some(format!(
+        "sweep `{}`: {} of {} score row(s) missed their precision target, in {} of {} point(s) (index {}{more}): \
+         target_met = false in {} (sweep.json: points_missing_target); the budget (measurement.max_seconds, \
+         measurement.max_samples_per_pixel) ran out first",
+        sweep.spec.name,
+        c.missed_rows,
+        c.rows,
+        c.missed_points.len(),
+        c.complete,
+        shown.join(", "),
+        c.csv.display()
+    ))
+}
+
+/// A collection's output: its summary and, if rows missed their target, the note.
+fn collected(sweep: &Sweep, c: &Collected) -> SweepOutput {
+    SweepOutput { stdout: summary(sweep, c), missed_rows: c.missed_rows, missed_note: missed_note(sweep, c) }
+}
+
 /// Runs the command; returns what goes to stdout (the script of `--dry-run`, else the
-/// collection summary).
-pub fn execute(cmd: &SweepCommand, log: &mut dyn FnMut(String)) -> Result<String> {
+/// collection summary) and whether score rows missed their precision target.
+pub fn execute(cmd: &SweepCommand, log: &mut dyn FnMut(String)) -> Result<SweepOutput> {
     let sweep = Sweep::load(&cmd.sweep, &cmd.overrides, cmd.out.as_deref())?;
     let resolved = sweep.resolve()?;
     let id = Sweep::id(&resolved)?;
@@ -65,7 +109,7 @@ pub fn execute(cmd: &SweepCommand, log: &mut dyn FnMut(String)) -> Result<String
 
     if cmd.collect {
         let c = collect(&sweep, &resolved, &store)?;
-        return Ok(summary(&sweep, &c));
+        return Ok(collected(&sweep, &c));
     }
 
     if let Some(slurm) = &cmd.slurm {
@@ -76,12 +120,12 @@ pub fn execute(cmd: &SweepCommand, log: &mut dyn FnMut(String)) -> Result<String
             if sub.points.is_empty() {
                 log(format!("{name}: all {n} points are complete; nothing to submit"));
             }
-            return Ok(sub.script);
+            return Ok(sub.script.into());
         }
         let Some(job) = &sub.job_id else {
             log(format!("{name}: all {n} points are complete; nothing to submit"));
             let c = collect(&sweep, &resolved, &store)?;
-            return Ok(summary(&sweep, &c));
+            return Ok(collected(&sweep, &c));
         };
         log(format!(
             "{name}: submitted job {job}: {} array task(s) for the {} missing of {n} points (script {}, logs in {}/slurm/)",
@@ -91,7 +135,7 @@ pub fn execute(cmd: &SweepCommand, log: &mut dyn FnMut(String)) -> Result<String
             store.root().display()
         ));
         if !cmd.wait {
-            return Ok(format!("submitted job {job}\n"));
+            return Ok(format!("submitted job {job}\n").into());
         }
         wait_for(job, &resolved, &sub.points, &store, cmd.quiet)?;
         let c = collect(&sweep, &resolved, &store)?;
@@ -104,7 +148,7 @@ pub fn execute(cmd: &SweepCommand, log: &mut dyn FnMut(String)) -> Result<String
                 store.root().display()
             )));
         }
-        return Ok(text);
+        return Ok(collected(&sweep, &c));
     }
 
     let selection = match &cmd.points {
@@ -127,10 +171,10 @@ pub fn execute(cmd: &SweepCommand, log: &mut dyn FnMut(String)) -> Result<String
         rayon::current_num_threads()
     ));
     if cmd.points.is_some() {
-        return Ok(String::new());
+        return Ok(SweepOutput::default());
     }
     let c = collect(&sweep, &resolved, &store)?;
-    Ok(summary(&sweep, &c))
+    Ok(collected(&sweep, &c))
 }
 
 /// What a collection wrote and which points are missing.

@@ -15,7 +15,7 @@ mod spec;
 mod store;
 
 pub use collect::{collect, Collected};
-pub use command::{execute, SweepCommand};
+pub use command::{execute, SweepCommand, SweepOutput};
 pub use run::{run_points, validate, LocalOptions, RunSummary};
 pub use slurm::{submit, wait_for, SlurmOptions, Submission};
 pub use spec::{format_selection, parse_selection, Axis, AxisKey, Point, SweepSpec};

@@ -40,6 +40,23 @@ pub struct ScoreRow {
     /// Its 95% half-width.
     #[serde(default, with = "exact_option", skip_serializing_if = "Option::is_none")]
     pub ssim_ci95: Option<f64>,
+    /// Samples per retina pixel over all replicates (converged estimator).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub samples_per_pixel: Option<u64>,
+    /// Replicates of the converged estimator.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub replicates: Option<usize>,
+    /// Whether both half-widths are within the measurement's targets (converged estimator; the
+    /// grid estimator has no target).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub target_met: Option<bool>,
+}
+
+impl ScoreRow {
+    /// Whether this row missed its precision target.
+    pub fn missed(&self) -> bool {
+        self.target_met == Some(false)
+    }
 }
 
 impl From<&Score> for ScoreRow {
@@ -51,6 +68,9 @@ impl From<&Score> for ScoreRow {
             psnr_ci95_db: s.psnr.ci95,
             ssim: s.ssim.mean,
             ssim_ci95: s.ssim.ci95,
+            samples_per_pixel: s.samples_per_pixel,
+            replicates: s.replicates,
+            target_met: s.target_met,
         }
     }
 }
@@ -303,6 +323,9 @@ mod tests {
                 psnr_ci95_db: Some(0.01),
                 ssim: 0.9,
                 ssim_ci95: None,
+                samples_per_pixel: Some(64),
+                replicates: Some(8),
+                target_met: Some(false),
             }],
             seconds: 1.5,
             backend: "analytic".into(),
