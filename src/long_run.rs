@@ -16,7 +16,10 @@ pub fn note(rays: u64, threads: usize) -> Option<String> {
             "note: this run traces about {:.2e} rays: roughly {} on this machine",
             rays as f64,
             if seconds < 3600.0 {
-                format!("{:.0} minutes", seconds / 60.0)
+                match (seconds / 60.0).round() as u64 {
+                    1 => "1 minute".to_string(),
+                    m => format!("{m} minutes"),
+                }
             } else {
                 format!("{:.1} hours", seconds / 3600.0)
             }
@@ -45,7 +48,8 @@ mod tests {
     fn the_note_appears_past_a_minute_of_work() {
         assert_eq!(note(599_000_000, 1), None);
         let n = note(601_000_000 * 2, 2).unwrap();
-        assert_eq!(n, "note: this run traces about 1.20e9 rays: roughly 1 minutes on this machine");
+        assert_eq!(n, "note: this run traces about 1.20e9 rays: roughly 1 minute on this machine");
+        assert!(note(2_000_000_000, 1).unwrap().ends_with("roughly 3 minutes on this machine"));
         assert!(note(1_000_000_000_000, 2).unwrap().contains("13.9 hours"));
         assert_eq!(retina_rays(512, 1, 52, 1), 512 * 512 * 52);
         assert_eq!(retina_rays(usize::MAX, 2, 2, 2), u64::MAX);

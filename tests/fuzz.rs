@@ -312,3 +312,97 @@ proptest! {
         prop_assert!(e.contains("bomb.ply"), "{}", e);
     }
 }
+
+/// The CLI end to end: `assess` on a mutated experiment file (the paper's, at small sizes) with
+/// one more `--set` of a random key to a hostile value. The process must end by itself within
+/// its time, with exit code 0 or 1, never a signal (abort, segfault) or a panic (101); a failure
+/// is one `error:` line that names the file or the `--set` it came from.
+const SET_KEYS: [&str; 12] = [
+    "eye.pupil_diameter",
+    "eye.retina_distance",
+    "eye.position",
+    "eye.retina_half_tangent",
+    "eye_cases[1].focus_mm",
+    "display.eye_to_lenslets",
+    "display.lenslets_to_lcd",
+    "display.lenslets.pitch",
+    "display.lenslets.focal_length",
+    "display.elemental_images.pitch",
+    "display.lcd.size",
+    "scene.objects",
+];
+const SET_VALUES: [&str; 12] =
+    ["nan", "inf", "-1", "0", "1e400", "1e-300", "[1e9, 0, 0]", "[[1, 2], [3, 4]]", "\"x\"", "[]", "{}", "1e30"];
+
+fn cli_case(muts: &[Mutation], key: usize, value: usize) -> Result<(), TestCaseError> {
+    let dir = tempfile::tempdir().unwrap();
+    let paper = std::fs::read_to_string(root().join("experiments/paper.toml")).unwrap();
+    let seed = paper
+        .replace("\"../scenes/paper.toml\"", "\"builtin:paper\"")
+        .replace("\"../displays/paper.toml\"", "\"builtin:paper\"");
+    let path = dir.path().join("fuzzed.toml");
+    std::fs::write(&path, apply(seed.into_bytes(), muts)).unwrap();
+    let set = format!("{}={}", SET_KEYS[key], SET_VALUES[value]);
+    let small = [
+        "display.lcd.resolution=[108, 108]",
+        "eye.retina_resolution=32",
+        "eye.pupil_grid=2",
+        "eye.retina_samples=1",
+        "display_render.la_grid=2",
+        "display_render.samples_per_pixel=1",
+        "measurement.estimator=\"grid\"",
+    ];
+    let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_inimtrace"));
+    cmd.args(["--quiet", "--threads", "1", "--max-memory", "2G", "assess"]).arg(&path);
+    cmd.arg("--out").arg(dir.path().join("out"));
+    for s in small.iter().copied().chain([set.as_str()]) {
+        cmd.args(["--set", s]);
+    }
+    let mut child = cmd.stdout(std::process::Stdio::null()).stderr(std::process::Stdio::piped()).spawn().unwrap();
+    let start = std::time::Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        if start.elapsed() > std::time::Duration::from_secs(120) {
+            let _ = child.kill();
+            let _ = child.wait();
+            return Err(TestCaseError::fail(format!("still running after 120 s: {muts:?} --set {set}")));
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    };
+    let mut stderr = String::new();
+    std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut stderr).unwrap();
+    let what = format!("{muts:?} --set {set}: {stderr}");
+    prop_assert!(matches!(status.code(), Some(0) | Some(1)), "ended with {status}: {what}");
+    prop_assert!(!stderr.contains("panicked"), "panicked: {what}");
+    if status.code() == Some(1) {
+        let error = stderr.lines().find(|l| l.starts_with("error:"));
+        prop_assert!(error.is_some(), "exit 1 without an error line: {what}");
+        let error = error.unwrap();
+        prop_assert!(
+            error.contains("fuzzed.toml")
+                || error.contains("--set")
+                || error.contains("built-in")
+                || error.contains("builtin:paper"),
+            "the error names neither the file nor the override: {what}"
+        );
+    }
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig {
+        cases: std::env::var("PROPTEST_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(24),
+        ..config()
+    })]
+
+    #[test]
+    fn fuzz_the_cli_on_a_mutated_experiment_and_a_hostile_set(
+        m in prop::collection::vec(mutation(), 0..3),
+        key in 0..SET_KEYS.len(),
+        value in 0..SET_VALUES.len(),
+    ) {
+        cli_case(&m, key, value)?;
+    }
+}

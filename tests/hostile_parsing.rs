@@ -74,26 +74,53 @@ fn yaml_nested_50k_deep_is_refused_before_parsing() {
 }
 
 #[test]
-fn a_duplicate_among_100k_eye_cases_is_found_in_linear_time() {
+fn a_duplicate_among_20k_eye_cases_is_found_in_linear_time() {
     let dir = tempfile::tempdir().unwrap();
-    let paper = std::fs::read_to_string(root().join("experiments/paper.toml")).unwrap();
-    let head = paper.split("[[eye_cases]]").next().unwrap();
-    let head = head
-        .replace("\"../scenes/paper.toml\"", "\"builtin:paper\"")
-        .replace("\"../displays/paper.toml\"", "\"builtin:paper\"");
-    let mut text = head.to_string();
-    let n = 100_000;
-    for i in 0..n {
-        write!(text, "[[eye_cases]]\nname = \"c{}\"\nfocus_mm = 300.0\n", if i == n - 1 { 0 } else { i }).unwrap();
-    }
     let path = dir.path().join("many.toml");
-    std::fs::write(&path, text).unwrap();
+    std::fs::write(&path, many_eye_cases(20_000)).unwrap();
+    assert!(std::fs::metadata(&path).unwrap().len() < 1 << 20, "the file must stay under the settings limit");
     let o = Command::new(env!("CARGO_BIN_EXE_inimtrace"))
         .args(["assess", path.to_str().unwrap(), "--out", dir.path().join("o").to_str().unwrap()])
         .output()
         .unwrap();
     let e = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{e}");
-    assert!(e.contains(&format!("eye_cases[{}].name", n - 1)) && e.contains("`c0` appears twice"), "{e}");
+    assert!(e.contains("eye_cases[19999].name") && e.contains("`c0` appears twice"), "{e}");
     assert!(!dir.path().join("o").exists(), "the folder was touched before the settings were checked");
+}
+
+/// The paper's experiment with `n` eye cases, the last one a duplicate of the first.
+fn many_eye_cases(n: usize) -> String {
+    let paper = std::fs::read_to_string(root().join("experiments/paper.toml")).unwrap();
+    let head = paper.split("[[eye_cases]]").next().unwrap();
+    let head = head
+        .replace("\"../scenes/paper.toml\"", "\"builtin:paper\"")
+        .replace("\"../displays/paper.toml\"", "\"builtin:paper\"");
+    let mut text = head.to_string();
+    for i in 0..n {
+        write!(text, "[[eye_cases]]\nname = \"c{}\"\nfocus_mm = 300.0\n", if i == n - 1 { 0 } else { i }).unwrap();
+    }
+    text
+}
+
+/// 100k eye cases (4.7 MB): refused by size before its TOML is parsed (whose tokens alone would
+/// take about 110 MB), naming the file and the limit.
+#[test]
+fn a_settings_file_over_a_mebibyte_is_refused_before_it_is_parsed() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("many.toml");
+    std::fs::write(&path, many_eye_cases(100_000)).unwrap();
+    for args in [
+        vec!["assess", path.to_str().unwrap(), "--out", dir.path().join("o").to_str().unwrap()],
+        vec!["info", "--display", path.to_str().unwrap()],
+    ] {
+        let o = Command::new(env!("CARGO_BIN_EXE_inimtrace")).args(&args).output().unwrap();
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{e}");
+        assert!(
+            e.contains("many.toml") && e.contains("4.5 MiB") && e.contains("1.0 MiB a settings file may have"),
+            "{e}"
+        );
+    }
+    assert!(!dir.path().join("o").exists());
 }

@@ -7,7 +7,9 @@
 //!   can be swapped in between the check and the read.
 //! * Nothing under `/proc` or `/sys` (by path after links, and by the device the handle is on): their files claim a size of zero and hold the process's and the machine's state.
 //! * A byte limit: a file larger than the memory budget ([`crate::budget::memory_budget`]) is
-//!   refused before it is read, and no read goes past the size the file had when opened.
+//!   refused before it is read, and no read goes past the size the file had when opened. Settings
+//!   texts (TOML, YAML, bar lists) have a tighter limit, [`MAX_SETTINGS_BYTES`]: parsing TOML
+//!   takes about 25 times the text's size in memory, and no real settings file comes near it.
 //! * [`Reach`]: where the files a scene names may be. A reference is resolved against the
 //!   folder of the file that names it; an absolute path, or one that leaves the scene file's
 //!   folder (by `..` or through a link), is refused unless the scene sets
@@ -93,6 +95,11 @@ fn byte_limit() -> crate::budget::Budget {
     crate::budget::memory_budget()
 }
 
+/// The most bytes a settings text (experiment, study, sweep, scene or display file, bar list)
+/// may have: 1 MiB, about 20,000 eye cases. Its TOML parse needs about 25 times that in memory
+/// (the parser's tokens and events), so a larger file is refused before it is read.
+pub const MAX_SETTINGS_BYTES: u64 = 1 << 20;
+
 /// Reads a whole file through the gate: a regular file outside `/proc` and `/sys`, no larger
 /// than the memory budget, read no further than the size it had when opened.
 pub fn read_regular(path: &Path) -> Result<Vec<u8>> {
@@ -104,6 +111,28 @@ pub fn read_regular(path: &Path) -> Result<Vec<u8>> {
             format!("is {}, more than the memory budget of {limit}; refused", crate::budget::Bytes(size)),
         ));
     }
+    read_open(path, file, size)
+}
+
+/// Reads a whole settings text through the gate, refusing one over [`MAX_SETTINGS_BYTES`].
+pub fn read_settings(path: &Path) -> Result<Vec<u8>> {
+    let (file, size) = open_regular(path)?;
+    if size > MAX_SETTINGS_BYTES {
+        return Err(refuse(
+            path,
+            format!(
+                "is {}, more than the {} a settings file may have (its parse needs about 25 times its size \
+                 in memory); refused",
+                crate::budget::Bytes(size),
+                crate::budget::Bytes(MAX_SETTINGS_BYTES)
+            ),
+        ));
+    }
+    read_open(path, file, size)
+}
+
+/// Reads `size` bytes of an open file, the buffer allocated fallibly.
+fn read_open(path: &Path, file: File, size: u64) -> Result<Vec<u8>> {
     let mut bytes = Vec::new();
     bytes.try_reserve_exact(size as usize).map_err(|_| {
         Error::Alloc(format!(

@@ -6,9 +6,10 @@ use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
 
-/// Reads a whole file through the input gate ([`crate::io::input`]), with the path in the error.
+/// Reads a whole settings text through the input gate ([`crate::io::input::read_settings`]:
+/// at most [`crate::io::input::MAX_SETTINGS_BYTES`]), with the path in the error.
 pub fn read_text(path: &Path) -> Result<String> {
-    let bytes = crate::io::input::read_regular(path)?;
+    let bytes = crate::io::input::read_settings(path)?;
     String::from_utf8(bytes)
         .map_err(|e| Error::parse(path, format!("not UTF-8 text (byte {})", e.utf8_error().valid_up_to())))
 }

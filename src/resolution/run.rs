@@ -141,6 +141,35 @@ pub fn source_names(study: &Study) -> Vec<String> {
     std::iter::once("ground_truth".to_string()).chain(study.methods.iter().map(|m| m.name())).collect()
 }
 
+/// The rays a study traces, for the long-run note: every method's display image of the LCD
+/// crop at every depth (LA's grid of rays per pixel), and at every depth and focus each window
+/// pixel's samples in every replicate. A sample is one eye ray that every source (the ground
+/// truth and each method) reads, so it counts once: the chart's analytic field and the display
+/// stack make the sources' reads far cheaper than the generic tracer the note assumes.
+pub fn study_rays(study: &Study, display: &Display, chart: &Chart) -> u64 {
+    let lcd = display.lcd.pixel_count() as u64;
+    let nd = study.depths.len() as u64;
+    let display_rays: u64 = study
+        .methods
+        .iter()
+        .map(|m| match m {
+            crate::render::Method::LensletAverage { grid } => (*grid as u64).pow(2),
+            _ => 1,
+        })
+        .fold(0u64, |a, k| a.saturating_add(lcd.saturating_mul(k)));
+    let pixels: u64 = chart.patches.iter().map(|p| (p.cols * p.rows) as u64).sum();
+    let per_window = [
+        nd,
+        study.focus_diopters.len() as u64,
+        pixels,
+        study.measurement.replicates as u64,
+        u64::from(study.measurement.samples_per_pixel),
+    ]
+    .iter()
+    .fold(1u64, |a, &x| a.saturating_mul(x));
+    nd.saturating_mul(display_rays).saturating_add(per_window)
+}
+
 /// Runs `study`; progress bars on stderr unless `quiet`.
 pub fn run_study(study: &Study, quiet: bool) -> Result<StudyResults> {
     let t = Instant::now();
@@ -179,6 +208,7 @@ pub fn run_study(study: &Study, quiet: bool) -> Result<StudyResults> {
     let sources = source_names(study);
     let (nd, nf, nq) = (study.depths.len(), study.focus_diopters.len(), study.frequencies_cpd.len());
     let ns = sources.len();
+    crate::long_run::announce(study_rays(study, &display, &chart));
     let mut timings = vec![Timing { stage: "chart and LCD crop".into(), seconds: t.elapsed().as_secs_f64() }];
 
     let settings = DisplayRenderSettings::default();
