@@ -283,6 +283,13 @@ enum Command {
         /// The focus of --eye, D (default: the relaxed eye's).
         #[arg(long, requires = "eye")]
         focus_diopters: Option<f64>,
+        /// Write the display as an explicit display TOML (v2, pitch matrices) to this file,
+        /// atomically; e.g. a display stated by intent, a framework YAML, or one with --set.
+        #[arg(long, value_name = "FILE", conflicts_with_all = ["scene", "eye", "print"])]
+        write_display: Option<PathBuf>,
+        /// Let --write-display replace an existing file.
+        #[arg(long, requires = "write_display")]
+        force: bool,
     },
 }
 
@@ -498,8 +505,9 @@ fn run() -> Result<()> {
             }
             printed_total = true;
         }
-        Command::Info { display, scene, pupil, json, print, .. } => {
-            printed_total = info(&g, display, scene, pupil, json, print)?;
+        Command::Info { display, scene, pupil, json, print, write_display, force, .. } => {
+            let write = write_display.map(|path| (path, force));
+            printed_total = info(&g, display, scene, pupil, json, print, write)?;
         }
     }
     if cli.timings && !printed_total {
@@ -784,6 +792,7 @@ fn info(
     pupil: f64,
     json: bool,
     print: Option<PrintTarget>,
+    write_display: Option<(PathBuf, bool)>,
 ) -> Result<bool> {
     let set = &g.set[..];
     if let Some(what) = print {
@@ -827,10 +836,35 @@ fn info(
     for w in inimtrace::optics::plausibility::display_warnings(&d, &source) {
         eprintln!("warning: {w}");
     }
+    // A display stated by intent: how the explicit one follows (the file's, before any --set).
+    let derivation = match &display {
+        Some(p) if set.is_empty() => inimtrace::io::display_intent::derivation_of(p)?,
+        _ => None,
+    };
+    if let Some((path, force)) = write_display {
+        let mut header = format!(
+            "The explicit display of {source}{}, written by inimtrace info --write-display.\n",
+            if set.is_empty() { "" } else { " with --set overrides" }
+        );
+        if let Some(x) = &derivation {
+            header += &x.text();
+        }
+        inimtrace::io::display_intent::write_display_file(&d, &header, &path, force)?;
+        eprintln!("wrote {}", path.display());
+    }
     let design = inimtrace::info::display_design(&d, pupil);
     match json {
-        true => outln!("{}", serde_json::to_string_pretty(&design)?),
+        true => {
+            let mut v = serde_json::to_value(&design)?;
+            if let (Some(x), Some(map)) = (&derivation, v.as_object_mut()) {
+                map.insert("intent_derivation".into(), serde_json::to_value(x)?);
+            }
+            outln!("{}", serde_json::to_string_pretty(&v)?)
+        }
         false => {
+            if let Some(x) = &derivation {
+                out!("{}", x.text());
+            }
             out!("{}", inimtrace::info::display_design_text(&design, &d.summary()));
             outln!("backend library: {}", inimtrace::version::embree_loaded());
         }

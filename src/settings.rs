@@ -5,10 +5,11 @@
 //! `--set` key that caused it. The canonical form of the resolved specs gives a content hash,
 //! which identifies a sweep point.
 //!
-//! A display from the framework's OpenCV YAML is inlined through [`DisplaySpec`], so its keys
-//! are ours (`display.lenslets.pitch`). Relative paths in an inlined scene (meshes, textures,
-//! bar lists) stay relative to the scene file they came from. `scene` or `display` set to a
-//! string loads that file (relative to the override's base) and inlines it.
+//! A display from the framework's OpenCV YAML, or stated by intent, is inlined through
+//! [`DisplaySpec`] (the explicit display), so its keys are ours (`display.lenslets.pitch`).
+//! Relative paths in an inlined scene (meshes, textures, bar lists) stay relative to the scene
+//! file they came from. `scene` or `display` set to a string loads that file (relative to the
+//! override's base) and inlines it.
 
 use std::path::{Path, PathBuf};
 
@@ -481,7 +482,8 @@ fn inline_scene(reference: &str, base: &Path) -> Result<(toml::Value, Origin)> {
 }
 
 /// A display reference (`builtin:paper`, our TOML or the framework's OpenCV YAML, relative to
-/// `base`) as a TOML table in our display format.
+/// `base`) as a TOML table in our display format (a display stated by intent as the explicit
+/// display derived from it).
 fn inline_display(reference: &str, base: &Path) -> Result<(toml::Value, Origin)> {
     let builtin = reference == BUILTIN;
     let path = base.join(reference);
@@ -493,6 +495,10 @@ fn inline_display(reference: &str, base: &Path) -> Result<(toml::Value, Origin)>
     let text = read_text(&path)?;
     if is_opencv_yaml(&text, &path) {
         let display = parse_opencv_display(&text, &path)?;
+        return Ok((to_value(&DisplaySpec::from_display(&display))?, origin));
+    }
+    if crate::io::display_intent::states_intent(&text) {
+        let (display, _) = crate::io::display_intent::parse_intent_display(&text, &path)?;
         return Ok((to_value(&DisplaySpec::from_display(&display))?, origin));
     }
     let _: DisplaySpec = toml::from_str(&text).map_err(|e| toml_error(&path, &text, &e))?;

@@ -169,7 +169,8 @@ impl DisplaySpec {
 }
 
 /// Loads a display: `builtin:paper`, an OpenCV FileStorage YAML file (first line `%YAML:1.0`
-/// or extension .yaml/.yml), or our TOML.
+/// or extension .yaml/.yml), or our TOML, explicit or stated by intent (an `[intent]` table,
+/// [`super::display_intent`]).
 pub fn load_display(spec: &str, base: &Path) -> Result<Display> {
     if spec == "builtin:paper" {
         return Ok(Display::paper());
@@ -178,6 +179,8 @@ pub fn load_display(spec: &str, base: &Path) -> Result<Display> {
     let text = read_text(&path)?;
     if is_opencv_yaml(&text, &path) {
         parse_opencv_display(&text, &path)
+    } else if super::display_intent::states_intent(&text) {
+        super::display_intent::parse_intent_display(&text, &path).map(|(d, _)| d)
     } else {
         let spec: DisplaySpec = toml::from_str(&text).map_err(|e| toml_error(&path, &text, &e))?;
         spec.to_display(&path.display().to_string())

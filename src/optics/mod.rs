@@ -2,6 +2,7 @@
 
 pub mod display;
 pub mod eye;
+pub mod intent;
 pub mod lattice;
 pub mod limits;
 pub mod plausibility;
