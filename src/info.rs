@@ -24,6 +24,7 @@
 use glam::{DVec2, IVec2};
 use serde::Serialize;
 
+use crate::optics::diffraction::{ApertureShape, Diffraction};
 use crate::optics::{Display, Lattice};
 use crate::scene::{Material, Scene, Shape};
 
@@ -119,8 +120,57 @@ pub struct DisplayDesign {
     pub view_spacing_mm: [f64; 2],
     /// Pixels of the central elemental image whose rays enter the pupil.
     pub views_through_pupil: usize,
+    /// Diffraction's angles at the pupil and the lenslet aperture, per colour channel.
+    pub diffraction: DiffractionInfo,
     /// Design warnings (lattices that do not match).
     pub warnings: Vec<String>,
+}
+
+/// Diffraction at the pupil and at the lenslet aperture (`optics::diffraction`): whether it is
+/// on and its angle lambda / width per colour channel, at the mean wavelength of each primary.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct DiffractionInfo {
+    /// `[optics] diffraction` ("none", "pupil" or "apertures").
+    pub mode: &'static str,
+    /// The lenslet aperture's shape from the lattice's cell ("square", "rectangle", "hexagonal").
+    pub lenslet_aperture: &'static str,
+    /// Red, green and blue.
+    pub channels: Vec<ChannelDiffraction>,
+}
+
+/// One colour channel's diffraction angles.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ChannelDiffraction {
+    /// "red", "green" or "blue".
+    pub channel: &'static str,
+    /// The primary's mean wavelength, nm.
+    pub wavelength_nm: f64,
+    /// lambda / D of the pupil, arcmin.
+    pub pupil_arcmin: f64,
+    /// lambda / w of the lenslet aperture (its side or flat-to-flat width), arcmin.
+    pub lenslet_arcmin: f64,
+}
+
+/// The diffraction angles of display `d` and a pupil of `pupil_diameter` mm, `mode` stated.
+pub fn diffraction_info(d: &Display, pupil_diameter: f64, mode: Diffraction) -> DiffractionInfo {
+    let shape = ApertureShape::of_lattice(&d.lenslets);
+    let primaries = d.primaries.clone().unwrap_or_default();
+    let means: [f64; 3] = match primaries.samplers("display") {
+        Ok(s) => std::array::from_fn(|c| s[c].mean_nm()),
+        Err(_) => [610.0, 535.0, 450.0],
+    };
+    let arcmin = |rad: f64| rad.to_degrees() * 60.0;
+    let channels = ["red", "green", "blue"]
+        .iter()
+        .zip(means)
+        .map(|(&channel, nm)| ChannelDiffraction {
+            channel,
+            wavelength_nm: nm,
+            pupil_arcmin: arcmin(nm * 1e-6 / pupil_diameter),
+            lenslet_arcmin: arcmin(shape.angle(nm)),
+        })
+        .collect();
+    DiffractionInfo { mode: mode.name(), lenslet_aperture: shape.name(), channels }
 }
 
 /// Half-width of the lattice's cell (0, 0) along `dir` from its centre (bisection on the
@@ -235,6 +285,7 @@ pub fn display_design(d: &Display, pupil_diameter: f64) -> DisplayDesign {
         pupil_diameter_mm: pupil_diameter,
         view_spacing_mm: (m * pitch).to_array(),
         views_through_pupil: views,
+        diffraction: diffraction_info(d, pupil_diameter, Diffraction::None),
         warnings,
     }
 }
@@ -278,6 +329,20 @@ pub fn display_design_text(x: &DisplayDesign, summary: &str) -> String {
         x.views_through_pupil,
         pair(x.view_spacing_mm, 4)
     );
+    let dx = &x.diffraction;
+    s += &format!(
+        "diffraction: {} ([optics] diffraction = \"{}\"); lambda / D at the {} mm pupil and lambda / w at the {} \
+         lenslet aperture, arcmin:",
+        if dx.mode == "none" { "off" } else { "on" },
+        dx.mode,
+        x.pupil_diameter_mm,
+        dx.lenslet_aperture
+    );
+    for c in &dx.channels {
+        s += &format!(" {} {:.0} nm {:.3} / {:.3};", c.channel, c.wavelength_nm, c.pupil_arcmin, c.lenslet_arcmin);
+    }
+    s.pop();
+    s += "\n";
     for w in &x.warnings {
         s += &format!("warning: {w}\n");
     }

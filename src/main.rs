@@ -290,6 +290,11 @@ enum Command {
         /// Let --write-display replace an existing file.
         #[arg(long, requires = "write_display")]
         force: bool,
+        /// The experiment's `[optics] diffraction` to report: none, pupil or apertures (the
+        /// angles lambda / D of the pupil and lambda / w of the lenslet aperture are printed
+        /// either way).
+        #[arg(long, default_value = "none", value_parser = ["none", "pupil", "apertures"])]
+        diffraction: String,
     },
 }
 
@@ -505,9 +510,14 @@ fn run() -> Result<()> {
             }
             printed_total = true;
         }
-        Command::Info { display, scene, pupil, json, print, write_display, force, .. } => {
+        Command::Info { display, scene, pupil, json, print, write_display, force, diffraction, .. } => {
             let write = write_display.map(|path| (path, force));
-            printed_total = info(&g, display, scene, pupil, json, print, write)?;
+            let diffraction = match diffraction.as_str() {
+                "pupil" => inimtrace::optics::diffraction::Diffraction::Pupil,
+                "apertures" => inimtrace::optics::diffraction::Diffraction::Apertures,
+                _ => inimtrace::optics::diffraction::Diffraction::None,
+            };
+            printed_total = info(&g, display, scene, (pupil, diffraction), json, print, write)?;
         }
     }
     if cli.timings && !printed_total {
@@ -789,7 +799,7 @@ fn info(
     g: &Globals,
     display: Option<PathBuf>,
     scene: Option<PathBuf>,
-    pupil: f64,
+    (pupil, diffraction): (f64, inimtrace::optics::diffraction::Diffraction),
     json: bool,
     print: Option<PrintTarget>,
     write_display: Option<(PathBuf, bool)>,
@@ -852,7 +862,8 @@ fn info(
         inimtrace::io::display_intent::write_display_file(&d, &header, &path, force)?;
         eprintln!("wrote {}", path.display());
     }
-    let design = inimtrace::info::display_design(&d, pupil);
+    let mut design = inimtrace::info::display_design(&d, pupil);
+    design.diffraction = inimtrace::info::diffraction_info(&d, pupil, diffraction);
     match json {
         true => {
             let mut v = serde_json::to_value(&design)?;

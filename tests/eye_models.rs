@@ -41,6 +41,7 @@ fn spec(model: EyeModel, primaries: bool, stiles_crawford: Option<(f64, DVec2)>)
         primaries,
         wavelength_samples: 3,
         stiles_crawford,
+        diffraction: Default::default(),
     }
 }
 

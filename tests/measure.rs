@@ -373,8 +373,10 @@ fn eye_to_lcd_and_fast_transfer_agree_bit_for_bit() {
                 hits += usize::from(t.pixel_index(tangent, s).is_some());
             }
             fast.pixel_indices(&tangents, k, &mut scratch, &mut batch_fast);
-            let samples: Vec<EyeSample> =
-                tangents.iter().map(|&tangent| EyeSample { tangent, pupil: s, spectral: 0.0 }).collect();
+            let samples: Vec<EyeSample> = tangents
+                .iter()
+                .map(|&tangent| EyeSample { tangent, pupil: s, spectral: 0.0, diffraction: [0.0; 4] })
+                .collect();
             t.pixel_indices(&samples, &mut batch_t);
             assert_eq!(batch_fast, batch_t, "pupil sample {k}");
         }
@@ -400,11 +402,22 @@ fn batched_lcd_pixels_are_the_single_ray_pixels() {
                     tangent: DVec2::new(0.3 * (f * 7.1).sin(), 0.3 * (f * 3.3).cos()),
                     pupil: DVec2::new(2.5 * f * (f * 40.0).cos(), 2.5 * f * (f * 40.0).sin()),
                     spectral: 0.0,
+                    diffraction: [0.0; 4],
                 }
             })
             .collect();
-        samples.push(EyeSample { tangent: DVec2::new(f64::NAN, 0.0), pupil: DVec2::ZERO, spectral: 0.0 });
-        samples.push(EyeSample { tangent: DVec2::splat(10.0), pupil: DVec2::ZERO, spectral: 0.0 });
+        samples.push(EyeSample {
+            tangent: DVec2::new(f64::NAN, 0.0),
+            pupil: DVec2::ZERO,
+            spectral: 0.0,
+            diffraction: [0.0; 4],
+        });
+        samples.push(EyeSample {
+            tangent: DVec2::splat(10.0),
+            pupil: DVec2::ZERO,
+            spectral: 0.0,
+            diffraction: [0.0; 4],
+        });
         let mut batch = vec![0u32; samples.len()];
         t.pixel_indices(&samples, &mut batch);
         let (mut on, mut off) = (0, 0);

@@ -30,6 +30,7 @@ use crate::io::text::{base_dir, read_text, toml_error};
 use crate::io::{load_display, load_scene};
 use crate::measure::spec::MeasurementSpec;
 use crate::metrics::SsimConstants;
+use crate::optics::diffraction::OpticsSpec;
 use crate::optics::eye::{EyeModel, EyeOptics, EyeOpticsSpec, FocusCriterion, UserEye};
 use crate::optics::{Aperture, Display, Eye, Focus, Retina};
 use crate::render::{DisplayRenderSettings, Method};
@@ -225,6 +226,7 @@ impl EyeModelSettings {
             primaries,
             wavelength_samples: self.wavelength_samples.unwrap_or(3),
             stiles_crawford,
+            diffraction: Default::default(),
         })
     }
 }
@@ -339,6 +341,9 @@ pub struct ExperimentSpec {
     /// `[display_render]`: how display images are rendered.
     #[serde(default)]
     pub display_render: DisplayRenderSpec,
+    /// `[optics]`: diffraction at the apertures (absent: rays only, the paper's model).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub optics: Option<OpticsSpec>,
     /// `[eye]`: the eye shared by all eye cases.
     #[serde(default)]
     pub eye: EyeSpec,
@@ -368,6 +373,7 @@ impl ExperimentSpec {
             ssim: SsimConstants::Wang2004,
             measurement: Some(MeasurementSpec::grid()),
             display_render: DisplayRenderSpec::default(),
+            optics: None,
             eye: EyeSpec::default(),
             eye_cases: Self::paper_cases(),
         }
@@ -539,7 +545,8 @@ impl Experiment {
         if spec.eye_cases.is_empty() {
             return Err(Error::invalid(source, "eye_cases", "list at least one eye case"));
         }
-        let optics_spec = e.optics_spec(source)?;
+        let diffraction = spec.optics.as_ref().map(|o| o.diffraction).unwrap_or_default();
+        let optics_spec = e.optics_spec(source)?.with_diffraction(diffraction, e.spectrum.is_some());
         let primaries = display.primaries.clone().unwrap_or_default();
         let mut cases = Vec::new();
         let mut names = std::collections::HashSet::new();
@@ -592,6 +599,18 @@ impl Experiment {
         }
         let measurement = spec.measurement.clone().unwrap_or_else(MeasurementSpec::grid);
         measurement.validate(source)?;
+        if diffraction.is_on() && measurement.estimator != crate::measure::spec::EstimatorKind::Converged {
+            return Err(Error::invalid(
+                source,
+                "optics.diffraction",
+                format!(
+                    "\"{}\" needs the converged estimator: a diffraction angle is a sampled dimension of its \
+                     integral, which the grid estimator's fixed pupil and retina grids do not have (add a \
+                     [measurement] table with estimator = \"converged\", or set optics.diffraction = \"none\")",
+                    diffraction.name()
+                ),
+            ));
+        }
         let d = EyeSpec::default();
         measurement.check_grid_only(
             source,

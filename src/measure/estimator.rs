@@ -20,6 +20,7 @@ use rayon::prelude::*;
 use super::sampler::Sampler;
 
 mod through_optics;
+use crate::optics::diffraction::ApertureShape;
 use crate::optics::transfer::{eye_scene_ray, FastTransfer};
 use crate::optics::{Display, Eye, Retina};
 use crate::progress::Progress;
@@ -40,6 +41,10 @@ pub struct EyeSample {
     /// primaries' spectra (a fifth sampled dimension; 0 when the source does not ask for it,
     /// [`PairedSource::spectral`]).
     pub spectral: f64,
+    /// Four uniform numbers in [0, 1) for the diffraction angles: the pupil's deviation (0, 1)
+    /// and the lenslet's (2, 3) (`optics::diffraction`; zeros when the source does not ask for
+    /// them, [`PairedSource::diffraction`]).
+    pub diffraction: [f64; 4],
 }
 
 /// What is measured along each eye ray: the radiance of several images, image 0 being the
@@ -54,6 +59,11 @@ pub trait PairedSource: Sync {
 
     /// True when the samples need their spectral number ([`EyeSample::spectral`]).
     fn spectral(&self) -> bool {
+        false
+    }
+
+    /// True when the samples need their diffraction numbers ([`EyeSample::diffraction`]).
+    fn diffraction(&self) -> bool {
         false
     }
 
@@ -114,13 +124,20 @@ pub struct DisplaySource<'a, F: RadianceField + ?Sized> {
     field: &'a F,
     transfer: EyeToLcd<'a>,
     stack: &'a DisplayStack,
+    /// The lenslet aperture when it diffracts (`[optics] diffraction = "apertures"`).
+    lenslet: Option<ApertureShape>,
 }
 
 impl<'a, F: RadianceField + ?Sized> DisplaySource<'a, F> {
     /// Samples of `eye`: the ground truth from `field`, and what it perceives of every display image
     /// of `stack` on `display`.
     pub fn new(display: &'a Display, eye: &'a Eye, field: &'a F, stack: &'a DisplayStack) -> Self {
-        Self { eye, field, transfer: EyeToLcd::new(display, eye), stack }
+        let lenslet = eye
+            .optics
+            .as_ref()
+            .filter(|o| o.diffraction.lenslets())
+            .map(|_| ApertureShape::of_lattice(&display.lenslets));
+        Self { eye, field, transfer: EyeToLcd::new(display, eye), stack, lenslet }
     }
 }
 
@@ -135,6 +152,10 @@ impl<F: RadianceField + ?Sized> PairedSource for DisplaySource<'_, F> {
 
     fn spectral(&self) -> bool {
         self.eye.optics.as_ref().is_some_and(|o| !o.is_single_wavelength())
+    }
+
+    fn diffraction(&self) -> bool {
+        self.eye.optics.as_ref().is_some_and(|o| o.diffraction.is_on())
     }
 
     fn reference_over(&self, tangents: (DVec2, DVec2), pupil_radius: f64) -> Option<[f64; 3]> {
@@ -448,6 +469,7 @@ impl Replicates {
             let mut sums = vec![0.0f64; TILE * TILE * k * 3];
             let radius = sampler.pupil_radius();
             let spectral = source.spectral();
+            let diffraction = source.diffraction();
             let mut pupils = vec![DVec2::ZERO; batch];
             // Image 0 of each sample, when known for its whole pixel (`reference_over`).
             let mut known = vec![None; batch];
@@ -503,7 +525,8 @@ impl Replicates {
                                     retina.half_tangent - (row as f64 + frac.y) * step,
                                 );
                                 let spectral = if spectral { points.spectral_of_last() } else { 0.0 };
-                                samples[filled] = EyeSample { tangent, pupil: DVec2::ZERO, spectral };
+                                let diffraction = if diffraction { points.diffraction_of_last() } else { [0.0; 4] };
+                                samples[filled] = EyeSample { tangent, pupil: DVec2::ZERO, spectral, diffraction };
                                 pupils[filled] = raw.unwrap_or(DVec2::ZERO);
                                 owners[filled] = owner;
                                 known[filled] = pixel_known[owner as usize];

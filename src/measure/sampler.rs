@@ -177,6 +177,27 @@ impl Points<'_> {
         f64::from(sobol_burley::sample(i, 4, self.seed))
     }
 
+    /// Coordinates 5 to 8 in [0, 1) of the sample the last call to [`Points::next_raw`] returned:
+    /// the diffraction dimensions (the pupil's deviation, then the lenslet's;
+    /// `optics::diffraction`), dimensions 5-8 of the same seed's scrambled Sobol sequence in
+    /// [`sobol_burley::sample`] as [`Points::spectral_of_last`] takes dimension 4. Independent
+    /// points hash instead.
+    #[inline]
+    pub fn diffraction_of_last(&self) -> [f64; 4] {
+        let i = self.index.wrapping_sub(1);
+        if self.sampler.independent {
+            return std::array::from_fn(|d| {
+                let h = mix64(
+                    (u64::from(self.seed) << 32 | u64::from(i))
+                        ^ self.sampler.key
+                        ^ (0x3c6e_f372_fe94_f82b_u64.wrapping_mul(d as u64 + 1)),
+                );
+                (h >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+            });
+        }
+        std::array::from_fn(|d| f64::from(sobol_burley::sample(i, 5 + d as u32, self.seed)))
+    }
+
     /// The current sample's pixel point and the raw uniform pair of its pupil point (to map with
     /// [`concentric_disk_batch`]; `None` for the pinhole eye); then step to the next.
     #[inline(always)]

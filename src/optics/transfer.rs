@@ -188,6 +188,17 @@ impl<'a> FastTransfer<'a> {
         self.indexer.index(self.to_lcd((ray.position + ray.slope * self.to_lenslets, ray.slope)))
     }
 
+    /// [`FastTransfer::pixel_index_of`] with the ray's slope after the lenslet changed by
+    /// `deviation` (the lenslet aperture's diffraction, `optics::diffraction`): the lenslet is
+    /// still the one the ray crosses, the deviation bends it on to the LCD.
+    #[inline(always)]
+    pub fn pixel_index_deviated(&self, ray: PlaneRay, deviation: DVec2) -> Option<usize> {
+        let x2 = ray.position + ray.slope * self.to_lenslets;
+        let c = self.display.lenslets.center(self.display.lenslets.nearest(x2));
+        let w2 = ray.slope - (x2 - c) * self.lenslet_power + deviation;
+        self.indexer.index(x2 + w2 * self.v2)
+    }
+
     /// The LCD pixel that ray hits, if any ([`crate::optics::Lcd::pixel_index`]).
     #[inline(always)]
     pub fn pixel_index(&self, tangent: DVec2, k: usize) -> Option<usize> {

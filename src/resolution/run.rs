@@ -200,10 +200,21 @@ pub fn run_study(study: &Study, quiet: bool) -> Result<StudyResults> {
         .collect::<Result<_>>()?;
     // A schematic eye's rays leave the thin lens's bound by its aberrations: a wide margin (the
     // crop only saves display-image pixels).
-    let display = if eyes.iter().any(|e| e.optics.as_ref().is_some_and(|o| o.schematic().is_some())) {
-        crop_display(&study.display, half * 1.25 + 0.02, radius * 1.3, max_vergence + 0.003)
+    // Diffraction bends rays by angles of a few lambda / aperture, with a thin tail: the crop
+    // keeps 200 lambda / aperture at the reddest visible wavelength (the Airy and sinc^2 tails
+    // beyond hold under 0.1% of the light).
+    let diffraction = if study.eye_optics.diffraction.is_on() {
+        let cell = crate::optics::diffraction::ApertureShape::of_lattice(&study.display.lenslets);
+        let pupil = if radius > 0.0 { 780e-6 / (2.0 * radius) } else { 0.0 };
+        let lenslet = if study.eye_optics.diffraction.lenslets() { cell.angle(780.0) } else { 0.0 };
+        DVec2::splat(200.0 * pupil.max(lenslet))
     } else {
-        crop_display(&study.display, half, radius, max_vergence)
+        DVec2::ZERO
+    };
+    let display = if eyes.iter().any(|e| e.optics.as_ref().is_some_and(|o| o.schematic().is_some())) {
+        crop_display(&study.display, half * 1.25 + 0.02 + diffraction, radius * 1.3, max_vergence + 0.003)
+    } else {
+        crop_display(&study.display, half + diffraction, radius, max_vergence)
     };
     let sources = source_names(study);
     let (nd, nf, nq) = (study.depths.len(), study.focus_diopters.len(), study.frequencies_cpd.len());

@@ -203,6 +203,10 @@ pub struct StudySpec {
     /// and Stiles-Crawford effect, as an experiment's `[eye]` names them (docs/EYE.md).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub eye: Option<crate::experiment::EyeModelSettings>,
+    /// `[optics]`: diffraction at the apertures, as an experiment's `[optics]` (absent: rays
+    /// only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub optics: Option<crate::optics::diffraction::OpticsSpec>,
 }
 
 fn no_values() -> Values {
@@ -353,7 +357,15 @@ impl Study {
             retina_nyquist_cpd: nyquist,
             measurement: spec.measurement,
             eye: spec.eye.clone(),
-            eye_optics: spec.eye.clone().unwrap_or_default().optics_spec(spec.pupil_diameter_mm, source, "eye.")?,
+            eye_optics: spec
+                .eye
+                .clone()
+                .unwrap_or_default()
+                .optics_spec(spec.pupil_diameter_mm, source, "eye.")?
+                .with_diffraction(
+                    spec.optics.as_ref().map(|o| o.diffraction).unwrap_or_default(),
+                    spec.eye.as_ref().is_some_and(|e| e.spectrum.is_some()),
+                ),
             accommodation: spec.accommodation,
             limits: spec.limits.clone(),
         })

@@ -125,6 +125,7 @@ pub fn measure_windows<S: PairedSource + ?Sized>(
             let mut values = vec![[0.0f64; 3]; BATCH * k];
             let mut sums = vec![0.0f64; n * k];
             let spectral = source.spectral();
+            let diffraction = source.diffraction();
             let flush =
                 |batch: &mut Vec<EyeSample>, owners: &mut Vec<u32>, sums: &mut [f64], values: &mut [[f64; 3]]| {
                     let vals = &mut values[..batch.len() * k];
@@ -155,7 +156,8 @@ pub fn measure_windows<S: PairedSource + ?Sized>(
                                 corner.y - (row as f64 + frac.y) * step,
                             );
                             let spectral = if spectral { points.spectral_of_last() } else { 0.0 };
-                            batch.push(EyeSample { tangent, pupil, spectral });
+                            let diffraction = if diffraction { points.diffraction_of_last() } else { [0.0; 4] };
+                            batch.push(EyeSample { tangent, pupil, spectral, diffraction });
                             owners.push((dr * p.cols + c) as u32);
                             if batch.len() == BATCH {
                                 flush(&mut batch, &mut owners, &mut sums, &mut values);

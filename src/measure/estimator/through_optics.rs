@@ -6,6 +6,13 @@
 //! meets (eq. (1) from the lenslet plane on, [`FastTransfer::pixel_index_of`]); a ray blocked
 //! inside the eye carries black for every image, as a ray that misses the LCD does.
 //!
+//!
+//! With diffraction (`optics::diffraction`), each channel's ray leaves its retina point bent by
+//! the pupil's Airy deviation ([`EyeOptics::rays_diffracted`]) for the ground truth and the
+//! perceived images alike, and a perceived ray is bent again after the lenslet it crosses by
+//! that lenslet aperture's deviation (`[optics] diffraction = "apertures"`), both at the
+//! channel's wavelength.
+//!
 //! [`FastTransfer::pixel_index_of`]: crate::optics::transfer::FastTransfer::pixel_index_of
 
 use super::{DisplaySource, EyeSample};
@@ -26,12 +33,19 @@ impl<F: RadianceField + ?Sized> DisplaySource<'_, F> {
         // Two at a time: a schematic eye's ray map shares its coefficients between them (bit for
         // bit `rays` one by one).
         let mut all = Vec::with_capacity(samples.len());
-        let mut pairs = samples.chunks_exact(2);
-        for pair in &mut pairs {
-            let (a, b) = (&pair[0], &pair[1]);
-            all.extend(optics.rays2((a.tangent, a.pupil, a.spectral), (b.tangent, b.pupil, b.spectral)));
+        if optics.diffraction.is_on() {
+            all.extend(samples.iter().map(|s| {
+                let xi = [s.diffraction[0], s.diffraction[1]];
+                optics.rays_diffracted(s.tangent, s.pupil, s.spectral, xi)
+            }));
+        } else {
+            let mut pairs = samples.chunks_exact(2);
+            for pair in &mut pairs {
+                let (a, b) = (&pair[0], &pair[1]);
+                all.extend(optics.rays2((a.tangent, a.pupil, a.spectral), (b.tangent, b.pupil, b.spectral)));
+            }
+            all.extend(pairs.remainder().iter().map(|s| optics.rays(s.tangent, s.pupil, s.spectral)));
         }
-        all.extend(pairs.remainder().iter().map(|s| optics.rays(s.tangent, s.pupil, s.spectral)));
         let mut rays = Vec::with_capacity(samples.len() * 3);
         for sr in &all {
             let n = if sr.single { 1 } else { 3 };
@@ -49,14 +63,21 @@ impl<F: RadianceField + ?Sized> DisplaySource<'_, F> {
             }
         }
         let mut next = 0;
-        for (o, sr) in out.chunks_exact_mut(k).zip(&all) {
+        for ((o, sr), s) in out.chunks_exact_mut(k).zip(&all).zip(samples) {
             o.fill([0.0; 3]);
             let channels: &[usize] = if sr.single { &[0] } else { &[0, 1, 2] };
             for &c in channels {
                 let Some(r) = sr.rays[c] else { continue };
                 let gt = hits[next].radiance.to_array();
                 next += 1;
-                let idx = self.transfer.transfer.pixel_index_of(world(r));
+                let idx = match &self.lenslet {
+                    Some(shape) => {
+                        let deviation =
+                            shape.deviation([s.diffraction[2], s.diffraction[3]], optics.wavelength(c, s.spectral));
+                        self.transfer.transfer.pixel_index_deviated(world(r), deviation)
+                    }
+                    None => self.transfer.transfer.pixel_index_of(world(r)),
+                };
                 let px = idx.map(|i| self.stack.pixel(i));
                 // The channels this ray carries: all three for one ray, else its own.
                 let carried = if sr.single { 0..3 } else { c..c + 1 };

@@ -29,6 +29,7 @@ use glam::DVec2;
 use super::ray_map::RayMap;
 use super::{Aperture, EyeModel, FocusCriterion, SchematicEye};
 use crate::error::{Error, Result};
+use crate::optics::diffraction::{disk_deviation, Diffraction};
 use crate::optics::spectrum::{Primaries, SpectrumSampler};
 use crate::optics::transfer::PlaneRay;
 
@@ -134,6 +135,21 @@ pub struct EyeOpticsSpec {
     pub wavelength_samples: usize,
     /// Stiles-Crawford: rho (1/mm^2) and peak (mm), if applied.
     pub stiles_crawford: Option<(f64, DVec2)>,
+    /// `[optics] diffraction` (`optics::diffraction`).
+    pub diffraction: Diffraction,
+}
+
+impl EyeOpticsSpec {
+    /// These settings with `[optics] diffraction = d`. With diffraction a thin-lens eye traces
+    /// each channel at its primary's sampled wavelengths unless `eye.spectrum` was stated
+    /// (`spectrum_stated`): diffraction's angle is proportional to the wavelength.
+    pub fn with_diffraction(mut self, d: Diffraction, spectrum_stated: bool) -> Self {
+        self.diffraction = d;
+        if d.is_on() && !spectrum_stated {
+            self.primaries = true;
+        }
+        self
+    }
 }
 
 /// An eye's optics beyond the thin lens's fast paths, solved for one eye case.
@@ -161,6 +177,9 @@ pub struct EyeOptics {
     pub criterion: FocusCriterion,
     /// The reference wavelength, nm.
     pub reference_nm: f64,
+    /// Which apertures diffract (`optics::diffraction`): the pupil here, the lenslets in the
+    /// perceived images' transfer.
+    pub diffraction: Diffraction,
 }
 
 impl PartialEq for EyeOptics {
@@ -173,6 +192,7 @@ impl PartialEq for EyeOptics {
             && self.criterion == o.criterion
             && self.reference_nm == o.reference_nm
             && self.wavelength_samples == o.wavelength_samples
+            && self.diffraction == o.diffraction
     }
 }
 
@@ -207,7 +227,7 @@ impl EyeOptics {
             Aperture::ThinLens { pupil_diameter, focus } => (pupil_diameter, Some(1000.0 * focus.vergence())),
         };
         let thin = spec.model == EyeModel::ThinLens;
-        if thin && spec.stiles_crawford.is_none() {
+        if thin && spec.stiles_crawford.is_none() && !spec.diffraction.is_on() {
             return Ok(None);
         }
         let (lens, accommodation, iris_diameter) = if thin {
@@ -253,7 +273,7 @@ impl EyeOptics {
             }
             (Lens::Schematic(Box::new(eye)), Some(a), iris)
         };
-        let spectrum = if spec.primaries && !thin {
+        let spectrum = if spec.primaries && (!thin || spec.diffraction.is_on()) {
             Spectrum::Primaries(Box::new(primaries.samplers(source)?))
         } else {
             Spectrum::Single(spec.reference_nm)
@@ -292,6 +312,7 @@ impl EyeOptics {
             stiles_crawford,
             criterion: spec.criterion,
             reference_nm: spec.reference_nm,
+            diffraction: spec.diffraction,
         })))
     }
 
@@ -305,7 +326,38 @@ impl EyeOptics {
 
     /// True when every channel is traced at one wavelength (one ray per sample).
     pub fn is_single_wavelength(&self) -> bool {
-        matches!(self.spectrum, Spectrum::Single(_)) || self.schematic().is_none()
+        matches!(self.spectrum, Spectrum::Single(_)) || (self.schematic().is_none() && !self.diffraction.is_on())
+    }
+
+    /// The pupil's diffraction deviation of channel `c`'s ray (a retina-side angle, added to
+    /// the retina tangent) for the uniform pair `xi` and spectral number `u`: the Airy pattern of
+    /// the entrance pupil at the channel's wavelength (zero without pupil diffraction or with a
+    /// pinhole, whose geometric idealisation has no width).
+    #[inline]
+    pub fn pupil_deviation(&self, c: usize, u: f64, xi: [f64; 2]) -> DVec2 {
+        if !self.diffraction.is_on() {
+            return DVec2::ZERO;
+        }
+        disk_deviation(xi, self.pupil_diameter, self.wavelength(c, u))
+    }
+
+    /// [`Self::rays`] with the pupil's diffraction (`xi`: the sample's two uniform numbers of
+    /// the pupil's deviation): each channel's ray leaves the retina point moved by its channel's
+    /// deviation ([`Self::pupil_deviation`]); without diffraction, `rays` itself.
+    pub fn rays_diffracted(&self, tangent: DVec2, pupil: DVec2, u: f64, xi: [f64; 2]) -> SampleRays {
+        if !self.diffraction.is_on() || self.pupil_diameter <= 0.0 {
+            return self.rays(tangent, pupil, u);
+        }
+        if self.is_single_wavelength() {
+            return self.rays(tangent + self.pupil_deviation(0, u, xi), pupil, u);
+        }
+        let mut out = SampleRays { rays: [None; 3], single: false, weight: 1.0 };
+        for c in 0..3 {
+            let r = self.rays(tangent + self.pupil_deviation(c, u, xi), pupil, u);
+            out.rays[c] = if r.single { r.rays[0] } else { r.rays[c] };
+            out.weight = r.weight;
+        }
+        out
     }
 
     /// Channel `c`'s wavelength for the uniform number `u`, nm.
@@ -422,6 +474,15 @@ impl EyeOptics {
         };
         if let Some(sc) = &self.stiles_crawford {
             s += &format!(", Stiles-Crawford rho {} /mm^2", sc.rho);
+        }
+        if self.diffraction.is_on() {
+            s += &format!(
+                ", diffraction at the {}",
+                match self.diffraction {
+                    Diffraction::Apertures => "pupil and the lenslets",
+                    _ => "pupil",
+                }
+            );
         }
         s
     }

@@ -1,0 +1,285 @@
+//! Diffraction at the apertures (`[optics] diffraction`, docs/OPTICS.md) against the analytic
+//! transfer functions of Goodman's *Introduction to Fourier Optics*: the perceived MTF of an
+//! aberration-free eye through a circular pupil (the disk's incoherent MTF) and through one
+//! square lenslet (the triangle `1 - s` along an axis), each measured by the converged
+//! estimator itself (`Replicates::extend` over a `DisplaySource`), and the hexagonal cell's
+//! tabulated pattern against its exact autocorrelation. Diffraction off keeps the thin lens's
+//! fast paths (no optics at all), and the grid estimator refuses diffraction naming the field.
+
+use std::f64::consts::{PI, TAU};
+
+use glam::{DMat2, DVec2, DVec3};
+use inimtrace::experiment::{Experiment, ExperimentSpec};
+use inimtrace::measure::estimator::{DisplaySource, Replicates};
+use inimtrace::measure::sampler::Sampler;
+use inimtrace::optics::diffraction::{disk_mtf, polygon_area, voronoi_hexagon, ApertureShape, Diffraction};
+use inimtrace::optics::display::Lcd;
+use inimtrace::optics::eye::{EyeModel, EyeOptics, EyeOpticsSpec, FocusCriterion};
+use inimtrace::optics::spectrum::Primaries;
+use inimtrace::optics::{Aperture, Display, Eye, Focus, Lattice, Retina};
+use inimtrace::progress::Progress;
+use inimtrace::raster::RgbImage;
+use inimtrace::ray::Ray;
+use inimtrace::render::retina::DisplayStack;
+use inimtrace::render::RadianceField;
+
+const NM: f64 = 555.0;
+
+/// A sinusoidal grating in visual tangent x on the plane z = `z`: `0.5 + 0.5 cos(2 pi nu x/z + phase)`.
+struct Grating {
+    z: f64,
+    nu: f64,
+    phase: f64,
+}
+
+impl RadianceField for Grating {
+    fn radiance(&self, ray: &Ray) -> DVec3 {
+        let t = (self.z - ray.origin.z) / ray.dir.z;
+        let x = ray.origin.x + ray.dir.x * t;
+        DVec3::splat(0.5 + 0.5 * (TAU * self.nu * x / self.z + self.phase).cos())
+    }
+}
+
+fn optics(eye: &Eye, diffraction: Diffraction) -> Option<std::sync::Arc<EyeOptics>> {
+    let spec = EyeOpticsSpec {
+        model: EyeModel::ThinLens,
+        criterion: FocusCriterion::Paraxial,
+        reference_nm: NM,
+        primaries: false,
+        wavelength_samples: 3,
+        stiles_crawford: None,
+        diffraction,
+    };
+    EyeOptics::build(&spec, &eye.aperture, eye.retina_distance, &Primaries::default(), 0.0, "t", "f").unwrap()
+}
+
+/// A retina of 2 x 2 pixels a hundred-millionth of a radian wide: its pixel box is a point.
+fn point_retina() -> Retina {
+    Retina { resolution: 2, half_tangent: 1e-8, samples_per_pixel: 1 }
+}
+
+/// The mean of image `k` over the retina and the replicates.
+fn mean(reps: &Replicates, k: usize) -> f64 {
+    let img = reps.mean_image(k);
+    img.pixels.iter().map(|p| f64::from(p[0])).sum::<f64>() / img.pixels.len() as f64
+}
+
+/// The modulation `|(C - 0.5, S - 0.5)| / 0.5` of a grating measured at phase 0 (C) and -pi/2 (S).
+fn modulation(c: f64, s: f64) -> f64 {
+    ((c - 0.5).powi(2) + (s - 0.5).powi(2)).sqrt() / 0.5
+}
+
+#[test]
+fn a_circular_pupils_perceived_mtf_is_the_disks_incoherent_mtf() {
+    // An aberration-free thin-lens eye (2 mm pupil) focused on a grating 500 mm away: the ground
+    // truth of the converged estimator, image 0, through the pupil's diffraction only.
+    let d = 2.0;
+    let z = 500.0;
+    let mut eye = Eye::thin_lens(d, Focus::Millimetres(z), 8);
+    eye.optics = optics(&eye, Diffraction::Pupil);
+    assert!(eye.optics.is_some());
+    let display = Display::paper();
+    let black = RgbImage::new(display.lcd.columns(), display.lcd.rows());
+    let stack = DisplayStack::new(&display, &[&black]).unwrap();
+    let retina = point_retina();
+    let cutoff = d / (NM * 1e-6); // cycles per radian
+    for s in [0.1, 0.3, 0.5, 0.7] {
+        let nu = s * cutoff;
+        let measure = |phase: f64| {
+            let field = Grating { z, nu, phase };
+            let source = DisplaySource::new(&display, &eye, &field, &stack);
+            let mut reps = Replicates::new(retina.resolution, 4, 2);
+            reps.extend(&source, &Sampler::new(7, 0, Some(0.5 * d)), &retina, 4096, &Progress::hidden());
+            mean(&reps, 0)
+        };
+        let m = modulation(measure(0.0), measure(-0.5 * PI));
+        let expected = disk_mtf(s);
+        eprintln!("pupil s = {s}: measured {m:.4}, analytic {expected:.4}");
+        assert!((m - expected).abs() < 0.03, "s = {s}: measured {m}, analytic {expected}");
+        // Far tighter than the requirement in fact; a model error (e.g. lambda / D for the Airy
+        // scale instead of lambda / (pi D) on x) moves it by more than 0.1.
+        assert!((m - expected).abs() < 0.01, "s = {s}: measured {m}, analytic {expected}");
+    }
+    // Without diffraction the in-focus grating keeps its full modulation.
+    let mut plain = Eye::thin_lens(d, Focus::Millimetres(z), 8);
+    plain.optics = None;
+    let field = Grating { z, nu: 0.5 * cutoff, phase: 0.0 };
+    let source = DisplaySource::new(&display, &plain, &field, &stack);
+    let mut reps = Replicates::new(retina.resolution, 4, 2);
+    reps.extend(&source, &Sampler::new(7, 0, Some(0.5 * d)), &retina, 64, &Progress::hidden());
+    assert!((mean(&reps, 0) - 1.0).abs() < 1e-6);
+}
+
+/// A display of 0.05 mm square lenslets whose LCD is in their focal plane (v2 = f = 3 mm), with
+/// an LCD of 10 um pixels 8 mm wide: a pinhole eye's rays at the retina's centre all cross the
+/// central lenslet at its centre and meet the LCD at `f (t + deviation)`.
+fn single_lenslet_display(lattice: Lattice) -> Display {
+    Display {
+        name: "one lenslet".into(),
+        eye_to_lenslets: 20.0,
+        lenslets_to_lcd: 3.0,
+        focal_length: 3.0,
+        lenslets: lattice,
+        elemental_images: lattice,
+        lcd: Lcd { size: DVec2::splat(8.0), resolution: [800, 800] },
+        primaries: None,
+    }
+}
+
+/// The perceived modulation of an LCD grating of `g` cycles/mm along `axis` through
+/// `display` by a pinhole eye at the retina's centre with diffraction at the lenslets.
+fn perceived_lcd_modulation(display: &Display, g: f64, axis: DVec2) -> f64 {
+    let mut eye = Eye::pinhole();
+    eye.optics = optics(&eye, Diffraction::Apertures);
+    let lcd = display.lcd;
+    let grating = |phase: f64| {
+        let mut img = RgbImage::new(lcd.columns(), lcd.rows());
+        for r in 0..lcd.rows() {
+            for c in 0..lcd.columns() {
+                let x = lcd.pixel_center(r, c).dot(axis);
+                img.pixels[r * lcd.columns() + c] = [(0.5 + 0.5 * (TAU * g * x + phase).cos()) as f32; 3];
+            }
+        }
+        img
+    };
+    let (cos, sin) = (grating(0.0), grating(-0.5 * PI));
+    let stack = DisplayStack::new(display, &[&cos, &sin]).unwrap();
+    let field = Grating { z: 1.0, nu: 0.0, phase: 0.0 };
+    let source = DisplaySource::new(display, &eye, &field, &stack);
+    let retina = point_retina();
+    let mut reps = Replicates::new(retina.resolution, 4, 3);
+    reps.extend(&source, &Sampler::new(3, 0, None), &retina, 8192, &Progress::hidden());
+    // The LCD's pixels hold the grating at their centres: its fundamental keeps sinc(g pitch).
+    let pitch = lcd.pixel_pitch().x;
+    let hold = (PI * g * pitch).sin() / (PI * g * pitch);
+    modulation(mean(&reps, 1), mean(&reps, 2)) / hold
+}
+
+#[test]
+fn one_square_lenslets_perceived_mtf_is_the_triangle_along_an_axis() {
+    let p = 0.05;
+    let display = single_lenslet_display(Lattice::square(p).unwrap());
+    for s in [0.1, 0.3, 0.5, 0.7] {
+        // s = nu / (p / lambda) with nu = g f cycles per radian.
+        let g = s * p / (NM * 1e-6) / display.focal_length;
+        let m = perceived_lcd_modulation(&display, g, DVec2::X);
+        eprintln!("square lenslet s = {s}: measured {m:.4}, analytic {:.4}", 1.0 - s);
+        assert!((m - (1.0 - s)).abs() < 0.03, "s = {s}: measured {m}, analytic {}", 1.0 - s);
+        let m = perceived_lcd_modulation(&display, g, DVec2::Y);
+        assert!((m - (1.0 - s)).abs() < 0.03, "y, s = {s}: measured {m}, analytic {}", 1.0 - s);
+    }
+}
+
+/// The overlap area of the convex polygon `v` and its copy shifted by `d` (Sutherland-Hodgman).
+fn overlap(v: &[DVec2], d: DVec2) -> f64 {
+    let mut poly: Vec<DVec2> = v.iter().map(|p| *p + d).collect();
+    for i in 0..v.len() {
+        let (a, b) = (v[i], v[(i + 1) % v.len()]);
+        let inside = |p: DVec2| (b - a).perp_dot(p - a) >= 0.0;
+        let mut out = Vec::new();
+        for j in 0..poly.len() {
+            let (p, q) = (poly[j], poly[(j + 1) % poly.len()]);
+            let cut = |p: DVec2, q: DVec2| {
+                let (dp, dq) = ((b - a).perp_dot(p - a), (b - a).perp_dot(q - a));
+                p + (q - p) * (dp / (dp - dq))
+            };
+            match (inside(p), inside(q)) {
+                (true, true) => out.push(q),
+                (true, false) => out.push(cut(p, q)),
+                (false, true) => {
+                    out.push(cut(p, q));
+                    out.push(q)
+                }
+                (false, false) => {}
+            }
+        }
+        poly = out;
+        if poly.is_empty() {
+            return 0.0;
+        }
+    }
+    polygon_area(&poly)
+}
+
+#[test]
+fn the_hexagonal_cells_pattern_has_the_hexagons_autocorrelation_as_its_mtf() {
+    // The OTF of an aperture is its normalised autocorrelation: the mean of cos(2 pi nu . theta)
+    // over the pattern's draws must be the overlap of the cell with its copy shifted by
+    // lambda nu. Regular hexagonal lattice of pitch 1 mm; frequencies across and along a flat.
+    let p = 1.0;
+    let lattice =
+        Lattice::new(DVec2::ZERO, DMat2::from_cols(DVec2::new(p, 0.0), DVec2::new(0.5 * p, 0.75f64.sqrt() * p)))
+            .unwrap();
+    let shape = ApertureShape::of_lattice(&lattice);
+    assert_eq!(shape.name(), "hexagonal");
+    let m = lattice.reduced_matrix();
+    let cell = voronoi_hexagon(m.x_axis, m.y_axis);
+    let area = polygon_area(&cell);
+    let lambda = NM * 1e-6;
+    let n = 256usize;
+    for dir in [DVec2::X, DVec2::Y, DVec2::new(0.6, 0.8)] {
+        for s in [0.1, 0.3, 0.5, 0.7] {
+            // nu in cycles per radian: the shift lambda nu is s times the cell's flat-to-flat width.
+            let nu = dir * (s * p / lambda);
+            let mut total = 0.0;
+            for i in 0..n {
+                for j in 0..n {
+                    let u = [(i as f64 + 0.5) / n as f64, (j as f64 + 0.5) / n as f64];
+                    total += (TAU * nu.dot(shape.deviation(u, NM))).cos();
+                }
+            }
+            let measured = total / (n * n) as f64;
+            let exact = overlap(&cell, nu * lambda) / area;
+            eprintln!("hexagon {dir} s = {s}: measured {measured:.4}, exact {exact:.4}");
+            assert!((measured - exact).abs() < 0.02, "{dir} s = {s}: {measured} vs {exact}");
+        }
+    }
+    if let ApertureShape::Polygon(pattern) = &shape {
+        assert!(pattern.captured() > 0.995 && pattern.captured() <= 1.0 + 1e-3, "{}", pattern.captured());
+    }
+}
+
+fn paper_converged(diffraction: Option<&str>) -> ExperimentSpec {
+    let mut text = ExperimentSpec::paper_converged().to_toml();
+    if let Some(d) = diffraction {
+        text += &format!("\n[optics]\ndiffraction = \"{d}\"\n");
+    }
+    toml::from_str(&text).unwrap()
+}
+
+#[test]
+fn diffraction_none_keeps_the_fast_paths_and_on_gives_every_eye_its_optics() {
+    let none = Experiment::from_parts(
+        paper_converged(Some("none")),
+        inimtrace::fixtures::white_wall(),
+        Display::paper(),
+        "e.toml",
+    )
+    .unwrap();
+    assert!(none.cases.iter().all(|c| c.eye.optics.is_none()));
+    let on = Experiment::from_parts(
+        paper_converged(Some("apertures")),
+        inimtrace::fixtures::white_wall(),
+        Display::paper(),
+        "e.toml",
+    )
+    .unwrap();
+    for c in &on.cases {
+        let o = c.eye.optics.as_ref().unwrap();
+        assert_eq!(o.diffraction, Diffraction::Apertures);
+        // Each channel at its primary's sampled wavelengths.
+        assert!(!o.is_single_wavelength());
+        assert!(matches!(c.eye.aperture, Aperture::Pinhole | Aperture::ThinLens { .. }));
+    }
+    // The grid estimator refuses it, naming the field and pointing to [measurement].
+    let mut grid = paper_converged(Some("pupil"));
+    grid.measurement = ExperimentSpec::paper().measurement;
+    let e = Experiment::from_parts(grid, inimtrace::fixtures::white_wall(), Display::paper(), "e.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("e.toml") && e.contains("optics.diffraction") && e.contains("[measurement]"), "{e}");
+    // An unknown value names the field.
+    let text = ExperimentSpec::paper_converged().to_toml() + "\n[optics]\ndiffraction = \"hurb\"\n";
+    let e = toml::from_str::<ExperimentSpec>(&text).unwrap_err().to_string();
+    assert!(e.contains("hurb"), "{e}");
+}
