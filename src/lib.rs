@@ -92,6 +92,7 @@ pub mod long_run;
 pub mod measure;
 pub mod metrics;
 pub mod optics;
+pub mod optimize;
 pub mod overrides;
 pub mod progress;
 pub mod raster;

@@ -242,8 +242,10 @@ pub enum MethodLabel {
     La,
     /// The ground truth (no display).
     Gt,
+    /// The optimised method.
+    Opt,
 }
-names!(MethodLabel { Lc => "LC", Pc => "PC", La => "LA", Gt => "GT" });
+names!(MethodLabel { Lc => "LC", Pc => "PC", La => "LA", Gt => "GT", Opt => "OPT" });
 
 impl MethodLabel {
     /// The display-image methods, in report order.
@@ -256,6 +258,7 @@ impl From<Method> for MethodLabel {
             Method::LensletCenter => MethodLabel::Lc,
             Method::PupilCenter => MethodLabel::Pc,
             Method::LensletAverage { .. } => MethodLabel::La,
+            Method::Optimized => MethodLabel::Opt,
         }
     }
 }
@@ -264,7 +267,7 @@ impl From<Method> for MethodLabel {
 pub fn la_grid_of(m: Method) -> usize {
     match m {
         Method::LensletAverage { grid } => grid,
-        Method::LensletCenter | Method::PupilCenter => 1,
+        Method::LensletCenter | Method::PupilCenter | Method::Optimized => 1,
     }
 }
 

@@ -53,7 +53,7 @@ impl Sampling {
                 .iter()
                 .find_map(|m| match m {
                     Method::LensletAverage { grid } => Some(*grid),
-                    Method::LensletCenter | Method::PupilCenter => None,
+                    Method::LensletCenter | Method::PupilCenter | Method::Optimized => None,
                 })
                 .unwrap_or(1),
         }

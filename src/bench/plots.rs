@@ -80,6 +80,7 @@ fn method_color(method: MethodLabel) -> RGBColor {
         MethodLabel::Pc => RGBColor(214, 39, 40),
         MethodLabel::La => RGBColor(44, 160, 44),
         MethodLabel::Gt => RGBColor(80, 80, 80),
+        MethodLabel::Opt => RGBColor(148, 103, 189),
     }
 }
 

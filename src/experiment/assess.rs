@@ -168,7 +168,7 @@ fn assess_with<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
     // 1. Display images, each rendered into the stack the simulation reads and written at once
     // (EXR + PNG preview), so it is held once and its depth plane only while it is written: the
     // same stage functions `inimtrace bench` times.
-    let stack = render_display_stack(exp, with_depth, opts.quiet, &mut stages, |k, image, depth| {
+    let (stack, optimization) = render_display_stack(exp, with_depth, opts.quiet, &mut stages, |k, image, depth| {
         if keep {
             displays.push(image.to_image());
             depths.push(depth.map(<[f32]>::to_vec));
@@ -201,6 +201,11 @@ fn assess_with<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
     // 2-3. Per eye case the ground truth, the perceived image of every method and the scores;
     // its retinal images are written (EXR + PNG preview each, in parallel) as soon as it is
     // measured, and only their figure cells are kept.
+    if let (Some(dir), Some(o)) = (dir, &optimization) {
+        let stem = format!("optimize_{}", o.method);
+        dir.write_bytes(&format!("{stem}.csv"), o.csv().as_bytes())?;
+        dir.write_with(&format!("{stem}.png"), |p| o.write_plot(p))?;
+    }
     let mut cells: Vec<Vec<RgbImage>> = Vec::new();
     let mut scores = Vec::new();
     let mut write_seconds = Vec::new();
@@ -245,6 +250,7 @@ fn assess_with<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
         stages,
         total_seconds: start.elapsed().as_secs_f64(),
         settings: exp.spec.clone(),
+        optimization,
     };
     if let Some(dir) = dir {
         write_reports(&report, exp, dir)?;

@@ -16,8 +16,8 @@ mod stages;
 pub use assess::{assess, assess_images, estimate, prepare_output_dir, Assessment, RunOptions, Z_CHANNEL_NOTE};
 pub use report::{table_markdown, AssessReport, Score, StageTime};
 pub use stages::{
-    ground_truth_image, pack_display_images, perceived_images, render_display_images, render_display_stack, table1,
-    table1_each, table1_scores, CaseResult, DisplayImages, Table1,
+    ground_truth_image, pack_display_images, perceived_images, render_display_images, render_display_stack,
+    render_optimized, table1, table1_each, table1_scores, CaseResult, DisplayImages, Table1,
 };
 
 use std::path::Path;
@@ -312,6 +312,9 @@ pub struct EyeCaseSpec {
     /// Focus as vergence, dioptres (0 = infinity).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub focus_diopters: Option<f64>,
+    /// This case's pupil centre, mm (default: `eye.position`): an eye displaced in the eye box.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub position: Option<[f64; 3]>,
 }
 
 /// An experiment file.
@@ -349,6 +352,9 @@ pub struct ExperimentSpec {
     pub eye: EyeSpec,
     /// `[[eye_cases]]`: the rows of Table 1, each a focus of the eye.
     pub eye_cases: Vec<EyeCaseSpec>,
+    /// `[optimize]`: how the optimised method OPT is trained (read when `methods` lists OPT).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub optimize: Option<crate::optimize::OptimizeSpec>,
 }
 
 impl ExperimentSpec {
@@ -358,6 +364,7 @@ impl ExperimentSpec {
             pinhole: focus.is_none(),
             focus_mm: focus,
             focus_diopters: None,
+            position: None,
         };
         vec![case("Pin", None), case("Near", Some(300.0)), case("Cen", Some(400.0)), case("Far", Some(600.0))]
     }
@@ -376,6 +383,7 @@ impl ExperimentSpec {
             optics: None,
             eye: EyeSpec::default(),
             eye_cases: Self::paper_cases(),
+            optimize: None,
         }
     }
 
@@ -442,6 +450,8 @@ pub struct Experiment {
     pub ssim: SsimConstants,
     /// How Table 1 is measured (`[measurement]`; the grid estimator when absent).
     pub measurement: MeasurementSpec,
+    /// How OPT is trained (`[optimize]`), when `methods` lists it.
+    pub optimize: Option<crate::optimize::Optimization>,
     /// The spec it was resolved from (what reports echo).
     pub spec: ExperimentSpec,
 }
@@ -480,7 +490,7 @@ impl Experiment {
             methods.push(method);
         }
         if methods.is_empty() {
-            return Err(Error::invalid(source, "methods", "list at least one of LC, PC, LA"));
+            return Err(Error::invalid(source, "methods", "list at least one of LC, PC, LA, OPT"));
         }
         if dr.la_grid == 0 || dr.la_grid > 64 {
             return Err(Error::invalid(
@@ -570,6 +580,16 @@ impl Experiment {
                         "give exactly one of `pinhole = true`, `focus_mm` or `focus_diopters`",
                     )
                 })?;
+            let position = match c.position {
+                Some(p) if !DVec3::from_array(p).is_finite() => {
+                    return Err(Error::invalid(source, format!("{field}.position"), "must be finite"))
+                }
+                Some(p) => {
+                    crate::optics::transfer::check_eye_in_front(&display, p[2], source, &format!("{field}.position"))?;
+                    DVec3::from_array(p)
+                }
+                None => position,
+            };
             let mut eye =
                 Eye { retina_distance: e.retina_distance, aperture, pupil_grid: e.pupil_grid, position, optics: None };
             eye.validate(source).map_err(|err| prefix_field(err, &format!("{field} / eye.")))?;
@@ -597,6 +617,23 @@ impl Experiment {
                 Error::in_field(source, format!("methods[{i}] (PupilCenter) at {eye}"), e)
             })?;
         }
+        let optimize = match (methods.contains(&Method::Optimized), &spec.optimize) {
+            (false, None) => None,
+            (false, Some(_)) => {
+                return Err(Error::invalid(source, "optimize", "is only read when `methods` lists OPT"));
+            }
+            (true, o) => {
+                let named: Vec<(String, Eye)> = cases.iter().map(|c| (c.name.clone(), c.eye.clone())).collect();
+                let base = crate::optimize::spec::BaseEye {
+                    retina_distance: e.retina_distance,
+                    pupil_diameter: e.pupil_diameter,
+                    pupil_grid: e.pupil_grid,
+                    position,
+                    retina,
+                };
+                Some(o.clone().unwrap_or_default().resolve(&named, &base, dr.la_grid, source)?)
+            }
+        };
         let measurement = spec.measurement.clone().unwrap_or_else(MeasurementSpec::grid);
         measurement.validate(source)?;
         if diffraction.is_on() && measurement.estimator != crate::measure::spec::EstimatorKind::Converged {
@@ -627,6 +664,7 @@ impl Experiment {
             cases,
             ssim: spec.ssim,
             measurement,
+            optimize,
             spec,
         })
     }

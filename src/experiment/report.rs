@@ -131,6 +131,9 @@ pub struct AssessReport {
     pub total_seconds: f64,
     /// The experiment's settings as resolved.
     pub settings: ExperimentSpec,
+    /// OPT's convergence record, when OPT is among the methods.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub optimization: Option<crate::optimize::OptimizationReport>,
 }
 
 /// Table 1 as Markdown: rows are eye cases, columns PSNR per method | SSIM per method.

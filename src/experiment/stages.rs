@@ -10,11 +10,12 @@ use rayon::prelude::*;
 use super::{Experiment, EyeCase, Score, StageTime};
 use crate::error::{Error, Result};
 use crate::metrics;
+use crate::optimize::OptimizationReport;
 use crate::progress::Progress;
 use crate::raster::{RgbImage, RgbView};
 use crate::render::display_stack::StackBuilder;
 use crate::render::retina::{simulate_stack, DisplayStack};
-use crate::render::{ground_truth, render_display_image_into, render_display_image_with_depth, RadianceField};
+use crate::render::{ground_truth, render_display_image_into, render_display_image_with_depth, Method, RadianceField};
 
 pub(super) fn stage_time(
     stages: &mut Vec<StageTime>,
@@ -48,6 +49,14 @@ pub fn render_display_images<D: RadianceField + ?Sized>(
     let mut depths = Vec::new();
     for m in &exp.methods {
         let t = Instant::now();
+        if *m == Method::Optimized {
+            let mut image = RgbImage::try_new(display.lcd.columns(), display.lcd.rows(), "the display image")?;
+            render_optimized(exp, with_depth, quiet, &mut image)?;
+            stage_time(stages, "render_display", Some(m.name().as_str()), None, t);
+            displays.push(image);
+            depths.push(None);
+            continue;
+        }
         let p = Progress::new(display.lcd.rows() as u64, &format!("display image {}", m.name()), quiet);
         let (img, depth) = render_display_image_with_depth(display, *m, &exp.render, with_depth, &p)?;
         p.finish();
@@ -58,19 +67,38 @@ pub fn render_display_images<D: RadianceField + ?Sized>(
     Ok((displays, depths))
 }
 
+/// OPT's display image for `exp` (its `[optimize]` training states) into `image`, with its
+/// convergence record. Errors when `exp` has no resolved `[optimize]` (OPT not among its methods).
+pub fn render_optimized<D: RadianceField + ?Sized>(
+    exp: &Experiment,
+    field: &D,
+    quiet: bool,
+    image: &mut RgbImage,
+) -> Result<OptimizationReport> {
+    let Some(opt) = &exp.optimize else {
+        return Err(Error::Mismatch("OPT's display image needs the experiment's [optimize] settings".into()));
+    };
+    let p = Progress::new(opt.solver.max_iterations as u64, "display image OPT (iterations)", quiet);
+    let report = crate::optimize::render_optimal_into(&exp.display, &exp.render, opt, field, &p, image)?;
+    p.finish();
+    Ok(report)
+}
+
 /// Stage 1 as `assess` runs it: every method's display image rendered into one reused image
 /// buffer and depth plane (`render_display` stages), handed to `finished` (method index, the image, its depth
 /// plane; timed as `write_display_image`), then added to the stack the simulation reads
 /// (`pack_display_images`: palette indices while the images allow, see
 /// [`crate::render::display_stack`]), before the next is rendered. The stack reads as
-/// [`pack_display_images`] of [`render_display_images`] bit for bit (tested).
+/// [`pack_display_images`] of [`render_display_images`] bit for bit (tested). OPT's convergence
+/// record, when OPT is among the methods, comes back beside the stack.
 pub fn render_display_stack<D: RadianceField + ?Sized>(
     exp: &Experiment,
     with_depth: &D,
     quiet: bool,
     stages: &mut Vec<StageTime>,
     mut finished: impl FnMut(usize, RgbView<'_>, Option<&[f32]>) -> Result<()>,
-) -> Result<DisplayStack> {
+) -> Result<(DisplayStack, Option<OptimizationReport>)> {
+    let mut optimized = None;
     let display = &exp.display;
     // One image buffer for every method; the stack keeps palette indices when it can.
     let (mut image, mut depth) =
@@ -78,9 +106,15 @@ pub fn render_display_stack<D: RadianceField + ?Sized>(
     let mut stack = StackBuilder::new(display, exp.methods.len());
     for (k, m) in exp.methods.iter().enumerate() {
         let t = Instant::now();
-        let p = Progress::new(display.lcd.rows() as u64, &format!("display image {}", m.name()), quiet);
-        let known = render_display_image_into(display, *m, &exp.render, with_depth, &p, &mut image, &mut depth)?;
-        p.finish();
+        let known = if *m == Method::Optimized {
+            optimized = Some(render_optimized(exp, with_depth, quiet, &mut image)?);
+            false
+        } else {
+            let p = Progress::new(display.lcd.rows() as u64, &format!("display image {}", m.name()), quiet);
+            let known = render_display_image_into(display, *m, &exp.render, with_depth, &p, &mut image, &mut depth)?;
+            p.finish();
+            known
+        };
         stage_time(stages, "render_display", Some(m.name().as_str()), None, t);
         let t = Instant::now();
         finished(k, RgbView::from(&image), known.then_some(depth.as_slice()))?;
@@ -90,7 +124,7 @@ pub fn render_display_stack<D: RadianceField + ?Sized>(
         stack.push(RgbView::from(&image))?;
         stage_time(stages, "pack_display_images", Some(m.name().as_str()), None, t);
     }
-    stack.finish()
+    Ok((stack.finish()?, optimized))
 }
 
 /// The display images interleaved for the simulation (`pack_display_images` stage).

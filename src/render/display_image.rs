@@ -14,6 +14,10 @@
 //! - LensletAverage (LA): `p` on a k x k grid of cell centres over the lenslet's pitch cell
 //!   (paper: 5 x 5), averaged. With k = 1 this is exactly LC.
 //!
+//! The fourth method, Optimized (OPT), traces no camera rays of its own: its image is the
+//! least-squares best over a set of eye states (`crate::optimize`, docs/OPTIMAL.md), started
+//! from LA's.
+//!
 //! The camera ray itself is eq. (1) and lives with it ([`camera_ray`]); the scene is read
 //! through a [`RadianceField`].
 
@@ -45,6 +49,10 @@ pub enum Method {
         /// k: samples per side of the lenslet cell (1 to 64; 1 is LC).
         grid: usize,
     },
+    /// OPT: the display image that minimises the squared error of the perceived images over a
+    /// set of eye states, within [0, 1] (`crate::optimize`; without an experiment's `[optimize]`
+    /// table, the paper's four eye states).
+    Optimized,
 }
 
 /// The paper's LensletAverage grid (Sec. 4.1: 5 x 5): what `LA` means without a `k`.
@@ -60,6 +68,7 @@ impl Method {
             Method::PupilCenter => "PC".into(),
             Method::LensletAverage { grid: PAPER_LA_GRID } => "LA".into(),
             Method::LensletAverage { grid } => format!("LA{grid}"),
+            Method::Optimized => "OPT".into(),
         }
     }
 
@@ -83,7 +92,7 @@ impl fmt::Display for Method {
 
 impl FromStr for Method {
     type Err = String;
-    /// "LC", "PC", "LA" (5 x 5) or "LA3" / "LA:3" for a 3 x 3 grid; case-insensitive. Also
+    /// "LC", "PC", "LA" (5 x 5), "LA3" / "LA:3" for a 3 x 3 grid, or "OPT"; case-insensitive. Also
     /// reads what `Display` writes ("LA (3x3)") and what [`Method::name`] writes.
     fn from_str(s: &str) -> std::result::Result<Self, String> {
         let u = s.trim().to_ascii_uppercase();
@@ -96,11 +105,12 @@ impl FromStr for Method {
             "LC" | "LENSLETCENTER" => Ok(Method::LensletCenter),
             "PC" | "PUPILCENTER" => Ok(Method::PupilCenter),
             "LA" | "LENSLETAVERAGE" => Ok(Method::LensletAverage { grid: PAPER_LA_GRID }),
+            "OPT" | "OPTIMIZED" => Ok(Method::Optimized),
             _ => {
                 let rest = u.strip_prefix("LA").map(|r| r.trim_start_matches([':', '-', '_']));
                 match rest.and_then(|r| r.parse::<usize>().ok()) {
                     Some(k) if (1..=64).contains(&k) => Ok(Method::LensletAverage { grid: k }),
-                    _ => Err(format!("unknown method `{s}`: expected LC, PC, LA or LA<k> with 1 <= k <= 64")),
+                    _ => Err(format!("unknown method `{s}`: expected LC, PC, LA, LA<k> with 1 <= k <= 64, or OPT")),
                 }
             }
         }
@@ -268,6 +278,16 @@ fn render_into<R: RadianceField + ?Sized>(
     }
     let lcd = display.lcd;
     let (nx, ny) = (lcd.columns(), lcd.rows());
+    if method == Method::Optimized {
+        // The paper's eye states around the settings' eye (an experiment's stages pass its own).
+        let opt = crate::optimize::Optimization::paper_default(settings.eye_position);
+        let mut image = RgbImage::try_new(nx, ny, "OPT's display image")?;
+        crate::optimize::render_optimal_into(display, settings, &opt, tracer, progress, &mut image)?;
+        dst.copy_from_slice(&image.pixels);
+        depth.clear();
+        depth.resize(nx * ny, f32::INFINITY);
+        return Ok((depth, false));
+    }
     let pixel_samples = stratified(settings.samples_per_pixel);
     // LA's samples p = c + offset give camera rays that differ from the LC ray (p = c) by a
     // constant start and slope shift per offset (eq. (1b) is affine in p):
@@ -395,7 +415,9 @@ mod tests {
         assert_eq!(la(1).name(), "LA1");
         assert_eq!(Method::LensletCenter.name(), "LC");
         assert_eq!(Method::PupilCenter.name(), "PC");
-        for m in [Method::LensletCenter, Method::PupilCenter].into_iter().chain((1..=64).map(la)) {
+        assert_eq!(Method::Optimized.name(), "OPT");
+        assert_eq!("opt".parse::<Method>(), Ok(Method::Optimized));
+        for m in [Method::LensletCenter, Method::PupilCenter, Method::Optimized].into_iter().chain((1..=64).map(la)) {
             assert_eq!(m.name().parse::<Method>(), Ok(m), "{}", m.name());
             assert_eq!(m.to_string().parse::<Method>(), Ok(m), "{m}");
         }

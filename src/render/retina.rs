@@ -21,7 +21,7 @@ use crate::raster::RgbImage;
 
 pub use super::display_stack::DisplayStack;
 
-mod through_optics;
+pub(crate) mod through_optics;
 
 /// Simulates what the eye sees of each display image in `displays` (all with the LCD's
 /// resolution). Convenience wrapper over [`simulate_stack`].

@@ -20,7 +20,7 @@ use crate::ray::Ray;
 use crate::render::RadianceField;
 
 /// Every sample of pixel (row, col): its rays.
-fn pixel_samples<'a>(
+pub(crate) fn pixel_samples<'a>(
     optics: &'a EyeOptics,
     eye: &'a Eye,
     retina: &'a Retina,
@@ -37,18 +37,18 @@ fn pixel_samples<'a>(
 }
 
 /// The number of samples per pixel.
-fn per_pixel(optics: &EyeOptics, eye: &Eye, retina: &Retina) -> f64 {
+pub(crate) fn per_pixel(optics: &EyeOptics, eye: &Eye, retina: &Retina) -> f64 {
     (retina.subpixel_offsets().len() * eye.pupil_samples().len() * optics.grid_spectral().len()) as f64
 }
 
 /// `ray` (eye coordinates, at the eye's plane) in world coordinates.
-fn world(eye: &Eye, r: PlaneRay) -> PlaneRay {
+pub(crate) fn world(eye: &Eye, r: PlaneRay) -> PlaneRay {
     PlaneRay { position: r.position + eye.position.truncate(), slope: r.slope }
 }
 
 /// Calls `f(channels, ray)` for each ray of a sample: all three channels for one ray, else each
 /// channel with its own.
-fn each_ray(sr: &SampleRays, mut f: impl FnMut(std::ops::Range<usize>, PlaneRay)) {
+pub(crate) fn each_ray(sr: &SampleRays, mut f: impl FnMut(std::ops::Range<usize>, PlaneRay)) {
     if sr.single {
         if let Some(r) = sr.rays[0] {
             f(0..3, r);

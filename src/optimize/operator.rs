@@ -1,0 +1,217 @@
+//! The perceived-image simulation as a linear operator on the display image, and its exact
+//! adjoint (paper Sec. 2.3, eq. (1)): for one eye state, retina pixel `p` of the perceived image
+//! is the weighted mean of the LCD pixels its eye rays reach, `(A x)_p = sum_e w_e x_{l_e}` over
+//! the pixel's samples `e` (retina sub-pixel point x pupil point, and for an eye beyond the thin
+//! lens its wavelengths and Stiles-Crawford weight). `A^T r` splats each residual back along the
+//! same rays: `(A^T r)_l = sum_{e : l_e = l} w_e r_{p_e}`.
+//!
+//! Matrix-free: the samples of a band of retina rows are traced afresh on every application
+//! (the same eye-to-LCD trace as [`crate::render::simulate_stack`]: [`FastTransfer`] for the thin
+//! lens, the eye's own rays ([`crate::optics::eye::EyeOptics::rays`]) otherwise) and dropped; only
+//! a bounded wave of bands is held at once. The sample pattern is fixed, so the forward operator
+//! and the adjoint are the same matrix, transposed. Both are deterministic bit for bit at any
+//! thread count: the forward sums each retina pixel's samples in trace order, and the adjoint adds
+//! into each LCD pixel in the global order of the samples (bands in order, samples in trace order),
+//! whichever thread owns that pixel.
+
+use glam::DVec2;
+use rayon::prelude::*;
+
+use crate::optics::transfer::FastTransfer;
+use crate::optics::{Display, Eye, Retina};
+use crate::render::retina::through_optics;
+
+/// One value per pixel and channel (R, G, B), in `f64`.
+pub type Rgb = [f64; 3];
+
+/// Retina rows traced together: one unit of parallel work.
+const BAND: usize = 8;
+
+/// The samples of a band: sample `i` adds `weight` times LCD pixel `lcd[i]` to retina pixel
+/// `pixel[i]` in channel `channel` (3: all). For the thin lens every sample has the same weight
+/// and all channels, and `each` is empty (8 bytes a sample); otherwise `each[i]` holds them.
+#[derive(Default)]
+struct Entries {
+    pairs: Vec<(u32, u32)>,
+    each: Vec<(u8, f64)>,
+}
+
+impl Entries {
+    fn clear(&mut self) {
+        self.pairs.clear();
+        self.each.clear();
+    }
+
+    /// Calls `f(lcd, pixel, channel, weight)` for every sample in order.
+    #[inline(always)]
+    fn for_each(&self, common: f64, mut f: impl FnMut(u32, u32, u8, f64)) {
+        if self.each.is_empty() {
+            for &(l, p) in &self.pairs {
+                f(l, p, 3, common);
+            }
+        } else {
+            for (&(l, p), &(c, w)) in self.pairs.iter().zip(&self.each) {
+                f(l, p, c, w);
+            }
+        }
+    }
+}
+
+/// A linear map from display images (LCD pixels x RGB) to retinal images (retina pixels x RGB)
+/// with an exact adjoint: what the solver needs of the simulation.
+pub trait Operator: Sync {
+    /// Retina pixels (rows of `A`).
+    fn rows(&self) -> usize;
+    /// LCD pixels (columns of `A`).
+    fn cols(&self) -> usize;
+    /// `y = A x` (`x`: `cols()` values, `y`: `rows()` values, overwritten).
+    fn forward(&self, x: &[Rgb], y: &mut [Rgb]);
+    /// `out += scale A^T r` (`r`: `rows()` values, `out`: `cols()` values).
+    fn adjoint_add(&self, r: &[Rgb], scale: f64, out: &mut [Rgb]);
+}
+
+/// The perceived-image operator `A_s` of one eye state on one display: the simulation's trace on
+/// a fixed sample pattern (the eye's pupil grid, the retina's sub-pixel grid).
+pub struct EyeOperator<'a> {
+    display: &'a Display,
+    eye: Eye,
+    retina: Retina,
+    fast: FastTransfer<'a>,
+    pupil: Vec<DVec2>,
+    subpixels: Vec<DVec2>,
+    /// Weight of one sample of the thin lens: 1 / (sub-pixel samples x pupil samples).
+    inv_count: f64,
+}
+
+impl<'a> EyeOperator<'a> {
+    /// The operator of `eye` looking at `display` with `retina`'s pixels and sub-pixel grid.
+    pub fn new(display: &'a Display, eye: &Eye, retina: &Retina) -> Self {
+        let pupil = eye.pupil_samples();
+        let subpixels = retina.subpixel_offsets();
+        let inv_count = 1.0 / (pupil.len() * subpixels.len()) as f64;
+        let fast = match eye.optics {
+            Some(_) => FastTransfer::for_eye(display, eye),
+            None => FastTransfer::new(display, eye, &pupil),
+        };
+        Self { display, eye: eye.clone(), retina: *retina, fast, pupil, subpixels, inv_count }
+    }
+
+    /// The number of bands of retina rows.
+    fn bands(&self) -> usize {
+        self.retina.resolution.div_ceil(BAND)
+    }
+
+    /// Every sample of the retina rows of band `band`, in trace order (per pixel: sub-pixel
+    /// point, then pupil point, then wavelength), into `out` (cleared first).
+    fn band_entries(&self, band: usize, out: &mut Entries, scratch: &mut (Vec<DVec2>, Vec<DVec2>, Vec<u32>)) {
+        out.clear();
+        let n = self.retina.resolution;
+        let rows = band * BAND..((band + 1) * BAND).min(n);
+        if let Some(optics) = &self.eye.optics {
+            let inv = 1.0 / through_optics::per_pixel(optics, &self.eye, &self.retina);
+            for row in rows {
+                for col in 0..n {
+                    let pixel = (row * n + col) as u32;
+                    for sr in through_optics::pixel_samples(optics, &self.eye, &self.retina, row, col) {
+                        through_optics::each_ray(&sr, |channels, r| {
+                            if let Some(i) = self.fast.pixel_index_of(through_optics::world(&self.eye, r)) {
+                                let channel = if channels.len() == 3 { 3 } else { channels.start as u8 };
+                                out.pairs.push((i as u32, pixel));
+                                out.each.push((channel, sr.weight * inv));
+                            }
+                        });
+                    }
+                }
+            }
+            return;
+        }
+        let (tangents, trace, lcd) = scratch;
+        lcd.resize(n, 0);
+        // A row per (sub-pixel point, pupil point) in one batch: each pixel's samples still come
+        // in its own order (sub-pixel point, then pupil point), interleaved with its row's.
+        for row in rows {
+            for frac in &self.subpixels {
+                tangents.clear();
+                tangents.extend((0..n).map(|col| self.retina.tangent(row, col, *frac)));
+                for k in 0..self.pupil.len() {
+                    self.fast.pixel_indices(tangents, k, trace, lcd);
+                    let base = (row * n) as u32;
+                    out.pairs.extend(
+                        lcd.iter().enumerate().filter(|(_, &i)| i != u32::MAX).map(|(col, &i)| (i, base + col as u32)),
+                    );
+                }
+            }
+        }
+    }
+
+    /// Bands traced at once by the adjoint (bounds its memory; the result does not depend on it).
+    fn wave(&self) -> usize {
+        (2 * rayon::current_num_threads()).max(4)
+    }
+}
+
+/// `acc += w * v` in `channel` (3: all).
+#[inline(always)]
+fn add(acc: &mut Rgb, channel: u8, w: f64, v: &Rgb) {
+    if channel == 3 {
+        for c in 0..3 {
+            acc[c] += w * v[c];
+        }
+    } else {
+        let c = channel as usize;
+        acc[c] += w * v[c];
+    }
+}
+
+impl Operator for EyeOperator<'_> {
+    fn rows(&self) -> usize {
+        self.retina.resolution * self.retina.resolution
+    }
+
+    fn cols(&self) -> usize {
+        self.display.lcd.pixel_count()
+    }
+
+    fn forward(&self, x: &[Rgb], y: &mut [Rgb]) {
+        assert!(x.len() == self.cols() && y.len() == self.rows(), "operator sizes");
+        let n = self.retina.resolution;
+        y.par_chunks_mut(BAND * n).enumerate().for_each_init(
+            || (Entries::default(), (Vec::new(), Vec::new(), Vec::new())),
+            |(entries, scratch), (band, out)| {
+                self.band_entries(band, entries, scratch);
+                out.iter_mut().for_each(|v| *v = [0.0; 3]);
+                let base = band * BAND * n;
+                entries.for_each(self.inv_count, |l, p, c, w| add(&mut out[p as usize - base], c, w, &x[l as usize]));
+            },
+        );
+    }
+
+    fn adjoint_add(&self, r: &[Rgb], scale: f64, out: &mut [Rgb]) {
+        assert!(r.len() == self.rows() && out.len() == self.cols(), "operator sizes");
+        let wave = self.wave();
+        let parts = rayon::current_num_threads().max(1);
+        let chunk = out.len().div_ceil(parts).max(1);
+        let mut lists: Vec<Entries> = (0..wave).map(|_| Entries::default()).collect();
+        for first in (0..self.bands()).step_by(wave) {
+            let count = wave.min(self.bands() - first);
+            lists[..count].par_iter_mut().enumerate().for_each_init(
+                || (Vec::new(), Vec::new(), Vec::new()),
+                |scratch, (b, list)| self.band_entries(first + b, list, scratch),
+            );
+            // Each part of the LCD walks every sample in order and keeps its own: every LCD
+            // pixel receives its additions in the samples' global order.
+            let lists = &lists[..count];
+            out.par_chunks_mut(chunk).enumerate().for_each(|(part, dst)| {
+                let lo = (part * chunk) as u32;
+                let hi = lo + dst.len() as u32;
+                for list in lists {
+                    list.for_each(self.inv_count, |l, p, c, w| {
+                        if l >= lo && l < hi {
+                            add(&mut dst[(l - lo) as usize], c, scale * w, &r[p as usize]);
+                        }
+                    });
+                }
+            });
+        }
+    }
+}

@@ -1,0 +1,293 @@
+//! The `[optimize]` table of an experiment (docs/OPTIMAL.md) and its resolved form: the eye
+//! states the optimised method (OPT) is trained on, with their weights, the training sample
+//! pattern (its own retina and pupil grids), the solver's budget and tolerance, the regulariser
+//! and the starting image.
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+use super::solver::SolverSettings;
+use crate::error::{Error, Result};
+use crate::optics::{Aperture, Eye, Focus, Retina};
+use crate::render::Method;
+
+/// `[[optimize.states]]`: a training state beyond the experiment's eye cases.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct StateSpec {
+    /// A label for reports.
+    pub name: String,
+    /// A pinhole eye.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub pinhole: bool,
+    /// Focus distance from the pupil, mm.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub focus_mm: Option<f64>,
+    /// Focus as vergence, dioptres.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub focus_diopters: Option<f64>,
+    /// Pupil centre, mm (default: the experiment's `eye.position`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub position: Option<[f64; 3]>,
+    /// Pupil diameter, mm (default: the experiment's `eye.pupil_diameter`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pupil_diameter: Option<f64>,
+    /// The state's weight w_s (1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub weight: Option<f64>,
+}
+
+/// `[optimize]`: how OPT's display image is optimised.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct OptimizeSpec {
+    /// The experiment's eye cases trained on, by name (absent: every eye case).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub train_cases: Option<Vec<String>>,
+    /// The weight of each of `train_cases` (absent: 1 each).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub case_weights: Option<Vec<f64>>,
+    /// Further training states.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub states: Vec<StateSpec>,
+    /// The most solver iterations.
+    pub iterations: usize,
+    /// Stop when the projected-gradient norm falls below this fraction of its initial value.
+    pub tolerance: f64,
+    /// lambda: the weight of `||x - x0||^2` per value (0: none).
+    pub regularization: f64,
+    /// The starting image (and the regulariser's centre): a method's name, LA by default.
+    pub initial: String,
+    /// The training pupil grid (n x n over the pupil's square; default: `eye.pupil_grid`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pupil_grid: Option<usize>,
+    /// The training retina's pixels per side (default: `eye.retina_resolution`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub retina_resolution: Option<usize>,
+    /// k x k training samples per retina pixel (1).
+    pub retina_samples: usize,
+    /// k x k training samples per retina pixel for a pinhole eye (4): it has one pupil point, so
+    /// its pixel's square is sampled finely at little cost.
+    pub pinhole_retina_samples: usize,
+}
+
+impl Default for OptimizeSpec {
+    fn default() -> Self {
+        Self {
+            train_cases: None,
+            case_weights: None,
+            states: Vec::new(),
+            iterations: 40,
+            tolerance: 1e-3,
+            regularization: 0.0,
+            initial: "LA".into(),
+            pupil_grid: None,
+            retina_resolution: None,
+            retina_samples: 1,
+            pinhole_retina_samples: 4,
+        }
+    }
+}
+
+/// One training state, resolved.
+#[derive(Clone, Debug)]
+pub struct TrainingState {
+    /// Its label.
+    pub name: String,
+    /// The eye (with the training pupil grid).
+    pub eye: Eye,
+    /// Its training retina (the sample pattern of its operator and ground truth).
+    pub retina: Retina,
+    /// w_s.
+    pub weight: f64,
+}
+
+/// `[optimize]`, resolved: everything OPT needs besides the display and the scene.
+#[derive(Clone, Debug)]
+pub struct Optimization {
+    /// The training states.
+    pub states: Vec<TrainingState>,
+    /// The starting image's method.
+    pub initial: Method,
+    /// Budget, tolerance, regulariser.
+    pub solver: SolverSettings,
+}
+
+/// The eye the experiment's `[eye]` gives, before a case's focus: what [`OptimizeSpec::resolve`]
+/// builds training states from.
+#[derive(Clone, Debug)]
+pub struct BaseEye {
+    /// v0, mm.
+    pub retina_distance: f64,
+    /// Pupil diameter, mm.
+    pub pupil_diameter: f64,
+    /// Pupil grid n.
+    pub pupil_grid: usize,
+    /// Pupil centre.
+    pub position: DVec3,
+    /// The retina of Table 1.
+    pub retina: Retina,
+}
+
+impl OptimizeSpec {
+    /// Resolves the table against the experiment's eye cases `(name, eye)` and `[eye]`; errors
+    /// name `source` and the field (`optimize.*`). `la_grid` is what "LA" means.
+    pub fn resolve(
+        &self,
+        cases: &[(String, Eye)],
+        base: &BaseEye,
+        la_grid: usize,
+        source: &str,
+    ) -> Result<Optimization> {
+        let f = |name: &str| format!("optimize.{name}");
+        if self.iterations == 0 || self.iterations > 100_000 {
+            return Err(Error::invalid(
+                source,
+                f("iterations"),
+                format!("must be 1 to 100000, got {}", self.iterations),
+            ));
+        }
+        if !(self.tolerance.is_finite() && self.tolerance >= 0.0 && self.tolerance < 1.0) {
+            return Err(Error::invalid(source, f("tolerance"), format!("must be in [0, 1), got {}", self.tolerance)));
+        }
+        if !(self.regularization.is_finite() && self.regularization >= 0.0) {
+            return Err(Error::invalid(
+                source,
+                f("regularization"),
+                format!("must be finite and >= 0, got {}", self.regularization),
+            ));
+        }
+        let initial: Method = self.initial.parse().map_err(|e: String| Error::invalid(source, f("initial"), e))?;
+        let initial = match (initial, self.initial.trim().eq_ignore_ascii_case("LA")) {
+            (Method::LensletAverage { .. }, true) => Method::LensletAverage { grid: la_grid },
+            (Method::Optimized, _) => {
+                return Err(Error::invalid(source, f("initial"), "OPT cannot start from itself: name LC, PC or LA"))
+            }
+            (m, _) => m,
+        };
+        let pupil_grid = self.pupil_grid.unwrap_or(base.pupil_grid);
+        if pupil_grid == 0 || pupil_grid > 64 {
+            return Err(Error::invalid(source, f("pupil_grid"), format!("must be 1 to 64, got {pupil_grid}")));
+        }
+        let retina = Retina {
+            resolution: self.retina_resolution.unwrap_or(base.retina.resolution),
+            samples_per_pixel: self.retina_samples,
+            ..base.retina
+        };
+        let pinhole_retina = Retina { samples_per_pixel: self.pinhole_retina_samples, ..retina };
+        for (r, name) in [(&retina, "retina_samples"), (&pinhole_retina, "pinhole_retina_samples")] {
+            r.validate(source).map_err(|e| match e {
+                Error::Invalid { source_name, field, message } => {
+                    let field = if field.contains("resolution") { f("retina_resolution") } else { f(name) };
+                    Error::Invalid { source_name, field, message }
+                }
+                e => e,
+            })?;
+        }
+        let retina_of = |eye: &Eye| if matches!(eye.aperture, Aperture::Pinhole) { pinhole_retina } else { retina };
+        let mut states = Vec::new();
+        let names: Vec<String> = match &self.train_cases {
+            Some(n) => n.clone(),
+            None if self.states.is_empty() => cases.iter().map(|(n, _)| n.clone()).collect(),
+            None => Vec::new(),
+        };
+        if let Some(w) = &self.case_weights {
+            if w.len() != names.len() {
+                return Err(Error::invalid(
+                    source,
+                    f("case_weights"),
+                    format!("gives {} weights for {} training cases", w.len(), names.len()),
+                ));
+            }
+        }
+        for (i, name) in names.iter().enumerate() {
+            let Some((_, eye)) = cases.iter().find(|(n, _)| n == name) else {
+                return Err(Error::invalid(
+                    source,
+                    format!("optimize.train_cases[{i}]"),
+                    format!("no eye case is named `{name}`"),
+                ));
+            };
+            let weight = self.case_weights.as_ref().map_or(1.0, |w| w[i]);
+            let mut eye = eye.clone();
+            eye.pupil_grid = pupil_grid;
+            states.push(TrainingState { name: name.clone(), retina: retina_of(&eye), eye, weight });
+        }
+        for (i, s) in self.states.iter().enumerate() {
+            let field = format!("optimize.states[{i}]");
+            let pupil = s.pupil_diameter.unwrap_or(base.pupil_diameter);
+            let aperture = Aperture::stated(s.pinhole, s.focus_mm, s.focus_diopters, pupil).ok_or_else(|| {
+                Error::invalid(source, &field, "give exactly one of `pinhole = true`, `focus_mm` or `focus_diopters`")
+            })?;
+            let position = s.position.map(DVec3::from_array).unwrap_or(base.position);
+            let eye = Eye { retina_distance: base.retina_distance, aperture, pupil_grid, position, optics: None };
+            eye.validate(source).map_err(|e| Error::in_field(source, &field, e))?;
+            if !position.is_finite() {
+                return Err(Error::invalid(source, format!("{field}.position"), "must be finite"));
+            }
+            states.push(TrainingState {
+                name: s.name.clone(),
+                retina: retina_of(&eye),
+                eye,
+                weight: s.weight.unwrap_or(1.0),
+            });
+        }
+        if states.is_empty() {
+            return Err(Error::invalid(source, f("train_cases"), "train on at least one eye state"));
+        }
+        for (i, s) in states.iter().enumerate() {
+            if !(s.weight.is_finite() && s.weight > 0.0) {
+                return Err(Error::invalid(
+                    source,
+                    format!("optimize weight of `{}` (state {i})", s.name),
+                    format!("must be finite and > 0, got {}", s.weight),
+                ));
+            }
+        }
+        Ok(Optimization {
+            states,
+            initial,
+            solver: SolverSettings {
+                max_iterations: self.iterations,
+                tolerance: self.tolerance,
+                regularization: self.regularization,
+            },
+        })
+    }
+}
+
+impl Optimization {
+    /// OPT where no `[optimize]` table is given (`render-display`, Python's `render_display`):
+    /// the paper's four eye states (pinhole; thin lens with a 5 mm pupil focused at 300, 400 and
+    /// 600 mm; 8 x 8 pupil grid) around `eye_position`, the paper's 512 x 512 retina over
+    /// tangents -0.3 to 0.3 (one ray per pixel, 4 x 4 for the pinhole), starting from LA 5 x 5,
+    /// 40 iterations.
+    pub fn paper_default(eye_position: DVec3) -> Self {
+        let spec = OptimizeSpec::default();
+        let state = |name: &str, aperture| {
+            let k =
+                if matches!(aperture, Aperture::Pinhole) { spec.pinhole_retina_samples } else { spec.retina_samples };
+            TrainingState {
+                name: name.into(),
+                eye: Eye { retina_distance: 17.0, aperture, pupil_grid: 8, position: eye_position, optics: None },
+                retina: Retina { resolution: 512, half_tangent: 0.3, samples_per_pixel: k },
+                weight: 1.0,
+            }
+        };
+        let lens = |mm| Aperture::ThinLens { pupil_diameter: 5.0, focus: Focus::Millimetres(mm) };
+        Self {
+            states: vec![
+                state("Pin", Aperture::Pinhole),
+                state("Near", lens(300.0)),
+                state("Cen", lens(400.0)),
+                state("Far", lens(600.0)),
+            ],
+            initial: Method::LensletAverage { grid: crate::render::display_image::PAPER_LA_GRID },
+            solver: SolverSettings {
+                max_iterations: spec.iterations,
+                tolerance: spec.tolerance,
+                regularization: spec.regularization,
+            },
+        }
+    }
+}
