@@ -94,6 +94,10 @@ enum Command {
         /// results are still written; without it a miss is reported on stderr and exits 0).
         #[arg(long)]
         strict: bool,
+        /// Also write each converged retinal image's replicates (`*.replicates.exr`, one part
+        /// per replicate): `compare` on two of them gives the table's de-biased scores.
+        #[arg(long)]
+        keep_replicates: bool,
         #[command(flatten)]
         backend: BackendArg,
     },
@@ -144,7 +148,8 @@ enum Command {
         #[command(flatten)]
         backend: BackendArg,
     },
-    /// PSNR and SSIM of two RGB EXR images of the same size.
+    /// PSNR and SSIM of two RGB EXR images of the same size; of two replicate sets (`assess
+    /// --keep-replicates`), the table's de-biased scores with their 95% intervals.
     Compare {
         a: PathBuf,
         b: PathBuf,
@@ -395,8 +400,8 @@ fn run() -> Result<()> {
     // `assess` and `bench` print their own total with --timings.
     let mut printed_total = false;
     match cli.command {
-        Command::Assess { experiment, out, scene, force, strict, backend } => {
-            printed_total = assess(&g, experiment, out, scene, force, strict, backend)?;
+        Command::Assess { experiment, out, scene, force, strict, keep_replicates, backend } => {
+            printed_total = assess(&g, experiment, out, scene, force, strict, keep_replicates, backend)?;
         }
         Command::RenderDisplay { method, setup, samples_per_pixel, reference_plane, eye_position, out, backend } => {
             printed_total =
@@ -536,6 +541,7 @@ fn assess(
     scene: Option<PathBuf>,
     force: bool,
     strict: bool,
+    keep_replicates: bool,
     backend: BackendArg,
 ) -> Result<bool> {
     let (set, quiet) = (&g.set[..], g.quiet);
@@ -550,7 +556,14 @@ fn assess(
     if !quiet {
         eprintln!("{}", exp.display.summary());
     }
-    let options = RunOptions { quiet, backend, exr_compression: g.exr_compression, force };
+    if keep_replicates && exp.measurement.estimator != inimtrace::measure::spec::EstimatorKind::Converged {
+        eprintln!(
+            "warning: --keep-replicates has nothing to keep: {} uses the grid estimator, which has no replicates \
+             (measurement.estimator = \"converged\" has)",
+            exp.source
+        );
+    }
+    let options = RunOptions { quiet, backend, exr_compression: g.exr_compression, force, keep_replicates };
     let report = experiment::assess(&exp, &out, options)?;
     out!("{}", experiment::table_markdown(&report, &exp));
     if g.timings {
@@ -729,8 +742,24 @@ fn compare(
     if !set.is_empty() {
         bail!("--set does not apply to compare (it reads no experiment, scene or display)");
     }
+    if part.is_none() {
+        if let Some((p, s)) = compare_replicate_sets(&a, &b, constants)? {
+            return print_replicate_scores(&a, &b, &p, &s, constants, json);
+        }
+    }
     let ia = read_exr_input(&a, part)?;
     let ib = read_exr_input(&b, part)?;
+    let noisy = [&a, &b].iter().any(|p| {
+        inimtrace::io::exr::read_attributes(p)
+            .is_ok_and(|attrs| attrs.iter().any(|(k, v)| k == "inimtrace:estimator" && v.starts_with("converged")))
+    });
+    if noisy {
+        eprintln!(
+            "note: these images are means of a converged measurement's replicates and keep its sampling noise, which \
+             biases PSNR and SSIM down; the table's scores remove it: run `assess --keep-replicates` and compare the \
+             `*.replicates.exr` files for them (docs/TABLE1.md)"
+        );
+    }
     let p = metrics::psnr(&ia, &ib).with_context(|| format!("comparing {} and {}", a.display(), b.display()))?;
     let s =
         metrics::ssim(&ia, &ib, constants).with_context(|| format!("comparing {} and {}", a.display(), b.display()))?;
@@ -760,6 +789,78 @@ fn compare(
     outln!(
         "SSIM  {:.5}  (R {:.5}, G {:.5}, B {:.5}; constants {})",
         s.mean,
+        s.channels[0],
+        s.channels[1],
+        s.channels[2],
+        constants
+    );
+    Ok(false)
+}
+
+/// The table's scores of two replicate sets (`None` when neither file is one).
+fn compare_replicate_sets(
+    a: &Path,
+    b: &Path,
+    constants: SsimConstants,
+) -> Result<Option<(inimtrace::measure::stats::Estimate, inimtrace::measure::stats::Estimate)>> {
+    use inimtrace::io::exr_replicates as sets;
+    match (sets::count(a)?, sets::count(b)?) {
+        (None, None) => Ok(None),
+        (Some(ra), Some(rb)) => {
+            let (sa, sb) = (sets::read(a, ra)?, sets::read(b, rb)?);
+            let (na, nb) = (a.display().to_string(), b.display().to_string());
+            let reps = sets::pair((&na, &sa), (&nb, &sb), 1)?;
+            Ok(inimtrace::measure::adaptive::estimates(&reps, constants).pop())
+        }
+        (Some(_), None) | (None, Some(_)) => {
+            let (set, plain) = if sets::count(a)?.is_some() { (a, b) } else { (b, a) };
+            bail!(
+                "{} is a replicate set and {} is one image: compare two replicate sets (the table's de-biased \
+                 scores) or two images",
+                set.display(),
+                plain.display()
+            )
+        }
+    }
+}
+
+fn print_replicate_scores(
+    a: &Path,
+    b: &Path,
+    p: &inimtrace::measure::stats::Estimate,
+    s: &inimtrace::measure::stats::Estimate,
+    constants: SsimConstants,
+    json: bool,
+) -> Result<bool> {
+    if json {
+        let out = serde_json::json!({
+            "a": a.display().to_string(),
+            "b": b.display().to_string(),
+            "replicate_sets": true,
+            "psnr_db": p,
+            "ssim": s,
+            "ssim_constants": constants.name(),
+            "tool": inimtrace::version::TOOL,
+        });
+        outln!("{}", serde_json::to_string_pretty(&out)?);
+        return Ok(true);
+    }
+    let ci = |e: &inimtrace::measure::stats::Estimate, digits: usize| match e.ci95 {
+        Some(h) => format!(" ± {h:.digits$}"),
+        None => String::new(),
+    };
+    outln!(
+        "PSNR  {} dB{}  (R {}, G {}, B {}; de-biased over replicates, 95% interval)",
+        metrics::format_db(p.mean, 3),
+        ci(p, 3),
+        metrics::format_db(p.channels[0], 3),
+        metrics::format_db(p.channels[1], 3),
+        metrics::format_db(p.channels[2], 3)
+    );
+    outln!(
+        "SSIM  {:.5}{}  (R {:.5}, G {:.5}, B {:.5}; constants {})",
+        s.mean,
+        ci(s, 5),
         s.channels[0],
         s.channels[1],
         s.channels[2],

@@ -46,6 +46,7 @@ from ._inimtrace import (
     ground_truth,
     has_embree,
     read_exr,
+    read_replicates,
     render_display,
     simulate,
 )
@@ -69,6 +70,7 @@ __all__ = [
     "ground_truth",
     "has_embree",
     "read_exr",
+    "read_replicates",
     "render_display",
     "Resolution",
     "resolution",

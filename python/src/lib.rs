@@ -52,6 +52,7 @@ fn _inimtrace(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(run::resolution, m)?)?;
     m.add_function(wrap_pyfunction!(run::compare, m)?)?;
     m.add_function(wrap_pyfunction!(run::read_exr, m)?)?;
+    m.add_function(wrap_pyfunction!(run::read_replicates, m)?)?;
     m.add("__version__", inimtrace::version::TOOL.version)?;
     m.add("git_revision", inimtrace::version::TOOL.git_revision)?;
     m.add("has_embree", cfg!(feature = "embree"))?;

@@ -334,7 +334,7 @@ pub fn assess<'py>(
     let backend = parse_backend(backend)?;
     let exr_compression = parse_compression(exr_compression)?;
     let exp = &experiment.inner;
-    let options = RunOptions { quiet: true, backend, exr_compression, force: false };
+    let options = RunOptions { quiet: true, backend, exr_compression, force: false, keep_replicates: false };
     let Assessment { report, displays, depths, ground_truths, perceived } =
         detached(py, threads, progress, || assess_images(exp, out.as_deref(), options))?;
 
@@ -378,8 +378,13 @@ pub fn assess<'py>(
     Ok(result)
 }
 
+/// Whether `compare()` on plain images has said that sampling noise biases their scores.
+static NOISE_NOTED: AtomicBool = AtomicBool::new(false);
+
 /// PSNR and SSIM of two `(rows, columns, 3)` float32 arrays of the same shape, as
-/// `inimtrace compare --json` (an infinite PSNR, identical channels, stays `inf`).
+/// `inimtrace compare --json` (an infinite PSNR, identical channels, stays `inf`); of two
+/// replicate sets `(replicates, rows, columns, 3)` (`read_replicates` of the files `assess
+/// --keep-replicates` writes), the table's de-biased scores with their 95% intervals.
 #[pyfunction]
 #[pyo3(signature = (a, b, ssim="wang2004"))]
 pub fn compare<'py>(
@@ -389,8 +394,24 @@ pub fn compare<'py>(
     ssim: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     let constants: SsimConstants = ssim.parse().map_err(|e: inimtrace::Error| value_error(e.to_string()))?;
+    let ndim = |o: &Bound<'py, PyAny>| o.getattr("ndim").ok().and_then(|n| n.extract::<usize>().ok());
+    if ndim(a) == Some(4) || ndim(b) == Some(4) {
+        return compare_sets(py, a, b, constants);
+    }
     let ia = numpy_to_image(a, "a", None, "compare()")?;
     let ib = numpy_to_image(b, "b", Some((ia.height, ia.width)), "compare()")?;
+    if !NOISE_NOTED.swap(true, Ordering::SeqCst) {
+        let warning = py.get_type::<pyo3::exceptions::PyUserWarning>();
+        PyErr::warn(
+            py,
+            &warning,
+            c"compare() scores the images as they are: if they are estimates with sampling noise (inimtrace's \
+              converged images are means of replicates), the noise biases PSNR and SSIM down. For the table's \
+              de-biased scores, compare two replicate sets: read_replicates() of the files assess --keep-replicates \
+              writes (said once per session)",
+            1,
+        )?;
+    }
     let (p, s) = detached(py, None, None, || Ok((metrics::psnr(&ia, &ib)?, metrics::ssim(&ia, &ib, constants)?)))?;
     let channels = |v: [f64; 3], mean: f64| -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
@@ -407,6 +428,88 @@ pub fn compare<'py>(
     out.set_item("ssim", channels(s.channels, s.mean)?)?;
     out.set_item("ssim_constants", constants.name())?;
     Ok(out)
+}
+
+/// [`compare`] of two replicate sets: the same statistics as the table (`src/measure/`).
+fn compare_sets<'py>(
+    py: Python<'py>,
+    a: &Bound<'py, PyAny>,
+    b: &Bound<'py, PyAny>,
+    constants: SsimConstants,
+) -> PyResult<Bound<'py, PyDict>> {
+    let set = |o: &Bound<'py, PyAny>, name: &str, other: &str| -> PyResult<Vec<inimtrace::raster::RgbImage>> {
+        if o.getattr("ndim").ok().and_then(|n| n.extract::<usize>().ok()) != Some(4) {
+            return Err(value_error(format!(
+                "{other} is a replicate set (replicates, rows, columns, 3) but {name} is not: compare two replicate \
+                 sets or two images"
+            )));
+        }
+        let n = o.len()?;
+        let first = o.get_item(0).ok();
+        let shape = first.as_ref().and_then(|f| f.getattr("shape").ok()).and_then(|s| s.extract::<(usize, usize, usize)>().ok());
+        if let Some((rows, columns, _)) = shape {
+            inimtrace::budget::check_buffer(
+                &format!("the copy of `{name}`"),
+                name,
+                n.saturating_mul(rows).saturating_mul(columns),
+                std::mem::size_of::<[f32; 3]>() as u64,
+                "compare()",
+            )
+            .py_err()?;
+        }
+        (0..n).map(|r| numpy_to_image(&o.get_item(r)?, &format!("{name}[{r}]"), None, "compare()")).collect()
+    };
+    let sa = set(a, "a", "b")?;
+    let sb = set(b, "b", "a")?;
+    let (p, s) = detached(py, None, None, || {
+        let reps = inimtrace::io::exr_replicates::pair(("a", &sa), ("b", &sb), 1)?;
+        Ok(inimtrace::measure::adaptive::estimates(&reps, constants).pop().expect("one scored image"))
+    })?;
+    let estimate = |e: &inimtrace::measure::stats::Estimate| -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        for (name, x) in ["R", "G", "B"].iter().zip(e.channels) {
+            d.set_item(*name, x)?;
+        }
+        d.set_item("mean", e.mean)?;
+        d.set_item("ci95", e.ci95)?;
+        if let Some(h) = e.channels_ci95 {
+            let c = PyDict::new(py);
+            for (name, x) in ["R", "G", "B"].iter().zip(h) {
+                c.set_item(*name, x)?;
+            }
+            d.set_item("channels_ci95", c)?;
+        }
+        Ok(d)
+    };
+    let out = PyDict::new(py);
+    out.set_item("width", sa[0].width)?;
+    out.set_item("height", sa[0].height)?;
+    out.set_item("replicates", sa.len())?;
+    out.set_item("replicate_sets", true)?;
+    out.set_item("psnr_db", estimate(&p)?)?;
+    out.set_item("ssim", estimate(&s)?)?;
+    out.set_item("ssim_constants", constants.name())?;
+    Ok(out)
+}
+
+/// Reads a replicate set (`*.replicates.exr`, written by `assess --keep-replicates`) as a
+/// `(replicates, rows, columns, 3)` float32 array, for [`compare`].
+#[pyfunction]
+pub fn read_replicates<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyAny>> {
+    let images = detached(py, None, None, || {
+        let n = inimtrace::io::exr_replicates::count(&path)?.ok_or_else(|| {
+            inimtrace::Error::parse(&path, "is not a replicate set (parts named `replicate 0`, `replicate 1`, ...)")
+        })?;
+        inimtrace::io::exr_replicates::read(&path, n)
+    })?;
+    let (r, rows, columns) = (images.len(), images[0].height, images[0].width);
+    let mut flat: Vec<f32> = Vec::with_capacity(r * rows * columns * 3);
+    for img in images {
+        flat.extend(img.pixels.iter().flatten());
+    }
+    let array = numpy::ndarray::Array4::from_shape_vec((r, rows, columns, 3), flat)
+        .map_err(|e| value_error(format!("replicate set of {r} x {columns} x {rows}: {e}")))?;
+    Ok(numpy::PyArray4::from_owned_array(py, array).into_any())
 }
 
 /// Reads an RGB EXR (e.g. a display image the CLI wrote) as a `(rows, columns, 3)` float32

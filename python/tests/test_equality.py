@@ -203,3 +203,47 @@ def test_assess_converged_scores_and_intervals_equal_cli(cli, tmp_path):
     assert [s["method"] for s in result.scores] == ["LC", "LA3"]
     assert {"display_LA3", "sim_LA3_Cen"} <= set(result.images)
     assert all(s["psnr_ci95_db"] > 0 and s["replicates"] == 4 for s in result.scores)
+
+
+def test_compare_of_replicate_sets_gives_the_tables_scores(cli, tmp_path):
+    """`assess --keep-replicates` writes each converged image's replicates; `compare()` on the
+    ground truth's and a method's sets (read by `read_replicates`) gives that cell of
+    results.json, intervals included, exactly; on single images it warns once about noise."""
+    path = tmp_path / "exp.toml"
+    path.write_text(CONVERGED_EXPERIMENT)
+    out = tmp_path / "cli"
+    cli("assess", path, "--out", out, "--keep-replicates", *SMALL_DISPLAY_ARGS)
+    report = load_json(out / "results.json")
+    for cell in report["scores"]:
+        gt = inimtrace.read_replicates(out / f"gt_{cell['eye_case']}.replicates.exr")
+        sim = inimtrace.read_replicates(out / f"sim_{cell['method']}_{cell['eye_case']}.replicates.exr")
+        assert gt.shape == (4, 32, 32, 3) and gt.dtype == np.float32
+        # The replicates' mean is the image the run wrote (to f32 rounding of the mean).
+        mean = read_exr(out / f"gt_{cell['eye_case']}.exr")[0]
+        assert np.allclose(gt.astype(np.float64).mean(axis=0), mean, rtol=1e-6, atol=1e-7)
+        ours = inimtrace.compare(gt, sim)
+        assert ours["replicate_sets"] is True and ours["replicates"] == 4
+        for metric, key in [("psnr_db", "psnr"), ("ssim", "ssim")]:
+            assert ours[metric]["mean"] == cell[key]["mean"]
+            assert ours[metric]["ci95"] == cell[key]["ci95"]
+            assert [ours[metric][c] for c in "RGB"] == cell[key]["channels"]
+            assert [ours[metric]["channels_ci95"][c] for c in "RGB"] == cell[key]["channels_ci95"]
+    with pytest.raises(ValueError, match="replicate set"):
+        inimtrace.compare(gt, sim[0])
+
+
+def test_compare_of_single_images_warns_once_that_noise_biases_the_score():
+    import subprocess
+    import sys
+
+    code = (
+        "import warnings, numpy as np, inimtrace\n"
+        "a = np.full((16, 16, 3), 0.25, np.float32)\n"
+        "warnings.simplefilter('always')\n"
+        "with warnings.catch_warnings(record=True) as w:\n"
+        "    warnings.simplefilter('always')\n"
+        "    inimtrace.compare(a, a + 0.1); inimtrace.compare(a, a + 0.2)\n"
+        "print(len(w), 'biases PSNR and SSIM' in str(w[0].message), w[0].category.__name__)\n"
+    )
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert r.stdout.split() == ["1", "True", "UserWarning"], r.stdout + r.stderr

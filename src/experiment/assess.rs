@@ -36,6 +36,9 @@ pub struct RunOptions {
     /// Replace another command's results in the output folder (`--force`; see
     /// [`crate::io::output`]).
     pub force: bool,
+    /// Also write each converged image's replicates (`*.replicates.exr`, see
+    /// [`crate::io::exr_replicates`]), from which `compare` recomputes the table's scores.
+    pub keep_replicates: bool,
 }
 
 /// Everything an assessment computed: its report and its images, in the experiment's order.
@@ -209,7 +212,7 @@ fn assess_with<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
     let mut cells: Vec<Vec<RgbImage>> = Vec::new();
     let mut scores = Vec::new();
     let mut write_seconds = Vec::new();
-    table1_each(exp, shade, &stack, opts.quiet, &mut stages, |c, result| {
+    table1_each(exp, shade, &stack, opts.quiet, opts.keep_replicates, &mut stages, |c, result| {
         if let Some(dir) = dir {
             let t = Instant::now();
             write_case(exp, dir, opts, backend_name, c, &result)?;
@@ -287,11 +290,19 @@ fn write_case(
     }
     // The writes run on rayon's workers: they carry the progress sink, which may cancel them.
     let sink = crate::progress::installed();
-    jobs.par_iter().try_for_each(|j| -> Result<()> {
+    jobs.par_iter().enumerate().try_for_each(|(k, j)| -> Result<()> {
         with_installed(sink.clone(), || {
             dir.write_with(&format!("{}.exr", j.stem), |p| {
                 crate::io::exr::write_rgb_with(p, j.image, None, &j.attributes, opts.exr_compression)
             })?;
+            if let Some(reps) = &result.replicates {
+                let mut a = j.attributes.clone();
+                a.0.retain(|(name, _)| name != "inimtrace:value");
+                a.set("inimtrace:value", "one replicate's mean (the image is their mean)");
+                dir.write_with(&format!("{}.replicates.exr", j.stem), |p| {
+                    crate::io::exr_replicates::write(p, reps, k, &a, opts.exr_compression)
+                })?;
+            }
             dir.write_with(&format!("{}.png", j.stem), |p| crate::io::png::write_preview(p, j.image))
         })
     })

@@ -67,7 +67,7 @@ pub fn table1<F: RadianceField + ?Sized>(
     stages: &mut Vec<StageTime>,
 ) -> Result<Option<Table1>> {
     let (mut gts, mut sims, mut scores) = (Vec::new(), Vec::new(), Vec::new());
-    let converged = table1_each(exp, field, stack, quiet, stages, &mut |_, case: CaseResult| {
+    let converged = table1_each(exp, field, stack, quiet, false, stages, &mut |_, case: CaseResult| {
         gts.push(case.ground_truth);
         sims.push(case.perceived);
         scores.extend(case.scores);
@@ -78,12 +78,15 @@ pub fn table1<F: RadianceField + ?Sized>(
 
 /// [`table1`] one eye case at a time (see [`crate::experiment::table1_each`]); `false` (and
 /// nothing done) when `exp` uses the grid estimator. Each case's replicates are reused by the
-/// next case once its mean images and scores are taken.
+/// next case once its mean images and scores are taken, unless `keep_replicates` hands them to
+/// `each` ([`CaseResult::replicates`]).
+#[allow(clippy::too_many_arguments)]
 pub fn table1_each<F: RadianceField + ?Sized>(
     exp: &Experiment,
     field: &F,
     stack: &DisplayStack,
     quiet: bool,
+    keep_replicates: bool,
     stages: &mut Vec<StageTime>,
     each: &mut dyn FnMut(usize, CaseResult) -> Result<()>,
 ) -> Result<bool> {
@@ -124,8 +127,14 @@ pub fn table1_each<F: RadianceField + ?Sized>(
         ] {
             stages.push(StageTime { stage: stage.into(), method: None, eye_case: Some(case.name.clone()), seconds });
         }
-        storage = Some(measured.replicates);
-        each(index, CaseResult { ground_truth: gt, perceived: case_sims, scores: case_scores })?;
+        let replicates = match keep_replicates {
+            true => Some(measured.replicates),
+            false => {
+                storage = Some(measured.replicates);
+                None
+            }
+        };
+        each(index, CaseResult { ground_truth: gt, perceived: case_sims, scores: case_scores, replicates })?;
     }
     Ok(true)
 }

@@ -188,7 +188,7 @@ pub fn table1<S: RadianceField + ?Sized>(
     stages: &mut Vec<StageTime>,
 ) -> Result<Table1> {
     let (mut gts, mut sims, mut scores) = (Vec::new(), Vec::new(), Vec::new());
-    table1_each(exp, shade, stack, quiet, stages, |_, case| {
+    table1_each(exp, shade, stack, quiet, false, stages, |_, case| {
         gts.push(case.ground_truth);
         sims.push(case.perceived);
         scores.extend(case.scores);
@@ -206,6 +206,9 @@ pub struct CaseResult {
     pub perceived: Vec<RgbImage>,
     /// PSNR and SSIM of each perceived image against the ground truth.
     pub scores: Vec<Score>,
+    /// The converged estimator's replicates (image 0 the ground truth, then one per method),
+    /// when asked for (`keep_replicates`); `None` for the grid estimator.
+    pub replicates: Option<crate::measure::estimator::Replicates>,
 }
 
 /// [`table1`] one eye case at a time: `each(case index, its results)` is called as soon as a
@@ -217,10 +220,11 @@ pub fn table1_each<S: RadianceField + ?Sized>(
     shade: &S,
     stack: &DisplayStack,
     quiet: bool,
+    keep_replicates: bool,
     stages: &mut Vec<StageTime>,
     mut each: impl FnMut(usize, CaseResult) -> Result<()>,
 ) -> Result<()> {
-    if crate::experiment::converged::table1_each(exp, shade, stack, quiet, stages, &mut each)? {
+    if crate::experiment::converged::table1_each(exp, shade, stack, quiet, keep_replicates, stages, &mut each)? {
         return Ok(());
     }
     for (c, case) in exp.cases.iter().enumerate() {
@@ -231,7 +235,7 @@ pub fn table1_each<S: RadianceField + ?Sized>(
         let t = Instant::now();
         let scores = case_scores(exp, c, &gt, &sims)?;
         stage_time(stages, "metrics", None, Some(&case.name), t);
-        each(c, CaseResult { ground_truth: gt, perceived: sims, scores })?;
+        each(c, CaseResult { ground_truth: gt, perceived: sims, scores, replicates: None })?;
     }
     Ok(())
 }

@@ -79,7 +79,7 @@ impl ExrCompression {
         }
     }
 
-    fn to_exr(self) -> Compression {
+    pub(super) fn to_exr(self) -> Compression {
         match self {
             ExrCompression::None => Compression::Uncompressed,
             ExrCompression::Rle => Compression::RLE,
@@ -228,32 +228,7 @@ pub(super) fn write_view_by(
         ));
     }
 
-    let mut layer_attributes = LayerAttributes::default();
-    let mut other = HashMap::new();
-    let version = [
-        ("inimtrace:version".to_string(), AttrValue::from(crate::version::VERSION)),
-        ("inimtrace:git_revision".to_string(), AttrValue::from(crate::version::GIT_REVISION)),
-    ];
-    for (name, value) in version.iter().chain(&attributes.0) {
-        if name.is_empty() || standard_names::ALL.contains(&name.as_bytes()) {
-            return Err(Error::invalid(
-                source,
-                "attributes",
-                format!("`{name}` is not allowed as a custom attribute name (empty or reserved by OpenEXR)"),
-            ));
-        }
-        let key = latin1_text(path, "name", name)?;
-        let val = value.to_exr().ok_or_else(|| {
-            Error::invalid(
-                path.display().to_string(),
-                "attributes",
-                format!("value of `{name}` `{value}` has characters outside Latin-1, which OpenEXR text cannot hold"),
-            )
-        })?;
-        other.insert(key, val);
-    }
-    layer_attributes.other = other;
-    layer_attributes.software_name = Text::new_or_none(crate::version::software());
+    let layer_attributes = header_attributes(path, attributes)?;
 
     let encoding =
         Encoding { compression: compression.to_exr(), blocks: Blocks::ScanLines, line_order: LineOrder::Increasing };
@@ -290,6 +265,39 @@ pub(super) fn write_view_by(
             finish(path, &Image::from_layer(Layer::new(size, layer_attributes, encoding, channels)), zip)
         }
     }
+}
+
+/// The header attributes of a written file: the version attributes, then `attributes` (typed,
+/// Latin-1, no reserved names), and the standard `software` attribute.
+pub(super) fn header_attributes(path: &Path, attributes: &Attributes) -> Result<LayerAttributes> {
+    let source = path.display().to_string();
+    let mut layer_attributes = LayerAttributes::default();
+    let mut other = HashMap::new();
+    let version = [
+        ("inimtrace:version".to_string(), AttrValue::from(crate::version::VERSION)),
+        ("inimtrace:git_revision".to_string(), AttrValue::from(crate::version::GIT_REVISION)),
+    ];
+    for (name, value) in version.iter().chain(&attributes.0) {
+        if name.is_empty() || standard_names::ALL.contains(&name.as_bytes()) {
+            return Err(Error::invalid(
+                source,
+                "attributes",
+                format!("`{name}` is not allowed as a custom attribute name (empty or reserved by OpenEXR)"),
+            ));
+        }
+        let key = latin1_text(path, "name", name)?;
+        let val = value.to_exr().ok_or_else(|| {
+            Error::invalid(
+                path.display().to_string(),
+                "attributes",
+                format!("value of `{name}` `{value}` has characters outside Latin-1, which OpenEXR text cannot hold"),
+            )
+        })?;
+        other.insert(key, val);
+    }
+    layer_attributes.other = other;
+    layer_attributes.software_name = Text::new_or_none(crate::version::software());
+    Ok(layer_attributes)
 }
 
 /// Writes `image` to `path`: by the `exr` crate, or with the crate's header and the blocks

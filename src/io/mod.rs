@@ -9,6 +9,7 @@ pub mod display_intent;
 pub mod exr;
 mod exr_attributes;
 mod exr_read;
+pub mod exr_replicates;
 mod exr_zip;
 pub mod figure;
 mod gltf;

@@ -82,6 +82,13 @@ pub fn score(reps: &Replicates, constants: SsimConstants, precision: &Precision)
     cells(psnr, ssim, precision)
 }
 
+/// The PSNR and SSIM of every scored image of `reps` against image 0, exactly as the table's
+/// last round computes them: for replicate sets read back from files (`compare`).
+pub fn estimates(reps: &Replicates, constants: SsimConstants) -> Vec<(Estimate, Estimate)> {
+    let (psnr, ssim) = rayon::join(|| psnr_estimates(reps), || ssim_estimates(reps, constants));
+    psnr.into_iter().zip(ssim).collect()
+}
+
 fn psnr_estimates(reps: &Replicates) -> Vec<Estimate> {
     gram_matrices(reps).iter().map(psnr_estimate).collect()
 }

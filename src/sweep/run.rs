@@ -145,6 +145,7 @@ fn run_with_images(job: &Job, store: &Store, local: LocalOptions) -> Result<()> 
         backend: local.backend,
         exr_compression: local.exr_compression,
         force: false,
+        keep_replicates: false,
     };
     let report = experiment::assess(&job.exp, &store.images_dir(&job.id), opts)?;
     store.write(&record(job, &report.scores, t.elapsed(), &report.backend))
