@@ -283,3 +283,49 @@ fn diffraction_none_keeps_the_fast_paths_and_on_gives_every_eye_its_optics() {
     let e = toml::from_str::<ExperimentSpec>(&text).unwrap_err().to_string();
     assert!(e.contains("hurb"), "{e}");
 }
+
+#[test]
+fn a_zero_deviation_meets_the_lcd_where_eq_1_does_even_on_lenslet_borders_and_corners() {
+    // The lenslet is chosen by eq. (1)'s one nearest-centre rule before the deviation bends the
+    // ray: rays exactly on a border or a corner of a square cell and of a hexagonal cell keep
+    // their lenslet and pixel.
+    use inimtrace::optics::transfer::FastTransfer;
+    use inimtrace::optics::PlaneRay;
+    let hex = Lattice::new(DVec2::ZERO, DMat2::from_cols(DVec2::new(1.2, 0.0), DVec2::new(0.6, 0.75f64.sqrt() * 1.2)))
+        .unwrap();
+    for lattice in [Lattice::square(1.2).unwrap(), hex] {
+        let display = Display { lenslets: lattice, ..Display::paper() };
+        let eye = Eye::pinhole();
+        let t = FastTransfer::for_eye(&display, &eye);
+        let v1 = display.eye_to_lenslets;
+        let mut n = 0;
+        for i in -8..=8 {
+            for j in -8..=8 {
+                // Border points (half-way between centres) and corners, reached from the pupil centre.
+                let x2 = DVec2::new(0.3 * i as f64, 0.3 * j as f64);
+                let ray = PlaneRay { position: DVec2::ZERO, slope: x2 / v1 };
+                assert_eq!(t.pixel_index_deviated(ray, DVec2::ZERO), t.pixel_index_of(ray), "{x2}");
+                n += usize::from(t.pixel_index_of(ray).is_some());
+            }
+        }
+        assert!(n > 200);
+    }
+}
+
+#[test]
+fn set_optics_diffraction_reaches_the_experiment_as_a_sweep_axis_would() {
+    use inimtrace::overrides::Override;
+    use inimtrace::settings::load_experiment;
+    let set: Override = "optics.diffraction=pupil".parse().unwrap();
+    // The built-in experiment (converged): every eye case diffracts at its pupil.
+    let e = load_experiment(None, None, std::slice::from_ref(&set)).unwrap();
+    assert!(e.cases.iter().all(|c| c.eye.optics.as_ref().unwrap().diffraction == Diffraction::Pupil));
+    // A grid experiment refuses it, naming the field.
+    let grid: Override = "measurement.estimator=grid".parse().unwrap();
+    let err = load_experiment(None, None, &[grid, set]).unwrap_err().to_string();
+    assert!(err.contains("optics.diffraction"), "{err}");
+    // An unknown mode is an error naming the key.
+    let bad: Override = "optics.diffraction=hurb".parse().unwrap();
+    let err = load_experiment(None, None, &[bad]).unwrap_err().to_string();
+    assert!(err.contains("diffraction") && err.contains("hurb"), "{err}");
+}

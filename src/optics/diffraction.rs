@@ -445,4 +445,24 @@ mod tests {
             assert!((re - s(q.x) * s(q.y)).abs() < 1e-12 && im.abs() < 1e-12, "{q}: {re} {im}");
         }
     }
+
+    #[test]
+    fn extreme_uniform_numbers_give_finite_deviations() {
+        let hex = ApertureShape::of_lattice(
+            &Lattice::new(DVec2::ZERO, DMat2::from_cols(DVec2::new(1.0, 0.0), DVec2::new(0.5, 0.75f64.sqrt())))
+                .unwrap(),
+        );
+        let shapes = [ApertureShape::of_lattice(&Lattice::square(1.2).unwrap()), ApertureShape::Disk(1.0), hex];
+        let top = 1.0 - f64::EPSILON / 2.0;
+        for shape in &shapes {
+            for u in [[0.0, 0.0], [top, top], [0.0, top], [top, 0.5], [0.5, 0.5]] {
+                let d = shape.deviation(u, 555.0);
+                assert!(d.is_finite(), "{} {u:?}: {d}", shape.name());
+            }
+        }
+        // The far tail: the table's asymptote, not a division by zero.
+        assert!(airy_radius(top).is_finite() && airy_radius(top) > 1e10);
+        assert!(sinc2_draw(top).is_finite() && sinc2_draw(0.0).is_finite());
+        assert_eq!(disk_deviation([0.3, 0.3], 0.0, 555.0), DVec2::ZERO);
+    }
 }
