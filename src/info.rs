@@ -122,6 +122,9 @@ pub struct DisplayDesign {
     pub views_through_pupil: usize,
     /// Diffraction's angles at the pupil and the lenslet aperture, per colour channel.
     pub diffraction: DiffractionInfo,
+    /// A real lenslet's focal properties (absent for the paper's thin lens).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lenslet: Option<LensletReport>,
     /// Design warnings (lattices that do not match).
     pub warnings: Vec<String>,
 }
@@ -173,6 +176,80 @@ pub fn diffraction_info(d: &Display, pupil_diameter: f64, mode: Diffraction) -> 
     DiffractionInfo { mode: mode.name(), lenslet_aperture: shape.name(), channels }
 }
 
+/// A real lenslet's first-order properties, at the d line and at each channel's median wavelength.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct LensletReport {
+    /// The material's name.
+    pub material: String,
+    /// Centre thickness, mm.
+    pub thickness_mm: f64,
+    /// The index at the d line (587.56 nm).
+    pub index_d: f64,
+    /// Effective focal length at the d line, mm.
+    pub efl_mm: f64,
+    /// Back focal distance (back vertex to the LCD-side focus) at the d line, mm.
+    pub bfd_mm: f64,
+    /// The red, green and blue primaries' median wavelengths, nm.
+    pub channel_wavelengths_nm: [f64; 3],
+    /// Effective focal length per channel, mm.
+    pub channel_efl_mm: [f64; 3],
+    /// The lenslets' image of the LCD per channel, mm from the pupil (`None`: at infinity or real).
+    pub channel_cdp_mm: [Option<f64>; 3],
+    /// The central depth plane the design intends (`design_cdp_mm`, else eq. (1)'s from
+    /// `focal_length` and `v2`), mm from the pupil.
+    pub intended_cdp_mm: Option<f64>,
+    /// The v2 that puts the real lenslet's image of the LCD (d line) at the intended plane, mm.
+    pub v2_for_intended_cdp_mm: Option<f64>,
+}
+
+/// The difference (dioptres) between the real lenslet's central depth plane and the intended
+/// one above which `info` warns: a tenth of the eye's depth of field at a 5 mm pupil (about 0.1 D).
+pub const CDP_MISMATCH_DIOPTERS: f64 = 0.01;
+
+/// [`LensletReport`] of `d`'s real lenslet, and the warning when it misses the intended plane.
+fn lenslet_report(d: &Display) -> Option<(LensletReport, Option<String>)> {
+    use crate::optics::lenslet::D_LINE_NM;
+    let t = d.thick_lenslet()?;
+    let (v1, v2) = (d.eye_to_lenslets, d.lenslets_to_lcd);
+    let p = t.paraxial(D_LINE_NM);
+    let nm = d.channel_wavelengths();
+    let intended = t.design_cdp_mm.or_else(|| {
+        let inv = 1.0 / v2 - 1.0 / d.focal_length;
+        (inv > 0.0).then(|| v1 + 1.0 / inv)
+    });
+    let real = d.central_depth_plane();
+    let v2_for = intended.map(|z| t.v2_for_image_distance(z - v1, D_LINE_NM)).filter(|v| v.is_finite() && *v > 0.0);
+    let dioptres = |z: Option<f64>| z.map_or(0.0, |z| 1000.0 / z);
+    let warning = intended.and_then(|z| {
+        let off = (dioptres(real) - dioptres(Some(z))).abs();
+        (off > CDP_MISMATCH_DIOPTERS).then(|| {
+            format!(
+                "v2 = {v2} mm puts the real lenslet's image of the LCD (d line) {}, not at the intended central depth \
+                 plane {z:.1} mm from the pupil ({:.3} D; {off:.3} D apart){}",
+                match real {
+                    Some(r) => format!("{r:.1} mm from the pupil ({:.3} D)", 1000.0 / r),
+                    None => "at infinity or on the eye's side (a real image)".into(),
+                },
+                1000.0 / z,
+                v2_for.map_or(String::new(), |v| format!(": v2 = {v:.4} mm would put it there")),
+            )
+        })
+    });
+    let report = LensletReport {
+        material: t.material.name.clone(),
+        thickness_mm: t.thickness,
+        index_d: p.index,
+        efl_mm: p.efl,
+        bfd_mm: p.bfd,
+        channel_wavelengths_nm: nm,
+        channel_efl_mm: nm.map(|w| t.paraxial(w).efl),
+        channel_cdp_mm: nm.map(|w| t.lcd_image_distance(v2, w).map(|z| v1 + z)),
+        intended_cdp_mm: intended,
+        v2_for_intended_cdp_mm: v2_for,
+    };
+    Some((report, warning))
+}
+
 /// Half-width of the lattice's cell (0, 0) along `dir` from its centre (bisection on the
 /// nearest-centre rule).
 fn cell_half_extent(l: &Lattice, dir: DVec2) -> f64 {
@@ -198,6 +275,10 @@ pub fn display_design(d: &Display, pupil_diameter: f64) -> DisplayDesign {
         DVec2::new(cell_half_extent(&d.elemental_images, DVec2::X), cell_half_extent(&d.elemental_images, DVec2::Y));
     let zone = 2.0 * m * half;
     let mut warnings = Vec::new();
+    let lenslet = lenslet_report(d).map(|(report, warning)| {
+        warnings.extend(warning);
+        report
+    });
 
     // Viewing zones of every lenslet whose elemental-image centre is on the LCD.
     let (w, h) = (0.5 * d.lcd.size.x, 0.5 * d.lcd.size.y);
@@ -286,6 +367,7 @@ pub fn display_design(d: &Display, pupil_diameter: f64) -> DisplayDesign {
         view_spacing_mm: (m * pitch).to_array(),
         views_through_pupil: views,
         diffraction: diffraction_info(d, pupil_diameter, Diffraction::None),
+        lenslet,
         warnings,
     }
 }
@@ -343,6 +425,29 @@ pub fn display_design_text(x: &DisplayDesign, summary: &str) -> String {
     }
     s.pop();
     s += "\n";
+    if let Some(l) = &x.lenslet {
+        let cdp = |z: Option<f64>| z.map_or("none".to_string(), |z| format!("{z:.1}"));
+        s += &format!(
+            "real lenslet: {} (n_d {:.5}), {} mm thick: EFL {:.4} mm, back focal distance {:.4} mm (d line, 587.56 nm)\n",
+            l.material, l.index_d, l.thickness_mm, l.efl_mm, l.bfd_mm
+        );
+        s += &format!(
+            "  per channel at {:.1} / {:.1} / {:.1} nm (R / G / B): EFL {:.4} / {:.4} / {:.4} mm, central depth plane \
+             {} / {} / {} mm\n",
+            l.channel_wavelengths_nm[0],
+            l.channel_wavelengths_nm[1],
+            l.channel_wavelengths_nm[2],
+            l.channel_efl_mm[0],
+            l.channel_efl_mm[1],
+            l.channel_efl_mm[2],
+            cdp(l.channel_cdp_mm[0]),
+            cdp(l.channel_cdp_mm[1]),
+            cdp(l.channel_cdp_mm[2]),
+        );
+        if let (Some(z), Some(v)) = (l.intended_cdp_mm, l.v2_for_intended_cdp_mm) {
+            s += &format!("  intended central depth plane {z:.1} mm (v2 = {v:.4} mm puts the d-line image there)\n");
+        }
+    }
     for w in &x.warnings {
         s += &format!("warning: {w}\n");
     }

@@ -446,7 +446,10 @@ fn compare_sets<'py>(
         }
         let n = o.len()?;
         let first = o.get_item(0).ok();
-        let shape = first.as_ref().and_then(|f| f.getattr("shape").ok()).and_then(|s| s.extract::<(usize, usize, usize)>().ok());
+        let shape = first
+            .as_ref()
+            .and_then(|f| f.getattr("shape").ok())
+            .and_then(|s| s.extract::<(usize, usize, usize)>().ok());
         if let Some((rows, columns, _)) = shape {
             inimtrace::budget::check_buffer(
                 &format!("the copy of `{name}`"),

@@ -128,6 +128,9 @@ pub struct DisplaySpec {
     /// `[primaries]`: the red, green and blue emission spectra (default: a typical LCD's).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub primaries: Option<crate::optics::spectrum::Primaries>,
+    /// `[lenslet]`: the lenslets' optics (default: the paper's thin lens).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lenslet: Option<super::display_lenslet::LensletOpticsSpec>,
 }
 
 impl DisplaySpec {
@@ -145,6 +148,10 @@ impl DisplaySpec {
             elemental_images,
             lcd: Lcd { size: DVec2::from_array(self.lcd.size), resolution: self.lcd.resolution },
             primaries: self.primaries.clone(),
+            lenslet: match &self.lenslet {
+                Some(l) => l.to_optics(source)?,
+                None => crate::optics::lenslet::LensletOptics::Paraxial,
+            },
         };
         if let Some(p) = &d.primaries {
             p.validate(source)?;
@@ -164,6 +171,7 @@ impl DisplaySpec {
             elemental_images: LatticeSpec::from_lattice(&d.elemental_images),
             lcd: LcdSpec { size: d.lcd.size.to_array(), resolution: d.lcd.resolution },
             primaries: d.primaries.clone(),
+            lenslet: super::display_lenslet::LensletOpticsSpec::from_optics(&d.lenslet),
         }
     }
 }
@@ -360,6 +368,7 @@ pub fn parse_opencv_display(text: &str, path: &Path) -> Result<Display> {
         elemental_images: lattice("eishift", "eiorientation")?,
         lcd: Lcd { size: DVec2::new(size[0], size[1]), resolution: [res[0] as usize, res[1] as usize] },
         primaries: None,
+        lenslet: crate::optics::lenslet::LensletOptics::Paraxial,
     };
     // Name the framework's keys in validation errors.
     d.validate(&src).map_err(|e| match e {

@@ -111,9 +111,18 @@ pub fn pair(a: (&str, &[RgbImage]), b: (&str, &[RgbImage]), samples: u32) -> Res
             return Err(Error::invalid(
                 name,
                 "size",
-                format!("is {} x {}; replicate sets compare square images of one size ({n} x {n})", img.width, img.height),
+                format!(
+                    "is {} x {}; replicate sets compare square images of one size ({n} x {n})",
+                    img.width, img.height
+                ),
             ));
         }
     }
-    Ok(Replicates::from_fn(n, ra, 2, samples, |p, r, k, c| if k == 0 { a.1[r].pixels[p][c] } else { b.1[r].pixels[p][c] }))
+    Ok(Replicates::from_fn(
+        n,
+        ra,
+        2,
+        samples,
+        |p, r, k, c| if k == 0 { a.1[r].pixels[p][c] } else { b.1[r].pixels[p][c] },
+    ))
 }

@@ -6,6 +6,7 @@
 pub mod csv_table;
 pub mod display_file;
 pub mod display_intent;
+pub mod display_lenslet;
 pub mod exr;
 mod exr_attributes;
 mod exr_read;

@@ -22,7 +22,7 @@ use super::sampler::Sampler;
 mod through_optics;
 use crate::optics::diffraction::ApertureShape;
 use crate::optics::transfer::{eye_scene_ray, FastTransfer};
-use crate::optics::{Display, Eye, Retina};
+use crate::optics::{Display, Eye, PlaneRay, Retina};
 use crate::progress::Progress;
 use crate::raster::RgbImage;
 use crate::render::retina::eye_rays;
@@ -121,6 +121,7 @@ impl<'a> EyeToLcd<'a> {
 /// image `1 + m` what the eye perceives of display image `m` of `stack`.
 pub struct DisplaySource<'a, F: RadianceField + ?Sized> {
     eye: &'a Eye,
+
     field: &'a F,
     transfer: EyeToLcd<'a>,
     stack: &'a DisplayStack,
@@ -192,6 +193,24 @@ impl<F: RadianceField + ?Sized> PairedSource for DisplaySource<'_, F> {
         }
         // Where every ray meets the LCD first (independent work the CPU overlaps), then the
         // reads (independent loads).
+        if self.transfer.transfer.is_thick() {
+            // Real lenslets: each channel of the thin-lens eye's ray finds its own LCD pixel.
+            let eye_xy = self.eye.position.truncate();
+            for (o, s) in out.chunks_exact_mut(k).zip(samples) {
+                let r = crate::optics::transfer::eye_ray(self.eye, s.tangent, s.pupil);
+                let world = PlaneRay { position: r.position + eye_xy, slope: r.slope };
+                o[1..].fill([0.0; 3]);
+                for c in 0..3 {
+                    if let Some(i) = self.transfer.transfer.pixel_index_in(world, c, s.spectral) {
+                        let px = self.stack.pixel(i);
+                        for (j, v) in o[1..].iter_mut().enumerate() {
+                            v[c] = f64::from(px[3 * j + c]);
+                        }
+                    }
+                }
+            }
+            return;
+        }
         let mut lcd = vec![0u32; samples.len()];
         self.transfer.pixel_indices(samples, &mut lcd);
         match m {

@@ -9,6 +9,7 @@
 use glam::{DVec2, IVec2};
 
 use super::lattice::Lattice;
+use super::lenslet::{LensletOptics, ThickLenslet, D_LINE_NM};
 use super::limits;
 use crate::error::{Error, Result};
 
@@ -145,6 +146,9 @@ pub struct Display {
     /// the documented default, [`crate::optics::spectrum::Primaries::typical_lcd`]). Only the
     /// schematic eyes read them, tracing each channel at its primary's wavelengths.
     pub primaries: Option<crate::optics::spectrum::Primaries>,
+    /// The lenslets' optics: the paper's thin lens of `focal_length` (the default), or a real
+    /// thick lenslet traced exactly ([`crate::optics::lenslet`]).
+    pub lenslet: LensletOptics,
 }
 
 impl Display {
@@ -160,6 +164,7 @@ impl Display {
             elemental_images: Lattice::square(1.58).expect("valid built-in lattice"),
             lcd: Lcd { size: DVec2::splat(21.6), resolution: [2160, 2160] },
             primaries: None,
+            lenslet: LensletOptics::Paraxial,
         }
     }
 
@@ -167,9 +172,29 @@ impl Display {
     pub fn lenslet_z(&self) -> f64 {
         self.eye_to_lenslets
     }
-    /// z of the LCD plane.
+    /// z of the LCD plane (v1 + v2, plus a real lenslet's thickness: v1 runs to its front
+    /// vertex, v2 from its back vertex).
     pub fn lcd_z(&self) -> f64 {
-        self.eye_to_lenslets + self.lenslets_to_lcd
+        self.eye_to_lenslets + self.lenslet.thickness() + self.lenslets_to_lcd
+    }
+
+    /// The samplers of the red, green and blue primaries' spectra (`primaries`, or the typical
+    /// LCD's): the wavelengths a real lenslet refracts each channel at.
+    pub fn channel_samplers(&self) -> [crate::optics::spectrum::SpectrumSampler; 3] {
+        let typical = crate::optics::spectrum::Primaries::typical_lcd();
+        let p = self.primaries.as_ref().unwrap_or(&typical);
+        p.samplers("display").or_else(|_| typical.samplers("display")).expect("the typical LCD's primaries are valid")
+    }
+
+    /// The median wavelength of each channel's primary, nm: where a real lenslet refracts the
+    /// camera rays of display rendering and the eye rays of the grid estimator.
+    pub fn channel_wavelengths(&self) -> [f64; 3] {
+        self.channel_samplers().map(|s| s.wavelength(0.5))
+    }
+
+    /// The real lenslet, if the display has one.
+    pub fn thick_lenslet(&self) -> Option<&ThickLenslet> {
+        self.lenslet.thick()
     }
     /// Lenslet optical power d2 = 1/f.
     pub fn lenslet_power(&self) -> f64 {
@@ -179,7 +204,11 @@ impl Display {
     /// z (from the pupil) of the central depth plane, the lenslets' image of the LCD:
     /// `1/v2 - 1/f = 1/d` with the virtual image at `z = v1 + d`. `None` when the LCD is in the
     /// lenslets' focal plane (image at infinity) or the image is real (LCD beyond the focus).
+    /// With a real lenslet: its paraxial image of the LCD at the d line.
     pub fn central_depth_plane(&self) -> Option<f64> {
+        if let Some(t) = self.thick_lenslet() {
+            return t.lcd_image_distance(self.lenslets_to_lcd, D_LINE_NM).map(|d| self.eye_to_lenslets + d);
+        }
         let inv = 1.0 / self.lenslets_to_lcd - 1.0 / self.focal_length;
         if inv <= 0.0 {
             None
@@ -215,6 +244,9 @@ impl Display {
         limits::FOCAL_LENGTH.check(source, "focal_length (f)", self.focal_length)?;
         limits::LCD_SIZE.check(source, "lcd.size[0] (width)", self.lcd.size.x)?;
         limits::LCD_SIZE.check(source, "lcd.size[1] (height)", self.lcd.size.y)?;
+        if let Some(t) = self.thick_lenslet() {
+            t.validate(&self.lenslets, source, "lenslet")?;
+        }
         for (i, n) in self.lcd.resolution.iter().enumerate() {
             if *n == 0 {
                 return Err(Error::invalid(source, format!("lcd.resolution[{i}]"), "must be at least 1 pixel"));
@@ -238,9 +270,23 @@ impl Display {
         };
         let [a, b, c, d] = self.lenslets.row_major();
         let [ea, eb, ec, ed] = self.elemental_images.row_major();
+        let lenslet = match self.thick_lenslet() {
+            None => String::new(),
+            Some(t) => format!(
+                "; real lenslets: {} {} mm thick, front radius {} conic {}, back radius {} conic {}, EFL {:.4} mm \
+                 (d line)",
+                t.material.name,
+                t.thickness,
+                t.front.radius,
+                t.front.conic,
+                t.back.radius,
+                t.back.conic,
+                t.paraxial(D_LINE_NM).efl
+            ),
+        };
         format!(
             "display {}: v1 {} mm, v2 {} mm, f {} mm; lenslets shift ({}, {}) M [{a} {b}; {c} {d}]; \
-             EIs shift ({}, {}) M [{ea} {eb}; {ec} {ed}]; LCD {} x {} mm, {} x {} px; central depth plane {cdp}",
+             EIs shift ({}, {}) M [{ea} {eb}; {ec} {ed}]; LCD {} x {} mm, {} x {} px; central depth plane {cdp}{lenslet}",
             self.name,
             self.eye_to_lenslets,
             self.lenslets_to_lcd,

@@ -225,6 +225,7 @@ impl DisplayIntent {
             elemental_images: lattice(x.elemental_image_matrix_mm, "intent.lenslet_pitch")?,
             lcd: self.lcd,
             primaries: self.primaries.clone(),
+            lenslet: super::lenslet::LensletOptics::Paraxial,
         };
         if let Some(p) = &d.primaries {
             p.validate(source)?;

@@ -5,6 +5,7 @@ pub mod display;
 pub mod eye;
 pub mod intent;
 pub mod lattice;
+pub mod lenslet;
 pub mod limits;
 pub mod plausibility;
 pub mod spectrum;

@@ -22,11 +22,18 @@
 //! - LCD -> eye: [`lcd_to_eye`] (slow) and [`camera_ray`], the display-image renderer's ray of
 //!   a display pixel, plus [`pupil_center_point`], eq. (1) solved for the lenslet-plane point
 //!   whose ray passes through the pupil centre (the PupilCenter method).
+//!
+//! A display with real (thick) lenslets replaces eq. (1b) by the exact trace of
+//! [`crate::optics::lenslet`] (its slow twin: root finding of the sag equation): the eye's rays
+//! find one LCD pixel per colour channel through [`FastTransfer::pixel_index_in`], and the
+//! camera rays are [`ThickLenslet::camera_ray`].
 
 use glam::{DVec2, DVec3, IVec2};
 
 use super::display::{Display, PixelIndexer};
 use super::eye::Eye;
+use super::lenslet::{Intersection, ThickLenslet};
+use super::spectrum::SpectrumSampler;
 use crate::error::{Error, Result};
 use crate::ray::Ray;
 
@@ -117,6 +124,17 @@ pub struct FastTransfer<'a> {
     lenslet_power: f64,
     v2: f64,
     indexer: PixelIndexer,
+    /// A real lenslet: the lens, the channels' spectra, the pupil plane's z.
+    thick: Option<ThickTransfer<'a>>,
+}
+
+/// What the exact trace through a real lenslet needs.
+struct ThickTransfer<'a> {
+    lens: &'a ThickLenslet,
+    samplers: Box<[SpectrumSampler; 3]>,
+    /// The material's index at each channel's median wavelength (spectral coordinate 0.5).
+    median_index: [f64; 3],
+    eye_z: f64,
 }
 
 impl<'a> FastTransfer<'a> {
@@ -140,6 +158,11 @@ impl<'a> FastTransfer<'a> {
             lenslet_power: display.lenslet_power(),
             v2: display.lenslets_to_lcd,
             indexer: PixelIndexer::new(&display.lcd),
+            thick: display.thick_lenslet().map(|lens| {
+                let samplers = Box::new(display.channel_samplers());
+                let median_index = std::array::from_fn(|c| lens.material.index(samplers[c].wavelength(0.5)));
+                ThickTransfer { lens, samplers, median_index, eye_z: eye.position.z }
+            }),
         }
     }
 
@@ -197,6 +220,37 @@ impl<'a> FastTransfer<'a> {
         let c = self.display.lenslets.center(self.display.lenslets.nearest(x2));
         let w2 = ray.slope - (x2 - c) * self.lenslet_power + deviation;
         self.indexer.index(x2 + w2 * self.v2)
+    }
+
+    /// Whether the display's lenslets are real ones: then each colour channel has its own LCD
+    /// pixel ([`FastTransfer::pixel_index_in`]) and the one-pixel paths above do not apply.
+    pub fn is_thick(&self) -> bool {
+        self.thick.is_some()
+    }
+
+    /// The LCD pixel met in colour channel `c` by `ray` (given as for
+    /// [`FastTransfer::pixel_index_of`]), at the wavelength the spectral coordinate `u` picks
+    /// from the channel's primary: through a real lenslet, the exact trace
+    /// ([`ThickLenslet::trace_to_lcd`]; a blocked ray meets no pixel); through the thin lens,
+    /// [`FastTransfer::pixel_index_of`] for every channel.
+    #[inline]
+    pub fn pixel_index_in(&self, ray: PlaneRay, c: usize, u: f64) -> Option<usize> {
+        let Some(t) = &self.thick else {
+            return self.pixel_index_of(ray);
+        };
+        let n = if u == 0.5 { t.median_index[c] } else { t.lens.material.index(t.samplers[c].wavelength(u)) };
+        let d = self.display;
+        t.lens
+            .trace_to_lcd_in(
+                &d.lenslets,
+                d.lenslet_z(),
+                d.lcd_z(),
+                ray.position.extend(t.eye_z),
+                ray.slope,
+                n,
+                Intersection::ClosedForm,
+            )
+            .and_then(|tr| self.indexer.index(tr.lcd))
     }
 
     /// The LCD pixel that ray hits, if any ([`crate::optics::Lcd::pixel_index`]).

@@ -112,7 +112,7 @@ impl<'a> EyeOperator<'a> {
             for row in rows {
                 for col in 0..n {
                     let pixel = (row * n + col) as u32;
-                    for sr in through_optics::pixel_samples(optics, &self.eye, &self.retina, row, col) {
+                    for (_, sr) in through_optics::pixel_samples(optics, &self.eye, &self.retina, row, col) {
                         through_optics::each_ray(&sr, |channels, r| {
                             if let Some(i) = self.fast.pixel_index_of(through_optics::world(&self.eye, r)) {
                                 let channel = if channels.len() == 3 { 3 } else { channels.start as u8 };

@@ -19,7 +19,8 @@
 //! from LA's.
 //!
 //! The camera ray itself is eq. (1) and lives with it ([`camera_ray`]); the scene is read
-//! through a [`RadianceField`].
+//! through a [`RadianceField`]. A display with real lenslets renders through them
+//! ([`super::display_thick`]).
 
 use std::fmt;
 use std::str::FromStr;
@@ -261,7 +262,7 @@ fn render_into<R: RadianceField + ?Sized>(
     mut depth: Vec<f32>,
 ) -> Result<(Vec<f32>, bool)> {
     check_eye_in_front(display, settings.eye_position.z, "display render settings", "eye_position")?;
-    if method == Method::PupilCenter {
+    if method == Method::PupilCenter && display.thick_lenslet().is_none() {
         check_pupil_center(display, settings.eye_position)?;
     }
     if settings.samples_per_pixel == 0 || settings.samples_per_pixel > 64 {
@@ -275,6 +276,9 @@ fn render_into<R: RadianceField + ?Sized>(
                 format!("must be between 1 and 64, got {grid}"),
             ));
         }
+    }
+    if let Some(lens) = display.thick_lenslet() {
+        return super::display_thick::render_into(display, lens, method, settings, tracer, progress, dst, depth);
     }
     let lcd = display.lcd;
     let (nx, ny) = (lcd.columns(), lcd.rows());

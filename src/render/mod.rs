@@ -4,6 +4,7 @@
 pub mod backend;
 pub mod display_image;
 pub mod display_stack;
+pub mod display_thick;
 pub mod field;
 pub(crate) mod planar;
 pub mod retina;

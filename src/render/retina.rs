@@ -14,6 +14,7 @@ use rayon::prelude::*;
 
 use super::field::{bounds, AffineRays, RadianceField, Sample};
 use crate::error::{Error, Result};
+use crate::optics::eye::EyeOptics;
 use crate::optics::transfer::{eye_scene_ray, FastTransfer};
 use crate::optics::{Display, Eye, Retina};
 use crate::progress::Progress;
@@ -85,7 +86,10 @@ pub fn simulate_stack(
 
     let mut images: Vec<RgbImage> =
         (0..m).map(|_| RgbImage::try_new(n, n, "a retinal image")).collect::<Result<_>>()?;
-    if let Some(optics) = &eye.optics {
+    // A display with real lenslets is seen through the thin-lens eye's `EyeOptics`, so that each
+    // colour channel finds its own LCD pixel.
+    let thin = (eye.optics.is_none() && display.thick_lenslet().is_some()).then(|| EyeOptics::thin_lens(eye));
+    if let Some(optics) = eye.optics.as_deref().or(thin.as_ref()) {
         let images = through_optics::simulate_stack(display, eye, optics, retina, stack, images, progress);
         // A cancelled simulation skipped pixels: its images are not returned.
         progress.check()?;

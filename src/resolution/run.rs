@@ -40,7 +40,13 @@ pub fn crop_display(display: &Display, half_tangent: DVec2, pupil_radius: f64, m
     let cell = 0.5 * (m.x_axis.abs() + m.y_axis.abs());
     let slope = half_tangent + DVec2::splat(pupil_radius * max_vergence.abs());
     let x2 = DVec2::splat(pupil_radius) + slope * v1;
-    let lcd = x2 + (slope + cell / display.focal_length) * v2;
+    let mut lcd = x2 + (slope + cell / display.focal_length) * v2;
+    if let Some(t) = display.thick_lenslet() {
+        // A real lenslet: the LCD is a thickness farther, and its shortest focal length over the
+        // visible range and its aberrations bend rays more than 1/f; a quarter more is ample.
+        let f = [400.0, 700.0].map(|nm| t.paraxial(nm).efl.abs()).into_iter().fold(display.focal_length, f64::min);
+        lcd = 1.25 * (x2 + (slope + cell / f) * (v2 + t.thickness));
+    }
     let pitch = display.lcd.pixel_pitch();
     let res = display.lcd.resolution;
     let pixels = |i: usize, half: f64| -> usize {

@@ -3,7 +3,8 @@
 //! measurement, each sample's object-space rays from [`EyeOptics::rays`] instead of eq. (1b)'s
 //! thin lens. Channel c of the ground truth is the scene's channel c along channel c's ray, and
 //! channel c of every perceived image the display image's channel c at the LCD pixel that ray
-//! meets (eq. (1) from the lenslet plane on, [`FastTransfer::pixel_index_of`]); a ray blocked
+//! meets (eq. (1) from the lenslet plane on, [`FastTransfer::pixel_index_of`], or through real
+//! lenslets each channel's own pixel, [`FastTransfer::pixel_index_in`]); a ray blocked
 //! inside the eye carries black for every image, as a ray that misses the LCD does.
 //!
 //!
@@ -14,6 +15,7 @@
 //! channel's wavelength.
 //!
 //! [`FastTransfer::pixel_index_of`]: crate::optics::transfer::FastTransfer::pixel_index_of
+//! [`FastTransfer::pixel_index_in`]: crate::optics::transfer::FastTransfer::pixel_index_in
 
 use super::{DisplaySource, EyeSample};
 use crate::optics::eye::EyeOptics;
@@ -70,19 +72,29 @@ impl<F: RadianceField + ?Sized> DisplaySource<'_, F> {
                 let Some(r) = sr.rays[c] else { continue };
                 let gt = hits[next].radiance.to_array();
                 next += 1;
-                let idx = match &self.lenslet {
-                    Some(shape) => {
-                        let deviation =
-                            shape.deviation([s.diffraction[2], s.diffraction[3]], optics.wavelength(c, s.spectral));
-                        self.transfer.transfer.pixel_index_deviated(world(r), deviation)
+                let thick = self.transfer.transfer.is_thick();
+                let idx = if thick {
+                    None
+                } else {
+                    match &self.lenslet {
+                        Some(shape) => {
+                            let deviation =
+                                shape.deviation([s.diffraction[2], s.diffraction[3]], optics.wavelength(c, s.spectral));
+                            self.transfer.transfer.pixel_index_deviated(world(r), deviation)
+                        }
+                        None => self.transfer.transfer.pixel_index_of(world(r)),
                     }
-                    None => self.transfer.transfer.pixel_index_of(world(r)),
                 };
-                let px = idx.map(|i| self.stack.pixel(i));
+                let mut px = idx.map(|i| self.stack.pixel(i));
                 // The channels this ray carries: all three for one ray, else its own.
                 let carried = if sr.single { 0..3 } else { c..c + 1 };
                 for ch in carried {
                     o[0][ch] = gt[ch] * sr.weight;
+                    if thick {
+                        // A real lenslet: each channel refracted at its own wavelength.
+                        let i = self.transfer.transfer.pixel_index_in(world(r), ch, s.spectral);
+                        px = i.map(|i| self.stack.pixel(i));
+                    }
                     if let Some(px) = px {
                         for (j, v) in o[1..].iter_mut().enumerate() {
                             v[ch] = f64::from(px[3 * j + ch]) * sr.weight;

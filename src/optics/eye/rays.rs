@@ -316,6 +316,30 @@ impl EyeOptics {
         })))
     }
 
+    /// The paper's thin-lens eye (eq. (1b) with d1, no Stiles-Crawford) as an `EyeOptics`: the
+    /// eye a display with real lenslets is simulated through, so that each colour channel finds
+    /// its own LCD pixel (the thin lens's fast paths read one pixel for all three).
+    pub fn thin_lens(eye: &super::Eye) -> EyeOptics {
+        let pupil_diameter = match eye.aperture {
+            Aperture::Pinhole => 0.0,
+            Aperture::ThinLens { pupil_diameter, .. } => pupil_diameter,
+        };
+        EyeOptics {
+            lens: Lens::ThinLens { v0: eye.retina_distance, d1: eye.power() },
+            map: None,
+            model: EyeModel::ThinLens,
+            accommodation: None,
+            pupil_diameter,
+            iris_diameter: pupil_diameter,
+            spectrum: Spectrum::Single(crate::optics::lenslet::D_LINE_NM),
+            wavelength_samples: 1,
+            stiles_crawford: None,
+            criterion: FocusCriterion::default(),
+            reference_nm: crate::optics::lenslet::D_LINE_NM,
+            diffraction: Diffraction::None,
+        }
+    }
+
     /// The schematic eye, if this is one.
     pub fn schematic(&self) -> Option<&SchematicEye> {
         match &self.lens {

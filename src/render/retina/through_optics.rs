@@ -2,7 +2,8 @@
 //! schematic eye, the display primaries' wavelengths, Stiles-Crawford; `optics::eye::rays`): for
 //! every retina sub-pixel sample, pupil-grid point and wavelength quantile of each primary, the
 //! sample's rays ([`EyeOptics::rays`]) into the scene (the ground truth) or on through the
-//! lenslets to the LCD (the perceived images, eq. (1) from the lenslet plane on). The pixel is
+//! lenslets to the LCD (the perceived images, eq. (1) from the lenslet plane on, or the exact
+//! trace through real lenslets, channel by channel at each channel's wavelength). The pixel is
 //! the plain mean over those samples, as on the thin lens's grid; a ray blocked inside the eye
 //! carries black.
 
@@ -19,20 +20,23 @@ use crate::raster::RgbImage;
 use crate::ray::Ray;
 use crate::render::RadianceField;
 
-/// Every sample of pixel (row, col): its rays.
+/// Every sample of pixel (row, col): its spectral coordinate and rays.
 pub(crate) fn pixel_samples<'a>(
     optics: &'a EyeOptics,
     eye: &'a Eye,
     retina: &'a Retina,
     row: usize,
     col: usize,
-) -> impl Iterator<Item = SampleRays> + 'a {
+) -> impl Iterator<Item = (f64, SampleRays)> + 'a {
     let pupil = eye.pupil_samples();
     let spectral = optics.grid_spectral();
     retina.subpixel_offsets().into_iter().flat_map(move |frac| {
         let t = retina.tangent(row, col, frac);
         let spectral = spectral.clone();
-        pupil.clone().into_iter().flat_map(move |s| spectral.clone().into_iter().map(move |u| optics.rays(t, s, u)))
+        pupil
+            .clone()
+            .into_iter()
+            .flat_map(move |s| spectral.clone().into_iter().map(move |u| (u, optics.rays(t, s, u))))
     })
 }
 
@@ -86,9 +90,19 @@ pub(super) fn simulate_stack(
                     break;
                 }
                 let acc = &mut out[col * 3 * m..(col + 1) * 3 * m];
-                for sr in pixel_samples(optics, eye, retina, row, col) {
+                for (u, sr) in pixel_samples(optics, eye, retina, row, col) {
                     each_ray(&sr, |channels, r| {
-                        if let Some(i) = transfer.pixel_index_of(world(eye, r)) {
+                        if transfer.is_thick() {
+                            // A real lenslet: each channel refracted at its own wavelength.
+                            for c in channels {
+                                if let Some(i) = transfer.pixel_index_in(world(eye, r), c, u) {
+                                    let px = stack.pixel(i);
+                                    for j in 0..m {
+                                        acc[3 * j + c] += f64::from(px[3 * j + c]) * sr.weight;
+                                    }
+                                }
+                            }
+                        } else if let Some(i) = transfer.pixel_index_of(world(eye, r)) {
                             let px = stack.pixel(i);
                             for j in 0..m {
                                 for c in channels.clone() {
@@ -132,7 +146,7 @@ pub(super) fn ground_truth<R: RadianceField + ?Sized>(
                 break;
             }
             let mut sum = DVec3::ZERO;
-            for sr in pixel_samples(optics, eye, retina, row, col) {
+            for (_, sr) in pixel_samples(optics, eye, retina, row, col) {
                 each_ray(&sr, |channels, r| {
                     let w = world(eye, r);
                     let l = field.radiance(&Ray { origin: w.position.extend(z), dir: w.slope.extend(1.0) });
