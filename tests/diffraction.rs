@@ -123,6 +123,7 @@ fn single_lenslet_display(lattice: Lattice) -> Display {
         elemental_images: lattice,
         lcd: Lcd { size: DVec2::splat(8.0), resolution: [800, 800] },
         primaries: None,
+        lenslet: Default::default(),
     }
 }
 

@@ -201,7 +201,8 @@ impl<F: RadianceField + ?Sized> PairedSource for DisplaySource<'_, F> {
                 let world = PlaneRay { position: r.position + eye_xy, slope: r.slope };
                 o[1..].fill([0.0; 3]);
                 for c in 0..3 {
-                    if let Some(i) = self.transfer.transfer.pixel_index_in(world, c, s.spectral) {
+                    // Not spectral: each channel at its primary's median wavelength.
+                    if let Some(i) = self.transfer.transfer.pixel_index_in(world, c, 0.5) {
                         let px = self.stack.pixel(i);
                         for (j, v) in o[1..].iter_mut().enumerate() {
                             v[c] = f64::from(px[3 * j + c]);

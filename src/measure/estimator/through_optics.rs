@@ -92,7 +92,9 @@ impl<F: RadianceField + ?Sized> DisplaySource<'_, F> {
                     o[0][ch] = gt[ch] * sr.weight;
                     if thick {
                         // A real lenslet: each channel refracted at its own wavelength.
-                        let i = self.transfer.transfer.pixel_index_in(world(r), ch, s.spectral);
+                        // Each channel at the sampled wavelength, else its primary's median.
+                        let u = if optics.is_single_wavelength() { 0.5 } else { s.spectral };
+                        let i = self.transfer.transfer.pixel_index_in(world(r), ch, u);
                         px = i.map(|i| self.stack.pixel(i));
                     }
                     if let Some(px) = px {
