@@ -95,6 +95,7 @@ pub mod optics;
 pub mod optimize;
 pub mod overrides;
 pub mod progress;
+pub mod provenance;
 pub mod raster;
 pub mod ray;
 pub mod render;

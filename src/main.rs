@@ -300,6 +300,10 @@ enum Command {
         /// either way).
         #[arg(long, default_value = "none", value_parser = ["none", "pupil", "apertures"])]
         diffraction: String,
+        /// Check the provenance of a run folder (an `assess` run's results.json, or a sweep's
+        /// point records): hash every input file it read again and report what changed.
+        #[arg(long, value_name = "RUN_DIR", conflicts_with_all = ["display", "scene", "eye", "print", "write_display"])]
+        provenance: Option<PathBuf>,
     },
 }
 
@@ -495,6 +499,11 @@ fn run() -> Result<()> {
                 eprint!("{}", run.timings_text());
                 eprintln!("wrote {}", run.out.display());
             }
+            printed_total = true;
+        }
+        Command::Info { provenance: Some(dir), .. } => {
+            let (text, _) = inimtrace::provenance::report(&dir)?;
+            out!("{text}");
             printed_total = true;
         }
         Command::Info { eye: Some(model), focus_diopters, pupil, json, .. } => {

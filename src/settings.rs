@@ -401,6 +401,43 @@ pub fn load_display_part(path: Option<&Path>, overrides: &[Override]) -> Result<
 /// # Ok::<(), inimtrace::Error>(())
 /// ```
 pub fn load_experiment(path: Option<&Path>, scene: Option<&Path>, overrides: &[Override]) -> Result<Experiment> {
+    let (exp, files) = crate::provenance::recording(|| load_experiment_files(path, scene, overrides));
+    let mut exp = exp?;
+    exp.provenance = provenance_of(&exp, path.map(|p| p.display().to_string()), files, overrides);
+    Ok(exp)
+}
+
+/// The provenance of `exp`: its experiment file as given (`None`: built in), the files read to
+/// load it, the overrides applied, its budgets and seed.
+pub fn provenance_of(
+    exp: &Experiment,
+    experiment_path: Option<String>,
+    files: Vec<crate::provenance::InputFile>,
+    overrides: &[Override],
+) -> crate::provenance::Provenance {
+    let m = &exp.measurement;
+    crate::provenance::Provenance {
+        experiment_path,
+        scene_name: exp.scene.name.clone(),
+        scene_path: exp.spec.scene.clone(),
+        display_path: exp.spec.display.clone(),
+        files,
+        set: overrides.iter().map(Override::to_arg).collect(),
+        budgets: crate::provenance::Budgets {
+            estimator: m.estimator.name().to_string(),
+            psnr_ci95_db: m.psnr_ci95_db,
+            ssim_ci95: m.ssim_ci95,
+            max_samples_per_pixel: m.max_samples_per_pixel,
+            max_seconds: m.max_seconds,
+            memory_bytes: crate::budget::memory_budget().bytes,
+        },
+        seed: m.seed,
+        working_directory: std::env::current_dir().map(|d| d.display().to_string()).unwrap_or_default(),
+    }
+}
+
+/// [`load_experiment`] without its provenance.
+fn load_experiment_files(path: Option<&Path>, scene: Option<&Path>, overrides: &[Override]) -> Result<Experiment> {
     if !overrides.is_empty() {
         let mut s = match path {
             Some(p) => Settings::experiment_file(p)?,

@@ -67,10 +67,25 @@ fn attrs(path: &Path) -> Vec<(String, AttrValue)> {
     read_typed_attributes(path).unwrap()
 }
 
-/// The attributes of `a` and `b` agree except for those only `assess` knows.
+/// The provenance attributes `assess` writes (its experiment's files and overrides).
+const PROVENANCE: [&str; 6] = [
+    "inimtrace:scene",
+    "inimtrace:scene_path",
+    "inimtrace:scene_sha256",
+    "inimtrace:experiment_path",
+    "inimtrace:input_files_sha256",
+    "inimtrace:set",
+];
+
+/// The attributes of `a` and `b` agree except for those only `assess` knows (and its
+/// provenance, which `b`, written by `assess`, must carry).
 fn same_metadata(a: &Path, b: &Path, only_assess: &[&str]) {
+    let names: Vec<String> = attrs(b).into_iter().map(|(k, _)| k).collect();
+    for p in ["inimtrace:scene", "inimtrace:scene_sha256", "inimtrace:input_files_sha256"] {
+        assert!(names.iter().any(|n| n == p), "{} lacks {p}", b.display());
+    }
     let keep = |v: Vec<(String, AttrValue)>| -> Vec<(String, AttrValue)> {
-        v.into_iter().filter(|(k, _)| !only_assess.contains(&k.as_str())).collect()
+        v.into_iter().filter(|(k, _)| !only_assess.contains(&k.as_str()) && !PROVENANCE.contains(&k.as_str())).collect()
     };
     let (x, y) = (keep(attrs(a)), keep(attrs(b)));
     assert_eq!(x, y, "{} and {} carry different metadata", a.display(), b.display());

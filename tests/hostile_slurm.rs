@@ -258,3 +258,74 @@ fn wait_keeps_waiting_on_a_reason_that_clears() {
     assert!(e.contains("job 4242 ended with 12 of 12 points missing") && !e.contains("cannot clear"), "{e}");
     assert_eq!(std::fs::read_to_string(&count).unwrap().trim(), "6");
 }
+
+/// Every file under `dir` with its bytes (empty when `dir` is not there).
+fn tree(dir: &Path) -> Vec<(std::path::PathBuf, Vec<u8>)> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).into_iter().flatten().flatten() {
+            let p = e.path();
+            if p.is_dir() {
+                out.push((p.clone(), Vec::new()));
+                stack.push(p);
+            } else {
+                out.push((p.clone(), std::fs::read(&p).unwrap()));
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+#[test]
+fn a_dry_run_writes_nothing_and_its_script_spreads_points_and_hints_complete_commands() {
+    let dir = tempfile::tempdir().unwrap();
+    // A folder that is not there stays absent.
+    let out = dir.path().join("fresh");
+    let o = inimtrace(&["sweep", &tiny(), "--out", out.to_str().unwrap(), "--slurm", "--dry-run", "--array-max", "5"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!out.exists(), "--dry-run created {}", out.display());
+    let script = String::from_utf8(o.stdout).unwrap();
+    // 12 points of equal cost over 5 tasks: dealt out in turn, never contiguous runs.
+    for chunk in ["'0,5,10'", "'1,6,11'", "'2,7'", "'3,8'", "'4,9'"] {
+        assert!(script.contains(chunk), "{chunk}: {script}");
+    }
+    assert!(script.contains("spread by\n# estimated cost"), "{script}");
+    // The collect hint is a complete command: this program, the sweep, --out, the --set.
+    let o = inimtrace(&[
+        "sweep",
+        &tiny(),
+        "--out",
+        out.to_str().unwrap(),
+        "--slurm",
+        "--dry-run",
+        "--set",
+        "eye.retina_resolution=48",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let script = String::from_utf8(o.stdout).unwrap();
+    let hint = script.lines().find(|l| l.ends_with(" --collect")).unwrap_or_else(|| panic!("{script}"));
+    let exe = std::fs::canonicalize(env!("CARGO_BIN_EXE_inimtrace")).unwrap();
+    assert_eq!(
+        hint,
+        format!(
+            "#   {} sweep {} --out {} --set eye.retina_resolution=48 --collect",
+            exe.display(),
+            tiny(),
+            std::path::absolute(&out).unwrap().display()
+        )
+    );
+
+    // A folder with a finished point in it: byte for byte the same afterwards.
+    let used = dir.path().join("used");
+    let run = inimtrace(&["--quiet", "sweep", &tiny(), "--out", used.to_str().unwrap(), "--points", "0"]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let before = tree(&used);
+    assert!(before.iter().any(|(p, _)| p.extension().is_some_and(|e| e == "json")));
+    let o = inimtrace(&["sweep", &tiny(), "--out", used.to_str().unwrap(), "--slurm", "--dry-run"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let script = String::from_utf8(o.stdout).unwrap();
+    assert!(script.contains("11 of its 12 points in 11 tasks"), "the recorded point is not submitted: {script}");
+    assert_eq!(tree(&used), before, "--dry-run changed {}", used.display());
+}

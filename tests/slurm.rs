@@ -120,14 +120,17 @@ fn a_job_array_of_four_tasks_gives_the_local_table() {
     let (ok, _, e) = inimtrace(&["sweep", &tiny(), "--out", local.to_str().unwrap()]);
     assert!(ok, "{e}");
 
-    // The script: 4 tasks of 3 points each.
+    // The script: 4 tasks of 3 points each, dealt out in turn (the tiny sweep's points all cost
+    // the same), and a complete command to collect.
     let (ok, script, e) =
         inimtrace(&["sweep", &tiny(), "--out", remote.to_str().unwrap(), "--slurm", "--array-max", "4", "--dry-run"]);
     assert!(ok, "{e}");
     assert!(script.contains("#SBATCH --array=0-3\n"), "{script}");
-    for chunk in ["'0..3'", "'3..6'", "'6..9'", "'9..12'"] {
+    for chunk in ["'0,4,8'", "'1,5,9'", "'2,6,10'", "'3,7,11'"] {
         assert!(script.contains(chunk), "{script}");
     }
+    assert!(script.contains(&format!("sweep {} --out {} --collect", tiny(), remote.display())), "{script}");
+    assert!(!remote.exists(), "--dry-run wrote into {}", remote.display());
 
     let (ok, stdout, e) = inimtrace(&[
         "sweep",
@@ -172,15 +175,20 @@ fn a_cancelled_task_leaves_no_partial_point_and_a_resubmission_runs_only_its_poi
     args.extend(slow);
     let (ok, stdout, e) = inimtrace(&args);
     assert!(ok, "{e}");
-    let job = stdout.trim().strip_prefix("submitted job ").unwrap_or_else(|| panic!("no job id: {stdout}")).to_string();
+    let first = stdout.lines().next().unwrap_or_default();
+    let job = first.strip_prefix("submitted job ").unwrap_or_else(|| panic!("no job id: {stdout}")).to_string();
+    // The hint is the complete command that collects this sweep.
+    assert!(stdout.contains(&format!(" --out {out_s} --set eye.retina_resolution=256")), "{stdout}");
+    assert!(stdout.trim_end().ends_with(" --collect"), "{stdout}");
 
-    // Cancel task 1 (points 3..6) once it has recorded its first point.
+    // Cancel task 1 (points 1, 5, 9: equal costs are dealt out in turn) once it has recorded its
+    // first point.
     let mut collect_args = vec!["sweep", &file, "--out", &out_s, "--collect"];
     collect_args.extend(slow);
     let (ok, _, e) = inimtrace(&collect_args);
     assert!(ok, "{e}");
     let ids = point_ids(&out);
-    let task1: Vec<&String> = ids[3..6].iter().collect();
+    let task1: Vec<&String> = [1, 5, 9].iter().map(|&i| &ids[i]).collect();
     loop {
         assert!(start.elapsed() < Duration::from_secs(300), "task 1 recorded no point");
         let done = records(&out);
@@ -200,7 +208,7 @@ fn a_cancelled_task_leaves_no_partial_point_and_a_resubmission_runs_only_its_poi
 
     let before = records(&out);
     let missing: BTreeSet<usize> = (0..12).filter(|&i| !before.contains_key(&format!("{}.json", ids[i]))).collect();
-    assert!(!missing.is_empty() && missing.iter().all(|i| (3..6).contains(i)), "missing {missing:?}");
+    assert!(!missing.is_empty() && missing.iter().all(|i| [1, 5, 9].contains(i)), "missing {missing:?}");
     // No partial point: every record there is complete and names its point.
     for (name, bytes) in &before {
         let r: serde_json::Value = serde_json::from_slice(bytes).unwrap();

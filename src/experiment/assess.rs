@@ -180,6 +180,7 @@ fn assess_with<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
         let m = exp.methods[k];
         let mut attributes = metadata::common("display image", name);
         attributes.extend(metadata::display_image(m, display, &exp.render, backend_name, depth.is_some()));
+        attributes.extend(metadata::provenance(&exp.provenance));
         let stem = format!("display_{}", m.name());
         // The writes run on rayon's workers: they carry the progress sink, which may cancel them.
         let sink = crate::progress::installed();
@@ -254,6 +255,7 @@ fn assess_with<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
         total_seconds: start.elapsed().as_secs_f64(),
         settings: exp.spec.clone(),
         optimization,
+        provenance: exp.provenance.clone(),
     };
     if let Some(dir) = dir {
         write_reports(&report, exp, dir)?;
@@ -278,6 +280,7 @@ fn write_case(
         if let Some(spp) = converged {
             crate::experiment::converged::set_exr_attributes(&mut a, exp, spp);
         }
+        a.extend(metadata::provenance(&exp.provenance));
         a
     };
     let mut jobs = Vec::new();

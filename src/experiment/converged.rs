@@ -186,6 +186,6 @@ pub fn set_exr_attributes(attributes: &mut Attributes, exp: &Experiment, samples
         .set("inimtrace:pupil_sampling", "continuous disk")
         .set("inimtrace:retina_samples_per_pixel", AttrValue::count(samples_per_pixel as usize))
         .set("inimtrace:replicates", AttrValue::count(m.replicates))
-        .set("inimtrace:seed", m.seed.to_string())
+        .set("inimtrace:seed", crate::experiment::metadata::seed_value(m.seed))
         .set("inimtrace:value", "mean over the replicates");
 }

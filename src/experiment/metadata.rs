@@ -165,3 +165,44 @@ pub fn perceived(
     a.extend(display(d));
     a
 }
+
+/// A seed as a number: an `int` when it fits one (every seed below 2^31), else a `double` when it
+/// is exact as one (below 2^53), else its decimal text.
+pub fn seed_value(seed: u64) -> AttrValue {
+    if let Ok(v) = i32::try_from(seed) {
+        AttrValue::I32(v)
+    } else if seed < (1u64 << 53) {
+        AttrValue::F64(seed as f64)
+    } else {
+        AttrValue::Text(seed.to_string())
+    }
+}
+
+/// Where an image comes from (see [`crate::provenance`]): the scene's name and path as given,
+/// its file's SHA-256, every input file with its SHA-256 (one `SHA256  PATH` line each, as
+/// `sha256sum` writes them) and the `--set` overrides (one per line). Nothing for an
+/// experiment built in code.
+pub fn provenance(p: &crate::provenance::Provenance) -> Attributes {
+    let mut a = Attributes::new();
+    if p.scene_name.is_empty() {
+        return a;
+    }
+    a.set("inimtrace:scene", latin1(&p.scene_name));
+    a.set("inimtrace:scene_path", latin1(&p.scene_path));
+    if let Some(h) = p.scene_sha256() {
+        a.set("inimtrace:scene_sha256", h);
+    }
+    if let Some(e) = &p.experiment_path {
+        a.set("inimtrace:experiment_path", latin1(e));
+    }
+    let files: Vec<String> = p.files.iter().map(|f| format!("{}  {}", f.sha256, latin1(&f.path))).collect();
+    a.set("inimtrace:input_files_sha256", files.join("\n"));
+    a.set("inimtrace:set", latin1(&p.set.join("\n")));
+    a
+}
+
+/// Text OpenEXR can hold (Latin-1): other characters as `\u{...}` escapes (results.json has the
+/// text as it is).
+fn latin1(s: &str) -> String {
+    s.chars().map(|c| if (c as u32) < 256 { c.to_string() } else { c.escape_unicode().to_string() }).collect()
+}

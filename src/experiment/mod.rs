@@ -454,6 +454,9 @@ pub struct Experiment {
     pub optimize: Option<crate::optimize::Optimization>,
     /// The spec it was resolved from (what reports echo).
     pub spec: ExperimentSpec,
+    /// What the run read and how it was asked to run (filled in by the loaders of
+    /// [`crate::settings`]; empty for an experiment built in code).
+    pub provenance: crate::provenance::Provenance,
 }
 
 impl Experiment {
@@ -666,6 +669,7 @@ impl Experiment {
             measurement,
             optimize,
             spec,
+            provenance: Default::default(),
         })
     }
 

@@ -134,6 +134,9 @@ pub struct AssessReport {
     /// OPT's convergence record, when OPT is among the methods.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub optimization: Option<crate::optimize::OptimizationReport>,
+    /// Where the results come from: the scene's name and path as given, every file read with its
+    /// SHA-256, the `--set` overrides, the budgets and the seed.
+    pub provenance: crate::provenance::Provenance,
 }
 
 /// Table 1 as Markdown: rows are eye cases, columns PSNR per method | SSIM per method.

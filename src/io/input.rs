@@ -142,6 +142,7 @@ fn read_open(path: &Path, file: File, size: u64) -> Result<Vec<u8>> {
         ))
     })?;
     file.take(size).read_to_end(&mut bytes).map_err(|e| Error::io(path, e))?;
+    crate::provenance::note_read(path, &bytes);
     Ok(bytes)
 }
 

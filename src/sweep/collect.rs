@@ -192,7 +192,9 @@ pub fn collect(sweep: &Sweep, resolved: &[Resolved], store: &Store) -> Result<Co
     let text = serde_json::to_string_pretty(&doc).map_err(|e| Error::serialize("serialise sweep.json", e))?;
     write_text(&out.json, &text)?;
 
-    out.plots = write_plots(&store.root().join("plots"), &keys, &plot_rows)?;
+    let axes: Vec<usize> =
+        sweep.spec.axes.iter().enumerate().flat_map(|(a, axis)| axis.keys.iter().map(move |_| a)).collect();
+    out.plots = write_plots(&store.root().join("plots"), &keys, &axes, &plot_rows)?;
     Ok(out)
 }
 

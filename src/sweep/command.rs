@@ -5,8 +5,8 @@
 use std::path::PathBuf;
 
 use super::collect::{collect, Collected};
-use super::run::{run_points, validate, LocalOptions};
-use super::slurm::{submit, wait_for, SlurmOptions};
+use super::run::{point_costs, run_points, LocalOptions, SweepInputs};
+use super::slurm::{submit, sweep_command_line, wait_for, SlurmOptions};
 use super::spec::parse_selection;
 use super::store::Store;
 use super::Sweep;
@@ -90,7 +90,8 @@ fn collected(sweep: &Sweep, c: &Collected) -> SweepOutput {
 /// Runs the command; returns what goes to stdout (the script of `--dry-run`, else the
 /// collection summary) and whether score rows missed their precision target.
 pub fn execute(cmd: &SweepCommand, log: &mut dyn FnMut(String)) -> Result<SweepOutput> {
-    let sweep = Sweep::load(&cmd.sweep, &cmd.overrides, cmd.out.as_deref())?;
+    let (sweep, files) = crate::provenance::recording(|| Sweep::load(&cmd.sweep, &cmd.overrides, cmd.out.as_deref()));
+    let sweep = sweep?;
     let resolved = sweep.resolve()?;
     let id = Sweep::id(&resolved)?;
     if let Some(expected) = &cmd.sweep_id {
@@ -102,7 +103,9 @@ pub fn execute(cmd: &SweepCommand, log: &mut dyn FnMut(String)) -> Result<SweepO
             ));
         }
     }
-    let store = Store::open(&sweep.out)?;
+    // A dry run writes nothing, not even the output folder.
+    let dry_run = cmd.slurm.as_ref().is_some_and(|s| s.dry_run);
+    let store = if dry_run { Store::existing(&sweep.out) } else { Store::open(&sweep.out)? };
     let images = cmd.images || sweep.spec.images;
     let n = sweep.points.len();
     let name = format!("sweep `{}`", sweep.spec.name);
@@ -113,9 +116,9 @@ pub fn execute(cmd: &SweepCommand, log: &mut dyn FnMut(String)) -> Result<SweepO
     }
 
     if let Some(slurm) = &cmd.slurm {
-        validate(&resolved)?;
+        let costs = point_costs(&resolved)?;
         let opts = SlurmOptions { images, backend: cmd.backend, exr_compression: cmd.exr_compression, ..slurm.clone() };
-        let sub = submit(&sweep, &resolved, &store, &opts)?;
+        let sub = submit(&sweep, &resolved, &costs, &store, &opts)?;
         if opts.dry_run {
             if sub.points.is_empty() {
                 log(format!("{name}: all {n} points are complete; nothing to submit"));
@@ -128,14 +131,19 @@ pub fn execute(cmd: &SweepCommand, log: &mut dyn FnMut(String)) -> Result<SweepO
             return Ok(collected(&sweep, &c));
         };
         log(format!(
-            "{name}: submitted job {job}: {} array task(s) for the {} missing of {n} points (script {}, logs in {}/slurm/)",
+            "{name}: submitted job {job}: {} array task(s) for the {} missing of {n} points, spread by estimated cost \
+             (script {}, logs in {}/slurm/)",
             sub.chunks.len(),
             sub.points.len(),
             sub.script_path.as_ref().map(|p| p.display().to_string()).unwrap_or_default(),
             store.root().display()
         ));
         if !cmd.wait {
-            return Ok(format!("submitted job {job}\n").into());
+            return Ok(format!(
+                "submitted job {job}\ncollect at any time with:\n  {}\n",
+                sweep_command_line(&sweep, store.root(), &["--collect"])
+            )
+            .into());
         }
         wait_for(job, &resolved, &sub.points, &store, cmd.quiet)?;
         let c = collect(&sweep, &resolved, &store)?;
@@ -143,9 +151,10 @@ pub fn execute(cmd: &SweepCommand, log: &mut dyn FnMut(String)) -> Result<SweepO
         if !c.missing.is_empty() {
             return Err(Error::Incomplete(format!(
                 "{text}job {job} ended with {} of {n} points missing (tasks failed, timed out or were cancelled; \
-                 see {}/slurm/): run the same command again to submit only those",
+                 see {}/slurm/): submit only those with `{}`",
                 c.missing.len(),
-                store.root().display()
+                store.root().display(),
+                sweep_command_line(&sweep, store.root(), &resubmit_flags(slurm, images, cmd.backend))
             )));
         }
         return Ok(collected(&sweep, &c));
@@ -157,7 +166,13 @@ pub fn execute(cmd: &SweepCommand, log: &mut dyn FnMut(String)) -> Result<SweepO
     };
     let values = sweep.value_texts();
     let opts = LocalOptions { backend: cmd.backend, quiet: cmd.quiet, images, exr_compression: cmd.exr_compression };
-    let run = run_points(&resolved, &values, &selection, &store, opts)?;
+    let inputs = SweepInputs {
+        experiment_path: (sweep.spec.experiment != "builtin:paper")
+            .then(|| sweep.spec.base().join(&sweep.spec.experiment).display().to_string()),
+        files,
+        set: sweep.spec.set.iter().chain(&sweep.overrides).map(|o| o.to_arg()).collect(),
+    };
+    let run = run_points(&resolved, &values, &selection, &store, opts, &inputs)?;
     for w in &run.warnings {
         log(format!("warning: {w}"));
     }
@@ -203,6 +218,40 @@ fn summary(sweep: &Sweep, c: &Collected) -> String {
         if c.missing.len() > 50 {
             s.push_str(&format!("  ... and {} more (sweep.json lists every point)\n", c.missing.len() - 50));
         }
+        s.push_str(&format!(
+            "run them here with `{}`, or on Slurm with `{}`\n",
+            sweep_command_line::<&str>(sweep, &sweep.out, &[]),
+            sweep_command_line(sweep, &sweep.out, &["--slurm"])
+        ));
     }
     s
+}
+
+/// The flags of a submission that matter for running its points again (not `--wait` or
+/// `--dry-run`).
+fn resubmit_flags(slurm: &SlurmOptions, images: bool, backend: BackendChoice) -> Vec<String> {
+    let mut flags: Vec<String> = vec!["--slurm".into()];
+    if let Some(p) = &slurm.partition {
+        flags.extend(["--partition".into(), p.clone()]);
+    }
+    if slurm.array_max != SlurmOptions::default().array_max {
+        flags.extend(["--array-max".into(), slurm.array_max.to_string()]);
+    }
+    if let Some(t) = &slurm.time {
+        flags.extend(["--time".into(), t.clone()]);
+    }
+    if let Some(c) = slurm.cpus_per_task {
+        flags.extend(["--cpus-per-task".into(), c.to_string()]);
+    }
+    if let Some(m) = slurm.max_running {
+        flags.extend(["--max-running".into(), m.to_string()]);
+    }
+    if images {
+        flags.push("--images".into());
+    }
+    if backend != BackendChoice::Auto {
+        flags.extend(["--backend".into(), backend.to_string()]);
+    }
+    flags.push("--wait".into());
+    flags
 }

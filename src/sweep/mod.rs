@@ -13,10 +13,11 @@ mod run;
 mod slurm;
 mod spec;
 mod store;
+pub mod units;
 
 pub use collect::{collect, Collected};
 pub use command::{execute, SweepCommand, SweepOutput};
-pub use run::{run_points, validate, LocalOptions, RunSummary};
+pub use run::{point_costs, run_points, validate, LocalOptions, RunSummary, SweepInputs};
 pub use slurm::{submit, wait_for, SlurmOptions, Submission};
 pub use spec::{format_selection, parse_selection, Axis, AxisKey, Point, SweepSpec};
 pub use store::{PointRecord, RecordState, ScoreRow, Store, RECORD_FORMAT};

@@ -1,7 +1,10 @@
 //! A sweep's plots (PNG and SVG): each Table 1 score (Sec. 4.2: PSNR, SSIM) against each
 //! numeric axis, one series per method. Every point and eye case is a dot (with its 95%
 //! interval when the measurement gives one); the line joins the mean at each axis value over
-//! the other axes and the eye cases.
+//! the other axes and the eye cases. For every pair of numeric axes (a 2-D sweep), the same
+//! score against one axis with one line per value of the other (`_by_`), and a heatmap per
+//! method over both (`_x_`, each cell's value written in it). Axis labels carry the settings'
+//! units ([`super::units`]).
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -54,47 +57,103 @@ impl Metric {
     }
 }
 
-/// Writes `<psnr|ssim>_vs_<key>.png` and `.svg` into `dir` for every numeric key with at least
-/// two values; returns the PNG paths. No plot is drawn when no point is complete.
-pub fn write_plots(dir: &Path, keys: &[String], rows: &[PlotRow]) -> Result<Vec<PathBuf>> {
+/// The sorted distinct values of key `k` over `rows`, if every row has a finite number there
+/// and there are at least two.
+fn numeric_values(rows: &[PlotRow], k: usize) -> Option<Vec<f64>> {
+    let mut distinct: Vec<f64> = Vec::new();
+    for r in rows {
+        let x = r.xs.get(k).copied().flatten().filter(|x| x.is_finite())?;
+        if !distinct.contains(&x) {
+            distinct.push(x);
+        }
+    }
+    distinct.sort_by(f64::total_cmp);
+    (distinct.len() >= 2).then_some(distinct)
+}
+
+/// A key as a file-name part.
+fn stem(key: &str) -> String {
+    key.chars().map(|c| if c.is_ascii_alphanumeric() || c == '.' || c == '-' { c } else { '_' }).collect()
+}
+
+/// Draws one plot into `<dir>/<name>.png` and `.svg`, each by `$body` with `$area` its drawing
+/// area; evaluates to the PNG's path (an error returns from the calling function).
+macro_rules! plot_file {
+    ($dir:expr, $name:expr, $size:expr, |$area:ident| $body:expr) => {{
+        for ext in ["png", "svg"] {
+            let path = $dir.join(format!("{}.{ext}", $name));
+            crate::io::output::write_atomic(&path, |tmp| {
+                let drawn = if ext == "png" {
+                    let $area = BitMapBackend::new(tmp, $size).into_drawing_area();
+                    $body
+                } else {
+                    let $area = SVGBackend::new(tmp, $size).into_drawing_area();
+                    $body
+                };
+                drawn.map_err(|e| Error::draw(path.display(), "plot", e))
+            })?;
+        }
+        $dir.join(format!("{}.png", $name))
+    }};
+}
+
+/// Writes the plots into `dir` (see the module's comment); `axes[k]` is the sweep axis key `k`
+/// belongs to (keys zipped in one axis move together and are never paired). Returns the PNG
+/// paths; no plot is drawn when no point is complete.
+pub fn write_plots(dir: &Path, keys: &[String], axes: &[usize], rows: &[PlotRow]) -> Result<Vec<PathBuf>> {
     let mut written = Vec::new();
     if rows.is_empty() {
         return Ok(written);
     }
-    for (k, key) in keys.iter().enumerate() {
-        let mut distinct: Vec<f64> = Vec::new();
-        let mut numeric = true;
-        for r in rows {
-            match r.xs.get(k).copied().flatten() {
-                Some(x) if x.is_finite() => {
-                    if !distinct.contains(&x) {
-                        distinct.push(x);
-                    }
-                }
-                _ => numeric = false,
+    let values: Vec<Option<Vec<f64>>> = (0..keys.len()).map(|k| numeric_values(rows, k)).collect();
+    let numeric: Vec<usize> = (0..keys.len()).filter(|&k| values[k].is_some()).collect();
+    if numeric.is_empty() {
+        return Ok(written);
+    }
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let mut methods: Vec<String> = Vec::new();
+    for r in rows {
+        if !methods.contains(&r.score.method) {
+            methods.push(r.score.method.clone());
+        }
+    }
+    for &k in &numeric {
+        for metric in [Metric::Psnr, Metric::Ssim] {
+            let name = format!("{}_vs_{}", metric.name(), stem(&keys[k]));
+            written.push(plot_file!(dir, &name, (900, 600), |area| draw(area, &keys[k], k, rows, metric)));
+        }
+    }
+    for &k in &numeric {
+        for &j in numeric.iter().filter(|&&j| j != k && axes.get(j) != axes.get(k)) {
+            let by = values[j].as_deref().unwrap_or_default();
+            for metric in [Metric::Psnr, Metric::Ssim] {
+                let name = format!("{}_vs_{}_by_{}", metric.name(), stem(&keys[k]), stem(&keys[j]));
+                written.push(plot_file!(dir, &name, (900, 600), |area| draw_by(
+                    area,
+                    (&keys[k], k),
+                    (&keys[j], j, by),
+                    rows,
+                    metric
+                )));
             }
         }
-        if !numeric || distinct.len() < 2 {
-            continue;
-        }
-        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-        let stem: String =
-            key.chars().map(|c| if c.is_ascii_alphanumeric() || c == '.' || c == '-' { c } else { '_' }).collect();
-        for metric in [Metric::Psnr, Metric::Ssim] {
-            let name = format!("{}_vs_{stem}", metric.name());
-            for ext in ["png", "svg"] {
-                let path = dir.join(format!("{name}.{ext}"));
-                let size = (900, 600);
-                crate::io::output::write_atomic(&path, |tmp| {
-                    let drawn = if ext == "png" {
-                        draw(BitMapBackend::new(tmp, size).into_drawing_area(), key, k, rows, metric)
-                    } else {
-                        draw(SVGBackend::new(tmp, size).into_drawing_area(), key, k, rows, metric)
-                    };
-                    drawn.map_err(|e| Error::draw(path.display(), "plot", e))
-                })?;
-                if ext == "png" {
-                    written.push(path);
+    }
+    for (a, &k) in numeric.iter().enumerate() {
+        for &j in numeric[a + 1..].iter().filter(|&&j| axes.get(j) != axes.get(k)) {
+            let (xs, ys) = (values[k].as_deref().unwrap_or_default(), values[j].as_deref().unwrap_or_default());
+            for metric in [Metric::Psnr, Metric::Ssim] {
+                for method in &methods {
+                    let name = format!("{}_{}_{}_x_{}", metric.name(), stem(method), stem(&keys[k]), stem(&keys[j]));
+                    let size = (260 + 90 * xs.len() as u32, 160 + 50 * ys.len() as u32);
+                    let size = (size.0.clamp(640, 1800), size.1.clamp(480, 1400));
+                    written.push(plot_file!(dir, &name, size, |area| heatmap(
+                        area,
+                        (&keys[k], k, xs),
+                        (&keys[j], j, ys),
+                        rows,
+                        method,
+                        metric
+                    )));
                 }
             }
         }
@@ -150,7 +209,7 @@ where
         Metric::Ssim => 0.002,
     });
     let mut chart = ChartBuilder::on(&area)
-        .caption(format!("{} against {key}", metric.label()), ("sans-serif", 20))
+        .caption(format!("{} against {}", metric.label(), super::units::label(key)), ("sans-serif", 20))
         .margin(14)
         .x_label_area_size(44)
         .y_label_area_size(64)
@@ -159,7 +218,7 @@ where
     chart
         .configure_mesh()
         .max_light_lines(2)
-        .x_desc(key)
+        .x_desc(super::units::label(key))
         .y_desc(format!("{}: dots every point and eye case, line the mean", metric.label()))
         .y_label_formatter(&|v| match metric {
             Metric::Psnr => format!("{v:.1}"),
@@ -193,5 +252,219 @@ where
             .map_err(e2s)?;
     }
     legend(&mut chart, SeriesLabelPosition::LowerRight, Some(14))?;
+    area.present().map_err(e2s)
+}
+
+/// The mean of `metric` over the rows of `method` (all methods when `None`) whose keys `k`
+/// and `j` have the values `x` and `y` (any `y` when `j` is `None`): over the eye cases and any
+/// further axes. `None` when no such row has a finite value.
+fn mean_at(
+    rows: &[PlotRow],
+    metric: Metric,
+    method: &str,
+    (k, x): (usize, f64),
+    by: Option<(usize, f64)>,
+) -> Option<f64> {
+    let (mut sum, mut n) = (0.0, 0usize);
+    for r in rows {
+        let at = |key: usize, v: f64| r.xs.get(key).copied().flatten() == Some(v);
+        if r.score.method != method || !at(k, x) || by.is_some_and(|(j, y)| !at(j, y)) {
+            continue;
+        }
+        if let Some((v, _)) = metric.of(&r.score) {
+            sum += v;
+            n += 1;
+        }
+    }
+    (n > 0).then(|| sum / n as f64)
+}
+
+/// A value of an axis for a legend or a tick: its shortest decimal form.
+fn value_text(v: f64) -> String {
+    format!("{v}")
+}
+
+/// `metric` against key `k`, one line per method and value of key `j` (the mean over the eye
+/// cases and any further axes), the method's colour darker for larger values of `j`.
+fn draw_by<DB: DrawingBackend>(
+    area: DrawingArea<DB, plotters::coord::Shift>,
+    (key, k): (&str, usize),
+    (by_key, j, by): (&str, usize, &[f64]),
+    rows: &[PlotRow],
+    metric: Metric,
+) -> std::result::Result<(), String>
+where
+    DB::ErrorType: 'static,
+{
+    let e2s = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    area.fill(&WHITE).map_err(e2s)?;
+    let mut xs: Vec<f64> = rows.iter().filter_map(|r| r.xs.get(k).copied().flatten()).collect();
+    xs.sort_by(f64::total_cmp);
+    xs.dedup();
+    let mut methods: Vec<String> = Vec::new();
+    for r in rows {
+        if !methods.contains(&r.score.method) {
+            methods.push(r.score.method.clone());
+        }
+    }
+    // (method index, index of the value of j, line)
+    type Line = (usize, usize, Vec<(f64, f64)>);
+    let mut lines: Vec<Line> = Vec::new();
+    for (mi, m) in methods.iter().enumerate() {
+        for (yi, &y) in by.iter().enumerate() {
+            let line: Vec<(f64, f64)> =
+                xs.iter().filter_map(|&x| mean_at(rows, metric, m, (k, x), Some((j, y))).map(|v| (x, v))).collect();
+            if !line.is_empty() {
+                lines.push((mi, yi, line));
+            }
+        }
+    }
+    let pts = lines.iter().flat_map(|(_, _, l)| l.iter());
+    let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
+    for &(x, v) in pts {
+        (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(v), y1.max(v));
+    }
+    if !(x0.is_finite() && y0.is_finite()) {
+        return area.present().map_err(e2s);
+    }
+    let xpad = ((x1 - x0) * 0.05).max(1e-9);
+    let ypad = ((y1 - y0) * 0.08).max(match metric {
+        Metric::Psnr => 0.2,
+        Metric::Ssim => 0.002,
+    });
+    let mut chart = ChartBuilder::on(&area)
+        .caption(
+            format!("{} against {}, one line per {}", metric.label(), super::units::label(key), by_key),
+            ("sans-serif", 18),
+        )
+        .margin(14)
+        .x_label_area_size(44)
+        .y_label_area_size(64)
+        .build_cartesian_2d((x0 - xpad)..(x1 + xpad), (y0 - ypad)..(y1 + ypad))
+        .map_err(e2s)?;
+    chart
+        .configure_mesh()
+        .max_light_lines(2)
+        .x_desc(super::units::label(key))
+        .y_desc(format!("{}: mean over eye cases and other axes", metric.label()))
+        .y_label_formatter(&|v| match metric {
+            Metric::Psnr => format!("{v:.1}"),
+            Metric::Ssim => format!("{v:.3}"),
+        })
+        .draw()
+        .map_err(e2s)?;
+    let unit = super::units::unit_of(by_key).map(|u| format!(" {u}")).unwrap_or_default();
+    for (mi, yi, line) in lines {
+        let base = method_color(&methods[mi], mi);
+        // Lighter for the first value of j, darker for the last.
+        let t = if by.len() > 1 { yi as f64 / (by.len() - 1) as f64 } else { 0.0 };
+        let shade = |c: u8| ((c as f64) * (1.25 - 0.75 * t)).clamp(0.0, 255.0) as u8;
+        let color = RGBColor(shade(base.0), shade(base.1), shade(base.2));
+        let style = color.stroke_width(2);
+        let label = format!("{} at {}{unit}", methods[mi], value_text(by[yi]));
+        chart
+            .draw_series(LineSeries::new(line.clone(), style))
+            .map_err(e2s)?
+            .label(label)
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], style));
+        chart.draw_series(line.iter().map(|&(x, v)| Circle::new((x, v), 3, color.filled()))).map_err(e2s)?;
+    }
+    legend(&mut chart, SeriesLabelPosition::LowerRight, Some(12))?;
+    area.present().map_err(e2s)
+}
+
+/// A colour of a perceptually ordered ramp (dark blue through green to yellow, as viridis) at
+/// `t` in [0, 1].
+fn ramp(t: f64) -> RGBColor {
+    const STOPS: [(f64, f64, f64); 5] =
+        [(68.0, 1.0, 84.0), (59.0, 82.0, 139.0), (33.0, 145.0, 140.0), (94.0, 201.0, 98.0), (253.0, 231.0, 37.0)];
+    let t = if t.is_finite() { t.clamp(0.0, 1.0) } else { 0.0 };
+    let s = t * (STOPS.len() - 1) as f64;
+    let i = (s.floor() as usize).min(STOPS.len() - 2);
+    let f = s - i as f64;
+    let mix = |a: f64, b: f64| (a + (b - a) * f).round() as u8;
+    let (a, b) = (STOPS[i], STOPS[i + 1]);
+    RGBColor(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
+}
+
+/// A heatmap of `metric` for `method` over keys `k` (columns) and `j` (rows): one cell per pair
+/// of values (the mean over the eye cases and any further axes), coloured on a ramp from the
+/// lowest to the highest value and labelled with its value; cells without a value stay grey.
+fn heatmap<DB: DrawingBackend>(
+    area: DrawingArea<DB, plotters::coord::Shift>,
+    (key, k, xs): (&str, usize, &[f64]),
+    (by_key, j, ys): (&str, usize, &[f64]),
+    rows: &[PlotRow],
+    method: &str,
+    metric: Metric,
+) -> std::result::Result<(), String>
+where
+    DB::ErrorType: 'static,
+{
+    let e2s = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    area.fill(&WHITE).map_err(e2s)?;
+    let cells: Vec<Vec<Option<f64>>> =
+        ys.iter().map(|&y| xs.iter().map(|&x| mean_at(rows, metric, method, (k, x), Some((j, y)))).collect()).collect();
+    let (lo, hi) = cells
+        .iter()
+        .flatten()
+        .flatten()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+    let mut chart = ChartBuilder::on(&area)
+        .caption(
+            format!("{} of {method}: {} x {}", metric.label(), super::units::label(key), super::units::label(by_key)),
+            ("sans-serif", 18),
+        )
+        .margin(14)
+        .x_label_area_size(44)
+        .y_label_area_size(80)
+        .build_cartesian_2d(0.0..xs.len() as f64, 0.0..ys.len() as f64)
+        .map_err(e2s)?;
+    let tick = |values: &[f64], v: f64| {
+        let i = v - 0.5;
+        if (i - i.round()).abs() < 1e-6 && i >= 0.0 && (i.round() as usize) < values.len() {
+            value_text(values[i.round() as usize])
+        } else {
+            String::new()
+        }
+    };
+    chart
+        .configure_mesh()
+        .disable_mesh()
+        .x_labels(2 * xs.len() + 1)
+        .y_labels(2 * ys.len() + 1)
+        .x_label_formatter(&|v| tick(xs, *v))
+        .y_label_formatter(&|v| tick(ys, *v))
+        .x_desc(super::units::label(key))
+        .y_desc(super::units::label(by_key))
+        .draw()
+        .map_err(e2s)?;
+    for (yi, row) in cells.iter().enumerate() {
+        for (xi, cell) in row.iter().enumerate() {
+            let (x, y) = (xi as f64, yi as f64);
+            let fill = match cell {
+                Some(v) if hi > lo => ramp((v - lo) / (hi - lo)),
+                Some(_) => ramp(0.5),
+                None => RGBColor(200, 200, 200),
+            };
+            chart.draw_series([Rectangle::new([(x, y), (x + 1.0, y + 1.0)], fill.filled())]).map_err(e2s)?;
+            if let Some(v) = cell {
+                let text = match metric {
+                    Metric::Psnr => format!("{v:.2}"),
+                    Metric::Ssim => format!("{v:.4}"),
+                };
+                // Dark text on the light end of the ramp, light text on the dark end.
+                let light = hi > lo && (v - lo) / (hi - lo) > 0.6;
+                let color = if light { BLACK } else { WHITE };
+                let style = TextStyle::from(("sans-serif", 14).into_font()).color(&color).pos(
+                    plotters::style::text_anchor::Pos::new(
+                        plotters::style::text_anchor::HPos::Center,
+                        plotters::style::text_anchor::VPos::Center,
+                    ),
+                );
+                chart.draw_series([Text::new(text, (x + 0.5, y + 0.5), style)]).map_err(e2s)?;
+            }
+        }
+    }
     area.present().map_err(e2s)
 }

@@ -34,6 +34,19 @@ pub struct LocalOptions {
     pub exr_compression: crate::io::exr::ExrCompression,
 }
 
+/// What a sweep read before its points are built, for their provenance
+/// ([`crate::provenance`]): the files (sweep, experiment, scene, display) and the overrides every
+/// point shares (the sweep's `[set]`, then the command line's `--set`).
+#[derive(Clone, Debug, Default)]
+pub struct SweepInputs {
+    /// The base experiment file as given (`None`: built in).
+    pub experiment_path: Option<String>,
+    /// The files read, with their hashes.
+    pub files: Vec<crate::provenance::InputFile>,
+    /// The shared overrides, as `KEY=VALUE`.
+    pub set: Vec<String>,
+}
+
 /// What a run did.
 #[derive(Clone, Debug, Default)]
 pub struct RunSummary {
@@ -62,23 +75,37 @@ struct Job {
 /// The points of one scene, built.
 type SceneJobs = (String, Scene, Vec<Job>);
 
-/// Builds (and so validates) the experiments of the points `todo`, each scene once.
-fn build(resolved: &[Resolved], values: &[Vec<String>], todo: &[usize]) -> Result<(Vec<SceneJobs>, Vec<String>)> {
+/// Builds (and so validates) the experiments of the points `todo`, each scene once; each
+/// point's provenance is `inputs` with the files its scene read and its own values.
+fn build(
+    resolved: &[Resolved],
+    values: &[Vec<String>],
+    todo: &[usize],
+    inputs: &SweepInputs,
+) -> Result<(Vec<SceneJobs>, Vec<String>)> {
     let mut scenes: Vec<SceneJobs> = Vec::new();
+    let mut scene_files: Vec<Vec<crate::provenance::InputFile>> = Vec::new();
     let mut warnings = Vec::new();
     for &i in todo {
         let r = &resolved[i];
         let slot = match scenes.iter().position(|(key, _, _)| *key == r.scene_key) {
             Some(s) => s,
             None => {
-                let scene = r.build_scene()?;
+                let (scene, files) = crate::provenance::recording(|| r.build_scene());
+                let scene = scene?;
                 warnings.extend(scene.warnings.iter().cloned());
                 scenes.push((r.scene_key.clone(), scene, Vec::new()));
+                scene_files.push(files);
                 scenes.len() - 1
             }
         };
-        let exp = r.experiment_with(scenes[slot].1.clone())?;
+        let mut exp = r.experiment_with(scenes[slot].1.clone())?;
         let values = values.get(i).cloned().unwrap_or_default();
+        let mut files = inputs.files.clone();
+        files.extend(scene_files[slot].iter().filter(|f| !inputs.files.iter().any(|g| g.path == f.path)).cloned());
+        let mut p = crate::settings::provenance_of(&exp, inputs.experiment_path.clone(), files, &[]);
+        p.set = inputs.set.iter().chain(&values).cloned().collect();
+        exp.provenance = p;
         scenes[slot].2.push(Job { index: i, id: r.id.clone(), values, exp });
     }
     Ok((scenes, warnings))
@@ -87,8 +114,19 @@ fn build(resolved: &[Resolved], values: &[Vec<String>], todo: &[usize]) -> Resul
 /// Builds every point's experiment, as a run would, and reports the first invalid one (before
 /// a sweep is submitted anywhere).
 pub fn validate(resolved: &[Resolved]) -> Result<()> {
+    point_costs(resolved).map(|_| ())
+}
+
+/// Builds (and so validates) every point's experiment and returns its estimated cost: the rays
+/// its display images and its retinal images trace ([`experiment::estimate`]), by index.
+pub fn point_costs(resolved: &[Resolved]) -> Result<Vec<u64>> {
     let all: Vec<usize> = (0..resolved.len()).collect();
-    build(resolved, &[], &all).map(|_| ())
+    let (scenes, _) = build(resolved, &[], &all, &SweepInputs::default())?;
+    let mut costs = vec![0; resolved.len()];
+    for job in scenes.iter().flat_map(|(_, _, jobs)| jobs) {
+        costs[job.index] = experiment::estimate(&job.exp).rays;
+    }
+    Ok(costs)
 }
 
 /// Runs the points `selection` (indices into `resolved`; `values` are their swept values as
@@ -100,6 +138,7 @@ pub fn run_points(
     selection: &[usize],
     store: &Store,
     opts: LocalOptions,
+    inputs: &SweepInputs,
 ) -> Result<RunSummary> {
     let start = Instant::now();
     let mut summary = RunSummary { selected: selection.len(), ..Default::default() };
@@ -112,7 +151,7 @@ pub fn run_points(
         .filter(|&i| seen.insert(resolved[i].id.clone()) && store.record_of(&resolved[i]).is_none())
         .collect();
     summary.already_complete = selection.len() - todo.len();
-    let (scenes, warnings) = build(resolved, values, &todo)?;
+    let (scenes, warnings) = build(resolved, values, &todo, inputs)?;
     let rays = scenes
         .iter()
         .flat_map(|(_, _, jobs)| jobs.iter())
@@ -164,6 +203,7 @@ fn record(job: &Job, scores: &[Score], elapsed: Duration, backend: &str) -> Poin
         host: host_name(),
         finished_unix: unix_now(),
         version: env!("CARGO_PKG_VERSION").to_string(),
+        provenance: Some(Box::new(job.exp.provenance.clone())),
     }
 }
 

@@ -1,6 +1,7 @@
 //! A sweep (the paper's assessment, Sec. 4, over ranges of settings) as a Slurm job array:
-//! the points not yet recorded are split into chunks, one array task per chunk, and each task
-//! runs `inimtrace sweep SWEEP.toml --points I..J` into the shared output folder, recording each
+//! the points not yet recorded are spread over the array tasks by estimated cost (the rays each
+//! point traces; longest first, each onto the task with the least cost so far), and each task
+//! runs `inimtrace sweep SWEEP.toml --points ...` into the shared output folder, recording each
 //! point atomically. A failed, timed-out or cancelled task therefore leaves only complete
 //! points, and submitting again runs only what is missing. Slurm does the distribution; this
 //! file only writes the batch script, calls `sbatch`, and polls `squeue` for `--wait`.
@@ -71,6 +72,8 @@ pub struct Submission {
     pub points: Vec<usize>,
     /// The `--points` text of each array task.
     pub chunks: Vec<String>,
+    /// The estimated cost of each array task (rays; see [`super::point_costs`]).
+    pub task_costs: Vec<u64>,
     /// The job script.
     pub script: String,
     /// Where the script was written (`None` for a dry run).
@@ -78,8 +81,16 @@ pub struct Submission {
 }
 
 /// Writes the batch script for the points of `sweep` that `store` has no record of and, unless
-/// `dry_run`, submits it with `sbatch`. Nothing is submitted when every point is complete.
-pub fn submit(sweep: &Sweep, resolved: &[Resolved], store: &Store, opts: &SlurmOptions) -> Result<Submission> {
+/// `dry_run`, submits it with `sbatch`. `costs` are the points' estimated costs by index
+/// ([`super::point_costs`]). Nothing is submitted when every point is complete; a dry run
+/// writes nothing.
+pub fn submit(
+    sweep: &Sweep,
+    resolved: &[Resolved],
+    costs: &[u64],
+    store: &Store,
+    opts: &SlurmOptions,
+) -> Result<Submission> {
     if opts.array_max == 0 {
         return Err(Error::invalid("command line", "--array-max", "must be at least 1"));
     }
@@ -91,13 +102,14 @@ pub fn submit(sweep: &Sweep, resolved: &[Resolved], store: &Store, opts: &SlurmO
         .map(|p| p.index)
         .filter(|&i| seen.insert(resolved[i].id.clone()) && store.record_of(&resolved[i]).is_none())
         .collect();
-    let chunks = split(&missing, opts.array_max);
-    let mut sub = Submission { job_id: None, points: missing, chunks, script: String::new(), script_path: None };
+    let (chunks, task_costs) = balance(&missing, costs, opts.array_max);
+    let mut sub =
+        Submission { job_id: None, points: missing, chunks, task_costs, script: String::new(), script_path: None };
     if sub.points.is_empty() {
         return Ok(sub);
     }
     let id = Sweep::id(resolved)?;
-    sub.script = script(sweep, &sub.chunks, &id, store.root(), opts)?;
+    sub.script = script(sweep, &sub.chunks, &sub.task_costs, &id, store.root(), opts)?;
     if opts.dry_run {
         return Ok(sub);
     }
@@ -280,22 +292,57 @@ pub fn wait_for(job: &str, resolved: &[Resolved], points: &[usize], store: &Stor
     Ok(())
 }
 
-/// Splits sorted point indices into at most `n` contiguous chunks of nearly equal size, each
-/// as `--points` text.
-fn split(points: &[usize], n: usize) -> Vec<String> {
+/// Spreads the point indices `points` over at most `n` tasks by cost (`costs[i]` of point `i`):
+/// the costliest point first, each onto the task with the least cost so far (the lowest task on
+/// a tie), so that equal costs are dealt out in turn (0, n, 2n, ... to the first task) and a
+/// sweep whose cost grows along an axis does not give one task all the expensive points.
+/// Returns each task's points as `--points` text and its total cost.
+fn balance(points: &[usize], costs: &[u64], n: usize) -> (Vec<String>, Vec<u64>) {
     let tasks = n.min(points.len());
     if tasks == 0 {
-        return Vec::new();
+        return (Vec::new(), Vec::new());
     }
-    let (size, extra) = (points.len() / tasks, points.len() % tasks);
-    let mut out = Vec::new();
-    let mut start = 0;
-    for t in 0..tasks {
-        let len = size + usize::from(t < extra);
-        out.push(format_selection(&points[start..start + len]));
-        start += len;
+    let cost = |i: usize| costs.get(i).copied().unwrap_or(1).max(1);
+    let mut order = points.to_vec();
+    // Stable: equal costs keep the sweep's order.
+    order.sort_by_key(|&i| std::cmp::Reverse(cost(i)));
+    let mut bins: Vec<(u64, Vec<usize>)> = vec![(0, Vec::new()); tasks];
+    for i in order {
+        let t = (0..tasks).min_by_key(|&t| bins[t].0).unwrap_or(0);
+        bins[t].0 = bins[t].0.saturating_add(cost(i));
+        bins[t].1.push(i);
     }
-    out
+    bins.into_iter()
+        .map(|(total, mut members)| {
+            members.sort_unstable();
+            (format_selection(&members), total)
+        })
+        .unzip()
+}
+
+/// A complete `inimtrace sweep` command line for `sweep` writing into `out`: this program, the
+/// sweep file and `--out` as absolute paths, the command line's `--set` overrides, then `extra`
+/// (each a word, quoted for a shell as needed). For the hints of submission and collection.
+pub fn sweep_command_line<S: AsRef<str>>(sweep: &Sweep, out: &Path, extra: &[S]) -> String {
+    let exe = std::env::current_exe().map(|p| p.display().to_string()).unwrap_or_else(|_| "inimtrace".into());
+    let abs = |p: &Path| absolute(p).unwrap_or_else(|_| p.to_path_buf()).display().to_string();
+    let mut words = vec![shell_word(&exe), "sweep".into(), shell_word(&abs(&sweep.spec.path))];
+    words.extend(["--out".into(), shell_word(&abs(out))]);
+    for o in &sweep.overrides {
+        words.extend(["--set".into(), shell_word(&o.to_arg())]);
+    }
+    words.extend(extra.iter().map(|w| shell_word(w.as_ref())));
+    words.join(" ")
+}
+
+/// A word for a shell: as it is when it holds only characters no shell treats specially, else
+/// single-quoted.
+fn shell_word(s: &str) -> String {
+    if !s.is_empty() && s.bytes().all(|b| b.is_ascii_alphanumeric() || b"/._-+=,:@%".contains(&b)) {
+        s.to_string()
+    } else {
+        quote(s)
+    }
 }
 
 /// A word for bash, single-quoted.
@@ -307,8 +354,15 @@ fn absolute(p: &Path) -> Result<PathBuf> {
     std::path::absolute(p).map_err(|e| Error::io(p, e))
 }
 
-/// The sbatch script of a job array over `chunks`.
-fn script(sweep: &Sweep, chunks: &[String], id: &str, out: &Path, opts: &SlurmOptions) -> Result<String> {
+/// The sbatch script of a job array over `chunks` (with their estimated costs).
+fn script(
+    sweep: &Sweep,
+    chunks: &[String],
+    task_costs: &[u64],
+    id: &str,
+    out: &Path,
+    opts: &SlurmOptions,
+) -> Result<String> {
     let exe = std::env::current_exe()
         .map_err(|e| Error::External { program: "current_exe", message: format!("cannot find this program: {e}") })?;
     let cwd = std::env::current_dir()
@@ -338,16 +392,19 @@ fn script(sweep: &Sweep, chunks: &[String], id: &str, out: &Path, opts: &SlurmOp
     }
     let points: usize =
         chunks.iter().map(|c| super::parse_selection(c, usize::MAX).map(|v| v.len()).unwrap_or(0)).sum();
+    let (lo, hi) = (task_costs.iter().min().copied().unwrap_or(0), task_costs.iter().max().copied().unwrap_or(0));
     s.push_str(&format!(
-        "#\n# inimtrace sweep {} as a Slurm job array: {points} of its {} points in {} tasks.\n\
-         # Written by `inimtrace sweep --slurm`. Each task runs its points and records each one atomically\n\
-         # in {}/points/, so a failed, timed-out or cancelled task leaves no partial point; submitting\n\
-         # again runs only the missing points. `inimtrace sweep {} --collect` collects at any time.\n",
+        "#\n# inimtrace sweep {} as a Slurm job array: {points} of its {} points in {} tasks, spread by\n\
+         # estimated cost (rays traced; costliest first, each onto the least-loaded task): {lo} to {hi} rays\n\
+         # per task. Written by `inimtrace sweep --slurm`. Each task runs its points and records each one\n\
+         # atomically in {}/points/, so a failed, timed-out or cancelled task leaves no partial point;\n\
+         # submitting again runs only the missing points. Collect at any time with:\n\
+         #   {}\n",
         sweep_file.display(),
         sweep.points.len(),
         chunks.len(),
         out.display(),
-        sweep_file.display(),
+        sweep_command_line(sweep, &out, &["--collect"]),
     ));
     s.push_str("set -euo pipefail\nPOINTS=(\n");
     for c in chunks {
@@ -542,12 +599,45 @@ mod tests {
     }
 
     #[test]
-    fn missing_points_split_into_even_contiguous_chunks() {
-        assert_eq!(split(&(0..12).collect::<Vec<_>>(), 4), ["0..3", "3..6", "6..9", "9..12"]);
-        assert_eq!(split(&[0, 1, 2, 3, 4], 2), ["0..3", "3..5"]);
-        assert_eq!(split(&[3, 4, 5], 4), ["3", "4", "5"]);
-        assert_eq!(split(&[1, 3, 4, 9], 1), ["1,3..5,9"]);
-        assert!(split(&[], 4).is_empty());
+    fn points_of_equal_cost_are_dealt_out_in_turn() {
+        let ones = vec![7; 12];
+        let (chunks, totals) = balance(&(0..12).collect::<Vec<_>>(), &ones, 4);
+        assert_eq!(chunks, ["0,4,8", "1,5,9", "2,6,10", "3,7,11"]);
+        assert_eq!(totals, [21, 21, 21, 21]);
+        assert_eq!(balance(&[0, 1, 2, 3, 4], &ones, 2).0, ["0,2,4", "1,3"]);
+        assert_eq!(balance(&[3, 4, 5], &ones, 4).0, ["3", "4", "5"]);
+        assert_eq!(balance(&[1, 3, 4, 9], &[1; 10], 1).0, ["1,3..5,9"]);
+        assert!(balance(&[], &ones, 4).0.is_empty());
+    }
+
+    #[test]
+    fn costs_growing_along_an_axis_are_balanced_unlike_contiguous_chunks() {
+        // Cost grows with the index (a pupil or resolution axis): contiguous halves would be
+        // 1+..+8 = 36 against 9+..+16 = 100.
+        let costs: Vec<u64> = (1..=16).collect();
+        let points: Vec<usize> = (0..16).collect();
+        let (chunks, totals) = balance(&points, &costs, 2);
+        assert_eq!(totals.iter().sum::<u64>(), 136);
+        assert_eq!(totals, [68, 68], "{chunks:?}");
+        // Every point in exactly one task.
+        let mut all: Vec<usize> = chunks.iter().flat_map(|c| crate::sweep::parse_selection(c, 16).unwrap()).collect();
+        all.sort_unstable();
+        assert_eq!(all, points);
+        // One very costly point gets a task of its own.
+        let mut costs = vec![1u64; 9];
+        costs[4] = 100;
+        let (chunks, totals) = balance(&(0..9).collect::<Vec<_>>(), &costs, 3);
+        assert_eq!(chunks[0], "4");
+        assert_eq!(totals, [100, 4, 4]);
+    }
+
+    #[test]
+    fn hint_words_are_quoted_only_when_needed() {
+        assert_eq!(shell_word("/a/b.toml"), "/a/b.toml");
+        assert_eq!(shell_word("eye.pupil_diameter=3"), "eye.pupil_diameter=3");
+        assert_eq!(shell_word("methods=[\"LC\"]"), "'methods=[\"LC\"]'");
+        assert_eq!(shell_word("/a b"), "'/a b'");
+        assert_eq!(shell_word(""), "''");
     }
 
     #[test]

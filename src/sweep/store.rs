@@ -110,6 +110,12 @@ pub struct PointRecord {
     pub finished_unix: u64,
     /// The inimtrace version.
     pub version: String,
+    /// Where the point's scores come from: the scene's name and path as given, every file read
+    /// (sweep, experiment, scene, display, meshes, textures) with its SHA-256, the overrides
+    /// (the sweep's `[set]`, the command line's `--set`, the point's values), the budgets and
+    /// the seed. Absent in records written before it was recorded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub provenance: Option<Box<crate::provenance::Provenance>>,
 }
 
 impl PointRecord {
@@ -194,6 +200,12 @@ impl Store {
         })?;
         let _ = fs::remove_file(&probe);
         Ok(Self { root: root.to_path_buf() })
+    }
+
+    /// The folder as it is, created or checked for nothing: for reading records only (a dry
+    /// run, which must write nothing). A folder that is not there holds no record.
+    pub fn existing(root: &Path) -> Self {
+        Self { root: root.to_path_buf() }
     }
 
     /// The store's folder.
@@ -333,6 +345,7 @@ mod tests {
             host: host_name(),
             finished_unix: unix_now(),
             version: "0".into(),
+            provenance: None,
         }
     }
 
