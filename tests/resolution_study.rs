@@ -37,6 +37,8 @@ fn the_tiny_study_writes_every_file_with_the_issue_columns() {
         "through_focus.svg",
         "accommodation.png",
         "accommodation.svg",
+        "orientations.png",
+        "orientations.svg",
     ] {
         assert!(out.join(f).is_file(), "{f} missing");
     }
@@ -46,9 +48,11 @@ fn the_tiny_study_writes_every_file_with_the_issue_columns() {
         lines.next().unwrap(),
         "source,target_diopters,focus_diopters,frequency_cpd,orientation_deg,measure,contrast,contrast_ci95"
     );
-    // 3 sources x 2 depths x 3 focuses (1, 2, 3 D; 2.5 D added) ... 4 focuses x 3 frequencies x 2 measures.
-    assert_eq!(lines.count(), 3 * 2 * 4 * 3 * 2);
+    // 3 sources x 2 depths x 3 focuses (1, 2, 3 D; 2.5 D added) ... 4 focuses x 3 frequencies x 2
+    // measures; and the gratings at the default 45, 90 and 135 degrees with the eye on the content.
+    assert_eq!(lines.count(), 3 * 2 * 4 * 3 * 2 + 3 * 3 * 2 * 3);
     assert!(mtf.contains("\nground_truth,1,1,2,0,grating,") && mtf.contains(",edge,"));
+    assert!(mtf.contains("\nground_truth,1,1,2,45,grating,") && mtf.contains("\nPC,2.5,2.5,4,135,grating,"));
     assert_eq!(
         read(&out, "mtf50.csv").lines().next().unwrap(),
         "source,target_diopters,focus_diopters,mtf50_cpd,mtf50_ci95"
@@ -112,6 +116,7 @@ pupil_diameter_mm = 5.0
 content_diopters = [0.5, 1.3, 2.2, 3.5]
 focus_diopters = { from = 0.0, to = 4.0, step = 0.25 }
 frequencies_cpd = [1, 2, 4]
+orientations_deg = [0]
 [retina]
 pixels_per_degree = 64
 window_deg = [1.0, 0.125]
@@ -156,6 +161,7 @@ content_diopters = []
 content_mm = [{cdp}]
 focus_diopters = [{}]
 frequencies_cpd = [1, 2, 3, 4, 8, 11.5]
+orientations_deg = [0]
 [retina]
 pixels_per_degree = 64
 window_deg = [2.0, 0.25]

@@ -10,6 +10,16 @@
 //! number of periods over its window, so the windowed Fourier coefficients of different
 //! frequencies are orthogonal.
 //!
+//! **Orientations.** The study measures the gratings at other orientations on the same chart
+//! turned as a whole about the visual axis ([`Chart::turned`]): a turned chart shows every
+//! grating turned by `a` (degrees counter-clockwise; its modulation along `(cos a, sin a)`) at the
+//! 0-degree grating's place turned by `a`, and its windows' retina pixels are cut in the turned
+//! frame. In its own frame every grating is still vertical bars over a whole number of periods,
+//! measured by the same analysis; the retina pixel's own box response along the modulation, and
+//! the eccentricity of each grating, are the same at every orientation: only the display (and an
+//! eye that is not rotationally symmetric) differ. On a display that is symmetric under a quarter
+//! turn (the paper's square one) 90 degrees shows the same as 0.
+//!
 //! [`ChartField`] is the chart as a [`RadianceField`] (the plane's radiance along any ray), the
 //! one field that renders the display images and the ground truth alike.
 
@@ -76,6 +86,10 @@ pub struct Chart {
     pub half_extent_deg: DVec2,
     /// Column layout: left edge and width of each column of patches, degrees.
     columns: Vec<(f64, f64, Vec<usize>)>,
+    /// The turn of the whole chart about the axis, degrees counter-clockwise (0: as laid out).
+    pub orientation_deg: f64,
+    /// `(cos a, sin a)` of the turn (exact at multiples of 90 degrees); `None` at 0.
+    turn: Option<DVec2>,
 }
 
 impl Chart {
@@ -147,12 +161,59 @@ impl Chart {
             pixels_per_degree: ppd,
             half_extent_deg: DVec2::new(0.5 * total_w, 0.5 * total_h),
             columns,
+            orientation_deg: 0.0,
+            turn: None,
+        }
+    }
+
+    /// This chart's gratings (the edge left out) turned by `deg` about the axis (module
+    /// documentation); `deg = 0` gives the gratings unturned.
+    pub fn turned(&self, deg: f64) -> Chart {
+        let keep: Vec<usize> =
+            (0..self.patches.len()).filter(|&i| matches!(self.patches[i].pattern, Pattern::Grating { .. })).collect();
+        let renumber = |i: &usize| keep.iter().position(|k| k == i);
+        Chart {
+            patches: keep.iter().map(|&i| self.patches[i]).collect(),
+            columns: self
+                .columns
+                .iter()
+                .map(|(x0, w, idx)| (*x0, *w, idx.iter().filter_map(renumber).collect()))
+                .collect(),
+            orientation_deg: deg,
+            turn: (deg != 0.0).then(|| unit_at(deg)),
+            ..self.clone()
+        }
+    }
+
+    /// A point of the unturned layout, turned with the chart (tangent or degree units alike).
+    #[inline]
+    pub fn turn(&self, p: DVec2) -> DVec2 {
+        match self.turn {
+            None => p,
+            Some(u) => DVec2::new(u.x * p.x - u.y * p.y, u.y * p.x + u.x * p.y),
+        }
+    }
+
+    /// Half-extent of the area the chart covers, degrees: its layout's, or the bounding box of
+    /// the turned layout.
+    pub fn reach_deg(&self) -> DVec2 {
+        match self.turn {
+            None => self.half_extent_deg,
+            Some(u) => {
+                let (c, s, h) = (u.x.abs(), u.y.abs(), self.half_extent_deg);
+                DVec2::new(c * h.x + s * h.y, s * h.x + c * h.y)
+            }
         }
     }
 
     /// Luminance at direction `deg` (degrees of tangent from the pupil centre).
     #[inline]
     pub fn luminance(&self, deg: DVec2) -> f64 {
+        // A turned chart: the point in the layout's own frame (turned back).
+        let deg = match self.turn {
+            None => deg,
+            Some(u) => DVec2::new(u.x * deg.x + u.y * deg.y, u.x * deg.y - u.y * deg.x),
+        };
         for (x0, w, idx) in &self.columns {
             if deg.x < *x0 || deg.x > x0 + w {
                 continue;
@@ -184,6 +245,25 @@ impl Chart {
     /// Half-extent of the chart in tangent units.
     pub fn half_extent_tangent(&self) -> DVec2 {
         self.half_extent_deg * (PI / 180.0)
+    }
+
+    /// [`Chart::reach_deg`] in tangent units.
+    pub fn reach_tangent(&self) -> DVec2 {
+        self.reach_deg() * (PI / 180.0)
+    }
+}
+
+/// `(cos a, sin a)` for `a` in degrees, exact at multiples of 90 degrees.
+pub fn unit_at(deg: f64) -> DVec2 {
+    match deg.rem_euclid(360.0) {
+        0.0 => DVec2::X,
+        90.0 => DVec2::Y,
+        180.0 => -DVec2::X,
+        270.0 => -DVec2::Y,
+        _ => {
+            let (s, c) = deg.to_radians().sin_cos();
+            DVec2::new(c, s)
+        }
     }
 }
 
@@ -241,6 +321,33 @@ mod tests {
         assert_eq!((c.patches[0].cols, c.patches[0].rows), (128, 16));
         assert_eq!((c.patches[4].cols, c.patches[4].rows), (128, 64));
         assert!((c.patches[4].edge_normal.x - 5f64.to_radians().cos()).abs() < 1e-15);
+    }
+
+    #[test]
+    fn a_turned_chart_shows_each_grating_turned_at_its_turned_place() {
+        let c = chart();
+        for deg in [90.0, 45.0, 135.0, 30.0] {
+            let t = c.turned(deg);
+            assert_eq!(t.patches.len(), 4);
+            let u = unit_at(deg);
+            for p in &t.patches {
+                let Pattern::Grating { frequency_cpd: f } = p.pattern else { panic!() };
+                // Along the turned modulation: a peak, a trough half a period on; across it: flat.
+                let centre = t.turn(p.center_deg);
+                let across = DVec2::new(-u.y, u.x);
+                for (offset, want) in [(0.0, 0.9), (0.5 / f, 0.1), (1.0 / f, 0.9)] {
+                    let q = centre + offset * u + 0.1 * across;
+                    assert!((t.luminance(q) - want).abs() < 1e-9, "{deg} deg, {f} cpd at {offset}: {}", t.luminance(q));
+                }
+            }
+            let r = t.reach_deg();
+            assert!(r.x >= c.half_extent_deg.x.min(c.half_extent_deg.y) - 1e-12);
+        }
+        // A quarter turn is exact: the layout's corners map onto each other.
+        let t = c.turned(90.0);
+        assert_eq!(t.turn(DVec2::new(1.5, -0.25)), DVec2::new(0.25, 1.5));
+        assert_eq!(t.reach_deg(), DVec2::new(c.half_extent_deg.y, c.half_extent_deg.x));
+        assert_eq!(c.turned(0.0).luminance(DVec2::new(0.3, 0.1)), c.luminance(DVec2::new(0.3, 0.1)));
     }
 
     #[test]

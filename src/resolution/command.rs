@@ -81,7 +81,8 @@ pub fn execute(cmd: &ResolutionCommand) -> Result<ResolutionRun> {
     dir.write_bytes("mtf50.csv", mtf50_csv(&results).as_bytes())?;
     dir.write_bytes("accommodation.csv", accommodation_csv(&accommodation).as_bytes())?;
     dir.write_bytes("display.json", display_json(&limits).as_bytes())?;
-    dir.write_bytes("display.md", display_md(&limits, &study).as_bytes())?;
+    let md = display_md(&limits, &study) + &super::report::orientations_md(&results);
+    dir.write_bytes("display.md", md.as_bytes())?;
     timings.push(Timing { stage: "tables".into(), seconds: t.elapsed().as_secs_f64() });
     let t = Instant::now();
     super::plots::write_plots(&results, &accommodation, &dir)?;

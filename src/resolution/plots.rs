@@ -4,7 +4,10 @@
 //! - `through_focus`: contrast at the accommodation frequency against eye focus per source, one
 //!   panel per content depth, the CDP (grey) and the content depth (black) marked;
 //! - `accommodation`: the predicted focus against content depth per source (lines: the
-//!   frequency rule; hollow circles: the area rule), the identity line and the CDP.
+//!   frequency rule; hollow circles: the area rule), the identity line and the CDP;
+//! - `orientations` (when the study has more than one orientation): grating contrast against
+//!   frequency, one line per orientation, one panel per source (columns) for the content depth
+//!   nearest the CDP and the farthest one (rows), the eye focused on the content.
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -59,6 +62,10 @@ pub fn write_plots(r: &StudyResults, accommodation: &[AccommodationRow], dir: &O
     draw_plot!(dir, "mtf", size, |area| plot_mtf(area, r, cols));
     draw_plot!(dir, "through_focus", size, |area| plot_through_focus(area, r, cols));
     draw_plot!(dir, "accommodation", (900, 700), |area| plot_accommodation(area, r, accommodation));
+    if r.study.orientations_deg.len() > 1 {
+        let size = (380 * r.sources.len() as u32, 60 + 2 * 320);
+        draw_plot!(dir, "orientations", size, |area| plot_orientations(area, r));
+    }
     Ok(())
 }
 
@@ -230,5 +237,61 @@ where
         chart.draw_series(pick("mtf_area").iter().map(|p| Circle::new(*p, 6, c.stroke_width(2)))).map_err(e2s)?;
     }
     legend(&mut chart, SeriesLabelPosition::UpperLeft, Some(13))?;
+    area.present().map_err(e2s)
+}
+
+fn plot_orientations<DB: DrawingBackend>(area: DrawingArea<DB, Shift>, r: &StudyResults) -> PlotResult
+where
+    DB::ErrorType: 'static,
+{
+    area.fill(&WHITE).map_err(e2s)?;
+    let s = &r.study;
+    let area = area
+        .titled(
+            &format!("Grating contrast by orientation, eye focused on the content ({} mm pupil)", s.pupil_diameter_mm),
+            ("sans-serif", 20),
+        )
+        .map_err(e2s)?;
+    let cdp = cdp_diopters(r).unwrap_or(0.0);
+    let near = (0..s.depths.len())
+        .min_by(|&a, &b| (s.depths[a].diopters - cdp).abs().total_cmp(&(s.depths[b].diopters - cdp).abs()))
+        .unwrap_or(0);
+    let fmax = s.frequencies_cpd.last().copied().unwrap_or(1.0) * 1.05;
+    let ns = r.sources.len();
+    let cells = area.split_evenly((2, ns));
+    for (row, di) in [near, 0].into_iter().enumerate() {
+        let d = s.depths[di];
+        let fi = s.focus_index(d.diopters).expect("content depths are measured focuses");
+        for (k, name) in r.sources.iter().enumerate() {
+            let mut chart = ChartBuilder::on(&cells[row * ns + k])
+                .caption(format!("{name}, content {:.2} D", d.diopters), ("sans-serif", 16))
+                .margin(8)
+                .x_label_area_size(34)
+                .y_label_area_size(40)
+                .build_cartesian_2d(0.0..fmax, 0.0..1.1)
+                .map_err(e2s)?;
+            chart
+                .configure_mesh()
+                .max_light_lines(1)
+                .x_desc("cycles per degree")
+                .y_desc("contrast")
+                .draw()
+                .map_err(e2s)?;
+            for (oi, o) in s.orientations_deg.iter().enumerate() {
+                let c = color(oi + 1);
+                let pts: Vec<(f64, f64)> =
+                    s.frequencies_cpd.iter().zip(&r.grating_at(oi)[k][di][fi]).map(|(f, v)| (*f, v.value)).collect();
+                let a = chart.draw_series(LineSeries::new(pts.clone(), c.stroke_width(2))).map_err(e2s)?;
+                if row == 0 && k == 0 {
+                    a.label(format!("{o} deg"))
+                        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], c.stroke_width(2)));
+                }
+                chart.draw_series(pts.iter().map(|p| Circle::new(*p, 2, c.filled()))).map_err(e2s)?;
+            }
+            if row == 0 && k == 0 {
+                legend(&mut chart, SeriesLabelPosition::UpperRight, Some(12))?;
+            }
+        }
+    }
     area.present().map_err(e2s)
 }

@@ -75,8 +75,9 @@ fn num(v: f64) -> String {
 }
 
 /// `mtf.csv`: source, target_diopters, focus_diopters, frequency_cpd, orientation_deg, measure,
-/// contrast, contrast_ci95. Gratings (vertical bars, 0 degrees) and the edge (its angle from
-/// vertical) at every study frequency.
+/// contrast, contrast_ci95. For each source, depth and focus: the gratings at 0 degrees (vertical
+/// bars), the edge (its angle from vertical), then the gratings at each other orientation (only
+/// with the eye on the content unless `orientations_through_focus`), at every study frequency.
 pub fn mtf_csv(r: &StudyResults) -> String {
     let s = &r.study;
     let mut out = String::from(
@@ -94,8 +95,17 @@ pub fn mtf_csv(r: &StudyResults) -> String {
     for (k, source) in r.sources.iter().enumerate() {
         for (di, d) in s.depths.iter().enumerate() {
             for (fi, f) in s.focus_diopters.iter().enumerate() {
+                // Other orientations: with the eye on the content only, unless measured through focus.
+                let measured = s.orientations_through_focus || s.focus_index(d.diopters) == Some(fi);
+                let turned = r
+                    .oriented
+                    .iter()
+                    .filter(|_| measured)
+                    .map(|o| ("grating", &o.grating[k][di][fi], o.orientation_deg));
                 for (measure, values, angle) in
                     [("grating", &r.grating[k][di][fi], 0.0), ("edge", &r.edge[k][di][fi], edge_angle)]
+                        .into_iter()
+                        .chain(turned)
                 {
                     for (q, v) in s.frequencies_cpd.iter().zip(values) {
                         let _ = writeln!(
@@ -284,4 +294,53 @@ pub fn display_md(l: &DisplayLimits, study: &Study) -> String {
         );
     }
     s
+}
+
+/// The part of `display.md` on orientations: for each source, the grating contrast at every
+/// study orientation at the `[limits]` frequencies, for the content depth nearest the CDP and the
+/// farthest one, the eye focused on the content; and the largest spread between orientations.
+pub fn orientations_md(r: &StudyResults) -> String {
+    let s = &r.study;
+    let mut out = String::new();
+    if s.orientations_deg.len() < 2 {
+        return out;
+    }
+    let cdp = s.display.central_depth_plane().map_or(0.0, |z| 1000.0 / z);
+    let near_cdp = (0..s.depths.len())
+        .min_by(|&a, &b| (s.depths[a].diopters - cdp).abs().total_cmp(&(s.depths[b].diopters - cdp).abs()))
+        .unwrap_or(0);
+    let mut depths = vec![near_cdp];
+    if near_cdp != 0 {
+        depths.push(0);
+    }
+    let _ = writeln!(
+        out,
+        "
+Grating contrast by orientation (degrees counter-clockwise from vertical bars), the eye focused on the \
+         content, +- the 95% half-width:\n"
+    );
+    let heads: Vec<String> = s.orientations_deg.iter().map(|o| format!("{o} deg")).collect();
+    let _ = writeln!(
+        out,
+        "| source | content (D) | frequency (cpd) | {} | spread |\n|---|---:|---:|{}---:|",
+        heads.join(" | "),
+        "---:|".repeat(heads.len())
+    );
+    for (k, source) in r.sources.iter().enumerate() {
+        for &di in &depths {
+            let d = s.depths[di];
+            let Some(fi) = s.focus_index(d.diopters) else { continue };
+            for f in &s.limits.frequencies_cpd {
+                let Some(qi) = s.frequency_index(*f) else { continue };
+                let vals: Vec<super::run::Value> =
+                    (0..s.orientations_deg.len()).map(|oi| r.grating_at(oi)[k][di][fi][qi]).collect();
+                let cells: Vec<String> = vals.iter().map(|v| format!("{:.3} +- {:.3}", v.value, v.ci95)).collect();
+                let (lo, hi) =
+                    vals.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v.value), b.max(v.value)));
+                let _ =
+                    writeln!(out, "| {source} | {:.3} | {f} | {} | {:.3} |", d.diopters, cells.join(" | "), hi - lo);
+            }
+        }
+    }
+    out
 }

@@ -111,6 +111,15 @@ pub struct Timing {
     pub seconds: f64,
 }
 
+/// The gratings of one orientation other than 0 degrees.
+#[derive(Clone, Debug)]
+pub struct OrientedGratings {
+    /// Degrees counter-clockwise from vertical bars.
+    pub orientation_deg: f64,
+    /// Contrast, `[source][depth][focus][frequency]`.
+    pub grating: Vec<Vec<Vec<Vec<Value>>>>,
+}
+
 /// The measured numbers of a study, indexed `[source][depth][focus]` (then frequency); source 0
 /// is the ground truth, source `1 + m` method `m`.
 #[derive(Clone, Debug)]
@@ -123,8 +132,10 @@ pub struct StudyResults {
     pub chart: Chart,
     /// The rendered part of the LCD, columns and rows.
     pub lcd_crop: [usize; 2],
-    /// Grating contrast, `[source][depth][focus][frequency]`.
+    /// Grating contrast at 0 degrees (vertical bars), `[source][depth][focus][frequency]`.
     pub grating: Vec<Vec<Vec<Vec<Value>>>>,
+    /// Grating contrast at each other orientation of the study, in its order.
+    pub oriented: Vec<OrientedGratings>,
     /// Edge MTF, `[source][depth][focus][frequency]`.
     pub edge: Vec<Vec<Vec<Vec<Value>>>>,
     /// MTF50 in cpd, `[source][depth][focus]`.
@@ -136,6 +147,15 @@ pub struct StudyResults {
 }
 
 impl StudyResults {
+    /// Grating contrast at the study's orientation `oi` (0: 0 degrees), `[source][depth][focus][frequency]`.
+    pub fn grating_at(&self, oi: usize) -> &Vec<Vec<Vec<Vec<Value>>>> {
+        if oi == 0 {
+            &self.grating
+        } else {
+            &self.oriented[oi - 1].grating
+        }
+    }
+
     /// Index of source `name`.
     pub fn source_index(&self, name: &str) -> Option<usize> {
         self.sources.iter().position(|s| s == name)
@@ -174,6 +194,18 @@ pub fn study_rays(study: &Study, display: &Display, chart: &Chart) -> u64 {
     .iter()
     .fold(1u64, |a, &x| a.saturating_mul(x));
     nd.saturating_mul(display_rays).saturating_add(per_window)
+}
+
+/// The rays of the turned chart `chart` on its crop `display` (as [`study_rays`]), at `focuses`
+/// focuses per depth.
+fn turned_rays(study: &Study, display: &Display, chart: &Chart, focuses: usize) -> u64 {
+    let all = study_rays(study, display, chart);
+    let nf = study.focus_diopters.len().max(1) as u64;
+    let pixels: u64 = chart.patches.iter().map(|p| (p.cols * p.rows) as u64).sum();
+    let per_focus = [study.depths.len() as u64, pixels, study.measurement.replicates as u64]
+        .iter()
+        .fold(u64::from(study.measurement.samples_per_pixel), |a, &x| a.saturating_mul(x));
+    all.saturating_sub(per_focus.saturating_mul(nf.saturating_sub(focuses as u64)))
 }
 
 /// Runs `study`; progress bars on stderr unless `quiet`.
@@ -217,29 +249,56 @@ pub fn run_study(study: &Study, quiet: bool) -> Result<StudyResults> {
     } else {
         DVec2::ZERO
     };
-    let display = if eyes.iter().any(|e| e.optics.as_ref().is_some_and(|o| o.schematic().is_some())) {
-        crop_display(&study.display, half * 1.25 + 0.02 + diffraction, radius * 1.3, max_vergence + 0.003)
-    } else {
-        crop_display(&study.display, half + diffraction, radius, max_vergence)
+    let schematic = eyes.iter().any(|e| e.optics.as_ref().is_some_and(|o| o.schematic().is_some()));
+    let crop = |half: DVec2| {
+        if schematic {
+            crop_display(&study.display, half * 1.25 + 0.02 + diffraction, radius * 1.3, max_vergence + 0.003)
+        } else {
+            crop_display(&study.display, half + diffraction, radius, max_vergence)
+        }
     };
+    let display = crop(half);
+    // The other orientations: the gratings turned about the axis, each on its own display images.
+    let turned: Vec<(Chart, Display)> = study.orientations_deg[1..]
+        .iter()
+        .map(|&o| {
+            let c = chart.turned(o);
+            let d = crop(c.reach_tangent());
+            (c, d)
+        })
+        .collect();
     let sources = source_names(study);
     let (nd, nf, nq) = (study.depths.len(), study.focus_diopters.len(), study.frequencies_cpd.len());
     let ns = sources.len();
-    crate::long_run::announce(study_rays(study, &display, &chart));
+    // Turned gratings are measured with the eye on the content, or at every focus.
+    let turned_focuses = if study.orientations_through_focus { nf } else { 1 };
+    crate::long_run::announce(turned.iter().fold(study_rays(study, &display, &chart), |a, (c, d)| {
+        a.saturating_add(turned_rays(study, d, c, turned_focuses))
+    }));
     let mut timings = vec![Timing { stage: "chart and LCD crop".into(), seconds: t.elapsed().as_secs_f64() }];
 
     let settings = DisplayRenderSettings::default();
-    let display_bar = Progress::new((nd * study.methods.len() * display.lcd.rows()) as u64, "display images", quiet);
-    let measure_bar = Progress::new((nd * nf) as u64 * progress_steps(&chart), "eye rays", quiet);
+    let display_rows = display.lcd.rows() + turned.iter().map(|(_, d)| d.lcd.rows()).sum::<usize>();
+    let display_bar = Progress::new((nd * study.methods.len() * display_rows) as u64, "display images", quiet);
+    let turned_steps: u64 = turned.iter().map(|(c, _)| progress_steps(c)).sum::<u64>() * turned_focuses as u64;
+    let measure_bar = Progress::new(nd as u64 * (nf as u64 * progress_steps(&chart) + turned_steps), "eye rays", quiet);
     let (mut t_display, mut t_measure, mut t_analysis) = (0.0, 0.0, 0.0);
+    let (mut t_turned_display, mut t_turned_measure) = (0.0, 0.0);
     let empty = vec![vec![vec![Value::NAN; nq]; nf]; nd];
     let mut grating = vec![empty.clone(); ns];
+    let mut oriented: Vec<OrientedGratings> = turned
+        .iter()
+        .map(|(c, _)| OrientedGratings { orientation_deg: c.orientation_deg, grating: vec![empty.clone(); ns] })
+        .collect();
     let mut edge = vec![empty; ns];
     let mut mtf50 = vec![vec![vec![Value::NAN; nf]; nd]; ns];
     let reps = study.measurement.replicates;
     let spp = study.measurement.samples_per_pixel;
     let ppd = study.retina.pixels_per_degree;
-    let mut eye_rays = 0u64;
+    let (mut eye_rays, mut turned_eye_rays) = (0u64, 0u64);
+    let rays_of = |windows: &[WindowSamples]| -> u64 {
+        windows.iter().map(|w| (w.cols * w.rows * reps) as u64 * u64::from(spp)).sum::<u64>()
+    };
     for (di, depth) in study.depths.iter().enumerate() {
         let field = ChartField { chart: &chart, depth: depth.mm };
         let t = Instant::now();
@@ -257,7 +316,7 @@ pub fn run_study(study: &Study, quiet: bool) -> Result<StudyResults> {
             let sampler = Sampler::new(study.measurement.seed, (di * nf + fi) as u64, Some(radius));
             let windows = measure_windows(&source, &sampler, &chart, reps, spp, &measure_bar);
             measure_bar.check()?;
-            eye_rays += windows.iter().map(|w| (w.cols * w.rows * reps) as u64 * u64::from(spp)).sum::<u64>();
+            eye_rays += rays_of(&windows);
             t_measure += t.elapsed().as_secs_f64();
             let t = Instant::now();
             let per_source: Vec<(Vec<Value>, Vec<Value>, Value)> = (0..ns)
@@ -285,6 +344,56 @@ pub fn run_study(study: &Study, quiet: bool) -> Result<StudyResults> {
             }
             t_analysis += t.elapsed().as_secs_f64();
         }
+        drop(stack);
+        drop(images);
+        // The turned charts at this depth: their own display images, the eye on the content (or
+        // at every focus); sample streams after every 0-degree one.
+        let content_focus = study.focus_index(depth.diopters).expect("content depths are measured focuses");
+        for (ti, (tchart, tdisplay)) in turned.iter().enumerate() {
+            let field = ChartField { chart: tchart, depth: depth.mm };
+            let t = Instant::now();
+            let images: Vec<RgbImage> = study
+                .methods
+                .iter()
+                .map(|&m| render_display_image(tdisplay, m, &settings, &field, &display_bar))
+                .collect::<Result<_>>()?;
+            let refs: Vec<&RgbImage> = images.iter().collect();
+            let stack = DisplayStack::new(tdisplay, &refs)?;
+            t_turned_display += t.elapsed().as_secs_f64();
+            for (fi, eye) in eyes.iter().enumerate() {
+                if !study.orientations_through_focus && fi != content_focus {
+                    continue;
+                }
+                let t = Instant::now();
+                let source = DisplaySource::new(tdisplay, eye, &field, &stack);
+                let stream = ((1 + ti) * nd * nf + di * nf + fi) as u64;
+                let sampler = Sampler::new(study.measurement.seed, stream, Some(radius));
+                let windows = measure_windows(&source, &sampler, tchart, reps, spp, &measure_bar);
+                measure_bar.check()?;
+                turned_eye_rays += rays_of(&windows);
+                t_turned_measure += t.elapsed().as_secs_f64();
+                let t = Instant::now();
+                let per_source: Vec<Vec<Value>> = (0..ns)
+                    .into_par_iter()
+                    .map(|k| {
+                        let mut g = vec![Value::NAN; nq];
+                        for (p, w) in tchart.patches.iter().zip(&windows) {
+                            if let Pattern::Grating { frequency_cpd } = p.pattern {
+                                let qi =
+                                    study.frequency_index(frequency_cpd).expect("chart frequencies are the study's");
+                                // In its own frame every grating is vertical bars.
+                                g[qi] = grating_value(w, k, frequency_cpd, ppd, tchart.contrast);
+                            }
+                        }
+                        g
+                    })
+                    .collect();
+                for (k, g) in per_source.into_iter().enumerate() {
+                    oriented[ti].grating[k][di][fi] = g;
+                }
+                t_analysis += t.elapsed().as_secs_f64();
+            }
+        }
     }
     display_bar.finish();
     measure_bar.finish();
@@ -298,6 +407,22 @@ pub fn run_study(study: &Study, quiet: bool) -> Result<StudyResults> {
         seconds: t_display,
     });
     timings.push(Timing { stage: format!("eye rays ({:.0} M)", eye_rays as f64 / 1e6), seconds: t_measure });
+    if let Some((_, d)) = turned.iter().max_by_key(|(_, d)| d.lcd.pixel_count()) {
+        timings.push(Timing {
+            stage: format!(
+                "display images of the turned charts ({} per depth, up to {} x {} LCD pixels)",
+                turned.len() * study.methods.len(),
+                d.lcd.columns(),
+                d.lcd.rows()
+            ),
+            seconds: t_turned_display,
+        });
+        timings.push(Timing {
+            stage: format!("eye rays of the turned charts ({:.0} M)", turned_eye_rays as f64 / 1e6),
+            seconds: t_turned_measure,
+        });
+    }
+    let eye_rays = eye_rays + turned_eye_rays;
     timings.push(Timing { stage: "grating and edge analysis".into(), seconds: t_analysis });
     Ok(StudyResults {
         study: study.clone(),
@@ -305,6 +430,7 @@ pub fn run_study(study: &Study, quiet: bool) -> Result<StudyResults> {
         chart,
         lcd_crop: display.lcd.resolution,
         grating,
+        oriented,
         edge,
         mtf50,
         timings,

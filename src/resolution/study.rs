@@ -12,6 +12,8 @@
 //! content_mm = [300, 400, 600]         # more content depths, in mm (duplicates are merged)
 //! focus_diopters = { from = 0.0, to = 4.0, step = 0.25 }
 //! frequencies_cpd = [0.5, 1, 1.5, 2, 3, 4, 5, 6, 7, 8]
+//! orientations_deg = [0, 45, 90, 135]  # the gratings' orientations (0 always; this is the default)
+//! orientations_through_focus = false   # other orientations only with the eye on the content
 //! [target]                             # gratings and the slanted edge: mean and contrast
 //! [retina]                             # pixels per degree, measured windows, guard bands
 //! [measurement]                        # samples per pixel, replicates, seed
@@ -189,6 +191,13 @@ pub struct StudySpec {
     pub focus_diopters: Values,
     /// Grating frequencies, cycles per degree.
     pub frequencies_cpd: Values,
+    /// Orientations of the gratings, degrees counter-clockwise from vertical bars (modulation
+    /// along x); 0 must be one of them (default 0, 45, 90, 135).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub orientations_deg: Option<Vec<f64>>,
+    /// Measure the other orientations at every focus too (default: with the eye on the content).
+    #[serde(default)]
+    pub orientations_through_focus: bool,
     /// `[target]`: the patterns' mean and contrast.
     pub target: TargetSpec,
     /// `[retina]`: pixels per degree, windows and guards.
@@ -255,6 +264,10 @@ pub struct Study {
     pub focus_grid_diopters: Vec<f64>,
     /// Grating frequencies, cpd, increasing.
     pub frequencies_cpd: Vec<f64>,
+    /// Grating orientations, degrees in [0, 180), increasing: 0 first.
+    pub orientations_deg: Vec<f64>,
+    /// Orientations other than 0 measured at every focus, not only with the eye on the content.
+    pub orientations_through_focus: bool,
     /// The patterns' mean and contrast.
     pub target: TargetSpec,
     /// The retina's sampling.
@@ -338,6 +351,7 @@ impl Study {
         let nyquist = 0.5 * r.pixels_per_degree;
         check_target_and_measurement(spec, source)?;
         check_listed_frequencies(spec, source, &frequencies)?;
+        let orientations = study_orientations(spec, source)?;
         Ok(Study {
             name: spec.name.clone(),
             description: spec.description.clone(),
@@ -351,6 +365,8 @@ impl Study {
             focus_diopters: focus,
             focus_grid_diopters: grid,
             frequencies_cpd: frequencies,
+            orientations_deg: orientations,
+            orientations_through_focus: spec.orientations_through_focus,
             target: spec.target,
             retina: r,
             retina_pixel_deg: 1.0 / r.pixels_per_degree,
@@ -376,10 +392,48 @@ impl Study {
         self.frequencies_cpd.iter().position(|g| (g - f).abs() < 1e-9)
     }
 
+    /// The index of orientation `o` degrees (one of the study's; 0 is index 0).
+    pub fn orientation_index(&self, o: f64) -> Option<usize> {
+        self.orientations_deg.iter().position(|g| (g - o).abs() < 1e-9)
+    }
+
     /// The index of focus `d` diopters (one of the measured focuses).
     pub fn focus_index(&self, d: f64) -> Option<usize> {
         self.focus_diopters.iter().position(|g| (g - d).abs() < 1e-9)
     }
+}
+
+/// The grating orientations measured when the study names none.
+pub const DEFAULT_ORIENTATIONS_DEG: [f64; 4] = [0.0, 45.0, 90.0, 135.0];
+
+/// The study's grating orientations: each in [0, 180) degrees, listed once, 0 among them (the
+/// accommodation rules and the display limits read the 0-degree gratings); increasing.
+fn study_orientations(spec: &StudySpec, source: &str) -> Result<Vec<f64>> {
+    let bad = |field: &str, msg: String| Error::invalid(source, field, msg);
+    let mut v = spec.orientations_deg.clone().unwrap_or_else(|| DEFAULT_ORIENTATIONS_DEG.to_vec());
+    for (i, o) in v.iter().enumerate() {
+        let field = format!("orientations_deg[{i}]");
+        if !(o.is_finite() && (0.0..180.0).contains(o)) {
+            return Err(bad(
+                &field,
+                format!("must be in [0, 180) degrees (a grating at 180 + a is the one at a), got {o}"),
+            ));
+        }
+        if v[..i].iter().any(|p| (p - o).abs() < 1e-9) {
+            return Err(bad(&field, format!("{o} degrees is listed twice")));
+        }
+    }
+    if !v.contains(&0.0) {
+        return Err(bad(
+            "orientations_deg",
+            format!("must include 0 (vertical bars: the accommodation rules and display limits use them), got {v:?}"),
+        ));
+    }
+    if v.len() > 12 {
+        return Err(bad("orientations_deg", format!("at most 12 orientations, got {}", v.len())));
+    }
+    v.sort_by(f64::total_cmp);
+    Ok(v)
 }
 
 /// The study's methods, parsed, each listed once.
@@ -591,6 +645,8 @@ mod tests {
         assert_eq!(s.frequencies_cpd[0], 0.5);
         // Beyond the paper display's Nyquist (about 5.8 cpd at the CDP).
         assert!(*s.frequencies_cpd.last().unwrap() > 6.0);
+        assert_eq!(s.orientations_deg, [0.0, 45.0, 90.0, 135.0]);
+        assert_eq!(with("orientations_deg", "[90, 0]").unwrap().orientations_deg, [0.0, 90.0]);
     }
 
     #[test]
@@ -606,6 +662,11 @@ mod tests {
             ("focus_diopters", "{ from = 1, to = 0, step = 0.5 }", "focus_diopters"),
             ("retina.window_deg", "[2.01, 0.25]", "retina.window_deg[0]"),
             ("measurement.replicates", "2", "measurement.replicates"),
+            ("orientations_deg", "[0, 180]", "orientations_deg[1]"),
+            ("orientations_deg", "[0, -45]", "orientations_deg[1]"),
+            ("orientations_deg", "[0, nan]", "orientations_deg[1]"),
+            ("orientations_deg", "[0, 45, 45]", "orientations_deg[2]"),
+            ("orientations_deg", "[45, 90]", "orientations_deg"),
             ("accommodation.frequency_cpd", "2.5", "accommodation.frequency_cpd"),
             ("limits.frequencies_cpd", "[1, 9]", "limits.frequencies_cpd[1]"),
             ("target.contrast", "0", "target.contrast"),

@@ -8,7 +8,8 @@
 //! point goes to every source at once ([`PairedSource`], paired as in `assess`). Windows are not
 //! centred on the axis, so this is a rectangle-of-pixels twin of
 //! [`crate::measure::estimator::Replicates::extend`], with the same sums in `f64` per pixel in
-//! sample order (results do not depend on the thread count).
+//! sample order (results do not depend on the thread count). The windows of a turned chart
+//! ([`Chart::turned`]) are its layout's windows turned with it: every sample's tangent is turned.
 
 use glam::DVec2;
 use rayon::prelude::*;
@@ -96,6 +97,7 @@ pub fn measure_windows<S: PairedSource + ?Sized>(
 ) -> Vec<WindowSamples> {
     let k = source.images();
     let step = chart.pixel_tangent();
+    let turned = chart.orientation_deg != 0.0;
     let deg = std::f64::consts::PI / 180.0;
     // Tasks: (window, first row).
     let mut offsets = Vec::with_capacity(chart.patches.len());
@@ -155,6 +157,7 @@ pub fn measure_windows<S: PairedSource + ?Sized>(
                                 corner.x + (c as f64 + frac.x) * step,
                                 corner.y - (row as f64 + frac.y) * step,
                             );
+                            let tangent = if turned { chart.turn(tangent) } else { tangent };
                             let spectral = if spectral { points.spectral_of_last() } else { 0.0 };
                             let diffraction = if diffraction { points.diffraction_of_last() } else { [0.0; 4] };
                             batch.push(EyeSample { tangent, pupil, spectral, diffraction });
