@@ -530,3 +530,30 @@ fn a_sweep_with_a_tiny_time_budget_marks_the_rows_that_missed_and_strict_exits_3
     assert!(rows.len() == 4 && rows.iter().all(|r| r["target_met"] == "true"), "{rows:?}");
     assert!(!stderr.contains("precision target"), "{stderr}");
 }
+
+/// OPT's display image depends on its training states, which shared sweep images do not key
+/// on: a sweep naming OPT is refused before any point runs, naming the field.
+#[test]
+fn a_sweep_with_opt_is_refused_naming_the_methods_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let exp = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("experiments/paper.toml");
+    let sweep = dir.path().join("opt.toml");
+    std::fs::write(
+        &sweep,
+        format!(
+            "name = \"opt\"\nexperiment = {:?}\n[set]\n\"methods\" = [\"LC\", \"OPT\"]\n\"display.lcd.resolution\" = [540, 540]\n\
+             \"eye.retina_resolution\" = 32\n[[axes]]\n\"eye.pupil_diameter\" = [3.0, 4.0]\n",
+            exp.to_str().unwrap()
+        ),
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_inimtrace"))
+        .args(["--quiet", "sweep", sweep.to_str().unwrap(), "--out", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert!(e.contains("methods") && e.contains("OPT is not available in sweeps"), "{e}");
+    assert!(!out.join("sweep.csv").exists());
+}

@@ -100,6 +100,16 @@ fn build(
             }
         };
         let mut exp = r.experiment_with(scenes[slot].1.clone())?;
+        // OPT's display image depends on its training states and solver settings, which the
+        // sweep's shared display images do not key on yet: refused rather than shared wrongly.
+        if exp.methods.contains(&Method::Optimized) {
+            return Err(crate::error::Error::invalid(
+                exp.source.clone(),
+                "methods",
+                "OPT is not available in sweeps yet (its display image depends on its [optimize] training states, \
+                 which shared sweep images do not account for); run `inimtrace assess` for it, per point",
+            ));
+        }
         let values = values.get(i).cloned().unwrap_or_default();
         let mut files = inputs.files.clone();
         files.extend(scene_files[slot].iter().filter(|f| !inputs.files.iter().any(|g| g.path == f.path)).cloned());
