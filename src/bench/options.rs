@@ -474,7 +474,7 @@ mod tests {
         let text: Vec<&str> = Backend::ALL.iter().map(|s| s.as_str()).collect();
         assert_eq!(text, ["analytic-fused", "analytic", "embree", "bvh"]);
         let text: Vec<&str> = MethodLabel::ALL.iter().map(|s| s.as_str()).collect();
-        assert_eq!(text, ["LC", "PC", "LA", "GT"]);
+        assert_eq!(text, ["LC", "PC", "LA", "GT", "OPT"]);
         assert_eq!(Quantity::GroundTruth.as_str(), "ground_truth");
         assert_eq!(Parameter::DisplaySamples.as_str(), "display_samples");
     }
