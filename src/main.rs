@@ -788,21 +788,8 @@ fn compare(
         outln!("{}", serde_json::to_string_pretty(&out)?);
         return Ok(true);
     }
-    outln!(
-        "PSNR  {} dB  (R {}, G {}, B {})",
-        metrics::format_db(p.mean, 3),
-        metrics::format_db(p.channels[0], 3),
-        metrics::format_db(p.channels[1], 3),
-        metrics::format_db(p.channels[2], 3)
-    );
-    outln!(
-        "SSIM  {:.5}  (R {:.5}, G {:.5}, B {:.5}; constants {})",
-        s.mean,
-        s.channels[0],
-        s.channels[1],
-        s.channels[2],
-        constants
-    );
+    use inimtrace::measure::stats::Estimate;
+    print_scores(&Estimate::exact(p.channels, p.mean), &Estimate::exact(s.channels, s.mean), constants, "")?;
     Ok(false)
 }
 
@@ -813,7 +800,8 @@ fn compare_replicate_sets(
     constants: SsimConstants,
 ) -> Result<Option<(inimtrace::measure::stats::Estimate, inimtrace::measure::stats::Estimate)>> {
     use inimtrace::io::exr_replicates as sets;
-    match (sets::count(a)?, sets::count(b)?) {
+    let (ca, cb) = (sets::count(a)?, sets::count(b)?);
+    match (ca, cb) {
         (None, None) => Ok(None),
         (Some(ra), Some(rb)) => {
             let (sa, sb) = (sets::read(a, ra)?, sets::read(b, rb)?);
@@ -822,7 +810,7 @@ fn compare_replicate_sets(
             Ok(inimtrace::measure::adaptive::estimates(&reps, constants).pop())
         }
         (Some(_), None) | (None, Some(_)) => {
-            let (set, plain) = if sets::count(a)?.is_some() { (a, b) } else { (b, a) };
+            let (set, plain) = if ca.is_some() { (a, b) } else { (b, a) };
             bail!(
                 "{} is a replicate set and {} is one image: compare two replicate sets (the table's de-biased \
                  scores) or two images",
@@ -854,12 +842,23 @@ fn print_replicate_scores(
         outln!("{}", serde_json::to_string_pretty(&out)?);
         return Ok(true);
     }
+    print_scores(p, s, constants, "; de-biased over replicates, 95% interval")?;
+    Ok(false)
+}
+
+/// `compare`'s two lines: PSNR and SSIM, their channels, and the 95% half-widths when known.
+fn print_scores(
+    p: &inimtrace::measure::stats::Estimate,
+    s: &inimtrace::measure::stats::Estimate,
+    constants: SsimConstants,
+    note: &str,
+) -> Result<()> {
     let ci = |e: &inimtrace::measure::stats::Estimate, digits: usize| match e.ci95 {
         Some(h) => format!(" ± {h:.digits$}"),
         None => String::new(),
     };
     outln!(
-        "PSNR  {} dB{}  (R {}, G {}, B {}; de-biased over replicates, 95% interval)",
+        "PSNR  {} dB{}  (R {}, G {}, B {}{note})",
         metrics::format_db(p.mean, 3),
         ci(p, 3),
         metrics::format_db(p.channels[0], 3),
@@ -875,7 +874,7 @@ fn print_replicate_scores(
         s.channels[2],
         constants
     );
-    Ok(false)
+    Ok(())
 }
 
 /// `inimtrace bench`; returns whether it printed its own total time.
