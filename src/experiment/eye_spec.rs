@@ -1,0 +1,264 @@
+//! The experiment's eye settings: the `[eye]` table shared by every eye case (the paper's
+//! thin-lens eye of Sec. 3, or a schematic eye of docs/EYE.md with its wavelengths and the
+//! Stiles-Crawford effect), the eye-model settings a resolution study shares with it, and the
+//! `[[eye_cases]]` rows of Table 1 (Sec. 4.1: Pin, Near, Cen, Far).
+
+use glam::DVec2;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use crate::optics::eye::{EyeModel, EyeOptics, EyeOpticsSpec, FocusCriterion, UserEye};
+use crate::optics::{Aperture, Eye};
+
+/// `[eye]`: the eye shared by all eye cases.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct EyeSpec {
+    /// v0, mm.
+    pub retina_distance: f64,
+    /// Pupil diameter, mm.
+    pub pupil_diameter: f64,
+    /// n: n x n grid over the pupil's bounding square, kept inside the circle.
+    pub pupil_grid: usize,
+    /// Retina pixels per side.
+    pub retina_resolution: usize,
+    /// T: the retina covers tangents -T..T.
+    pub retina_half_tangent: f64,
+    /// k: k x k stratified samples per retina pixel.
+    pub retina_samples: usize,
+    /// Pupil centre, mm.
+    pub position: [f64; 3],
+    /// The eye model ([`EyeModel::parse`]): "thin-lens" (the paper's, the default), "navarro"
+    /// (1985), "navarro-1999", "arizona", "le-grand" or "user" (with `[eye.user]`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub model: Option<String>,
+    /// `[eye.user]`: a user-defined schematic eye (with `model = "user"`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub user: Option<UserEye>,
+    /// How a schematic eye's focus is judged when its accommodation is solved: "paraxial" or
+    /// "min-rms-spot".
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub focus_criterion: Option<FocusCriterion>,
+    /// The reference wavelength of the focus and the retina's map, and the single-wavelength
+    /// mode's wavelength, nm (555).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub wavelength_nm: Option<f64>,
+    /// "primaries" (each channel at its display primary's wavelengths; a schematic eye's
+    /// default) or "single" (every channel at `wavelength_nm`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub spectrum: Option<String>,
+    /// The grid estimator's wavelengths per channel (3); the converged one samples them.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub wavelength_samples: Option<usize>,
+    /// The Stiles-Crawford effect's rho, 1/mm^2 (absent: not applied; 0.05 is typical).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stiles_crawford_rho: Option<f64>,
+    /// The Stiles-Crawford peak in the entrance pupil, mm from its centre ([0, 0]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stiles_crawford_peak: Option<[f64; 2]>,
+}
+
+impl EyeSpec {
+    /// The eye beyond the thin lens these settings ask for; errors name `source` and the field.
+    pub fn optics_spec(&self, source: &str) -> Result<EyeOpticsSpec> {
+        let m = EyeModelSettings {
+            model: self.model.clone(),
+            user: self.user.clone(),
+            focus_criterion: self.focus_criterion,
+            wavelength_nm: self.wavelength_nm,
+            spectrum: self.spectrum.clone(),
+            wavelength_samples: self.wavelength_samples,
+            stiles_crawford_rho: self.stiles_crawford_rho,
+            stiles_crawford_peak: self.stiles_crawford_peak,
+        };
+        m.optics_spec(self.pupil_diameter, source, "eye.")
+    }
+}
+
+/// The eye-model settings of an experiment's `[eye]` (there among the eye's other fields) and of
+/// a resolution study's `[eye]` table: the model, its focus criterion, the wavelengths and the
+/// Stiles-Crawford effect (docs/EYE.md).
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct EyeModelSettings {
+    /// See [`EyeSpec::model`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub model: Option<String>,
+    /// See [`EyeSpec::user`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub user: Option<UserEye>,
+    /// See [`EyeSpec::focus_criterion`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub focus_criterion: Option<FocusCriterion>,
+    /// See [`EyeSpec::wavelength_nm`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub wavelength_nm: Option<f64>,
+    /// See [`EyeSpec::spectrum`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub spectrum: Option<String>,
+    /// See [`EyeSpec::wavelength_samples`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub wavelength_samples: Option<usize>,
+    /// See [`EyeSpec::stiles_crawford_rho`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stiles_crawford_rho: Option<f64>,
+    /// See [`EyeSpec::stiles_crawford_peak`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stiles_crawford_peak: Option<[f64; 2]>,
+}
+
+impl EyeModelSettings {
+    /// The eye beyond the thin lens these settings ask for, with a pupil of `pupil_diameter`
+    /// mm; errors name `source` and the field (`prefix` + its name).
+    pub fn optics_spec(&self, pupil_diameter: f64, source: &str, prefix: &str) -> Result<EyeOpticsSpec> {
+        let f = |name: &str| format!("{prefix}{name}");
+        let model = EyeModel::parse(self.model.as_deref().unwrap_or("thin-lens"), self.user.clone(), source)
+            .map_err(|e| prefix_model_field(e, prefix))?;
+        if self.user.is_some() && !matches!(model, EyeModel::User(_)) {
+            return Err(Error::invalid(source, f("user"), "is only read with `model = \"user\"`"));
+        }
+        let reference_nm = self.wavelength_nm.unwrap_or(555.0);
+        if !(reference_nm.is_finite() && (380.0..=780.0).contains(&reference_nm)) {
+            return Err(Error::invalid(
+                source,
+                f("wavelength_nm"),
+                format!("must be a visible wavelength in nm (380 to 780), got {reference_nm}"),
+            ));
+        }
+        let primaries = match self.spectrum.as_deref() {
+            None => model != EyeModel::ThinLens,
+            Some("primaries") => true,
+            Some("single") => false,
+            Some(other) => {
+                return Err(Error::invalid(
+                    source,
+                    f("spectrum"),
+                    format!("`{other}` is not one of \"primaries\" or \"single\""),
+                ))
+            }
+        };
+        let stiles_crawford = match (self.stiles_crawford_rho, self.stiles_crawford_peak) {
+            (None, None) => None,
+            (None, Some(_)) => {
+                return Err(Error::invalid(
+                    source,
+                    f("stiles_crawford_peak"),
+                    "needs eye.stiles_crawford_rho (0.05 /mm^2 is typical)",
+                ))
+            }
+            (Some(rho), peak) => {
+                if !(rho.is_finite() && (0.0..=1.0).contains(&rho)) {
+                    return Err(Error::invalid(
+                        source,
+                        f("stiles_crawford_rho"),
+                        format!("must be between 0 and 1 /mm^2 (0.05 is typical), got {rho}"),
+                    ));
+                }
+                let peak = DVec2::from_array(peak.unwrap_or([0.0; 2]));
+                if !peak.is_finite() || peak.length() > 0.5 * pupil_diameter.max(0.0) + 1e-12 {
+                    return Err(Error::invalid(
+                        source,
+                        f("stiles_crawford_peak"),
+                        format!("must lie inside the pupil (radius {} mm), got {peak}", 0.5 * pupil_diameter),
+                    ));
+                }
+                Some((rho, peak))
+            }
+        };
+        Ok(EyeOpticsSpec {
+            model,
+            criterion: self.focus_criterion.unwrap_or(FocusCriterion::Paraxial),
+            reference_nm,
+            primaries,
+            wavelength_samples: self.wavelength_samples.unwrap_or(3),
+            stiles_crawford,
+            diffraction: Default::default(),
+        })
+    }
+}
+
+impl EyeModelSettings {
+    /// The optics these settings give `eye` (its aperture and focus), with the display's
+    /// `primaries` (its `[primaries]`, or the default's): what the single-stage commands'
+    /// `--eye-model` flags and Python's `Eye(model=...)` build. `None` for the thin lens without
+    /// Stiles-Crawford.
+    /// `focus_field` names the focus in errors (an unreachable focus); `half_tangent` is the
+    /// retina's half field per axis (the fitted ray map covers it).
+    pub fn optics_for(
+        &self,
+        eye: &Eye,
+        half_tangent: f64,
+        primaries: &crate::optics::spectrum::Primaries,
+        source: &str,
+        focus_field: &str,
+    ) -> Result<Option<std::sync::Arc<EyeOptics>>> {
+        let pupil = match eye.aperture {
+            Aperture::Pinhole => 0.0,
+            Aperture::ThinLens { pupil_diameter, .. } => pupil_diameter,
+        };
+        let spec = self.optics_spec(pupil, source, "eye.")?;
+        EyeOptics::build(
+            &spec,
+            &eye.aperture,
+            eye.retina_distance,
+            primaries,
+            half_tangent * std::f64::consts::SQRT_2,
+            source,
+            focus_field,
+        )
+    }
+}
+
+/// An error of the model's own fields (`eye.model`, `eye.user...`) renamed under `prefix`.
+fn prefix_model_field(e: Error, prefix: &str) -> Error {
+    match e {
+        Error::Invalid { source_name, field, message } if prefix != "eye." => Error::Invalid {
+            source_name,
+            field: format!("{prefix}{}", field.strip_prefix("eye.").unwrap_or(&field)),
+            message,
+        },
+        other => other,
+    }
+}
+
+impl Default for EyeSpec {
+    fn default() -> Self {
+        Self {
+            retina_distance: 17.0,
+            pupil_diameter: 5.0,
+            pupil_grid: 8,
+            retina_resolution: 512,
+            retina_half_tangent: 0.3,
+            retina_samples: 1,
+            position: [0.0; 3],
+            model: None,
+            user: None,
+            focus_criterion: None,
+            wavelength_nm: None,
+            spectrum: None,
+            wavelength_samples: None,
+            stiles_crawford_rho: None,
+            stiles_crawford_peak: None,
+        }
+    }
+}
+
+/// `[[eye_cases]]`: one row of Table 1.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct EyeCaseSpec {
+    /// Used in file names (`gt_<name>.exr`) and as the table's row label.
+    pub name: String,
+    /// A pinhole eye (the paper's "Pin"): one chief ray per retina sample, no focus.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub pinhole: bool,
+    /// Focus distance from the pupil, mm (give this or `focus_diopters` unless `pinhole`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub focus_mm: Option<f64>,
+    /// Focus as vergence, dioptres (0 = infinity).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub focus_diopters: Option<f64>,
+    /// This case's pupil centre, mm (default: `eye.position`): an eye displaced in the eye box.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub position: Option<[f64; 3]>,
+}
