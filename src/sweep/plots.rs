@@ -173,6 +173,44 @@ fn method_color(method: &str, i: usize) -> RGBColor {
     }
 }
 
+/// The axes every line plot of a sweep shares: `key` (with its unit) across, `metric` up, over
+/// the data's box `(x0, x1, y0, y1)` padded by 5% across and 8% up (at least 0.2 dB or 0.002
+/// SSIM), under `caption` at its font size.
+fn metric_axes<'a, DB: DrawingBackend>(
+    area: &'a DrawingArea<DB, plotters::coord::Shift>,
+    metric: Metric,
+    key: &str,
+    (caption, caption_size): (String, u32),
+    y_desc: String,
+    (x0, x1, y0, y1): (f64, f64, f64, f64),
+) -> std::result::Result<
+    ChartContext<'a, DB, Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>>,
+    DrawingAreaErrorKind<DB::ErrorType>,
+> {
+    let xpad = ((x1 - x0) * 0.05).max(1e-9);
+    let ypad = ((y1 - y0) * 0.08).max(match metric {
+        Metric::Psnr => 0.2,
+        Metric::Ssim => 0.002,
+    });
+    let mut chart = ChartBuilder::on(area)
+        .caption(caption, ("sans-serif", caption_size))
+        .margin(14)
+        .x_label_area_size(44)
+        .y_label_area_size(64)
+        .build_cartesian_2d((x0 - xpad)..(x1 + xpad), (y0 - ypad)..(y1 + ypad))?;
+    chart
+        .configure_mesh()
+        .max_light_lines(2)
+        .x_desc(super::units::label(key))
+        .y_desc(y_desc)
+        .y_label_formatter(&|v| match metric {
+            Metric::Psnr => format!("{v:.1}"),
+            Metric::Ssim => format!("{v:.3}"),
+        })
+        .draw()?;
+    Ok(chart)
+}
+
 fn draw<DB: DrawingBackend>(
     area: DrawingArea<DB, plotters::coord::Shift>,
     key: &str,
@@ -203,29 +241,9 @@ where
     if !(x0.is_finite() && y0.is_finite()) {
         return area.present().map_err(e2s);
     }
-    let xpad = (x1 - x0) * 0.05;
-    let ypad = ((y1 - y0) * 0.08).max(match metric {
-        Metric::Psnr => 0.2,
-        Metric::Ssim => 0.002,
-    });
-    let mut chart = ChartBuilder::on(&area)
-        .caption(format!("{} against {}", metric.label(), super::units::label(key)), ("sans-serif", 20))
-        .margin(14)
-        .x_label_area_size(44)
-        .y_label_area_size(64)
-        .build_cartesian_2d((x0 - xpad)..(x1 + xpad), (y0 - ypad)..(y1 + ypad))
-        .map_err(e2s)?;
-    chart
-        .configure_mesh()
-        .max_light_lines(2)
-        .x_desc(super::units::label(key))
-        .y_desc(format!("{}: dots every point and eye case, line the mean", metric.label()))
-        .y_label_formatter(&|v| match metric {
-            Metric::Psnr => format!("{v:.1}"),
-            Metric::Ssim => format!("{v:.3}"),
-        })
-        .draw()
-        .map_err(e2s)?;
+    let caption = (format!("{} against {}", metric.label(), super::units::label(key)), 20);
+    let y_desc = format!("{}: dots every point and eye case, line the mean", metric.label());
+    let mut chart = metric_axes(&area, metric, key, caption, y_desc, (x0, x1, y0, y1)).map_err(e2s)?;
     for (i, (method, pts)) in methods.iter().enumerate() {
         let color = method_color(method, i);
         let mut means: BTreeMap<u64, (f64, f64, usize)> = BTreeMap::new();
@@ -327,32 +345,9 @@ where
     if !(x0.is_finite() && y0.is_finite()) {
         return area.present().map_err(e2s);
     }
-    let xpad = ((x1 - x0) * 0.05).max(1e-9);
-    let ypad = ((y1 - y0) * 0.08).max(match metric {
-        Metric::Psnr => 0.2,
-        Metric::Ssim => 0.002,
-    });
-    let mut chart = ChartBuilder::on(&area)
-        .caption(
-            format!("{} against {}, one line per {}", metric.label(), super::units::label(key), by_key),
-            ("sans-serif", 18),
-        )
-        .margin(14)
-        .x_label_area_size(44)
-        .y_label_area_size(64)
-        .build_cartesian_2d((x0 - xpad)..(x1 + xpad), (y0 - ypad)..(y1 + ypad))
-        .map_err(e2s)?;
-    chart
-        .configure_mesh()
-        .max_light_lines(2)
-        .x_desc(super::units::label(key))
-        .y_desc(format!("{}: mean over eye cases and other axes", metric.label()))
-        .y_label_formatter(&|v| match metric {
-            Metric::Psnr => format!("{v:.1}"),
-            Metric::Ssim => format!("{v:.3}"),
-        })
-        .draw()
-        .map_err(e2s)?;
+    let caption = (format!("{} against {}, one line per {}", metric.label(), super::units::label(key), by_key), 18);
+    let y_desc = format!("{}: mean over eye cases and other axes", metric.label());
+    let mut chart = metric_axes(&area, metric, key, caption, y_desc, (x0, x1, y0, y1)).map_err(e2s)?;
     let unit = super::units::unit_of(by_key).map(|u| format!(" {u}")).unwrap_or_default();
     for (mi, yi, line) in lines {
         let base = method_color(&methods[mi], mi);
