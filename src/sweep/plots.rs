@@ -173,6 +173,10 @@ fn method_color(method: &str, i: usize) -> RGBColor {
     }
 }
 
+/// A line plot's chart: numbers across and up.
+type LineChart<'a, DB> =
+    ChartContext<'a, DB, Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>>;
+
 /// The axes every line plot of a sweep shares: `key` (with its unit) across, `metric` up, over
 /// the data's box `(x0, x1, y0, y1)` padded by 5% across and 8% up (at least 0.2 dB or 0.002
 /// SSIM), under `caption` at its font size.
@@ -183,10 +187,7 @@ fn metric_axes<'a, DB: DrawingBackend>(
     (caption, caption_size): (String, u32),
     y_desc: String,
     (x0, x1, y0, y1): (f64, f64, f64, f64),
-) -> std::result::Result<
-    ChartContext<'a, DB, Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>>,
-    DrawingAreaErrorKind<DB::ErrorType>,
-> {
+) -> std::result::Result<LineChart<'a, DB>, DrawingAreaErrorKind<DB::ErrorType>> {
     let xpad = ((x1 - x0) * 0.05).max(1e-9);
     let ypad = ((y1 - y0) * 0.08).max(match metric {
         Metric::Psnr => 0.2,
