@@ -213,38 +213,7 @@ fn navarro_accommodation_and_chromatic_aberration_match_brute_force() {
 }
 
 fn user_eye() -> UserEye {
-    toml::from_str(
-        r#"
-retina_radius = -12.0
-iris = { after = "cornea-back", distance = 3.05 }
-[[surfaces]]
-name = "cornea-front"
-radius = 7.72
-conic = -0.26
-thickness = 0.55
-semi_diameter = 5.5
-medium = { constant = 1.376 }
-[[surfaces]]
-name = "cornea-back"
-radius = 6.5
-thickness = 3.05
-semi_diameter = 5.5
-medium = { cauchy = { a = 1.3247, b = 0.0044 } }
-[[surfaces]]
-radius = 10.2
-conic = -3.1316
-thickness = 4.0
-semi_diameter = 4.5
-medium = { table = { wavelength_nm = [400.0, 550.0, 700.0], index = [1.434, 1.422, 1.416] } }
-[[surfaces]]
-radius = -6.0
-conic = -1.0
-thickness = 16.40
-semi_diameter = 4.5
-medium = { sellmeier = { b = [0.7848], c = [0.0118] } }
-"#,
-    )
-    .unwrap()
+    toml::from_str(include_str!("data/eyes/navarro-like.toml")).unwrap()
 }
 
 fn all_models() -> Vec<EyeModel> {

@@ -164,35 +164,8 @@ impl UserEye {
 mod tests {
     use super::*;
 
-    pub(crate) const NAVARRO_LIKE: &str = r#"
-retina_radius = -12.0
-iris = { after = "cornea-back", distance = 3.05 }
-[[surfaces]]
-name = "cornea-front"
-radius = 7.72
-conic = -0.26
-thickness = 0.55
-semi_diameter = 5.5
-medium = { constant = 1.376 }
-[[surfaces]]
-name = "cornea-back"
-radius = 6.5
-thickness = 3.05
-semi_diameter = 5.5
-medium = { cauchy = { a = 1.3247, b = 0.0044 } }
-[[surfaces]]
-radius = 10.2
-conic = -3.1316
-thickness = 4.0
-semi_diameter = 4.5
-medium = { table = { wavelength_nm = [400.0, 550.0, 700.0], index = [1.434, 1.422, 1.416] } }
-[[surfaces]]
-radius = -6.0
-conic = -1.0
-thickness = 16.40
-semi_diameter = 4.5
-medium = { sellmeier = { b = [0.7848], c = [0.0118] } }
-"#;
+    /// The user-eye fixture every medium form appears in (tests/data/eyes/navarro-like.toml).
+    const NAVARRO_LIKE: &str = include_str!("../../../tests/data/eyes/navarro-like.toml");
 
     #[test]
     fn a_user_eye_reads_from_toml_and_validates() {
