@@ -531,29 +531,65 @@ fn a_sweep_with_a_tiny_time_budget_marks_the_rows_that_missed_and_strict_exits_3
     assert!(!stderr.contains("precision target"), "{stderr}");
 }
 
-/// OPT's display image depends on its training states, which shared sweep images do not key
-/// on: a sweep naming OPT is refused before any point runs, naming the field.
+/// OPT in a sweep: its display image is keyed on its resolved `[optimize]` settings, so points
+/// whose training states differ (a trained eye case's focus) get their own, and points that
+/// differ only in what OPT does not train on (a held-out case's focus) share one. Each point's
+/// OPT scores are those of `assess` by hand, to the last digit.
 #[test]
-fn a_sweep_with_opt_is_refused_naming_the_methods_field() {
+fn a_sweep_with_opt_keys_its_display_image_on_the_optimize_settings() {
     let dir = tempfile::tempdir().unwrap();
     let exp = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("experiments/paper.toml");
     let sweep = dir.path().join("opt.toml");
     std::fs::write(
         &sweep,
         format!(
-            "name = \"opt\"\nexperiment = {:?}\n[set]\n\"methods\" = [\"LC\", \"OPT\"]\n\"display.lcd.resolution\" = [540, 540]\n\
-             \"eye.retina_resolution\" = 32\n[[axes]]\n\"eye.pupil_diameter\" = [3.0, 4.0]\n",
+            "name = \"opt\"\nexperiment = {:?}\n[set]\n\"methods\" = [\"LA\", \"OPT\"]\n\
+             \"display.lcd.resolution\" = [540, 540]\n\"eye.retina_resolution\" = 24\n\"eye.pupil_grid\" = 2\n\
+             \"optimize\" = {{ train_cases = [\"Near\", \"Cen\"], iterations = 3, pupil_grid = 2 }}\n\
+             [[axes]]\n\"eye_cases[1].focus_mm\" = [300.0, 320.0]\n[[axes]]\n\"eye_cases[3].focus_mm\" = [600.0, 700.0]\n",
             exp.to_str().unwrap()
         ),
     )
     .unwrap();
     let out = dir.path().join("out");
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_inimtrace"))
-        .args(["--quiet", "sweep", sweep.to_str().unwrap(), "--out", out.to_str().unwrap()])
-        .output()
-        .unwrap();
-    let e = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(1), "{e}");
-    assert!(e.contains("methods") && e.contains("OPT is not available in sweeps"), "{e}");
-    assert!(!out.join("sweep.csv").exists());
+    let (ok, stdout, stderr) = inimtrace(&["sweep", sweep.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    assert!(ok, "{stderr}");
+    assert!(stdout.contains("4 of 4 points complete"), "{stdout}");
+    // LA once for all four points; OPT once per trained focus (two), shared across the held-out one.
+    assert!(stderr.contains("4 run") && stderr.contains("3 display image(s) rendered"), "{stderr}");
+    let (_, rows) = read_csv(&out.join("sweep.csv"));
+    assert_eq!(rows.len(), 4 * 2 * 4, "4 points x 2 methods x 4 eye cases");
+    let opt = |point: &str, case: &str| {
+        rows.iter()
+            .find(|r| r["point"] == point && r["method"] == "OPT" && r["eye_case"] == case)
+            .map(|r| r["psnr_db"].clone())
+            .unwrap()
+    };
+    // Points 0 and 1 differ only in the held-out Far focus: the same OPT image, the same Cen score.
+    // Points 0 and 2 differ in the trained Near focus: different OPT images.
+    assert_eq!(opt("0", "Cen"), opt("1", "Cen"));
+    assert_ne!(opt("0", "Cen"), opt("2", "Cen"));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("sweep.json")).unwrap()).unwrap();
+    let experiment = json["experiment_file"].as_str().unwrap().to_string();
+    for p in [1usize, 2] {
+        let point = &json["points"][p];
+        let by_hand = dir.path().join(format!("by-hand-{p}"));
+        let mut args = vec!["assess".to_string(), experiment.clone(), "--out".into(), by_hand.display().to_string()];
+        args.extend(point["assess_args"].as_array().unwrap().iter().map(|a| a.as_str().unwrap().to_string()));
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let (ok, _, e) = inimtrace(&args);
+        assert!(ok, "{e}");
+        let csv = std::fs::read_to_string(by_hand.join("results.csv")).unwrap();
+        let mut compared = 0;
+        for line in csv.lines().filter(|l| l.starts_with("score,") && l.contains(",mean,")) {
+            let f = csv_fields(line);
+            let (method, case, psnr) = (&f[2], &f[3], &f[5]);
+            if method == "OPT" {
+                assert_eq!(&opt(&p.to_string(), case), psnr, "point {p} OPT {case}");
+                compared += 1;
+            }
+        }
+        assert_eq!(compared, 4);
+    }
 }

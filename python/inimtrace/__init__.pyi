@@ -131,7 +131,7 @@ class Experiment:
     @property
     def display(self) -> Display: ...
     @property
-    def methods(self) -> List[str]: ...
+    def methods(self) -> List[str]: ...  # "LC", "PC", "LA", "LA<k>" or "OPT" (its [optimize] table: settings()["optimize"])
     @property
     def eye_cases(self) -> List[Tuple[str, Eye]]: ...
     @property
@@ -143,7 +143,7 @@ class Experiment:
 def render_display(
     scene: Scene,
     display: Display,
-    method: str = "LA",
+    method: str = "LA",  # "LC", "PC", "LA", "LA<k>" or "OPT" (trained on the paper's four eye states)
     backend: str = "auto",
     *,
     samples_per_pixel: int = 1,
@@ -157,7 +157,7 @@ def render_display(
 def render_display(
     scene: Scene,
     display: Display,
-    method: str = "LA",
+    method: str = "LA",  # "LC", "PC", "LA", "LA<k>" or "OPT"
     backend: str = "auto",
     *,
     samples_per_pixel: int = 1,

@@ -13,6 +13,8 @@
 //! field and any eye the simulation knows, because it uses only the simulation's forward operator
 //! and its adjoint.
 
+pub mod accelerated;
+pub mod conjugate;
 pub mod operator;
 pub mod report;
 pub mod solver;
@@ -24,7 +26,7 @@ use rayon::prelude::*;
 
 pub use operator::{EyeOperator, Operator, Rgb};
 pub use report::OptimizationReport;
-pub use solver::{solve, Iteration, Solution, SolverSettings, Stop, Term};
+pub use solver::{solve, Iteration, Solution, SolverMethod, SolverSettings, Stop, Term};
 pub use spec::{Optimization, OptimizeSpec, TrainingState};
 
 use crate::error::{Error, Result};
@@ -81,6 +83,7 @@ pub fn render_optimal_into<R: RadianceField + ?Sized>(
     Ok(OptimizationReport {
         method: Method::Optimized.name(),
         initial: opt.initial.name(),
+        solver: opt.solver.method,
         states: opt.states.iter().map(|s| (s.name.clone(), s.weight)).collect(),
         retina_resolution: opt.states.first().map_or(0, |s| s.retina.resolution),
         samples_per_pixel,

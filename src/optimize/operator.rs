@@ -68,6 +68,9 @@ pub trait Operator: Sync {
     fn forward(&self, x: &[Rgb], y: &mut [Rgb]);
     /// `out += scale A^T r` (`r`: `rows()` values, `out`: `cols()` values).
     fn adjoint_add(&self, r: &[Rgb], scale: f64, out: &mut [Rgb]);
+    /// `out += scale diag(A^T A)`: for each column (and channel) the sum over rows of the
+    /// squared entry, `sum_p A_pl^2` (the Jacobi preconditioner's diagonal).
+    fn diagonal_add(&self, scale: f64, out: &mut [Rgb]);
 }
 
 /// The perceived-image operator `A_s` of one eye state on one display: the simulation's trace on
@@ -148,6 +151,31 @@ impl<'a> EyeOperator<'a> {
     fn wave(&self) -> usize {
         (2 * rayon::current_num_threads()).max(4)
     }
+
+    /// The matrix entries of band `band`, `(A_pl` per channel), one per distinct (LCD pixel,
+    /// retina pixel) pair, sorted by (retina pixel, LCD pixel): the band's samples summed per
+    /// pair (in trace order within a pair).
+    fn band_matrix(&self, band: usize, scratch: &mut (Vec<DVec2>, Vec<DVec2>, Vec<u32>)) -> Vec<(u32, Rgb)> {
+        let mut entries = Entries::default();
+        self.band_entries(band, &mut entries, scratch);
+        let mut samples: Vec<(u32, u32, u8, f64)> = Vec::with_capacity(entries.pairs.len());
+        entries.for_each(self.inv_count, |l, p, c, w| samples.push((p, l, c, w)));
+        drop(entries);
+        // Stable: samples of one pair keep their trace order, so the sums are deterministic.
+        samples.sort_by_key(|&(p, l, _, _)| (p, l));
+        let mut out: Vec<(u32, Rgb)> = Vec::new();
+        let mut last = None;
+        for (p, l, c, w) in samples {
+            if last != Some((p, l)) {
+                out.push((l, [0.0; 3]));
+                last = Some((p, l));
+            }
+            if let Some((_, v)) = out.last_mut() {
+                add(v, c, w, &[1.0; 3]);
+            }
+        }
+        out
+    }
 }
 
 /// `acc += w * v` in `channel` (3: all).
@@ -210,6 +238,33 @@ impl Operator for EyeOperator<'_> {
                             add(&mut dst[(l - lo) as usize], c, scale * w, &r[p as usize]);
                         }
                     });
+                }
+            });
+        }
+    }
+
+    fn diagonal_add(&self, scale: f64, out: &mut [Rgb]) {
+        assert!(out.len() == self.cols(), "operator sizes");
+        let wave = self.wave();
+        let parts = rayon::current_num_threads().max(1);
+        let chunk = out.len().div_ceil(parts).max(1);
+        for first in (0..self.bands()).step_by(wave) {
+            let count = wave.min(self.bands() - first);
+            let lists: Vec<Vec<(u32, Rgb)>> = (first..first + count)
+                .into_par_iter()
+                .map_init(|| (Vec::new(), Vec::new(), Vec::new()), |scratch, b| self.band_matrix(b, scratch))
+                .collect();
+            // As the adjoint: every LCD pixel receives its additions in one global order.
+            out.par_chunks_mut(chunk).enumerate().for_each(|(part, dst)| {
+                let lo = (part * chunk) as u32;
+                let hi = lo + dst.len() as u32;
+                for &(l, v) in lists.iter().flatten() {
+                    if l >= lo && l < hi {
+                        let d = &mut dst[(l - lo) as usize];
+                        for c in 0..3 {
+                            d[c] += scale * v[c] * v[c];
+                        }
+                    }
                 }
             });
         }

@@ -20,6 +20,8 @@ pub struct OptimizationReport {
     pub method: String,
     /// The starting image's method.
     pub initial: String,
+    /// The solver ("fista", "spg" or "pcg").
+    pub solver: super::solver::SolverMethod,
     /// The training states: name and weight.
     pub states: Vec<(String, f64)>,
     /// Training retina pixels per side.

@@ -1,4 +1,5 @@
-//! The bound-constrained least-squares solver of the optimised method (docs/OPTIMAL.md):
+//! The bound-constrained least-squares problem of the optimised method (docs/OPTIMAL.md) and its
+//! solvers:
 //!
 //! ```text
 //! minimise f(x) = sum_s c_s ||A_s x - t_s||^2 + mu ||x - x0||^2   over 0 <= x <= 1,
@@ -6,15 +7,19 @@
 //! ```
 //!
 //! (`N_s` retina pixels of state `s`, `M` LCD pixels, three channels each: the weights are per
-//! value, so `f` is a weighted mean squared error.) Spectral projected gradient with an exact line
-//! search (Birgin, Martinez & Raydan, SIAM J. Optim. 10, 2000, with the monotone exact step that a
-//! quadratic allows): from `x` with gradient `g`, the direction `d = P(x - alpha g) - x` (`P` clips
-//! to [0, 1]) stays feasible for every step `t` in [0, 1]; `f(x + t d) = f + t g.d + t^2 q` with
-//! `q = sum_s c_s ||A_s d||^2 + mu ||d||^2`, so the best step is `t = min(1, -g.d / (2 q))`: one
-//! forward application per state, and `f` never increases. The next `alpha` is the
-//! Barzilai-Borwein step `||d||^2 / (2 q)` (the inverse curvature along the last step), which needs
-//! no further operator call. Each iteration costs one adjoint (the gradient) and one forward (the
-//! step) per state.
+//! value, so `f` is a weighted mean squared error.) Three solvers share the problem's pieces here
+//! (residuals, objective, gradient, projected-gradient norm); each costs one adjoint and one
+//! forward application per state and iteration, keeps `x` in [0, 1] and never increases `f`:
+//!
+//! - [`SolverMethod::Spg`], here: spectral projected gradient with an exact line search (Birgin,
+//!   Martinez & Raydan, SIAM J. Optim. 10, 2000, with the monotone exact step that a quadratic
+//!   allows): from `x` with gradient `g`, the direction `d = P(x - alpha g) - x` (`P` clips to
+//!   [0, 1]) stays feasible for every step `t` in [0, 1]; `f(x + t d) = f + t g.d + t^2 q` with
+//!   `q = sum_s c_s ||A_s d||^2 + mu ||d||^2`, so the best step is `t = min(1, -g.d / (2 q))`.
+//!   The next `alpha` is the Barzilai-Borwein step `||d||^2 / (2 q)`.
+//! - [`SolverMethod::Fista`] (`accelerated.rs`): FISTA with a diagonal majoriser and monotone restart.
+//! - [`SolverMethod::Pcg`] (`conjugate.rs`): projected conjugate gradient with the Jacobi
+//!   preconditioner.
 
 use std::time::Instant;
 
@@ -33,9 +38,40 @@ pub struct Term<O> {
     pub weight: f64,
 }
 
-/// When the solver stops.
+/// Which algorithm minimises `f` (docs/OPTIMAL.md compares them).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SolverMethod {
+    /// Spectral projected gradient with the exact step.
+    Spg,
+    /// FISTA with the diagonal majoriser `diag(H 1)` and monotone restart.
+    Fista,
+    /// Projected conjugate gradient, Jacobi-preconditioned, restarted when the step meets a bound.
+    Pcg,
+}
+
+impl SolverMethod {
+    /// The names `[optimize] solver` accepts.
+    pub const NAMES: &'static str = "\"spg\", \"fista\" or \"pcg\"";
+}
+
+impl std::str::FromStr for SolverMethod {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "spg" => Ok(Self::Spg),
+            "fista" => Ok(Self::Fista),
+            "pcg" => Ok(Self::Pcg),
+            _ => Err(format!("unknown solver `{s}`: name {}", Self::NAMES)),
+        }
+    }
+}
+
+/// How and when the solver stops.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SolverSettings {
+    /// The algorithm.
+    pub method: SolverMethod,
     /// The most iterations.
     pub max_iterations: usize,
     /// Stop when the projected-gradient norm falls below `tolerance` times its initial value.
@@ -87,7 +123,7 @@ pub struct Solution {
 }
 
 /// Deterministic `sum |a - b|^2` (fixed chunks summed in order).
-fn sum_sq(a: &[Rgb], b: Option<&[Rgb]>) -> f64 {
+pub(super) fn sum_sq(a: &[Rgb], b: Option<&[Rgb]>) -> f64 {
     const CHUNK: usize = 8192;
     let parts: Vec<f64> = a
         .par_chunks(CHUNK)
@@ -107,18 +143,18 @@ fn sum_sq(a: &[Rgb], b: Option<&[Rgb]>) -> f64 {
 }
 
 /// The objective's pieces for the terms' residuals `r_s = A_s x - t_s` and `x`.
-fn objective<O: Operator>(terms: &[Term<O>], residuals: &[Vec<Rgb>], x: &[Rgb], x0: &[Rgb], mu: f64) -> f64 {
+pub(super) fn objective<O: Operator>(terms: &[Term<O>], residuals: &[Vec<Rgb>], x: &[Rgb], x0: &[Rgb], mu: f64) -> f64 {
     let data: f64 = terms.iter().zip(residuals).map(|(t, r)| coefficient(t) * sum_sq(r, None)).sum();
     data + if mu > 0.0 { mu * sum_sq(x, Some(x0)) } else { 0.0 }
 }
 
 /// c_s = w_s / (3 N_s).
-fn coefficient<O: Operator>(t: &Term<O>) -> f64 {
+pub(super) fn coefficient<O: Operator>(t: &Term<O>) -> f64 {
     t.weight / (3.0 * t.operator.rows() as f64)
 }
 
 /// `A_s x - t_s` for every term.
-fn residuals<O: Operator>(terms: &[Term<O>], x: &[Rgb]) -> Vec<Vec<Rgb>> {
+pub(super) fn residuals<O: Operator>(terms: &[Term<O>], x: &[Rgb]) -> Vec<Vec<Rgb>> {
     terms
         .iter()
         .map(|t| {
@@ -130,17 +166,88 @@ fn residuals<O: Operator>(terms: &[Term<O>], x: &[Rgb]) -> Vec<Vec<Rgb>> {
         .collect()
 }
 
-/// Minimises `f` from `x0` (which must lie in [0, 1]; it is also the regulariser's centre).
-/// Deterministic bit for bit at any thread count. A cancelled run (`progress`) stops after the
-/// current iteration with the best point so far.
+/// The gradient `2 sum_s c_s A_s^T r_s + 2 mu (x - x0)` into `g` (one adjoint per term).
+pub(super) fn gradient<O: Operator>(
+    terms: &[Term<O>],
+    res: &[Vec<Rgb>],
+    x: &[Rgb],
+    x0: &[Rgb],
+    mu: f64,
+    g: &mut [Rgb],
+) {
+    g.par_iter_mut().zip(x).zip(x0).for_each(|((g, x), x0)| {
+        *g = if mu > 0.0 { std::array::from_fn(|c| 2.0 * mu * (x[c] - x0[c])) } else { [0.0; 3] };
+    });
+    for (t, r) in terms.iter().zip(res) {
+        t.operator.adjoint_add(r, 2.0 * coefficient(t), g);
+    }
+}
+
+/// `||P(x - g) - x||`: zero exactly at the constrained minimum (deterministic chunked sum).
+pub(super) fn projected_gradient(g: &[Rgb], x: &[Rgb]) -> f64 {
+    g.par_chunks(8192)
+        .zip(x.par_chunks(8192))
+        .map(|(g, x)| {
+            let mut s = 0.0;
+            for (g, x) in g.iter().zip(x) {
+                for c in 0..3 {
+                    let p = (x[c] - g[c]).clamp(0.0, 1.0) - x[c];
+                    s += p * p;
+                }
+            }
+            s
+        })
+        .collect::<Vec<f64>>()
+        .iter()
+        .sum::<f64>()
+        .sqrt()
+}
+
+/// Deterministic `sum a.b` (fixed chunks summed in order).
+pub(super) fn dot(a: &[Rgb], b: &[Rgb]) -> f64 {
+    a.par_chunks(8192)
+        .zip(b.par_chunks(8192))
+        .map(|(a, b)| {
+            let mut s = 0.0;
+            for (a, b) in a.iter().zip(b) {
+                for c in 0..3 {
+                    s += a[c] * b[c];
+                }
+            }
+            s
+        })
+        .collect::<Vec<f64>>()
+        .iter()
+        .sum()
+}
+
+/// Each residual's mean squared error `||r||^2 / (3 N)`.
+pub(super) fn mse(res: &[Vec<Rgb>]) -> Vec<f64> {
+    res.iter().map(|r| sum_sq(r, None) / (3.0 * r.len().max(1) as f64)).collect()
+}
+
+/// `x0` clipped to [0, 1]: every solver's start.
+pub(super) fn clipped(x0: &[Rgb]) -> Vec<Rgb> {
+    x0.iter().map(|v| v.map(|c| c.clamp(0.0, 1.0))).collect()
+}
+
+/// Minimises `f` from `x0` (which must lie in [0, 1]; it is also the regulariser's centre) with
+/// `settings.method`. Deterministic bit for bit at any thread count. A cancelled run
+/// (`progress`) stops after the current iteration with the best point so far.
 pub fn solve<O: Operator>(terms: &[Term<O>], x0: &[Rgb], settings: &SolverSettings, progress: &Progress) -> Solution {
+    match settings.method {
+        SolverMethod::Spg => spg(terms, x0, settings, progress),
+        SolverMethod::Fista => super::accelerated::fista(terms, x0, settings, progress),
+        SolverMethod::Pcg => super::conjugate::pcg(terms, x0, settings, progress),
+    }
+}
+
+/// Spectral projected gradient with the exact step (this file's header).
+fn spg<O: Operator>(terms: &[Term<O>], x0: &[Rgb], settings: &SolverSettings, progress: &Progress) -> Solution {
     let m = x0.len();
     let mu = settings.regularization / (3.0 * m as f64);
-    let mut x: Vec<Rgb> = x0.iter().map(|v| v.map(|c| c.clamp(0.0, 1.0))).collect();
+    let mut x = clipped(x0);
     let mut res = residuals(terms, &x);
-    let mse = |res: &[Vec<Rgb>]| -> Vec<f64> {
-        res.iter().map(|r| sum_sq(r, None) / (3.0 * r.len().max(1) as f64)).collect()
-    };
     let initial_mse = mse(&res);
     let mut f = objective(terms, &res, &x, x0, mu);
     let mut g = vec![[0.0; 3]; m];
@@ -152,29 +259,8 @@ pub fn solve<O: Operator>(terms: &[Term<O>], x0: &[Rgb], settings: &SolverSettin
     for it in 0..=settings.max_iterations {
         let start = Instant::now();
         // The gradient: 2 sum_s c_s A_s^T r_s + 2 mu (x - x0).
-        g.par_iter_mut().zip(&x).zip(x0).for_each(|((g, x), x0)| {
-            *g = if mu > 0.0 { std::array::from_fn(|c| 2.0 * mu * (x[c] - x0[c])) } else { [0.0; 3] };
-        });
-        for (t, r) in terms.iter().zip(&res) {
-            t.operator.adjoint_add(r, 2.0 * coefficient(t), &mut g);
-        }
-        let pg = g
-            .par_chunks(8192)
-            .zip(x.par_chunks(8192))
-            .map(|(g, x)| {
-                let mut s = 0.0;
-                for (g, x) in g.iter().zip(x) {
-                    for c in 0..3 {
-                        let p = (x[c] - g[c]).clamp(0.0, 1.0) - x[c];
-                        s += p * p;
-                    }
-                }
-                s
-            })
-            .collect::<Vec<f64>>()
-            .iter()
-            .sum::<f64>()
-            .sqrt();
+        gradient(terms, &res, &x, x0, mu, &mut g);
+        let pg = projected_gradient(&g, &x);
         if it == 0 {
             pg0 = pg;
             history.push(Iteration { iteration: 0, objective: f, projected_gradient: pg, step: 0.0, seconds: 0.0 });

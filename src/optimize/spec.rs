@@ -6,7 +6,7 @@
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
-use super::solver::SolverSettings;
+use super::solver::{SolverMethod, SolverSettings};
 use crate::error::{Error, Result};
 use crate::optics::{Aperture, Eye, Focus, Retina};
 use crate::render::Method;
@@ -50,6 +50,8 @@ pub struct OptimizeSpec {
     /// Further training states.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub states: Vec<StateSpec>,
+    /// The solver: "spg" (the default), "fista" or "pcg" (docs/OPTIMAL.md).
+    pub solver: String,
     /// The most solver iterations.
     pub iterations: usize,
     /// Stop when the projected-gradient norm falls below this fraction of its initial value.
@@ -77,6 +79,7 @@ impl Default for OptimizeSpec {
             train_cases: None,
             case_weights: None,
             states: Vec::new(),
+            solver: "spg".into(),
             iterations: 40,
             tolerance: 1e-3,
             regularization: 0.0,
@@ -157,6 +160,7 @@ impl OptimizeSpec {
                 format!("must be finite and >= 0, got {}", self.regularization),
             ));
         }
+        let method: SolverMethod = self.solver.parse().map_err(|e: String| Error::invalid(source, f("solver"), e))?;
         let initial: Method = self.initial.parse().map_err(|e: String| Error::invalid(source, f("initial"), e))?;
         let initial = match (initial, self.initial.trim().eq_ignore_ascii_case("LA")) {
             (Method::LensletAverage { .. }, true) => Method::LensletAverage { grid: la_grid },
@@ -248,6 +252,7 @@ impl OptimizeSpec {
             states,
             initial,
             solver: SolverSettings {
+                method,
                 max_iterations: self.iterations,
                 tolerance: self.tolerance,
                 regularization: self.regularization,
@@ -261,7 +266,7 @@ impl Optimization {
     /// the paper's four eye states (pinhole; thin lens with a 5 mm pupil focused at 300, 400 and
     /// 600 mm; 8 x 8 pupil grid) around `eye_position`, the paper's 512 x 512 retina over
     /// tangents -0.3 to 0.3 (one ray per pixel, 4 x 4 for the pinhole), starting from LA 5 x 5,
-    /// 40 iterations.
+    /// 40 iterations of SPG.
     pub fn paper_default(eye_position: DVec3) -> Self {
         let spec = OptimizeSpec::default();
         let state = |name: &str, aperture| {
@@ -284,6 +289,7 @@ impl Optimization {
             ],
             initial: Method::LensletAverage { grid: crate::render::display_image::PAPER_LA_GRID },
             solver: SolverSettings {
+                method: spec.solver.parse().unwrap_or(SolverMethod::Spg),
                 max_iterations: spec.iterations,
                 tolerance: spec.tolerance,
                 regularization: spec.regularization,

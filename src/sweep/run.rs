@@ -1,7 +1,8 @@
 //! Running sweep points on this machine: the paper's stages (Sec. 4: display image, ground
 //! truth, perceived image, scores) for every point not yet recorded, on all cores. Points that
 //! render the same display image (same scene, display, method and display-render settings; for
-//! PupilCenter also the same eye position) share it: it is rendered once, and the points that
+//! PupilCenter also the same eye position, for OPT also the same `[optimize]` training states and
+//! solver) share it: it is rendered once, and the points that
 //! use it run in parallel on it. Each point is recorded atomically as soon as it is done.
 
 use std::collections::{HashMap, HashSet};
@@ -100,16 +101,6 @@ fn build(
             }
         };
         let mut exp = r.experiment_with(scenes[slot].1.clone())?;
-        // OPT's display image depends on its training states and solver settings, which the
-        // sweep's shared display images do not key on yet: refused rather than shared wrongly.
-        if exp.methods.contains(&Method::Optimized) {
-            return Err(crate::error::Error::invalid(
-                exp.source.clone(),
-                "methods",
-                "OPT is not available in sweeps yet (its display image depends on its [optimize] training states, \
-                 which shared sweep images do not account for); run `inimtrace assess` for it, per point",
-            ));
-        }
         let values = values.get(i).cloned().unwrap_or_default();
         let mut files = inputs.files.clone();
         files.extend(scene_files[slot].iter().filter(|f| !inputs.files.iter().any(|g| g.path == f.path)).cloned());
@@ -218,13 +209,32 @@ fn record(job: &Job, scores: &[Score], elapsed: Duration, backend: &str) -> Poin
 }
 
 /// The key of one display image: everything it depends on (display, method, display-render
-/// settings; the eye position only for PupilCenter, the one method that aims at it). Points of
-/// one scene with equal keys share the image.
+/// settings; the eye position only for PupilCenter, the one method that aims at it). OPT's also
+/// holds its resolved `[optimize]` settings (training states with their eyes, retinas and
+/// weights, starting image, solver) and the eye position (its starting image may be PC's).
+/// Points of one scene with equal keys share the image.
 fn image_key(exp: &Experiment, method: Method) -> String {
-    let eye = if method == Method::PupilCenter { Some(exp.render.eye_position.to_array()) } else { None };
+    let aims = matches!(method, Method::PupilCenter | Method::Optimized);
+    let eye = if aims { Some(exp.render.eye_position.to_array()) } else { None };
+    // Debug of f64 is exact (shortest round-trip), so equal text means equal settings.
+    let optimize = if method == Method::Optimized { Some(format!("{:?}", exp.optimize)) } else { None };
     let display = crate::io::display_file::DisplaySpec::from_display(&exp.display);
     let settings = (&display, format!("{method:?}"), exp.render.samples_per_pixel, exp.render.reference_plane_z, eye);
-    hash_json(&settings).unwrap_or_else(|_| format!("{settings:?}"))
+    match optimize {
+        None => hash_json(&settings).unwrap_or_else(|_| format!("{settings:?}")),
+        Some(o) => hash_json(&(settings, o)).unwrap_or_else(|e| format!("{e}")),
+    }
+}
+
+/// OPT's display image for `exp` (its resolved `[optimize]`), without its convergence record
+/// (which `--images` writes, as `assess` does).
+fn optimized_image<D: RadianceField + ?Sized>(exp: &Experiment, field: &D) -> Result<RgbImage> {
+    let Some(opt) = &exp.optimize else {
+        return Err(crate::error::Error::Mismatch("OPT's display image needs the experiment's [optimize]".into()));
+    };
+    let mut image = RgbImage::try_new(exp.display.lcd.columns(), exp.display.lcd.rows(), "the display image")?;
+    crate::optimize::render_optimal_into(&exp.display, &exp.render, opt, field, &Progress::hidden(), &mut image)?;
+    Ok(image)
 }
 
 /// Bytes of the images one point holds while it runs: per eye case the ground truth and one
@@ -262,13 +272,18 @@ impl FieldUser for SharedDisplays<'_> {
             let t = Instant::now();
             for (method, key) in first.methods.iter().zip(keys) {
                 if !cache.contains_key(key) {
-                    let (image, _) = render_display_image_with_depth(
-                        &first.display,
-                        *method,
-                        &first.render,
-                        with_depth,
-                        &Progress::hidden(),
-                    )?;
+                    let image = if *method == Method::Optimized {
+                        optimized_image(first, with_depth)?
+                    } else {
+                        render_display_image_with_depth(
+                            &first.display,
+                            *method,
+                            &first.render,
+                            with_depth,
+                            &Progress::hidden(),
+                        )?
+                        .0
+                    };
                     cache.insert(key.clone(), image);
                     rendered += 1;
                 }
