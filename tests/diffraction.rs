@@ -14,7 +14,9 @@ use inimtrace::measure::estimator::{DisplaySource, Replicates};
 use inimtrace::measure::sampler::Sampler;
 use inimtrace::optics::diffraction::{disk_mtf, polygon_area, voronoi_hexagon, ApertureShape, Diffraction};
 use inimtrace::optics::display::Lcd;
+use inimtrace::optics::eye::medium::Dispersion;
 use inimtrace::optics::eye::{EyeModel, EyeOptics, EyeOpticsSpec, FocusCriterion};
+use inimtrace::optics::lenslet::{LensletOptics, Material, Surface, ThickLenslet};
 use inimtrace::optics::spectrum::Primaries;
 use inimtrace::optics::{Aperture, Display, Eye, Focus, Lattice, Retina};
 use inimtrace::progress::Progress;
@@ -130,8 +132,28 @@ fn single_lenslet_display(lattice: Lattice) -> Display {
 /// The perceived modulation of an LCD grating of `g` cycles/mm along `axis` through
 /// `display` by a pinhole eye at the retina's centre with diffraction at the lenslets.
 fn perceived_lcd_modulation(display: &Display, g: f64, axis: DVec2) -> f64 {
+    perceived_lcd_modulations(display, g, axis, false)[0]
+}
+
+/// [`perceived_lcd_modulation`] of each colour channel; `primaries`: each channel at its
+/// display primary's sampled wavelengths (else all at `NM`).
+fn perceived_lcd_modulations(display: &Display, g: f64, axis: DVec2, primaries: bool) -> [f64; 3] {
     let mut eye = Eye::pinhole();
-    eye.optics = optics(&eye, Diffraction::Apertures);
+    eye.optics = if primaries {
+        let spec = EyeOpticsSpec {
+            model: EyeModel::ThinLens,
+            criterion: FocusCriterion::Paraxial,
+            reference_nm: NM,
+            primaries: false,
+            wavelength_samples: 3,
+            stiles_crawford: None,
+            diffraction: Diffraction::None,
+        }
+        .with_diffraction(Diffraction::Apertures, false);
+        EyeOptics::build(&spec, &eye.aperture, eye.retina_distance, &Primaries::default(), 0.0, "t", "f").unwrap()
+    } else {
+        optics(&eye, Diffraction::Apertures)
+    };
     let lcd = display.lcd;
     let grating = |phase: f64| {
         let mut img = RgbImage::new(lcd.columns(), lcd.rows());
@@ -153,7 +175,33 @@ fn perceived_lcd_modulation(display: &Display, g: f64, axis: DVec2) -> f64 {
     // The LCD's pixels hold the grating at their centres: its fundamental keeps sinc(g pitch).
     let pitch = lcd.pixel_pitch().x;
     let hold = (PI * g * pitch).sin() / (PI * g * pitch);
-    modulation(mean(&reps, 1), mean(&reps, 2)) / hold
+    let channel = |k: usize, c: usize| {
+        let img = reps.mean_image(k);
+        img.pixels.iter().map(|p| f64::from(p[c])).sum::<f64>() / img.pixels.len() as f64
+    };
+    std::array::from_fn(|c| modulation(channel(1, c), channel(2, c)) / hold)
+}
+
+#[test]
+fn a_pinhole_eyes_lenslet_diffraction_scales_with_each_channels_own_wavelength() {
+    // One ray per sample (a pinhole eye has no pupil diffraction) still carries three channels
+    // whose lenslet deviations differ: each channel's MTF is the triangle at its own primary's
+    // wavelengths, 1 - s lambda / NM averaged over the primary's spectrum.
+    let p = 0.05;
+    let display = single_lenslet_display(Lattice::square(p).unwrap());
+    let samplers = Primaries::default().samplers("t").unwrap();
+    let s = 0.5;
+    let g = s * p / (NM * 1e-6) / display.focal_length;
+    let m = perceived_lcd_modulations(&display, g, DVec2::X, true);
+    for c in 0..3 {
+        let expected =
+            (0..1000).map(|i| (1.0 - s * samplers[c].wavelength((i as f64 + 0.5) / 1000.0) / NM).max(0.0)).sum::<f64>()
+                / 1000.0;
+        eprintln!("channel {c}: measured {:.4}, analytic {expected:.4}", m[c]);
+        assert!((m[c] - expected).abs() < 0.03, "channel {c}: measured {}, analytic {expected}", m[c]);
+    }
+    // Red (longer waves) is blurred more than blue.
+    assert!(m[0] < m[2] - 0.05, "{m:?}");
 }
 
 #[test]
@@ -165,6 +213,37 @@ fn one_square_lenslets_perceived_mtf_is_the_triangle_along_an_axis() {
         let g = s * p / (NM * 1e-6) / display.focal_length;
         let m = perceived_lcd_modulation(&display, g, DVec2::X);
         eprintln!("square lenslet s = {s}: measured {m:.4}, analytic {:.4}", 1.0 - s);
+        assert!((m - (1.0 - s)).abs() < 0.03, "s = {s}: measured {m}, analytic {}", 1.0 - s);
+        let m = perceived_lcd_modulation(&display, g, DVec2::Y);
+        assert!((m - (1.0 - s)).abs() < 0.03, "y, s = {s}: measured {m}, analytic {}", 1.0 - s);
+    }
+}
+
+#[test]
+fn one_real_lenslets_perceived_mtf_is_the_triangle_too() {
+    // The same single 0.05 mm square cell as a plano-convex lenslet (n 1.5, front radius 1.5 mm:
+    // EFL 3 mm) 0.01 mm thick, the LCD at its back focal distance f - t / n: the deviation is
+    // applied where the ray leaves the back surface, so the LCD sees it over the BFD.
+    let p = 0.05;
+    let (t, n) = (0.01, 1.5);
+    let lens = ThickLenslet {
+        front: Surface { radius: 1.5, conic: 0.0 },
+        back: Surface { radius: 0.0, conic: 0.0 },
+        thickness: t,
+        material: Material { name: "user".into(), dispersion: Dispersion::Constant(n) },
+        design_cdp_mm: None,
+    };
+    let bfd = 3.0 - t / n;
+    let display = Display {
+        lenslets_to_lcd: bfd,
+        lenslet: LensletOptics::Thick(Box::new(lens)),
+        ..single_lenslet_display(Lattice::square(p).unwrap())
+    };
+    assert!(display.thick_lenslet().is_some());
+    for s in [0.1, 0.3, 0.5, 0.7] {
+        let g = s * p / (NM * 1e-6) / bfd;
+        let m = perceived_lcd_modulation(&display, g, DVec2::X);
+        eprintln!("real square lenslet s = {s}: measured {m:.4}, analytic {:.4}", 1.0 - s);
         assert!((m - (1.0 - s)).abs() < 0.03, "s = {s}: measured {m}, analytic {}", 1.0 - s);
         let m = perceived_lcd_modulation(&display, g, DVec2::Y);
         assert!((m - (1.0 - s)).abs() < 0.03, "y, s = {s}: measured {m}, analytic {}", 1.0 - s);

@@ -544,8 +544,12 @@ impl Replicates {
                                     -retina.half_tangent + (c as f64 + frac.x) * step,
                                     retina.half_tangent - (row as f64 + frac.y) * step,
                                 );
-                                let spectral = if spectral { points.spectral_of_last() } else { 0.0 };
-                                let diffraction = if diffraction { points.diffraction_of_last() } else { [0.0; 4] };
+                                let (spectral, diffraction) = if diffraction {
+                                    let (u, d) = points.spectral_and_diffraction_of_last();
+                                    (if spectral { u } else { 0.0 }, d)
+                                } else {
+                                    (if spectral { points.spectral_of_last() } else { 0.0 }, [0.0; 4])
+                                };
                                 samples[filled] = EyeSample { tangent, pupil: DVec2::ZERO, spectral, diffraction };
                                 pupils[filled] = raw.unwrap_or(DVec2::ZERO);
                                 owners[filled] = owner;

@@ -89,12 +89,46 @@ const X_MAX: f64 = STEP * NODES as f64;
 struct Table {
     cdf: Vec<f64>,
     tail: f64,
+    /// `guide[j]`: the first node with `F > j / GUIDE` (j = 0..=GUIDE), so the node a `u` in
+    /// `[j / GUIDE, (j + 1) / GUIDE)` looks for lies in `guide[j]..=guide[j + 1]`.
+    guide: Vec<u32>,
 }
 
+/// Buckets of the inverse tables' guide (a power of two: `u * GUIDE` and `j / GUIDE` are exact).
+const GUIDE: usize = 4096;
+
 impl Table {
+    /// The table of distribution values `cdf` (non-decreasing, from 0) with tail constant `tail`.
+    fn new(cdf: Vec<f64>, tail: f64) -> Self {
+        let guide = (0..=GUIDE)
+            .map(|j| {
+                let u = j as f64 / GUIDE as f64;
+                cdf.partition_point(|&f| f <= u) as u32
+            })
+            .collect();
+        Self { cdf, tail, guide }
+    }
+
     /// The x with F(x) = u, u in [0, 1).
     #[inline]
     fn invert(&self, u: f64) -> f64 {
+        self.invert_with(u, |u| {
+            // The guide's bucket narrows the search; the same node as a search of the whole table.
+            let j = (u * GUIDE as f64) as usize;
+            let (lo, hi) = (self.guide[j] as usize, self.guide[j + 1] as usize);
+            lo + self.cdf[lo..hi].partition_point(|&f| f <= u)
+        })
+    }
+
+    /// Slow twin of [`Table::invert`]: the node found by a binary search of the whole table.
+    #[cfg(test)]
+    fn invert_searching_all(&self, u: f64) -> f64 {
+        self.invert_with(u, |u| self.cdf.partition_point(|&f| f <= u))
+    }
+
+    /// The inversion, given how to find the first node with F > u (for u below the last node).
+    #[inline(always)]
+    fn invert_with(&self, u: f64, first_above: impl Fn(f64) -> usize) -> f64 {
         let last = self.cdf[NODES];
         if u >= last {
             // 1 - u = c / x beyond the table (joined at the last node's own 1 - F).
@@ -102,7 +136,7 @@ impl Table {
             return x.max(X_MAX);
         }
         // The first node with F > u (F is non-decreasing, F[0] = 0).
-        let i = self.cdf.partition_point(|&f| f <= u).clamp(1, NODES);
+        let i = first_above(u).clamp(1, NODES);
         let (f0, f1) = (self.cdf[i - 1], self.cdf[i]);
         let t = if f1 > f0 { (u - f0) / (f1 - f0) } else { 0.0 };
         STEP * ((i - 1) as f64 + t)
@@ -124,7 +158,7 @@ fn airy_table() -> &'static Table {
             cdf[i] = cdf[i].max(cdf[i - 1]);
         }
         let tail = (1.0 - cdf[NODES]) * X_MAX;
-        Table { cdf, tail }
+        Table::new(cdf, tail)
     })
 }
 
@@ -151,7 +185,7 @@ fn sinc2_table() -> &'static Table {
             cdf.push(g.min(1.0));
         }
         let tail = (1.0 - cdf[NODES]) * X_MAX;
-        Table { cdf, tail }
+        Table::new(cdf, tail)
     })
 }
 
@@ -180,9 +214,32 @@ pub fn disk_deviation(u: [f64; 2], diameter: f64, nm: f64) -> DVec2 {
     if diameter <= 0.0 {
         return DVec2::ZERO;
     }
-    let r = airy_radius(u[0]) * nm * 1e-6 / (PI * diameter);
+    disk_draw(u).disk(diameter, nm)
+}
+
+/// The Airy pattern's draw for the uniform pair `u`, before a diameter and a wavelength scale it
+/// ([`ApertureDraw::disk`]).
+#[inline]
+pub fn disk_draw(u: [f64; 2]) -> ApertureDraw {
     let (s, c) = (TAU * u[1]).sin_cos();
-    DVec2::new(r * c, r * s)
+    ApertureDraw([airy_radius(u[0]), c, s])
+}
+
+/// An aperture's deviation for one uniform pair before the wavelength scales it
+/// ([`disk_draw`], [`ApertureShape::draw`]): the table inversions and the angle, computed once
+/// per sample and shared by the colour channels, whose deviations are this draw scaled by each
+/// channel's wavelength (the same arithmetic as drawing per channel, so the same bits).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ApertureDraw([f64; 3]);
+
+impl ApertureDraw {
+    /// The deviation through a disk of diameter `diameter` mm at `nm` (a draw of [`disk_draw`]).
+    #[inline(always)]
+    pub fn disk(self, diameter: f64, nm: f64) -> DVec2 {
+        let [a, c, s] = self.0;
+        let r = a * nm * 1e-6 / (PI * diameter);
+        DVec2::new(r * c, r * s)
+    }
 }
 
 /// A lenslet's aperture: the shape of one cell of its lattice.
@@ -219,13 +276,40 @@ impl ApertureShape {
     /// The ray's angular deviation (slope change) for the uniform pair `u` at `nm` nanometres.
     #[inline]
     pub fn deviation(&self, u: [f64; 2], nm: f64) -> DVec2 {
+        self.scaled(self.draw(u), nm)
+    }
+
+    /// The wavelength-free part of [`ApertureShape::deviation`] for the uniform pair `u` (the
+    /// tables' inversions), to scale per channel with [`ApertureShape::scaled`].
+    #[inline]
+    pub fn draw(&self, u: [f64; 2]) -> ApertureDraw {
+        match self {
+            ApertureShape::Rectangle { .. } => ApertureDraw([sinc2_draw(u[0]), sinc2_draw(u[1]), 0.0]),
+            ApertureShape::Disk(_) => disk_draw(u),
+            ApertureShape::Polygon(p) => {
+                let d = p.draw(u);
+                ApertureDraw([d.x, d.y, 0.0])
+            }
+        }
+    }
+
+    /// The deviation at `nm` nanometres of the draw `d` ([`ApertureShape::draw`]).
+    #[inline]
+    pub fn scaled(&self, d: ApertureDraw, nm: f64) -> DVec2 {
         let lambda = nm * 1e-6;
+        let [x, y, _] = d.0;
         match self {
             ApertureShape::Rectangle { axes, sides } => {
-                axes[0] * (sinc2_draw(u[0]) * lambda / sides[0]) + axes[1] * (sinc2_draw(u[1]) * lambda / sides[1])
+                axes[0] * (x * lambda / sides[0]) + axes[1] * (y * lambda / sides[1])
             }
-            ApertureShape::Disk(d) => disk_deviation(u, *d, nm),
-            ApertureShape::Polygon(p) => p.draw(u) * (lambda / p.scale),
+            ApertureShape::Disk(diameter) => {
+                if *diameter <= 0.0 {
+                    DVec2::ZERO
+                } else {
+                    d.disk(*diameter, nm)
+                }
+            }
+            ApertureShape::Polygon(p) => DVec2::new(x, y) * (lambda / p.scale),
         }
     }
 
@@ -418,6 +502,79 @@ mod tests {
         // Symmetric sinc^2 draws: u and 1 - u give opposite signs.
         assert!((sinc2_draw(0.2) + sinc2_draw(0.8)).abs() < 1e-9);
         assert_eq!(sinc2_draw(0.5), 0.0);
+    }
+
+    #[test]
+    fn the_guided_inversion_finds_the_node_a_search_of_the_whole_table_finds() {
+        // Every guide bucket's ends and their neighbours, the tables' own nodes (ties: the first
+        // node with F > u), the tail's start, and many 24- and 53-bit uniforms.
+        let mut us: Vec<f64> = Vec::new();
+        for j in 0..=GUIDE {
+            let u = j as f64 / GUIDE as f64;
+            us.extend([u, u.next_up(), u.next_down()]);
+        }
+        for t in [airy_table(), sinc2_table()] {
+            us.extend(t.cdf.iter().step_by(7).flat_map(|&f| [f, f.next_up(), f.next_down()]));
+            us.extend([t.cdf[NODES], t.cdf[NODES].next_down()]);
+        }
+        let mut h = 5u64;
+        for _ in 0..200_000 {
+            h = crate::measure::sampler::mix64(h);
+            us.push((h >> 11) as f64 / (1u64 << 53) as f64);
+            us.push((h & 0xff_ffff) as f64 / 16_777_216.0);
+        }
+        for t in [airy_table(), sinc2_table()] {
+            for &u in us.iter().filter(|u| (0.0..1.0).contains(*u)) {
+                assert_eq!(t.invert(u).to_bits(), t.invert_searching_all(u).to_bits(), "{u}");
+            }
+        }
+    }
+
+    #[test]
+    fn one_draw_scaled_per_channel_is_the_per_channel_deviation_bit_for_bit() {
+        let hex = ApertureShape::of_lattice(
+            &Lattice::new(DVec2::ZERO, DMat2::from_cols(DVec2::new(1.0, 0.0), DVec2::new(0.5, 0.75f64.sqrt())))
+                .unwrap(),
+        );
+        let shapes = [
+            ApertureShape::of_lattice(&Lattice::square(1.2).unwrap()),
+            ApertureShape::Rectangle { axes: [DVec2::new(0.6, 0.8), DVec2::new(-0.8, 0.6)], sides: [1.1, 0.7] },
+            ApertureShape::Disk(5.0),
+            ApertureShape::Disk(0.0),
+            hex,
+        ];
+        let mut h = 9u64;
+        for _ in 0..2000 {
+            h = crate::measure::sampler::mix64(h);
+            let u = [(h >> 11) as f64 / (1u64 << 53) as f64, (h & 0xff_ffff) as f64 / 16_777_216.0];
+            for shape in &shapes {
+                let draw = shape.draw(u);
+                for nm in [450.3, 535.0, 611.7] {
+                    // Drawn for this channel alone, written out.
+                    let lambda = nm * 1e-6;
+                    let a = match shape {
+                        ApertureShape::Rectangle { axes, sides } => {
+                            axes[0] * (sinc2_draw(u[0]) * lambda / sides[0])
+                                + axes[1] * (sinc2_draw(u[1]) * lambda / sides[1])
+                        }
+                        ApertureShape::Disk(d) if *d <= 0.0 => DVec2::ZERO,
+                        ApertureShape::Disk(d) => {
+                            let r = airy_radius(u[0]) * nm * 1e-6 / (PI * d);
+                            let (s, c) = (TAU * u[1]).sin_cos();
+                            DVec2::new(r * c, r * s)
+                        }
+                        ApertureShape::Polygon(p) => p.draw(u) * (lambda / p.scale),
+                    };
+                    let b = shape.scaled(draw, nm);
+                    assert_eq!(a, shape.deviation(u, nm));
+                    assert_eq!([a.x.to_bits(), a.y.to_bits()], [b.x.to_bits(), b.y.to_bits()], "{}", shape.name());
+                }
+            }
+            for (d, nm) in [(5.0, 450.3), (2.0, 611.7)] {
+                let (a, b) = (disk_deviation(u, d, nm), disk_draw(u).disk(d, nm));
+                assert_eq!([a.x.to_bits(), a.y.to_bits()], [b.x.to_bits(), b.y.to_bits()]);
+            }
+        }
     }
 
     #[test]

@@ -253,6 +253,30 @@ impl<'a> FastTransfer<'a> {
             .and_then(|tr| self.indexer.index(tr.lcd))
     }
 
+    /// [`FastTransfer::pixel_index_in`] with the lenslet aperture's diffraction `deviation` (a
+    /// slope change, `optics::diffraction`): through a real lenslet the exact trace's ray is bent
+    /// where it leaves the back surface and goes on straight to the LCD; through the thin lens,
+    /// [`FastTransfer::pixel_index_deviated`].
+    #[inline]
+    pub fn pixel_index_in_deviated(&self, ray: PlaneRay, c: usize, u: f64, deviation: DVec2) -> Option<usize> {
+        let Some(t) = &self.thick else {
+            return self.pixel_index_deviated(ray, deviation);
+        };
+        let n = if u == 0.5 { t.median_index[c] } else { t.lens.material.index(t.samplers[c].wavelength(u)) };
+        let d = self.display;
+        let tr = t.lens.trace_to_lcd_in(
+            &d.lenslets,
+            d.lenslet_z(),
+            d.lcd_z(),
+            ray.position.extend(t.eye_z),
+            ray.slope,
+            n,
+            Intersection::ClosedForm,
+        )?;
+        let slope = tr.dir.truncate() / tr.dir.z + deviation;
+        self.indexer.index(tr.back.truncate() + slope * (d.lcd_z() - tr.back.z))
+    }
+
     /// The LCD pixel that ray hits, if any ([`crate::optics::Lcd::pixel_index`]).
     #[inline(always)]
     pub fn pixel_index(&self, tangent: DVec2, k: usize) -> Option<usize> {

@@ -11,8 +11,9 @@
 //! With diffraction (`optics::diffraction`), each channel's ray leaves its retina point bent by
 //! the pupil's Airy deviation ([`EyeOptics::rays_diffracted`]) for the ground truth and the
 //! perceived images alike, and a perceived ray is bent again after the lenslet it crosses by
-//! that lenslet aperture's deviation (`[optics] diffraction = "apertures"`), both at the
-//! channel's wavelength.
+//! that lenslet aperture's deviation (`[optics] diffraction = "apertures"`; through a real
+//! lenslet where it leaves the back surface), both at the channel's wavelength. One draw per
+//! sample and aperture serves the three channels, scaled by each one's wavelength.
 //!
 //! [`FastTransfer::pixel_index_of`]: crate::optics::transfer::FastTransfer::pixel_index_of
 //! [`FastTransfer::pixel_index_in`]: crate::optics::transfer::FastTransfer::pixel_index_in
@@ -65,37 +66,43 @@ impl<F: RadianceField + ?Sized> DisplaySource<'_, F> {
             }
         }
         let mut next = 0;
+        let thick = self.transfer.transfer.is_thick();
+        // Each carried channel finds its own LCD pixel through a real lenslet (refracted at its
+        // own wavelength), and through a diffracting lenslet when the channels' wavelengths differ
+        // (the deviation scales with the wavelength); else one pixel serves them all.
+        let per_channel = thick || (self.lenslet.is_some() && !optics.is_single_wavelength());
+        // Each channel at the sampled wavelength, else its primary's median (real lenslets).
+        let u_lens = |s: &EyeSample| if optics.is_single_wavelength() { 0.5 } else { s.spectral };
         for ((o, sr), s) in out.chunks_exact_mut(k).zip(&all).zip(samples) {
             o.fill([0.0; 3]);
+            // The lenslet's draw once for the three channels, scaled by each one's wavelength.
+            let draw = self.lenslet.as_ref().map(|shape| (shape, shape.draw([s.diffraction[2], s.diffraction[3]])));
             let channels: &[usize] = if sr.single { &[0] } else { &[0, 1, 2] };
             for &c in channels {
                 let Some(r) = sr.rays[c] else { continue };
                 let gt = hits[next].radiance.to_array();
                 next += 1;
-                let thick = self.transfer.transfer.is_thick();
-                let idx = if thick {
-                    None
-                } else {
-                    match &self.lenslet {
-                        Some(shape) => {
-                            let deviation =
-                                shape.deviation([s.diffraction[2], s.diffraction[3]], optics.wavelength(c, s.spectral));
-                            self.transfer.transfer.pixel_index_deviated(world(r), deviation)
-                        }
-                        None => self.transfer.transfer.pixel_index_of(world(r)),
+                // The LCD pixel of this ray in channel `ch`.
+                let index = |ch: usize| match (thick, draw) {
+                    (false, None) => self.transfer.transfer.pixel_index_of(world(r)),
+                    (false, Some((shape, draw))) => {
+                        let deviation = shape.scaled(draw, optics.wavelength(ch, s.spectral));
+                        self.transfer.transfer.pixel_index_deviated(world(r), deviation)
+                    }
+                    (true, None) => self.transfer.transfer.pixel_index_in(world(r), ch, u_lens(s)),
+                    // Bent where it leaves the lenslet by the cell's deviation.
+                    (true, Some((shape, draw))) => {
+                        let deviation = shape.scaled(draw, optics.wavelength(ch, s.spectral));
+                        self.transfer.transfer.pixel_index_in_deviated(world(r), ch, u_lens(s), deviation)
                     }
                 };
-                let mut px = idx.map(|i| self.stack.pixel(i));
+                let mut px = if per_channel { None } else { index(c).map(|i| self.stack.pixel(i)) };
                 // The channels this ray carries: all three for one ray, else its own.
                 let carried = if sr.single { 0..3 } else { c..c + 1 };
                 for ch in carried {
                     o[0][ch] = gt[ch] * sr.weight;
-                    if thick {
-                        // A real lenslet: each channel refracted at its own wavelength.
-                        // Each channel at the sampled wavelength, else its primary's median.
-                        let u = if optics.is_single_wavelength() { 0.5 } else { s.spectral };
-                        let i = self.transfer.transfer.pixel_index_in(world(r), ch, u);
-                        px = i.map(|i| self.stack.pixel(i));
+                    if per_channel {
+                        px = index(ch).map(|i| self.stack.pixel(i));
                     }
                     if let Some(px) = px {
                         for (j, v) in o[1..].iter_mut().enumerate() {

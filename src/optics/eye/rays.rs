@@ -29,7 +29,7 @@ use glam::DVec2;
 use super::ray_map::RayMap;
 use super::{Aperture, EyeModel, FocusCriterion, SchematicEye};
 use crate::error::{Error, Result};
-use crate::optics::diffraction::{disk_deviation, Diffraction};
+use crate::optics::diffraction::{disk_deviation, disk_draw, Diffraction};
 use crate::optics::spectrum::{Primaries, SpectrumSampler};
 use crate::optics::transfer::PlaneRay;
 
@@ -375,9 +375,12 @@ impl EyeOptics {
         if self.is_single_wavelength() {
             return self.rays(tangent + self.pupil_deviation(0, u, xi), pupil, u);
         }
+        // One Airy draw for the three channels, scaled by each one's wavelength: the same
+        // deviations as `pupil_deviation` per channel, bit for bit.
+        let draw = disk_draw(xi);
         let mut out = SampleRays { rays: [None; 3], single: false, weight: 1.0 };
         for c in 0..3 {
-            let r = self.rays(tangent + self.pupil_deviation(c, u, xi), pupil, u);
+            let r = self.rays(tangent + draw.disk(self.pupil_diameter, self.wavelength(c, u)), pupil, u);
             out.rays[c] = if r.single { r.rays[0] } else { r.rays[c] };
             out.weight = r.weight;
         }
