@@ -14,6 +14,11 @@ use inimtrace::render::{with_fields, BackendChoice, Fields};
 use inimtrace::scene::Scene;
 use inimtrace::settings::{load_display_part, load_scene_part, setup_with};
 
+pub(crate) mod assess;
+pub(crate) mod bench;
+pub(crate) mod compare;
+pub(crate) mod info;
+pub(crate) mod render;
 pub(crate) mod values;
 
 /// Refuses an image of `pixels` pixels at `bytes_each` bytes that would not fit in the memory
@@ -191,4 +196,31 @@ pub(crate) fn error_line(e: &anyhow::Error) -> String {
         }
     }
     line
+}
+
+/// Prints what loading the scene noticed (always) and which backend runs (unless quiet).
+pub(crate) fn announce(scene: &Scene, backend: BackendChoice, quiet: bool) {
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
+    if !quiet {
+        let picked = inimtrace::render::backend::resolve(scene, backend);
+        let how = if backend == BackendChoice::Auto { "picked by auto" } else { "as asked" };
+        eprintln!(
+            "backend: {picked} ({how}; scene `{}`: {} object(s), {} triangle(s) when tessellated)",
+            scene.name,
+            scene.objects.len(),
+            scene.triangle_count()
+        );
+    }
+}
+
+/// The RGB image of an input EXR (of part `part`), printing the reader's note on a multipart
+/// file.
+pub(crate) fn read_exr_input(path: &std::path::Path, part: Option<&str>) -> Result<inimtrace::raster::RgbImage> {
+    let input = inimtrace::io::exr::read_input(path, part)?;
+    if let Some(note) = input.note {
+        eprintln!("{note}");
+    }
+    Ok(input.image)
 }

@@ -1,0 +1,103 @@
+//! `inimtrace info`: a display's design figures, a scene's summary, or the built-in files.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Result};
+
+use inimtrace::experiment::ExperimentSpec;
+use inimtrace::io::display_file::DisplaySpec;
+use inimtrace::io::scene_file::SceneSpec;
+use inimtrace::io::{load_display, load_scene};
+use inimtrace::optics::Display;
+use inimtrace::settings::{display_with, scene_with};
+
+use crate::{Globals, PrintTarget};
+
+/// `inimtrace info`; returns whether it printed its own total time.
+pub(crate) fn info(
+    g: &Globals,
+    display: Option<PathBuf>,
+    scene: Option<PathBuf>,
+    (pupil, diffraction): (f64, inimtrace::optics::diffraction::Diffraction),
+    json: bool,
+    print: Option<PrintTarget>,
+    write_display: Option<(PathBuf, bool)>,
+) -> Result<bool> {
+    let set = &g.set[..];
+    if let Some(what) = print {
+        if !set.is_empty() {
+            bail!("--set does not apply to --print (it prints the built-in files as they are)");
+        }
+        let text = match what {
+            PrintTarget::PaperExperiment => ExperimentSpec::paper_converged().to_toml(),
+            PrintTarget::PaperGridExperiment => ExperimentSpec::paper().to_toml(),
+            PrintTarget::Framework2020Experiment => ExperimentSpec::framework_2020().to_toml(),
+            PrintTarget::PaperScene => toml::to_string_pretty(&SceneSpec::paper())?,
+            PrintTarget::PaperDisplay => toml::to_string_pretty(&DisplaySpec::from_display(&Display::paper()))?,
+        };
+        out!("{text}");
+        return Ok(true);
+    }
+    if let Some(p) = scene {
+        let scene = match set.is_empty() {
+            true => load_scene(&p.to_string_lossy(), Path::new(""))?,
+            false => scene_with(Some(&p), set)?,
+        };
+        let summary = inimtrace::info::scene_summary(&scene);
+        match json {
+            true => outln!("{}", serde_json::to_string_pretty(&summary)?),
+            false => {
+                out!("{}", inimtrace::info::scene_summary_text(&summary));
+                outln!("backend library: {}", inimtrace::version::embree_loaded());
+            }
+        }
+        return Ok(true);
+    }
+    if !(pupil.is_finite() && pupil > 0.0) {
+        bail!("--pupil must be a positive number of mm, got {pupil}");
+    }
+    let d = match display {
+        _ if !set.is_empty() => display_with(display.as_deref(), set)?,
+        Some(ref p) => load_display(&p.to_string_lossy(), Path::new(""))?,
+        None => Display::paper(),
+    };
+    let source = display.as_ref().map_or_else(|| "builtin:paper".to_string(), |p| p.display().to_string());
+    for w in inimtrace::optics::plausibility::display_warnings(&d, &source) {
+        eprintln!("warning: {w}");
+    }
+    // A display stated by intent: how the explicit one follows (the file's, before any --set).
+    let derivation = match &display {
+        Some(p) if set.is_empty() => inimtrace::io::display_intent::derivation_of(p)?,
+        _ => None,
+    };
+    if let Some((path, force)) = write_display {
+        let mut header = format!(
+            "The explicit display of {source}{}, written by inimtrace info --write-display.\n",
+            if set.is_empty() { "" } else { " with --set overrides" }
+        );
+        if let Some(x) = &derivation {
+            header += &x.text();
+        }
+        inimtrace::io::display_intent::write_display_file(&d, &header, &path, force)?;
+        eprintln!("wrote {}", path.display());
+    }
+    let mut design = inimtrace::info::display_design(&d, pupil);
+    design.diffraction = inimtrace::info::diffraction_info(&d, pupil, diffraction);
+    match json {
+        true => {
+            let mut v = serde_json::to_value(&design)?;
+            if let (Some(x), Some(map)) = (&derivation, v.as_object_mut()) {
+                map.insert("intent_derivation".into(), serde_json::to_value(x)?);
+            }
+            outln!("{}", serde_json::to_string_pretty(&v)?)
+        }
+        false => {
+            if let Some(x) = &derivation {
+                out!("{}", x.text());
+            }
+            out!("{}", inimtrace::info::display_design_text(&design, &d.summary()));
+            outln!("backend library: {}", inimtrace::version::embree_loaded());
+        }
+    }
+    Ok(false)
+}

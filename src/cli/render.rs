@@ -1,0 +1,130 @@
+//! The single-stage commands: `render-display` (one display image), `simulate` (the retinal
+//! image of a display image) and `ground-truth` (the eye's view of the scene itself).
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+use glam::DVec3;
+
+use inimtrace::experiment::metadata;
+use inimtrace::progress::Progress;
+use inimtrace::render::retina::simulate;
+use inimtrace::render::{ground_truth, render_display_image_with_depth, DisplayRenderSettings, Method};
+
+use super::{announce, check_memory, load_setup, read_exr_input, with_field, write_image, EyeArgs, Setup};
+use crate::{BackendArg, Globals};
+
+/// `inimtrace render-display`; returns whether it printed its own total time.
+#[allow(clippy::too_many_arguments)] // the command's flags, as clap parsed them
+pub(crate) fn render_display(
+    g: &Globals,
+    method: Method,
+    setup: Setup,
+    samples_per_pixel: usize,
+    reference_plane: f64,
+    eye_position: DVec3,
+    out: PathBuf,
+    backend: BackendArg,
+) -> Result<bool> {
+    let (set, quiet) = (&g.set[..], g.quiet);
+    let backend = backend.choice()?;
+    let (scene, display) = load_setup(&setup, set)?;
+    announce(&scene, backend, quiet);
+    inimtrace::optics::limits::REFERENCE_PLANE_Z.check("command line", "--reference-plane", reference_plane)?;
+    check_memory(
+        "the display image, its depth plane and its preview",
+        &format!("lcd.resolution = {:?} of the display", display.lcd.resolution),
+        display.lcd.pixel_count(),
+        32,
+    )?;
+    inimtrace::optics::transfer::check_eye_in_front(&display, eye_position.z, "command line", "--eye-position")?;
+    let settings = DisplayRenderSettings { samples_per_pixel, reference_plane_z: reference_plane, eye_position };
+    let per_pixel = match method {
+        Method::LensletAverage { grid } => grid as u64 * grid as u64,
+        _ => 1,
+    };
+    inimtrace::long_run::announce(
+        (display.lcd.pixel_count() as u64)
+            .saturating_mul((samples_per_pixel as u64).saturating_pow(2))
+            .saturating_mul(per_pixel),
+    );
+    let (img, depth, name) = with_field(&scene, backend, |fields| {
+        let p = Progress::new(display.lcd.rows() as u64, &format!("display image {}", method.name()), quiet);
+        let (img, depth) = render_display_image_with_depth(&display, method, &settings, fields.with_depth, &p)?;
+        p.finish();
+        Ok((img, depth, fields.name))
+    })?;
+    let mut attrs = metadata::common("display image", None);
+    attrs.extend(metadata::display_image(method, &display, &settings, name, depth.is_some()));
+    write_image(&out, &img, depth.as_deref(), &attrs, g.exr_compression)?;
+    Ok(false)
+}
+
+/// `inimtrace simulate`; returns whether it printed its own total time.
+pub(crate) fn simulate_command(
+    g: &Globals,
+    display_image: PathBuf,
+    part: Option<&str>,
+    setup: Setup,
+    eye: EyeArgs,
+    out: PathBuf,
+) -> Result<bool> {
+    let (set, quiet) = (&g.set[..], g.quiet);
+    let (_, display) = load_setup(&setup, set)?;
+    let (eye, retina) = eye.eye(&display)?;
+    inimtrace::optics::transfer::check_eye_in_front(&display, eye.position.z, "command line", "--eye-position")?;
+    check_memory("the retinal image", "--retina", retina.resolution * retina.resolution, 24)?;
+    let img = read_exr_input(&display_image, part)?;
+    let pupil = eye.pupil_samples().len();
+    inimtrace::long_run::announce(inimtrace::long_run::retina_rays(
+        retina.resolution,
+        retina.samples_per_pixel,
+        pupil,
+        1,
+    ));
+    // The method, when the display image says which.
+    let method = inimtrace::io::exr::read_attributes(&display_image)?
+        .into_iter()
+        .find(|(k, _)| k == "inimtrace:method")
+        .and_then(|(_, v)| v.parse::<Method>().ok());
+    let p = Progress::new(retina.resolution as u64, "simulate", quiet);
+    let sim = simulate(&display, &eye, &retina, &[&img], &p)
+        .with_context(|| format!("simulating {}", display_image.display()))?;
+    p.finish();
+    let source = display_image.display().to_string();
+    let attrs = metadata::perceived(None, method, None, &eye, &retina, &display, Some(&source));
+    write_image(&out, &sim[0], None, &attrs, g.exr_compression)?;
+    Ok(false)
+}
+
+/// `inimtrace ground-truth`; returns whether it printed its own total time.
+pub(crate) fn ground_truth_command(
+    g: &Globals,
+    setup: Setup,
+    eye: EyeArgs,
+    out: PathBuf,
+    backend: BackendArg,
+) -> Result<bool> {
+    let (set, quiet) = (&g.set[..], g.quiet);
+    let backend = backend.choice()?;
+    let (scene, display) = load_setup(&setup, set)?;
+    let (eye, retina) = eye.eye(&display)?;
+    check_memory("the retinal image", "--retina", retina.resolution * retina.resolution, 24)?;
+    let pupil = eye.pupil_samples().len();
+    inimtrace::long_run::announce(inimtrace::long_run::retina_rays(
+        retina.resolution,
+        retina.samples_per_pixel,
+        pupil,
+        1,
+    ));
+    announce(&scene, backend, quiet);
+    let (img, name) = with_field(&scene, backend, |fields| {
+        let p = Progress::new(retina.resolution as u64, "ground truth", quiet);
+        let img = ground_truth(&eye, &retina, fields.shade, &p);
+        p.finish();
+        Ok((img, fields.name))
+    })?;
+    let attrs = metadata::ground_truth(None, None, &eye, &retina, name);
+    write_image(&out, &img, None, &attrs, g.exr_compression)?;
+    Ok(false)
+}
