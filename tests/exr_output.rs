@@ -177,8 +177,13 @@ fn openexr_python_bindings_read_back_types_values_and_pixels() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let get = |k: &str| (v[k][0].as_str().unwrap_or("missing").to_string(), v[k][1].clone());
-    assert_eq!(get("inimtrace:focus_mm"), ("double".into(), serde_json::json!(300.0)));
-    assert_eq!(get("inimtrace:focus_diopters"), ("double".into(), serde_json::json!(1000.0 / 300.0)));
+    // An f64 is a `float` (its nearest f32) with its exact value beside it as text.
+    assert_eq!(get("inimtrace:focus_mm"), ("float".into(), serde_json::json!(300.0)));
+    assert_eq!(get("inimtrace:focus_mm.exact"), ("string".into(), serde_json::json!("300.0")));
+    let third: f64 = 1000.0 / 300.0;
+    assert_eq!(get("inimtrace:focus_diopters"), ("float".into(), serde_json::json!(third as f32 as f64)));
+    let exact = get("inimtrace:focus_diopters.exact").1;
+    assert_eq!(exact.as_str().unwrap().parse::<f64>().unwrap().to_bits(), third.to_bits(), "{exact}");
     assert_eq!(get("inimtrace:half_float_note"), ("float".into(), serde_json::json!(0.25)));
     assert_eq!(get("inimtrace:pupil_samples"), ("int".into(), serde_json::json!(52)));
     assert_eq!(get("inimtrace:method"), ("string".into(), serde_json::json!("LA (5x5)")));
@@ -345,4 +350,98 @@ fn openexr_python_bindings_read_inimtraces_zip_and_zips_blocks_bit_for_bit() {
             }
         }
     }
+}
+
+/// For every custom attribute of every file given: its classic `InputFile` type and value (an
+/// `f64`'s value as its bits, to compare exactly) and, for `NAME.exact`, the bits of `float()`.
+const CLASSIC_READER: &str = r#"
+import json, struct, sys
+import OpenEXR
+bits = lambda x: struct.unpack("<Q", struct.pack("<d", x))[0]
+out = {}
+for path in sys.argv[1:]:
+    h = OpenEXR.InputFile(path).header()
+    rows = {}
+    for k, v in h.items():
+        if v is None:
+            rows[k] = ["none", None]
+        elif isinstance(v, bool):
+            rows[k] = ["bool", v]
+        elif isinstance(v, int):
+            rows[k] = ["int", v]
+        elif isinstance(v, float):
+            rows[k] = ["float", bits(v)]
+        elif isinstance(v, bytes) and k.endswith(".exact"):
+            rows[k] = ["exact", bits(float(v.decode()))]
+        elif isinstance(v, bytes):
+            rows[k] = ["string", v.decode("latin-1")]
+        else:
+            rows[k] = ["other", type(v).__name__]
+    out[path] = rows
+print(json.dumps(out))
+"#;
+
+#[test]
+fn the_classic_openexr_inputfile_api_reads_every_numeric_attribute_of_an_assess_run_as_a_number() {
+    let py = match python_with_openexr() {
+        Ok(p) => p,
+        Err(why) => {
+            assert!(std::env::var_os("INIMTRACE_REQUIRE_OPENEXR").is_none(), "INIMTRACE_REQUIRE_OPENEXR is set: {why}");
+            eprintln!("SKIPPED the_classic_openexr_inputfile_api_reads_every_numeric_attribute: {why}");
+            return;
+        }
+    };
+    // A small converged run: display images, ground truth and retinal images with every
+    // attribute `assess` writes (seed, replicates, budgets, provenance).
+    let dir = tempfile::tempdir().unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let out = Command::new(env!("CARGO_BIN_EXE_inimtrace"))
+        .current_dir(root)
+        .args(["--quiet", "assess", "experiments/paper-converged.toml", "--out"])
+        .arg(dir.path().join("run"))
+        .args(["--set", "display.lcd.resolution=[270, 270]", "--set", "eye.retina_resolution=16"])
+        .args(["--set", "eye_cases=[{ name = \"Eye\", focus_diopters = 2.5 }]", "--set", "methods=[\"LC\", \"LA\"]"])
+        .args(["--set", "measurement.max_samples_per_pixel=64"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir.path().join("run"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "exr"))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 5, "{files:?}");
+    let script = dir.path().join("classic.py");
+    std::fs::write(&script, CLASSIC_READER).unwrap();
+    let out = Command::new(&py).arg(&script).args(&files).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let mut doubles = 0;
+    for path in &files {
+        let classic = &v[path.to_str().unwrap()];
+        let kind = |k: &str| classic[k][0].as_str().unwrap_or("missing").to_string();
+        // No attribute the classic API cannot read (it gives None for a type it does not know);
+        // ours are numbers or strings (the standard ones are its own objects: channels, boxes).
+        for (k, row) in classic.as_object().unwrap() {
+            let ours = k.starts_with("inimtrace:") || k == "software";
+            assert!(row[0] != "none" && !(ours && row[0] == "other"), "{}: {k} reads as {row}", path.display());
+        }
+        for (name, value) in read_typed_attributes(path).unwrap() {
+            let at = format!("{}: {name}", path.display());
+            match value {
+                AttrValue::F64(x) => {
+                    doubles += 1;
+                    assert_eq!(kind(&name), "float", "{at}");
+                    assert_eq!(classic[&name][1], serde_json::json!((x as f32 as f64).to_bits()), "{at}");
+                    // The exact value: Python's float() of the text is the f64 inimtrace wrote.
+                    assert_eq!(classic[format!("{name}.exact")][1], serde_json::json!(x.to_bits()), "{at}");
+                }
+                AttrValue::F32(x) => assert_eq!(classic[&name][1], serde_json::json!((x as f64).to_bits()), "{at}"),
+                AttrValue::I32(x) => assert_eq!(classic[&name], serde_json::json!(["int", x]), "{at}"),
+                AttrValue::Text(s) => assert_eq!(classic[&name], serde_json::json!(["string", s]), "{at}"),
+            }
+        }
+    }
+    assert!(doubles >= 5 * files.len(), "{doubles} f64 attributes in {} files", files.len());
 }

@@ -33,7 +33,7 @@ use std::path::Path;
 use exr::image::write::layers::WritableLayers;
 use exr::image::{Encoding, Image, Layer, SpecificChannels};
 use exr::math::Vec2;
-use exr::meta::attribute::Text;
+use exr::meta::attribute::{AttributeValue, Text};
 use exr::meta::header::{standard_names, LayerAttributes};
 use exr::prelude::{Blocks, Compression, LineOrder, WritableImage};
 
@@ -286,6 +286,14 @@ pub(super) fn header_attributes(path: &Path, attributes: &Attributes) -> Result<
             ));
         }
         let key = latin1_text(path, "name", name)?;
+        if let AttrValue::F64(v) = value {
+            // A `float` (read as a number by every OpenEXR reader, the classic Python API
+            // included) and its exact value as text (module documentation).
+            let exact = latin1_text(path, "name", &format!("{name}{EXACT_SUFFIX}"))?;
+            other.insert(key, AttributeValue::F32(*v as f32));
+            other.insert(exact, AttributeValue::Text(latin1_text(path, "value", &format!("{v:?}"))?));
+            continue;
+        }
         let val = value.to_exr().ok_or_else(|| {
             Error::invalid(
                 path.display().to_string(),
@@ -465,7 +473,40 @@ pub fn read_typed_attributes(path: &Path) -> Result<Vec<(String, AttrValue)>> {
     }
     out.sort_by(|a, b| a.0.cmp(&b.0));
     out.dedup();
-    Ok(out)
+    Ok(merge_exact(out))
+}
+
+/// A `double` as this module writes it: the attribute `NAME` as a `float` and `NAME` followed by
+/// this suffix as a `string` holding the exact value (Rust's shortest round-trip form, which
+/// Python's `float()` reads to the same bits).
+pub const EXACT_SUFFIX: &str = ".exact";
+
+/// `NAME` (`float`) with `NAME.exact` (`string`) as the one `double` they encode; `NAME.exact`
+/// is dropped. Any other attribute, an old file's `double` included, is kept as it is.
+fn merge_exact(attrs: Vec<(String, AttrValue)>) -> Vec<(String, AttrValue)> {
+    let exact = |name: &str| {
+        attrs.iter().find_map(|(n, v)| match v {
+            AttrValue::Text(s) if n.strip_suffix(EXACT_SUFFIX) == Some(name) => s.parse::<f64>().ok(),
+            _ => None,
+        })
+    };
+    let merged: Vec<(String, AttrValue)> = attrs
+        .iter()
+        .map(|(n, v)| match (v, exact(n)) {
+            (AttrValue::F32(f), Some(x)) if x as f32 == *f || (x.is_nan() && f.is_nan()) => {
+                (n.clone(), AttrValue::F64(x))
+            }
+            _ => (n.clone(), v.clone()),
+        })
+        .collect();
+    merged
+        .iter()
+        .filter(|(n, _)| {
+            !n.strip_suffix(EXACT_SUFFIX)
+                .is_some_and(|base| merged.iter().any(|(m, v)| m == base && matches!(v, AttrValue::F64(_))))
+        })
+        .cloned()
+        .collect()
 }
 
 /// The compression of the first header of an OpenEXR file (`None` for one this crate does not
