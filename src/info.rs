@@ -16,8 +16,13 @@
 //!   by the lenslet, `p (z - v1) / v2`, seen from the pupil centre, `p (z - v1) / (v2 z)` rad;
 //!   pixels per degree is its inverse (LCD in the focal plane: `p / f`);
 //! * **pixels per elemental image**: cell area over pixel area, and cell widths over pixel pitch;
-//! * **views through a pupil** of diameter `D` centred on the axis: the pixels of the central
-//!   elemental image whose rays through the lenslet's centre enter the pupil (spots `m p` apart).
+//! * **views across the pupil** (the integral-imaging quantity, the paper's "4 x 4 rays within
+//!   the pupil"): a point on the axis at the CDP sends one ray through each lenslet centre; the
+//!   pupil diameter over their spacing at the pupil plane, per axis, and how many enter the pupil
+//!   disk (the resolution study reports the same numbers);
+//! * **pixel beams of one lenslet in the pupil** (pupil diameter `D`, centred on the axis): the
+//!   pixels of the central elemental image whose rays through the lenslet's centre enter the
+//!   pupil (spots `m p` apart), a different, much larger count.
 //! * A warning when the elemental-image lattice is not a scaled copy of the lenslet lattice
 //!   (square elemental images under hexagonal lenslets), or the eye box is empty.
 
@@ -114,12 +119,19 @@ pub struct DisplayDesign {
     pub pixels_per_elemental_image: f64,
     /// Cell width along x and y over the pixel pitch.
     pub pixels_per_elemental_image_xy: [f64; 2],
-    /// The pupil the views are counted through, mm.
+    /// The pupil the views and pixel beams are counted through, mm.
     pub pupil_diameter_mm: f64,
-    /// Eye-plane spacing of the views (one per LCD pixel) of a lenslet, `m p`.
-    pub view_spacing_mm: [f64; 2],
-    /// Pixels of the central elemental image whose rays enter the pupil.
-    pub views_through_pupil: usize,
+    /// Views per axis a point on the axis at the CDP sends through the pupil: the pupil diameter
+    /// over the spacing of its rays through neighbouring lenslet centres at the pupil (`None`:
+    /// the CDP is at infinity or real).
+    pub views_across_pupil: Option<[f64; 2]>,
+    /// Rays of that point through lenslet centres that enter the pupil disk.
+    pub views_in_pupil: Option<usize>,
+    /// Eye-plane spacing of one lenslet's pixel beams (one per LCD pixel), `m p`.
+    pub pixel_beam_spacing_mm: [f64; 2],
+    /// Pixel beams of one lenslet in the pupil: pixels of the central elemental image whose rays
+    /// through the lenslet's centre enter the pupil.
+    pub lenslet_pixel_beams_in_pupil: usize,
     /// Diffraction's angles at the pupil and the lenslet aperture, per colour channel.
     pub diffraction: DiffractionInfo,
     /// A real lenslet's focal properties (absent for the paper's thin lens).
@@ -331,7 +343,9 @@ pub fn display_design(d: &Display, pupil_diameter: f64) -> DisplayDesign {
     };
     let to_deg = |r: DVec2| r * (180.0 / std::f64::consts::PI);
 
-    // Views: pixels of the central elemental image whose rays enter the pupil.
+    let (views_across_pupil, views_in_pupil) = views_of_a_cdp_point(d, pupil_diameter);
+
+    // Pixel beams: pixels of the central elemental image whose rays enter the pupil.
     let home = d.lenslets.nearest(DVec2::ZERO);
     let (cl, ce) = (d.lenslets.center(home), d.elemental_images.center(home));
     let r2 = (0.5 * pupil_diameter).powi(2);
@@ -364,12 +378,43 @@ pub fn display_design(d: &Display, pupil_diameter: f64) -> DisplayDesign {
         pixels_per_elemental_image: d.elemental_images.cell_area() / (pitch.x * pitch.y),
         pixels_per_elemental_image_xy: (2.0 * half / pitch).to_array(),
         pupil_diameter_mm: pupil_diameter,
-        view_spacing_mm: (m * pitch).to_array(),
-        views_through_pupil: views,
+        views_across_pupil,
+        views_in_pupil,
+        pixel_beam_spacing_mm: (m * pitch).to_array(),
+        lenslet_pixel_beams_in_pupil: views,
         diffraction: diffraction_info(d, pupil_diameter, Diffraction::None),
         lenslet,
         warnings,
     }
+}
+
+/// The views a point on the axis at the central depth plane sends through a pupil of
+/// `pupil_diameter` mm: per axis (the pupil diameter over the spacing at the pupil plane of its
+/// rays through neighbouring lenslet centres) and the rays that enter the pupil disk; `None` when
+/// the central depth plane is at infinity or real.
+pub fn views_of_a_cdp_point(display: &Display, pupil_diameter: f64) -> (Option<[f64; 2]>, Option<usize>) {
+    let cdp = display.central_depth_plane();
+    let v1 = display.eye_to_lenslets;
+    let lenslet = display.lenslets.reduced_matrix();
+    let pitch = [lenslet.x_axis.length(), lenslet.y_axis.length()];
+    // Rays from (0, 0, z) through lenslet centres c reach the pupil plane at c z / (z - v1).
+    let scale = cdp.map(|z| z / (z - v1));
+    let views_across = scale.map(|s| [pupil_diameter / (pitch[0] * s), pupil_diameter / (pitch[1] * s)]);
+    let views_in = scale.map(|s| {
+        let r = 0.5 * pupil_diameter;
+        let reach = (r / (s * pitch[0].min(pitch[1]))).ceil() as i32 + 2;
+        let mut n = 0;
+        for j in -reach..=reach {
+            for i in -reach..=reach {
+                let c = display.lenslets.center(IVec2::new(i, j));
+                if (c * s).length() <= r {
+                    n += 1;
+                }
+            }
+        }
+        n
+    });
+    (views_across, views_in)
 }
 
 /// [`DisplayDesign`] as the text `inimtrace info` prints.
@@ -406,10 +451,18 @@ pub fn display_design_text(x: &DisplayDesign, summary: &str) -> String {
         pair(x.pixels_per_elemental_image_xy, 1)
     );
     s += &format!(
-        "views through a {} mm pupil: {} (view spacing {} mm at the pupil)\n",
+        "views through a {} mm pupil (a point at the central depth plane): {}\n",
         x.pupil_diameter_mm,
-        x.views_through_pupil,
-        pair(x.view_spacing_mm, 4)
+        match (x.views_across_pupil, x.views_in_pupil) {
+            (Some(v), Some(n)) => format!("{} across; {n} in the pupil disk", pair(v, 2)),
+            _ => "none (the central depth plane is at infinity or real)".into(),
+        }
+    );
+    s += &format!(
+        "pixel beams of one lenslet in a {} mm pupil: {} ({} mm apart at the pupil)\n",
+        x.pupil_diameter_mm,
+        x.lenslet_pixel_beams_in_pupil,
+        pair(x.pixel_beam_spacing_mm, 4)
     );
     let dx = &x.diffraction;
     s += &format!(
@@ -597,7 +650,13 @@ mod tests {
         // Views 0.0317 mm apart at the pupil: a 5 mm pupil holds about pi/4 (5 / 0.0317)^2.
         let spacing: f64 = 0.01 * 20.0 / 6.316;
         let disc = std::f64::consts::FRAC_PI_4 * (5.0 / spacing).powi(2);
-        assert!((x.views_through_pupil as f64 - disc).abs() < 0.03 * disc, "{} vs {disc}", x.views_through_pupil);
+        let beams = x.lenslet_pixel_beams_in_pupil as f64;
+        assert!((beams - disc).abs() < 0.03 * disc, "{beams} vs {disc}");
+        // Views across the pupil: 5 mm over 1.2 mm lenslets seen from the CDP, 1.2 z / (z - 20).
+        let z = Display::paper().central_depth_plane().unwrap();
+        let across = 5.0 / (1.2 * z / (z - 20.0));
+        assert!((x.views_across_pupil.unwrap()[0] - across).abs() < 1e-12, "{:?}", x.views_across_pupil);
+        assert!((3.9..4.0).contains(&across), "{across}");
         // CDP 385.7 mm: a pixel magnified by (385.7 - 20) / 6.316, seen from 385.7 mm.
         let z = Display::paper().central_depth_plane().unwrap();
         let ppd = 1.0 / (0.01 * (z - 20.0) / (6.316 * z)).to_degrees();

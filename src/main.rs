@@ -255,7 +255,7 @@ enum Command {
         force: bool,
     },
     /// Describe a display design (central depth plane, eye box, field of view, pixels per
-    /// degree, views through the pupil) or a scene (objects, sizes, depth range), and write the
+    /// degree, views through the pupil, pixel beams in it) or a scene (objects, sizes, depth range), and write the
     /// built-in files.
     Info {
         /// Display TOML or OpenCV YAML (default: the paper's).
@@ -264,7 +264,7 @@ enum Command {
         /// Describe this scene TOML instead of a display.
         #[arg(long, conflicts_with = "display")]
         scene: Option<PathBuf>,
-        /// Pupil diameter (mm) for the number of views through the pupil.
+        /// Pupil diameter (mm) for the views through the pupil and the pixel beams in it.
         #[arg(long, default_value_t = 5.0)]
         pupil: f64,
         /// Print JSON.

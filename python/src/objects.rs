@@ -101,7 +101,8 @@ impl PyDisplay {
         to_py(py, &DisplayParameters::from(&self.inner))
     }
     /// The design figures of `inimtrace info --json`: eye box, field of view, pixels per degree,
-    /// views through a `pupil` mm pupil.
+    /// views through a `pupil` mm pupil (`views_across_pupil`, `views_in_pupil`) and one
+    /// lenslet's pixel beams in it (`lenslet_pixel_beams_in_pupil`).
     #[pyo3(signature = (pupil=5.0))]
     fn design<'py>(&self, py: Python<'py>, pupil: f64) -> PyResult<Bound<'py, PyAny>> {
         if !(pupil.is_finite() && pupil > 0.0) {

@@ -91,23 +91,6 @@ pub fn display_limits(display: &Display, pupil_diameter: f64) -> DisplayLimits {
     let v1 = display.eye_to_lenslets;
     let lenslet = display.lenslets.reduced_matrix();
     let pitch = [lenslet.x_axis.length(), lenslet.y_axis.length()];
-    // Rays from (0, 0, z) through lenslet centres c reach the pupil plane at c z / (z - v1).
-    let scale = cdp.map(|z| z / (z - v1));
-    let views_across = scale.map(|s| [pupil_diameter / (pitch[0] * s), pupil_diameter / (pitch[1] * s)]);
-    let views_in = scale.map(|s| {
-        let r = 0.5 * pupil_diameter;
-        let reach = (r / (s * pitch[0].min(pitch[1]))).ceil() as i32 + 2;
-        let mut n = 0;
-        for j in -reach..=reach {
-            for i in -reach..=reach {
-                let c = display.lenslets.center(glam::IVec2::new(i, j));
-                if (c * s).length() <= r {
-                    n += 1;
-                }
-            }
-        }
-        n
-    });
     DisplayLimits {
         display: d.display.clone(),
         pupil_diameter_mm: pupil_diameter,
@@ -117,8 +100,8 @@ pub fn display_limits(display: &Display, pupil_diameter: f64) -> DisplayLimits {
         pixels_per_degree: d.pixels_per_degree,
         nyquist_cpd: d.pixels_per_degree.map(|p| [0.5 * p[0], 0.5 * p[1]]),
         lenslet_angular_pitch_deg: [(pitch[0] / v1).atan().to_degrees(), (pitch[1] / v1).atan().to_degrees()],
-        views_across_pupil: views_across,
-        views_in_pupil: views_in,
+        views_across_pupil: d.views_across_pupil,
+        views_in_pupil: d.views_in_pupil,
         eye_relief_mm: d.eye_relief_mm,
         eye_box_mm: d.eye_box_mm,
         field_of_view_deg: d.field_of_view_deg,
