@@ -471,6 +471,9 @@ fn run() -> Result<()> {
             let cmd =
                 inimtrace::resolution::command::ResolutionCommand { study, out, overrides: set.clone(), quiet, force };
             let run = inimtrace::resolution::command::execute(&cmd)?;
+            for w in &run.warnings {
+                eprintln!("warning: {w}");
+            }
             if !quiet {
                 eprint!("{}", run.timings_text());
                 eprintln!("wrote {}", run.out.display());

@@ -89,3 +89,60 @@ fn an_unknown_mesh_format_names_the_file_and_the_formats() {
     }
     assert!(err.to_string().ends_with("unknown mesh format (expected extension .obj, .ply, .stl, .gltf or .glb)"));
 }
+
+/// Settings errors speak the settings' words: the field and the form its value must take (never a
+/// Rust type such as `usize` or `untagged enum PitchSpec`), at the line of the key, and a missing
+/// key with the table that lacks it.
+#[test]
+fn settings_errors_name_the_field_and_the_expected_form_at_the_keys_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let paper = fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("displays/paper.toml")).unwrap();
+    let line_of = |prefix: &str| paper.lines().position(|l| l.starts_with(prefix)).unwrap() + 1;
+    let edit = |name: &str, from: &str, to: &str| {
+        let l = paper.lines().find(|l| l.starts_with(from)).unwrap();
+        let text = paper.replacen(l, to, 1);
+        write(dir.path(), name, &text);
+        let e = inimtrace::io::load_display(dir.path().join(name).to_str().unwrap(), Path::new("")).unwrap_err();
+        e.to_string()
+    };
+    let cases = [
+        (
+            "pitch.toml",
+            "pitch = 1.2",
+            "pitch = \"big\"",
+            "lenslets.pitch",
+            "a number (square), [x, y]",
+            line_of("pitch = 1.2"),
+        ),
+        (
+            "res.toml",
+            "resolution =",
+            "resolution = [2160.5, 2160]",
+            "lcd.resolution",
+            "expected a whole number",
+            line_of("resolution ="),
+        ),
+        (
+            "neg.toml",
+            "resolution =",
+            "resolution = [-3, 2160]",
+            "lcd.resolution",
+            "expected a whole number",
+            line_of("resolution ="),
+        ),
+    ];
+    for (name, from, to, field, form, line) in cases {
+        let e = edit(name, from, to);
+        assert!(e.contains(name) && e.contains(&format!("field `{field}`")) && e.contains(form), "{e}");
+        assert!(e.contains(&format!("line {line},")), "{e}: not at line {line}");
+        for serde in ["untagged", "enum", "usize", "PitchSpec", "floating point"] {
+            assert!(!e.contains(serde), "{e}: says {serde}");
+        }
+    }
+    // Missing keys: the table that lacks one, or the top level; never "line 1, column 1".
+    let e = edit("nof.toml", "focal_length", "");
+    assert!(e.contains("missing field `lenslets.focal_length`") && e.contains("[lenslets] at line"), "{e}");
+    let e = edit("nov1.toml", "eye_to_lenslets", "");
+    assert!(e.contains("missing field `eye_to_lenslets`") && e.contains("top-level"), "{e}");
+    assert!(!e.contains("line 1, column 1"), "{e}");
+}

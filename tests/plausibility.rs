@@ -88,3 +88,25 @@ fn focus_mm_of_one_and_a_half_is_warned_as_metres_or_diopters() {
     assert!(line.starts_with("warning:") && line.contains("exp.toml"), "{line}");
     assert!(line.contains("metres? 1.5 m = 1500 mm") && line.contains("focus_diopters = 1.5"), "{line}");
 }
+
+#[test]
+fn the_resolution_study_warns_of_its_displays_and_pupils_unit_mistakes() {
+    let dir = tempfile::tempdir().unwrap();
+    let study = dir.path().join("study.toml");
+    let text = std::fs::read_to_string("studies/tiny.toml")
+        .unwrap()
+        .replace("pupil_diameter_mm = 5.0", "pupil_diameter_mm = 0.9");
+    assert!(text.contains("pupil_diameter_mm = 0.9"));
+    std::fs::write(&study, text).unwrap();
+    let out = dir.path().join("out");
+    let o = inimtrace(&["--quiet", "resolution", study.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    let e = stderr(&o);
+    assert!(o.status.success(), "{e}");
+    let line = e.lines().find(|l| l.contains("pupil_diameter_mm")).unwrap_or_else(|| panic!("no warning: {e}"));
+    assert!(line.starts_with("warning:") && line.contains("study.toml"), "{line}");
+    assert!(line.contains("centimetres? 0.9 cm = 9 mm"), "{line}");
+    // The built-in display and a 5 mm pupil: none.
+    let o =
+        inimtrace(&["--quiet", "resolution", "studies/tiny.toml", "--out", dir.path().join("ok").to_str().unwrap()]);
+    assert!(o.status.success() && !stderr(&o).contains("warning"), "{}", stderr(&o));
+}

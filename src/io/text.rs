@@ -18,13 +18,17 @@ pub fn read_text(path: &Path) -> Result<String> {
 /// lines are never quoted (a file named by mistake, or on purpose, must not have its content
 /// echoed): the field is named only when the line is a TOML key-value pair.
 pub fn toml_error(path: &Path, text: &str, e: &toml::de::Error) -> Error {
-    let message = e.message().trim().replace('\n', " ");
+    let message = plain_message(e.message().trim().replace('\n', " "));
     match e.span() {
         Some(span) => {
             let start = span.start.min(text.len());
             let line = text[..start].matches('\n').count() + 1;
             let line_start = text[..start].rfind('\n').map(|i| i + 1).unwrap_or(0);
             let column = text[line_start..start].chars().count() + 1;
+            if let Some(key) = message.strip_prefix("missing field `").and_then(|m| m.strip_suffix('`')) {
+                // serde points a missing key at the table that lacks it (line 1 for the top level).
+                return Error::parse(path, missing_key(text, line_start, key));
+            }
             match field_at(text, line_start) {
                 Some(field) => Error::parse(path, format!("line {line}, column {column}: field `{field}`: {message}")),
                 None => Error::parse(path, format!("line {line}, column {column}: {message}")),
@@ -32,6 +36,58 @@ pub fn toml_error(path: &Path, text: &str, e: &toml::de::Error) -> Error {
         }
         None => Error::parse(path, message),
     }
+}
+
+/// A missing key: named with its table (`[lenslets]`, at its line), or as a top-level key.
+fn missing_key(text: &str, line_start: usize, key: &str) -> String {
+    let header = text[line_start..].lines().next().unwrap_or("").trim();
+    let table = header.strip_prefix('[').and_then(|h| h.trim_start_matches('[').split(']').next()).map(str::trim);
+    match table {
+        Some(t) if !t.is_empty() => {
+            let line = text[..line_start].matches('\n').count() + 1;
+            format!("missing field `{t}.{key}` (the table [{t}] at line {line} has no `{key}` key)")
+        }
+        _ => format!("missing field `{key}` (a top-level key, before any [table])"),
+    }
+}
+
+/// A serde message in the words of the settings: the form a value must take instead of a Rust
+/// type (`usize`, `untagged enum PitchSpec`).
+fn plain_message(message: String) -> String {
+    const FORMS: [(&str, &str); 3] = [
+        ("PitchSpec", "a pitch in mm: a number (square), [x, y] (rectangular) or a row-major matrix [[a, b], [c, d]]"),
+        ("Values", "a list of numbers [a, b, ...] or a range { from, to, step }"),
+        ("MaterialSpec", "a material name (\"pmma\", \"n-bk7\") or a dispersion formula table"),
+    ];
+    if let Some(name) = message.strip_prefix("data did not match any variant of untagged enum ") {
+        let form =
+            FORMS.iter().find(|(n, _)| *n == name.trim()).map_or("one of the forms the documentation lists", |f| f.1);
+        return format!("expected {form}");
+    }
+    let mut m = message;
+    for (rust, words) in [
+        ("usize", "a whole number, 0 or more"),
+        ("u64", "a whole number, 0 or more"),
+        ("u32", "a whole number, 0 or more"),
+        ("u16", "a whole number, 0 or more"),
+        ("u8", "a whole number, 0 or more"),
+        ("i64", "a whole number"),
+        ("i32", "a whole number"),
+        ("f64", "a number"),
+        ("f32", "a number"),
+    ] {
+        if let Some(head) = m.strip_suffix(&format!("expected {rust}")) {
+            m = format!("{head}expected {words}");
+        }
+    }
+    for (rust, words) in
+        [("expected struct ", "expected a table"), ("expected enum ", "expected one of the documented values")]
+    {
+        if let Some(i) = m.find(rust) {
+            m = format!("{}{words}", &m[..i]);
+        }
+    }
+    m.replace("floating point `", "number `")
 }
 
 /// The key path of the key-value line starting at `line_start` (`eye.pupil_diameter`, with the

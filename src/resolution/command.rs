@@ -37,6 +37,9 @@ pub struct ResolutionRun {
     pub results: StudyResults,
     /// Every stage, the files last.
     pub timings: Vec<Timing>,
+    /// Plausibility warnings of the study's display and pupil (likely unit mistakes,
+    /// `crate::optics::plausibility`).
+    pub warnings: Vec<String>,
 }
 
 impl ResolutionRun {
@@ -57,6 +60,14 @@ pub fn load_study(cmd: &ResolutionCommand) -> Result<Study> {
         Some(p) => Study::load(p, &cmd.overrides),
         None => Study::paper(&cmd.overrides),
     }
+}
+
+/// The plausibility warnings of `study`: its display's fields and its pupil.
+pub fn plausibility_warnings(study: &Study) -> Vec<String> {
+    use crate::optics::plausibility::{check, display_warnings, PUPIL_DIAMETER};
+    let mut w = display_warnings(&study.display, &study.display_source);
+    w.extend(check(&study.source, "pupil_diameter_mm", study.pupil_diameter_mm, PUPIL_DIAMETER));
+    w
 }
 
 /// Runs the study and writes its files.
@@ -90,5 +101,5 @@ pub fn execute(cmd: &ResolutionCommand) -> Result<ResolutionRun> {
     // study.json last: its presence marks a complete run.
     dir.finish("study.json", |files| Ok(study_json(&results, &timings, files).into_bytes()))?;
     results.timings = timings.clone();
-    Ok(ResolutionRun { out, results, timings })
+    Ok(ResolutionRun { out, results, timings, warnings: plausibility_warnings(&study) })
 }
