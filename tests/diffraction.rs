@@ -10,7 +10,7 @@ use std::f64::consts::{PI, TAU};
 
 use glam::{DMat2, DVec2, DVec3};
 use inimtrace::experiment::{Experiment, ExperimentSpec};
-use inimtrace::measure::estimator::{DisplaySource, Replicates};
+use inimtrace::measure::estimator::{DisplaySource, EyeSample, PairedSource, Replicates};
 use inimtrace::measure::sampler::Sampler;
 use inimtrace::optics::diffraction::{disk_mtf, polygon_area, voronoi_hexagon, ApertureShape, Diffraction};
 use inimtrace::optics::display::Lcd;
@@ -408,4 +408,82 @@ fn set_optics_diffraction_reaches_the_experiment_as_a_sweep_axis_would() {
     let bad: Override = "optics.diffraction=hurb".parse().unwrap();
     let err = load_experiment(None, None, &[bad]).unwrap_err().to_string();
     assert!(err.contains("diffraction") && err.contains("hurb"), "{err}");
+}
+
+/// A scene whose three channels differ along every direction: each channel its own grating.
+struct Colours;
+
+impl RadianceField for Colours {
+    fn radiance(&self, ray: &Ray) -> DVec3 {
+        let t = (400.0 - ray.origin.z) / ray.dir.z;
+        let p = ray.origin + ray.dir * t;
+        DVec3::new(0.5 + 0.5 * (p.x * 3.1).cos(), 0.5 + 0.5 * (p.y * 2.3).sin(), 0.5 + 0.5 * ((p.x + p.y) * 4.7).cos())
+    }
+}
+
+#[test]
+fn the_batched_thin_lens_with_diffraction_equals_the_per_sample_path_bit_for_bit() {
+    // The paper's display showing two images of distinct pixels, every kind of thin-lens eye
+    // that diffracts (pupil or apertures, one wavelength or the primaries', pinhole or 5 mm
+    // pupil), random samples with extreme uniform numbers among them.
+    let display = Display::paper();
+    let (cols, rows) = (display.lcd.columns(), display.lcd.rows());
+    let image = |seed: u32| {
+        let mut img = RgbImage::new(cols, rows);
+        for (i, p) in img.pixels.iter_mut().enumerate() {
+            let h = (i as u32).wrapping_mul(2_654_435_761).wrapping_add(seed.wrapping_mul(40_503));
+            *p = [(h % 251) as f32 / 250.0, (h / 251 % 241) as f32 / 240.0, (h / 60_491 % 239) as f32 / 238.0];
+        }
+        img
+    };
+    let (a, b) = (image(1), image(2));
+    let stack = DisplayStack::new(&display, &[&a, &b]).unwrap();
+    let mut h = 0x9e37_79b9_7f4a_7c15u64;
+    let mut uniform = move || {
+        h ^= h << 13;
+        h ^= h >> 7;
+        h ^= h << 17;
+        (h >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let extremes = [0.0, 1.0 - f64::EPSILON, 0.5];
+    let samples: Vec<EyeSample> = (0..3000)
+        .map(|i| {
+            let mut u = || if i % 10 == 0 { extremes[(i / 10) % 3] } else { uniform() };
+            let tangent = DVec2::new(0.6 * u() - 0.3, 0.6 * u() - 0.3);
+            let (r, phi) = (2.5 * u().sqrt(), TAU * u());
+            let pupil = DVec2::new(r * phi.cos(), r * phi.sin());
+            EyeSample { tangent, pupil, spectral: u(), diffraction: [u(), u(), u(), u()] }
+        })
+        .collect();
+    for pinhole in [false, true] {
+        for diffraction in [Diffraction::Pupil, Diffraction::Apertures] {
+            for primaries in [false, true] {
+                let mut eye = if pinhole { Eye::pinhole() } else { Eye::thin_lens(5.0, Focus::Millimetres(400.0), 8) };
+                let spec = EyeOpticsSpec {
+                    model: EyeModel::ThinLens,
+                    criterion: FocusCriterion::Paraxial,
+                    reference_nm: NM,
+                    primaries: false,
+                    wavelength_samples: 3,
+                    stiles_crawford: None,
+                    diffraction: Diffraction::None,
+                }
+                .with_diffraction(diffraction, !primaries);
+                eye.optics =
+                    EyeOptics::build(&spec, &eye.aperture, eye.retina_distance, &Primaries::default(), 0.0, "t", "f")
+                        .unwrap();
+                let source = DisplaySource::new(&display, &eye, &Colours, &stack);
+                let k = source.images();
+                let (mut fast, mut slow) = (vec![[0.0; 3]; samples.len() * k], vec![[f64::NAN; 3]; samples.len() * k]);
+                source.eval(&samples, &mut fast);
+                source.eval_each_ray(&samples, &mut slow);
+                let bits = |v: &[[f64; 3]]| v.iter().flatten().map(|x| x.to_bits()).collect::<Vec<_>>();
+                let case = format!("pinhole {pinhole}, {diffraction:?}, primaries {primaries}");
+                assert_eq!(bits(&fast), bits(&slow), "{case}");
+                // Not trivially equal: the images and the channels differ.
+                assert!(fast.iter().any(|v| v[0] != v[1] && v[1] != v[2]), "{case}");
+                assert!(fast.chunks_exact(k).any(|o| o[1] != o[2]), "{case}");
+            }
+        }
+    }
 }

@@ -19,6 +19,7 @@ use rayon::prelude::*;
 
 use super::sampler::Sampler;
 
+mod diffracted;
 mod through_optics;
 use crate::optics::diffraction::ApertureShape;
 use crate::optics::transfer::{eye_scene_ray, FastTransfer};
@@ -174,6 +175,9 @@ impl<F: RadianceField + ?Sized> PairedSource for DisplaySource<'_, F> {
         let m = self.stack.len();
         debug_assert_eq!(out.len(), samples.len() * k);
         if let Some(optics) = &self.eye.optics {
+            if self.is_thin_diffracted(optics) {
+                return self.eval_diffracted(optics, samples, out);
+            }
             return self.eval_through(optics, samples, out);
         }
         if self.field.prefers_batches() {
@@ -234,6 +238,16 @@ impl<F: RadianceField + ?Sized> PairedSource for DisplaySource<'_, F> {
 }
 
 impl<F: RadianceField + ?Sized> DisplaySource<'_, F> {
+    /// Slow twin of [`PairedSource::eval`] for an eye with optics beyond the thin lens's fast
+    /// paths: every sample through the generic per-sample path (`through_optics.rs`), also
+    /// where a batched one serves the eye (the thin lens with diffraction). Same values.
+    pub fn eval_each_ray(&self, samples: &[EyeSample], out: &mut [[f64; 3]]) {
+        match &self.eye.optics {
+            Some(optics) => self.eval_through(optics, samples, out),
+            None => self.eval(samples, out),
+        }
+    }
+
     /// The perceived images' samples (images 1..=M of `out`) for a stack of `M` display images,
     /// from the LCD pixel of every sample (`u32::MAX`: the ray missed the LCD).
     #[inline(always)]

@@ -1,0 +1,115 @@
+//! The paired samples of the paper's thin-lens eye with diffraction (`optics::diffraction`:
+//! the pupil's Airy pattern and the lenslet aperture's pattern, each channel at its wavelength)
+//! in passes over the batch: the fast twin of the generic per-sample path
+//! (`through_optics.rs`, [`super::DisplaySource::eval_each_ray`]), with the same arithmetic in
+//! the same order, so the same values bit for bit (tested in `tests/diffraction.rs`).
+//!
+//! Per sample: the channels' wavelengths once (the generic path asks for each twice), the
+//! pupil's and the lenslet's draws once, then each channel's ray (the thin lens's eq. (1a),
+//! (1b) from the retina tangent moved by the channel's pupil deviation; one ray for all three
+//! when the wavelengths are one or the eye is a pinhole); then all the batch's scene rays at
+//! once, all its LCD pixels (eq. (1) with the lenslet's deviation after the lenslet), and last
+//! the reads of the display images (independent loads the CPU overlaps).
+
+use super::{DisplaySource, EyeSample};
+use crate::optics::diffraction::{disk_draw, ApertureDraw};
+use crate::optics::eye::EyeOptics;
+use crate::optics::PlaneRay;
+use crate::ray::Ray;
+use crate::render::{RadianceField, Sample};
+
+/// Off the LCD (no pixel).
+const MISS: u32 = u32::MAX;
+
+impl<F: RadianceField + ?Sized> DisplaySource<'_, F> {
+    /// Whether [`DisplaySource::eval_diffracted`] serves `optics`: the thin lens without the
+    /// Stiles-Crawford weight, thin lenslets, diffraction on.
+    pub(super) fn is_thin_diffracted(&self, optics: &EyeOptics) -> bool {
+        optics.diffraction.is_on()
+            && optics.schematic().is_none()
+            && optics.stiles_crawford.is_none()
+            && !self.transfer.transfer.is_thick()
+    }
+
+    /// [`super::PairedSource::eval`] of the thin-lens eye with diffraction, batched
+    /// ([`DisplaySource::is_thin_diffracted`]): `out[i * images + k]` is image `k` of sample `i`.
+    pub(super) fn eval_diffracted(&self, optics: &EyeOptics, samples: &[EyeSample], out: &mut [[f64; 3]]) {
+        let k = 1 + self.stack.len();
+        let n = samples.len();
+        let eye_xy = self.eye.position.truncate();
+        let z = self.eye.position.z;
+        let single = optics.is_single_wavelength();
+        let pupil_on = optics.pupil_diameter > 0.0;
+        // Three rays per sample when the channels' pupil deviations differ.
+        let per_ray = if pupil_on && !single { 3 } else { 1 };
+        // Each channel's own LCD pixel when its lenslet deviation (or its ray) is its own.
+        let per_pixel = per_ray == 3 || (self.lenslet.is_some() && !single);
+
+        // Wavelengths, draws and rays (world coordinates at the pupil plane).
+        let mut nm = Vec::with_capacity(n);
+        let mut lens_draw = Vec::with_capacity(if self.lenslet.is_some() { n } else { 0 });
+        let mut rays = Vec::with_capacity(n * per_ray);
+        for s in samples {
+            let u = s.spectral;
+            let l: [f64; 3] =
+                if single { [optics.wavelength(0, u); 3] } else { std::array::from_fn(|c| optics.wavelength(c, u)) };
+            nm.push(l);
+            if let Some(shape) = &self.lenslet {
+                lens_draw.push(shape.draw([s.diffraction[2], s.diffraction[3]]));
+            }
+            // `EyeOptics::rays_diffracted`'s tangents: moved by the channel's Airy deviation.
+            let draw = if pupil_on { disk_draw([s.diffraction[0], s.diffraction[1]]) } else { ApertureDraw::default() };
+            for &lc in &l[..per_ray] {
+                let tangent = if pupil_on { s.tangent + draw.disk(optics.pupil_diameter, lc) } else { s.tangent };
+                let r = optics.rays(tangent, s.pupil, u).rays[0].expect("the thin lens passes every ray");
+                rays.push(PlaneRay { position: r.position + eye_xy, slope: r.slope });
+            }
+        }
+
+        // The ground truth: every ray into the scene.
+        let scene: Vec<Ray> =
+            rays.iter().map(|w| Ray { origin: w.position.extend(z), dir: w.slope.extend(1.0) }).collect();
+        let mut hits = vec![Sample::default(); scene.len()];
+        if self.field.prefers_batches() {
+            self.field.sample_many(&scene, &mut hits);
+        } else {
+            for (h, r) in hits.iter_mut().zip(&scene) {
+                h.radiance = self.field.radiance(r);
+            }
+        }
+
+        // The LCD pixel of each sample's channels (one for all when `!per_pixel`).
+        let pixels = if per_pixel { 3 } else { 1 };
+        let t = &self.transfer.transfer;
+        let mut lcd = vec![MISS; n * pixels];
+        for (i, px) in lcd.chunks_exact_mut(pixels).enumerate() {
+            for (c, p) in px.iter_mut().enumerate() {
+                let r = rays[i * per_ray + c.min(per_ray - 1)];
+                let index = match &self.lenslet {
+                    None => t.pixel_index_of(r),
+                    Some(shape) => t.pixel_index_deviated(r, shape.scaled(lens_draw[i], nm[i][c])),
+                };
+                *p = index.map_or(MISS, |j| j as u32);
+            }
+        }
+
+        // The reads: the ground truth's channel c from channel c's ray, every image's channel
+        // c at channel c's pixel.
+        for (i, o) in out.chunks_exact_mut(k).enumerate() {
+            for c in 0..3 {
+                o[0][c] = hits[i * per_ray + c.min(per_ray - 1)].radiance.to_array()[c];
+                let idx = lcd[i * pixels + c.min(pixels - 1)];
+                if idx == MISS {
+                    for v in o[1..].iter_mut() {
+                        v[c] = 0.0;
+                    }
+                } else {
+                    let px = self.stack.pixel(idx as usize);
+                    for (j, v) in o[1..].iter_mut().enumerate() {
+                        v[c] = f64::from(px[3 * j + c]);
+                    }
+                }
+            }
+        }
+    }
+}
