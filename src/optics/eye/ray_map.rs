@@ -103,21 +103,48 @@ const EXPONENTS: [[usize; 3]; TERMS] = {
     e
 };
 
-/// The monomials `a^i b^j c^k` of [`EXPONENTS`].
+/// For each monomial of [`EXPONENTS`] after the first, the earlier monomial it is one factor
+/// away from and that factor's variable (0: a, 1: b, 2: c): the first nonzero exponent is
+/// lowered by one.
+const PARENTS: [(usize, usize); TERMS] = {
+    let mut p = [(0, 0); TERMS];
+    let mut n = 1;
+    while n < TERMS {
+        let [i, j, k] = EXPONENTS[n];
+        let (var, lower) = if i > 0 {
+            (0, [i - 1, j, k])
+        } else if j > 0 {
+            (1, [i, j - 1, k])
+        } else {
+            (2, [i, j, k - 1])
+        };
+        let mut m = 0;
+        while !(EXPONENTS[m][0] == lower[0] && EXPONENTS[m][1] == lower[1] && EXPONENTS[m][2] == lower[2]) {
+            m += 1;
+        }
+        p[n] = (m, var);
+        n += 1;
+    }
+    p
+};
+
+/// The monomials `a^i b^j c^k` of [`EXPONENTS`], written into `m`: each one multiply from its
+/// parent ([`PARENTS`]), in place (no array is built and copied).
+#[inline(always)]
+fn monomials_into(m: &mut [f64; TERMS], a: f64, b: f64, c: f64) {
+    let v = [a, b, c];
+    m[0] = 1.0;
+    for (n, &(parent, var)) in PARENTS.iter().enumerate().skip(1) {
+        m[n] = m[parent] * v[var];
+    }
+}
+
+/// The monomials `a^i b^j c^k` of [`EXPONENTS`] ([`monomials_into`]).
 #[inline(always)]
 fn monomials(a: f64, b: f64, c: f64) -> [f64; TERMS] {
-    let mut pa = [1.0; DEGREE + 1];
-    let mut pb = [1.0; DEGREE + 1];
-    let mut pc = [1.0; DEGREE + 1];
-    for d in 1..=DEGREE {
-        pa[d] = pa[d - 1] * a;
-        pb[d] = pb[d - 1] * b;
-        pc[d] = pc[d - 1] * c;
-    }
-    std::array::from_fn(|n| {
-        let [i, j, k] = EXPONENTS[n];
-        pa[i] * pb[j] * pc[k]
-    })
+    let mut m = [0.0; TERMS];
+    monomials_into(&mut m, a, b, c);
+    m
 }
 
 /// The Chebyshev polynomials `T_0 .. T_{n-1}` at `s` (in [-1, 1]).
@@ -442,8 +469,10 @@ impl RayMap {
         const MAX: usize = NODES;
         let ts = t.map(|t| t / self.tau_max);
         let ps = p.map(|p| p / self.radius);
-        let m: [[f64; TERMS]; L] =
-            std::array::from_fn(|l| monomials(ts[l].length_squared(), ts[l].dot(ps[l]), ps[l].length_squared()));
+        let mut m = [[0.0; TERMS]; L];
+        for ((ml, t), p) in m.iter_mut().zip(&ts).zip(&ps) {
+            monomials_into(ml, t.length_squared(), t.dot(*p), p.length_squared());
+        }
         let mut y = [[0.0; 4 * MAX]; L];
         let (mut term, mut offset) = (0, 0);
         for (g, &keep) in self.kept.iter().enumerate() {
@@ -523,7 +552,8 @@ impl RayMap {
         const MAX: usize = NODES;
         let ts = t / self.tau_max;
         let ps = p / self.radius;
-        let m = monomials(ts.length_squared(), ts.dot(ps), ps.length_squared());
+        let mut m = [0.0; TERMS];
+        monomials_into(&mut m, ts.length_squared(), ts.dot(ps), ps.length_squared());
         // The four outputs' Chebyshev coefficients at this point, once for every wavelength:
         // `y[4 d + k]`, each total degree of monomials adding into its kept terms.
         let n1 = self.degree1;
