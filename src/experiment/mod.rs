@@ -384,7 +384,23 @@ impl Experiment {
                     position,
                     retina,
                 };
-                Some(o.clone().unwrap_or_default().resolve(&named, &base, dr.la_grid, source)?)
+                let mut opt = o.clone().unwrap_or_default().resolve(&named, &base, dr.la_grid, source)?;
+                // The explicit [[optimize.states]] see through the experiment's eye optics, as
+                // its cases do (a schematic eye, the primaries' wavelengths, diffraction).
+                let explicit = o.as_ref().map_or(0, |o| o.states.len());
+                let first = opt.states.len() - explicit;
+                for (i, s) in opt.states.iter_mut().enumerate().skip(first) {
+                    s.eye.optics = EyeOptics::build(
+                        &optics_spec,
+                        &s.eye.aperture,
+                        e.retina_distance,
+                        &primaries,
+                        e.retina_half_tangent * std::f64::consts::SQRT_2,
+                        source,
+                        &format!("optimize.states[{}]", i - first),
+                    )?;
+                }
+                Some(opt)
             }
         };
         let measurement = spec.measurement.clone().unwrap_or_else(MeasurementSpec::grid);

@@ -56,10 +56,16 @@ pub fn render_optimal_into<R: RadianceField + ?Sized>(
     let t = Instant::now();
     let mut terms = Vec::with_capacity(opt.states.len());
     for s in &opt.states {
-        let gt = ground_truth(&s.eye, &s.retina, field, &hidden);
+        let operator = EyeOperator::new(display, &s.eye, &s.retina);
+        // With diffraction the target sees the operator's diffracted rays; else the grid's.
+        let target = match operator.diffracted_target(field) {
+            Some(t) => t,
+            None => {
+                ground_truth(&s.eye, &s.retina, field, &hidden).pixels.par_iter().map(|p| p.map(f64::from)).collect()
+            }
+        };
         crate::progress::check_cancelled()?;
-        let target: Vec<Rgb> = gt.pixels.par_iter().map(|p| p.map(f64::from)).collect();
-        terms.push(Term { operator: EyeOperator::new(display, &s.eye, &s.retina), target, weight: s.weight });
+        terms.push(Term { operator, target, weight: s.weight });
     }
     let targets_seconds = t.elapsed().as_secs_f64();
     let x0: Vec<Rgb> = image.pixels.par_iter().map(|p| p.map(f64::from)).collect();

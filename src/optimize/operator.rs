@@ -7,8 +7,11 @@
 //!
 //! Matrix-free: the samples of a band of retina rows are traced afresh on every application
 //! (the same eye-to-LCD trace as [`crate::render::simulate_stack`]: [`FastTransfer`] for the thin
-//! lens, the eye's own rays ([`crate::optics::eye::EyeOptics::rays`]) otherwise) and dropped; only
-//! a bounded wave of bands is held at once. The sample pattern is fixed, so the forward operator
+//! lens, the eye's own rays ([`crate::optics::eye::EyeOptics::rays`]) otherwise, through real
+//! lenslets each channel's own exact trace) and dropped; only a bounded wave of bands is held at
+//! once. With diffraction (which only the converged estimator models) each sample carries a fixed
+//! pseudo-random draw of the pupil's and the lenslet aperture's deviations
+//! ([`diffraction_numbers`]), and its LCD pixels are those the estimator finds for that sample. The sample pattern is fixed, so the forward operator
 //! and the adjoint are the same matrix, transposed. Both are deterministic bit for bit at any
 //! thread count: the forward sums each retina pixel's samples in trace order, and the adjoint adds
 //! into each LCD pixel in the global order of the samples (bands in order, samples in trace order),
@@ -17,9 +20,14 @@
 use glam::DVec2;
 use rayon::prelude::*;
 
+use crate::measure::estimator::EyeSample;
+use crate::optics::diffraction::ApertureShape;
+use crate::optics::eye::EyeOptics;
 use crate::optics::transfer::FastTransfer;
 use crate::optics::{Display, Eye, Retina};
+use crate::ray::Ray;
 use crate::render::retina::through_optics;
+use crate::render::RadianceField;
 
 /// One value per pixel and channel (R, G, B), in `f64`.
 pub type Rgb = [f64; 3];
@@ -84,6 +92,11 @@ pub struct EyeOperator<'a> {
     subpixels: Vec<DVec2>,
     /// Weight of one sample of the thin lens: 1 / (sub-pixel samples x pupil samples).
     inv_count: f64,
+    /// The thin-lens eye's `EyeOptics` when the display has real lenslets and the eye no optics
+    /// of its own (each colour channel then finds its own LCD pixel).
+    thin: Option<EyeOptics>,
+    /// The lenslet aperture when it diffracts (`[optics] diffraction = "apertures"`).
+    lenslet: Option<ApertureShape>,
 }
 
 impl<'a> EyeOperator<'a> {
@@ -92,11 +105,17 @@ impl<'a> EyeOperator<'a> {
         let pupil = eye.pupil_samples();
         let subpixels = retina.subpixel_offsets();
         let inv_count = 1.0 / (pupil.len() * subpixels.len()) as f64;
-        let fast = match eye.optics {
-            Some(_) => FastTransfer::for_eye(display, eye),
-            None => FastTransfer::new(display, eye, &pupil),
+        let thin = (eye.optics.is_none() && display.thick_lenslet().is_some()).then(|| EyeOptics::thin_lens(eye));
+        let fast = match (&eye.optics, &thin) {
+            (None, None) => FastTransfer::new(display, eye, &pupil),
+            _ => FastTransfer::for_eye(display, eye),
         };
-        Self { display, eye: eye.clone(), retina: *retina, fast, pupil, subpixels, inv_count }
+        let lenslet = eye
+            .optics
+            .as_ref()
+            .filter(|o| o.diffraction.lenslets())
+            .map(|_| ApertureShape::of_lattice(&display.lenslets));
+        Self { display, eye: eye.clone(), retina: *retina, fast, pupil, subpixels, inv_count, thin, lenslet }
     }
 
     /// The number of bands of retina rows.
@@ -104,23 +123,127 @@ impl<'a> EyeOperator<'a> {
         self.retina.resolution.div_ceil(BAND)
     }
 
+    /// The eye the optics path traces through: the eye's own optics, or for real lenslets seen by
+    /// the thin lens its `EyeOptics` (as [`crate::render::simulate_stack`]); `None`: the thin
+    /// lens's fast path.
+    fn optics(&self) -> Option<&EyeOptics> {
+        self.eye.optics.as_deref().or(self.thin.as_ref())
+    }
+
+    /// The fixed samples of retina pixel (row, col) through `optics`, in trace order (sub-pixel
+    /// point, then pupil point, then wavelength): those of the grid simulation
+    /// ([`through_optics::pixel_samples`]), and with diffraction their four diffraction numbers,
+    /// a fixed pseudo-random pattern ([`diffraction_numbers`]). Without diffraction they are 0,
+    /// and unused.
+    pub fn pixel_samples(&self, row: usize, col: usize) -> Vec<EyeSample> {
+        let Some(optics) = self.optics() else {
+            return Vec::new();
+        };
+        let spectral = optics.grid_spectral();
+        let diffraction = optics.diffraction.is_on();
+        let pixel = (row * self.retina.resolution + col) as u64;
+        let mut out = Vec::with_capacity(self.subpixels.len() * self.pupil.len() * spectral.len());
+        for frac in &self.subpixels {
+            let tangent = self.retina.tangent(row, col, *frac);
+            for &pupil in &self.pupil {
+                for &u in &spectral {
+                    let k = out.len() as u64;
+                    let numbers = if diffraction { diffraction_numbers(pixel, k) } else { [0.0; 4] };
+                    out.push(EyeSample { tangent, pupil, spectral: u, diffraction: numbers });
+                }
+            }
+        }
+        out
+    }
+
+    /// With diffraction, the ground truth on the operator's own samples: each pixel the mean of
+    /// the scene along its samples' pupil-diffracted rays (as the converged estimator's reference
+    /// is, sample by sample); `None` without diffraction (the grid's ground truth then sees the
+    /// same rays).
+    pub fn diffracted_target<R: RadianceField + ?Sized>(&self, field: &R) -> Option<Vec<Rgb>> {
+        let optics = self.optics().filter(|o| o.diffraction.is_on())?;
+        let n = self.retina.resolution;
+        let inv = 1.0 / through_optics::per_pixel(optics, &self.eye, &self.retina);
+        let z = self.eye.position.z;
+        let mut out = vec![[0.0; 3]; n * n];
+        out.par_chunks_mut(n).enumerate().for_each(|(row, out)| {
+            for (col, px) in out.iter_mut().enumerate() {
+                let mut sum = [0.0; 3];
+                for s in self.pixel_samples(row, col) {
+                    let sr =
+                        optics.rays_diffracted(s.tangent, s.pupil, s.spectral, [s.diffraction[0], s.diffraction[1]]);
+                    through_optics::each_ray(&sr, |channels, r| {
+                        let w = through_optics::world(&self.eye, r);
+                        let l = field.radiance(&Ray { origin: w.position.extend(z), dir: w.slope.extend(1.0) });
+                        for c in channels {
+                            sum[c] += l[c] * sr.weight;
+                        }
+                    });
+                }
+                *px = sum.map(|v| v * inv);
+            }
+        });
+        Some(out)
+    }
+
     /// Every sample of the retina rows of band `band`, in trace order (per pixel: sub-pixel
-    /// point, then pupil point, then wavelength), into `out` (cleared first).
+    /// point, then pupil point, then wavelength), into `out` (cleared first). Through `optics`
+    /// each sample's LCD pixels are those of the perceived-image simulation: the grid
+    /// simulation's ([`crate::render::simulate_stack`]) without diffraction, the converged
+    /// estimator's (`measure::estimator::through_optics`) for the same samples with it.
     fn band_entries(&self, band: usize, out: &mut Entries, scratch: &mut (Vec<DVec2>, Vec<DVec2>, Vec<u32>)) {
         out.clear();
         let n = self.retina.resolution;
         let rows = band * BAND..((band + 1) * BAND).min(n);
-        if let Some(optics) = &self.eye.optics {
+        if let Some(optics) = self.optics() {
             let inv = 1.0 / through_optics::per_pixel(optics, &self.eye, &self.retina);
+            let thick = self.fast.is_thick();
+            let diffraction = optics.diffraction.is_on();
+            let single = optics.is_single_wavelength();
+            // Each channel finds its own LCD pixel through a real lenslet, and through a
+            // diffracting lenslet when the channels' wavelengths differ.
+            let per_channel = thick || (self.lenslet.is_some() && !single);
+            let fast = &self.fast;
             for row in rows {
                 for col in 0..n {
                     let pixel = (row * n + col) as u32;
-                    for (_, sr) in through_optics::pixel_samples(optics, &self.eye, &self.retina, row, col) {
+                    for s in self.pixel_samples(row, col) {
+                        let sr = if diffraction {
+                            optics.rays_diffracted(s.tangent, s.pupil, s.spectral, [s.diffraction[0], s.diffraction[1]])
+                        } else {
+                            optics.rays(s.tangent, s.pupil, s.spectral)
+                        };
+                        let w = sr.weight * inv;
+                        let draw = self
+                            .lenslet
+                            .as_ref()
+                            .map(|shape| (shape, shape.draw([s.diffraction[2], s.diffraction[3]])));
+                        // Real lenslets: each channel at the sampled wavelength, else its primary's median.
+                        let u_lens = if single { 0.5 } else { s.spectral };
                         through_optics::each_ray(&sr, |channels, r| {
-                            if let Some(i) = self.fast.pixel_index_of(through_optics::world(&self.eye, r)) {
+                            let r = through_optics::world(&self.eye, r);
+                            let index = |ch: usize| match (thick, draw) {
+                                (false, None) => fast.pixel_index_of(r),
+                                (false, Some((shape, draw))) => {
+                                    fast.pixel_index_deviated(r, shape.scaled(draw, optics.wavelength(ch, s.spectral)))
+                                }
+                                (true, None) => fast.pixel_index_in(r, ch, u_lens),
+                                (true, Some((shape, draw))) => {
+                                    let deviation = shape.scaled(draw, optics.wavelength(ch, s.spectral));
+                                    fast.pixel_index_in_deviated(r, ch, u_lens, deviation)
+                                }
+                            };
+                            if per_channel {
+                                for ch in channels {
+                                    if let Some(i) = index(ch) {
+                                        out.pairs.push((i as u32, pixel));
+                                        out.each.push((ch as u8, w));
+                                    }
+                                }
+                            } else if let Some(i) = index(channels.start) {
                                 let channel = if channels.len() == 3 { 3 } else { channels.start as u8 };
                                 out.pairs.push((i as u32, pixel));
-                                out.each.push((channel, sr.weight * inv));
+                                out.each.push((channel, w));
                             }
                         });
                     }
@@ -176,6 +299,19 @@ impl<'a> EyeOperator<'a> {
         }
         out
     }
+}
+
+/// The four diffraction numbers in [0, 1) of sample `k` of retina pixel `pixel`: the pupil's
+/// deviation (0, 1) and the lenslet's (2, 3), as [`EyeSample::diffraction`]. A fixed
+/// pseudo-random pattern (SplitMix64 of the pixel, the sample and the dimension), so the
+/// deviations are part of the operator's fixed sample pattern: the forward operator and its
+/// adjoint see the same rays.
+pub fn diffraction_numbers(pixel: u64, k: u64) -> [f64; 4] {
+    const SEED: u64 = 0x4f50_545f_6469_6666; // "OPT_diff"
+    let base = crate::measure::sampler::mix64(SEED ^ pixel.wrapping_mul(0x1_0000_0001)).wrapping_add(k << 2);
+    std::array::from_fn(|d| {
+        (crate::measure::sampler::mix64(base + d as u64) >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+    })
 }
 
 /// `acc += w * v` in `channel` (3: all).
