@@ -9,8 +9,11 @@
 //!   distinct pixel tuples (every method's RGB at one pixel). Display images of flat-shaded
 //!   scenes, such as the paper's charts on plain backgrounds, hold few distinct tuples (143 for
 //!   the paper's LC, PC and LA 5 x 5 together), so the stack then takes 2 bytes per pixel
-//!   instead of 36, and the simulation's random reads hit a far smaller working set. Images
-//!   with more than 65,536 distinct tuples (textures, smooth shading) stay dense.
+//!   instead of 36, and the simulation's random reads hit a far smaller working set;
+//! - **wide palette**: the same with 32-bit indices, for images with more than 65,536 distinct
+//!   tuples but at most a quarter as many as pixels (real lenslets' images: dispersion and
+//!   aberrations blend the scene's few colours into many), 4 bytes per pixel plus the table.
+//!   Images with more tuples than that (textures, smooth shading) stay dense.
 //!
 //! [`StackBuilder`] takes the display images one at a time, each from one reused image buffer,
 //! and keeps only the palette indices of those pushed so far (switching to the dense layout if
@@ -38,10 +41,42 @@ enum Layout {
     Dense(Vec<f32>),
     /// Pixel `i`'s tuple is `palette[index[i] * 3 * count..][..3 * count]`.
     Palette { index: Vec<u16>, palette: Vec<f32> },
+    /// The same with 32-bit indices.
+    Wide { index: Vec<u32>, palette: Vec<f32> },
 }
 
 /// Most distinct pixel tuples a palette stack holds.
 const MAX_PALETTE: usize = 1 << 16;
+
+/// Most distinct pixel tuples a wide palette holds, as a fraction of the pixels: beyond it the
+/// table and the indices would save too little over the dense layout.
+const WIDE_FRACTION: usize = 4;
+
+/// A palette index: `u16` (the palette layout) or `u32` (the wide one).
+trait PaletteIndex: Copy + Send + Sync + Eq + std::hash::Hash {
+    fn get(self) -> usize;
+    fn make(i: usize) -> Self;
+}
+impl PaletteIndex for u16 {
+    #[inline(always)]
+    fn get(self) -> usize {
+        usize::from(self)
+    }
+    #[inline(always)]
+    fn make(i: usize) -> Self {
+        i as u16
+    }
+}
+impl PaletteIndex for u32 {
+    #[inline(always)]
+    fn get(self) -> usize {
+        self as usize
+    }
+    #[inline(always)]
+    fn make(i: usize) -> Self {
+        i as u32
+    }
+}
 
 impl DisplayStack {
     /// Packs display images that must all have the LCD's resolution (dense layout).
@@ -102,7 +137,12 @@ impl DisplayStack {
 
     /// Whether the stack holds palette indices (see [`StackBuilder`]).
     pub fn is_palette(&self) -> bool {
-        matches!(self.layout, Layout::Palette { .. })
+        matches!(self.layout, Layout::Palette { .. } | Layout::Wide { .. })
+    }
+
+    /// Whether the palette's indices are 32-bit.
+    pub fn is_wide(&self) -> bool {
+        matches!(self.layout, Layout::Wide { .. })
     }
 
     /// Bytes of pixel data held.
@@ -110,6 +150,7 @@ impl DisplayStack {
         match &self.layout {
             Layout::Dense(values) => values.len() * 4,
             Layout::Palette { index, palette } => index.len() * 2 + palette.len() * 4,
+            Layout::Wide { index, palette } => index.len() * 4 + palette.len() * 4,
         }
     }
 
@@ -121,6 +162,10 @@ impl DisplayStack {
             Layout::Dense(values) => &values[index * stride..(index + 1) * stride],
             Layout::Palette { index: ix, palette } => {
                 let j = usize::from(ix[index]);
+                &palette[j * stride..(j + 1) * stride]
+            }
+            Layout::Wide { index: ix, palette } => {
+                let j = ix[index] as usize;
                 &palette[j * stride..(j + 1) * stride]
             }
         }
@@ -140,6 +185,8 @@ pub struct StackBuilder {
 enum Building {
     /// The tuples of the first `pushed` images: `palette[index[i] * 3 * pushed..][..3 * pushed]`.
     Palette { index: Vec<u16>, palette: Vec<f32> },
+    /// The same with 32-bit indices.
+    Wide { index: Vec<u32>, palette: Vec<f32> },
     /// `3 * count` floats per pixel; slots `0..pushed` filled.
     Dense(Vec<f32>),
 }
@@ -168,21 +215,22 @@ impl StackBuilder {
             )));
         }
         let (k, stride) = (self.pushed, 3 * self.count);
+        let wide_max = (self.width * self.height / WIDE_FRACTION).max(MAX_PALETTE);
         match &mut self.state {
-            Building::Palette { index, palette } => match extend_palette(index, palette, k, image) {
+            Building::Palette { index, palette } => match extend_palette(index, palette, k, image, MAX_PALETTE) {
                 Some((new_index, new_palette)) => (*index, *palette) = (new_index, new_palette),
                 None => {
-                    // Too many tuples: the images pushed so far, and this one, dense.
-                    let mut values =
-                        crate::budget::try_vec(self.width * self.height * stride, 0f32, "the display stack")?;
-                    let old = 3 * k;
-                    values.par_chunks_mut(stride).zip(index.par_iter()).enumerate().for_each(|(i, (dst, &j))| {
-                        let j = usize::from(j);
-                        dst[..old].copy_from_slice(&palette[j * old..(j + 1) * old]);
-                        dst[old..old + 3].copy_from_slice(&image.pixel(i));
-                    });
-                    self.state = Building::Dense(values);
+                    // Too many tuples for 16 bits: try 32, else dense.
+                    let wide: Vec<u32> = index.par_iter().map(|&j| u32::from(j)).collect();
+                    self.state = match extend_palette(&wide, palette, k, image, wide_max) {
+                        Some((index, palette)) => Building::Wide { index, palette },
+                        None => Building::Dense(dense(&wide, palette, k, stride, image)?),
+                    };
                 }
+            },
+            Building::Wide { index, palette } => match extend_palette(index, palette, k, image, wide_max) {
+                Some((new_index, new_palette)) => (*index, *palette) = (new_index, new_palette),
+                None => self.state = Building::Dense(dense(index, palette, k, stride, image)?),
             },
             Building::Dense(values) => {
                 values.par_chunks_mut(stride).enumerate().for_each(|(i, dst)| {
@@ -204,10 +252,29 @@ impl StackBuilder {
         }
         let layout = match self.state {
             Building::Palette { index, palette } => Layout::Palette { index, palette },
+            Building::Wide { index, palette } => Layout::Wide { index, palette },
             Building::Dense(values) => Layout::Dense(values),
         };
         Ok(DisplayStack { count: self.count, width: self.width, height: self.height, layout })
     }
+}
+
+/// The dense stack of the `k` images held as `index`/`palette` and image `k` (slot `k`).
+fn dense<I: PaletteIndex>(
+    index: &[I],
+    palette: &[f32],
+    k: usize,
+    stride: usize,
+    image: RgbView<'_>,
+) -> Result<Vec<f32>> {
+    let mut values = crate::budget::try_vec(index.len() * stride, 0f32, "the display stack")?;
+    let old = 3 * k;
+    values.par_chunks_mut(stride).zip(index.par_iter()).enumerate().for_each(|(i, (dst, &j))| {
+        let j = j.get();
+        dst[..old].copy_from_slice(&palette[j * old..(j + 1) * old]);
+        dst[old..old + 3].copy_from_slice(&image.pixel(i));
+    });
+    Ok(values)
 }
 
 /// Pixels per chunk of [`extend_palette`] (a fixed size, so the work does not depend on the
@@ -215,21 +282,27 @@ impl StackBuilder {
 const CHUNK: usize = 1 << 16;
 
 /// A pixel's key while the palette grows: its tuple so far and its RGB in image `k`, as bits.
-type Key = (u16, [u32; 3]);
+type Key<I> = (I, [u32; 3]);
 
 /// The palette of `k + 1`-tuples from that of the first `k` images (`index`, `palette`, tuples of
 /// `3 * k` floats) and image `k`: every pixel's tuple extended by its RGB, numbered in order of
-/// first appearance. `None` when there are more than [`MAX_PALETTE`] tuples. Chunks of pixels
+/// first appearance. `None` when there are more than `max` tuples. Chunks of pixels
 /// number their own keys in parallel; merging them in chunk order gives the numbers one pass
 /// over all pixels would.
-fn extend_palette(index: &[u16], palette: &[f32], k: usize, image: RgbView<'_>) -> Option<(Vec<u16>, Vec<f32>)> {
+fn extend_palette<I: PaletteIndex>(
+    index: &[I],
+    palette: &[f32],
+    k: usize,
+    image: RgbView<'_>,
+    max: usize,
+) -> Option<(Vec<I>, Vec<f32>)> {
     let old = 3 * k;
-    let parts: Vec<(Vec<u16>, Vec<Key>)> = index
+    let parts: Vec<(Vec<u16>, Vec<Key<I>>)> = index
         .par_chunks(CHUNK)
         .enumerate()
         .map(|(c, ids)| local_keys(ids, |i| image.pixel(c * CHUNK + i).map(f32::to_bits)))
         .collect::<Option<_>>()?;
-    let mut table: FxHashMap<Key, u16> = FxHashMap::default();
+    let mut table: FxHashMap<Key<I>, I> = FxHashMap::default();
     let mut next = Vec::new();
     let mut maps = Vec::with_capacity(parts.len());
     for (_, keys) in &parts {
@@ -237,19 +310,19 @@ fn extend_palette(index: &[u16], palette: &[f32], k: usize, image: RgbView<'_>) 
         for key in keys {
             let id = table.len();
             let id = *table.entry(*key).or_insert_with(|| {
-                let j = usize::from(key.0);
+                let j = key.0.get();
                 next.extend_from_slice(&palette[j * old..(j + 1) * old]);
                 next.extend(key.1.map(f32::from_bits));
-                id as u16
+                I::make(id)
             });
-            if table.len() > MAX_PALETTE {
+            if table.len() > max {
                 return None;
             }
             map.push(id);
         }
         maps.push(map);
     }
-    let mut out = vec![0u16; index.len()];
+    let mut out = vec![I::make(0); index.len()];
     out.par_chunks_mut(CHUNK).zip(parts.par_iter().zip(&maps)).for_each(|(dst, ((local, _), map))| {
         for (d, &l) in dst.iter_mut().zip(local) {
             *d = map[usize::from(l)];
@@ -260,11 +333,11 @@ fn extend_palette(index: &[u16], palette: &[f32], k: usize, image: RgbView<'_>) 
 
 /// One chunk of [`extend_palette`]: each pixel's local number and the distinct keys in order of
 /// first appearance (`rgb(i)`: the bits of the chunk's pixel `i`).
-fn local_keys(ids: &[u16], rgb: impl Fn(usize) -> [u32; 3]) -> Option<(Vec<u16>, Vec<Key>)> {
-    let mut table: FxHashMap<Key, u16> = FxHashMap::default();
+fn local_keys<I: PaletteIndex>(ids: &[I], rgb: impl Fn(usize) -> [u32; 3]) -> Option<(Vec<u16>, Vec<Key<I>>)> {
+    let mut table: FxHashMap<Key<I>, u16> = FxHashMap::default();
     let mut keys = Vec::new();
     let mut local = Vec::with_capacity(ids.len());
-    let mut last: Option<(Key, u16)> = None;
+    let mut last: Option<(Key<I>, u16)> = None;
     for (i, &j) in ids.iter().enumerate() {
         let key = (j, rgb(i));
         // Neighbouring pixels often hold the same tuple: compare with the last one first.
