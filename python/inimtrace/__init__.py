@@ -94,6 +94,10 @@ class Assessment:
     stages: the wall time of every stage: records with `stage`, `method`, `eye_case`, `seconds`.
     report: everything `results.json` holds (tool, settings, display, backend, threads, ...).
     out: the folder the files were written to, or None.
+    optimization: when the methods list OPT, its convergence record (`optimization` of
+        `results.json`): `solver`, `initial`, the training `states` (name, weight), each state's
+        training `initial_mse` and `final_mse`, `stop`, and `iterations` (records of `iteration`,
+        `objective`, `projected_gradient`, `step`, `seconds`; iteration 0 is the start); else None.
     """
 
     scores: List[Dict[str, Any]]
@@ -102,6 +106,7 @@ class Assessment:
     stages: List[Dict[str, Any]]
     report: Dict[str, Any] = field(repr=False)
     out: Optional[str] = None
+    optimization: Optional[Dict[str, Any]] = field(default=None, repr=False)
 
     def score(self, method: str, eye_case: str) -> Dict[str, Any]:
         """The score record of one method under one eye case."""
@@ -134,6 +139,7 @@ def assess(
         stages=r["stages"],
         report=r["report"],
         out=r["out"],
+        optimization=r["report"].get("optimization"),
     )
 
 

@@ -190,6 +190,7 @@ class Assessment:
     stages: List[Dict[str, Any]]
     report: Dict[str, Any]
     out: Optional[str] = None
+    optimization: Optional[Dict[str, Any]] = None  # OPT's convergence record (results.json's "optimization")
     def score(self, method: str, eye_case: str) -> Dict[str, Any]: ...
 
 def assess(
