@@ -207,10 +207,10 @@ pub(crate) fn announce(scene: &Scene, backend: BackendChoice, quiet: bool) {
         let picked = inimtrace::render::backend::resolve(scene, backend);
         let how = if backend == BackendChoice::Auto { "picked by auto" } else { "as asked" };
         eprintln!(
-            "backend: {picked} ({how}; scene `{}`: {} object(s), {} triangle(s) when tessellated)",
+            "backend: {picked} ({how}; scene `{}`: {}, {} when tessellated)",
             scene.name,
-            scene.objects.len(),
-            scene.triangle_count()
+            inimtrace::count::count(scene.objects.len(), "object"),
+            inimtrace::count::count(scene.triangle_count(), "triangle")
         );
     }
 }

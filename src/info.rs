@@ -29,6 +29,7 @@
 use glam::{DVec2, IVec2};
 use serde::Serialize;
 
+use crate::count::count;
 use crate::optics::diffraction::{ApertureShape, Diffraction};
 use crate::optics::{Display, Lattice};
 use crate::scene::{Material, Scene, Shape};
@@ -316,8 +317,9 @@ pub fn display_design(d: &Display, pupil_diameter: f64) -> DisplayDesign {
     let eye_box = (count > 0 && box_hi.cmpgt(box_lo).all()).then(|| (box_hi - box_lo, 0.5 * (box_lo + box_hi)));
     if eye_box.is_none() {
         warnings.push(format!(
-            "no eye box: the viewing zones of the {count} lenslets do not overlap at the eye relief ({v1} mm); \
+            "no eye box: the viewing zones of the {} do not overlap at the eye relief ({v1} mm); \
              the elemental-image pitch does not suit the lenslet pitch and distances (ideal ratio (v1 + v2) / v1 = {:.5})",
+            crate::count::count(count, "lenslet"),
             (v1 + v2) / v1
         ));
     }
@@ -426,12 +428,12 @@ pub fn display_design_text(x: &DisplayDesign, summary: &str) -> String {
         x.eye_relief_mm,
         match (x.eye_box_mm, x.eye_box_center_mm) {
             (Some(b), Some(c)) => format!(
-                "{} mm centred at ({:.3}, {:.3}) (one lenslet's viewing zone {} mm; {} lenslets on the LCD)",
+                "{} mm centred at ({:.3}, {:.3}) (one lenslet's viewing zone {} mm; {} on the LCD)",
                 pair(b, 3),
                 c[0],
                 c[1],
                 pair(x.viewing_zone_mm, 3),
-                x.lenslets_on_lcd
+                count(x.lenslets_on_lcd, "lenslet")
             ),
             _ => "none".into(),
         }
@@ -600,13 +602,13 @@ pub fn scene_summary(scene: &Scene) -> SceneSummary {
 /// [`SceneSummary`] as the text `inimtrace info --scene` prints.
 pub fn scene_summary_text(s: &SceneSummary) -> String {
     let v3 = |v: [f64; 3]| format!("({:.3}, {:.3}, {:.3})", v[0], v[1], v[2]);
-    let mut t = format!("scene {}: {} object(s), {} triangle(s)\n", s.name, s.objects.len(), s.triangles);
+    let mut t = format!("scene {}: {}, {}\n", s.name, count(s.objects.len(), "object"), count(s.triangles, "triangle"));
     for o in &s.objects {
         t += &format!(
-            "  {} ({}, {} triangle(s), {}): bounds {} to {} mm, size {}\n",
+            "  {} ({}, {}, {}): bounds {} to {} mm, size {}\n",
             o.name,
             o.shape,
-            o.triangles,
+            count(o.triangles, "triangle"),
             o.material,
             v3(o.bounds_min_mm),
             v3(o.bounds_max_mm),

@@ -81,6 +81,7 @@
 pub mod accel;
 pub mod bench;
 pub mod budget;
+pub mod count;
 pub mod cpu;
 pub mod error;
 pub mod experiment;

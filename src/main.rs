@@ -470,10 +470,12 @@ fn run() -> Result<()> {
         Command::Resolution { study, out, force } => {
             let cmd =
                 inimtrace::resolution::command::ResolutionCommand { study, out, overrides: set.clone(), quiet, force };
-            let run = inimtrace::resolution::command::execute(&cmd)?;
-            for w in &run.warnings {
+            // Likely unit mistakes before the run (which may take minutes), not after it.
+            let study = inimtrace::resolution::command::load_study(&cmd)?;
+            for w in inimtrace::resolution::command::plausibility_warnings(&study) {
                 eprintln!("warning: {w}");
             }
+            let run = inimtrace::resolution::command::execute(&cmd)?;
             if !quiet {
                 eprint!("{}", run.timings_text());
                 eprintln!("wrote {}", run.out.display());
@@ -527,7 +529,7 @@ struct TargetsMissed(usize);
 
 impl std::fmt::Display for TargetsMissed {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "--strict: {} score(s) missed their precision target", self.0)
+        write!(f, "--strict: {} missed their precision target", inimtrace::count::count(self.0, "score"))
     }
 }
 

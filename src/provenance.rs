@@ -209,14 +209,14 @@ pub fn report(dir: &Path) -> crate::error::Result<(String, usize)> {
     let first = &runs[0].1;
     let _ = writeln!(
         text,
-        "{}: scene `{}` ({}), display {}{}; seed {}; {} record(s)",
+        "{}: scene `{}` ({}), display {}{}; seed {}; {}",
         dir.display(),
         first.scene_name,
         first.scene_path,
         first.display_path,
         if first.set.is_empty() { String::new() } else { format!("; --set {}", first.set.join(" ")) },
         first.seed,
-        runs.len()
+        crate::count::count(runs.len(), "record")
     );
     // Each file once, as the first record that read it saw it.
     let mut seen: Vec<(InputFile, String)> = Vec::new();
@@ -245,9 +245,9 @@ pub fn report(dir: &Path) -> crate::error::Result<(String, usize)> {
         let _ = writeln!(text, "{line}");
     }
     let _ = if bad == 0 {
-        writeln!(text, "all {} input file(s) unchanged", seen.len())
+        writeln!(text, "all {} unchanged", crate::count::count(seen.len(), "input file"))
     } else {
-        writeln!(text, "{bad} of {} input file(s) changed or missing since the run", seen.len())
+        writeln!(text, "{bad} of {} changed or missing since the run", crate::count::count(seen.len(), "input file"))
     };
     Ok((text, bad))
 }

@@ -191,7 +191,12 @@ fn every_obj_ply_stl_and_gltf2_file_renders_or_is_refused_in_one_line() {
         gltf1.len(),
         started.elapsed().as_secs_f64()
     );
-    assert!(failures.is_empty(), "{} file(s) misbehaved:\n{}", failures.len(), failures.join("\n"));
+    assert!(
+        failures.is_empty(),
+        "{} misbehaved:\n{}",
+        inimtrace::count::count(failures.len(), "file"),
+        failures.join("\n")
+    );
     // The package holds 95 such files (7 of them glTF 1.0); a corpus found nearly empty would
     // prove nothing.
     assert!(files.len() >= 80, "only {} files found under {}", files.len(), corpus.display());

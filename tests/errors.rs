@@ -146,3 +146,77 @@ fn settings_errors_name_the_field_and_the_expected_form_at_the_keys_line() {
     assert!(e.contains("missing field `eye_to_lenslets`") && e.contains("top-level"), "{e}");
     assert!(!e.contains("line 1, column 1"), "{e}");
 }
+
+/// The cases the display test above leaves: a value written over several lines (the element's
+/// line, and the key it belongs to), a list given as one value, a missing key of an `[[array]]`
+/// table, and a sweep file's axis (its key's line, not the file alone). Never a serde word.
+#[test]
+fn experiment_display_and_sweep_errors_point_at_the_keys_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let serde_words =
+        ["untagged", "enum", "usize", "u32", "f64", "sequence", "map,", "floating point", "line 1, column 1"];
+    let clean = |e: &str| {
+        for w in serde_words {
+            assert!(!e.contains(w), "{e}: says `{w}`");
+        }
+    };
+    // A display whose LCD resolution spans lines 11 to 14, with a fraction at line 12.
+    let display = DISPLAY.replace("resolution = [216, 216]", "resolution = [\n    216.5,\n    216,\n]");
+    write(dir.path(), "multi.toml", &display);
+    let e = inimtrace::io::load_display(dir.path().join("multi.toml").to_str().unwrap(), Path::new(""))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("multi.toml: line 12, column 5: field `lcd.resolution` (its value starts at line 11)"), "{e}");
+    assert!(e.contains("expected a whole number"), "{e}");
+    clean(&e);
+
+    // Experiments: a list given as one string, a wrong type, a missing key of an [[eye_cases]] table.
+    write(dir.path(), "d.toml", DISPLAY);
+    let exp = |name: &str, text: &str| {
+        write(dir.path(), name, text);
+        load_experiment(Some(&dir.path().join(name)), None, &[]).unwrap_err().to_string()
+    };
+    let base = "name = \"e\"\nscene = \"builtin:paper\"\ndisplay = \"d.toml\"\nmethods = [\"LC\"]\n\
+                [eye]\nretina_resolution = 16\n[[eye_cases]]\nname = \"Pin\"\npinhole = true\n";
+    let e = exp("methods.toml", &base.replace("methods = [\"LC\"]", "methods = \"LC\""));
+    assert!(e.contains("line 4, column 11: field `methods`") && e.contains("expected a list"), "{e}");
+    clean(&e);
+    let e = exp("res.toml", &base.replace("retina_resolution = 16", "retina_resolution = \"big\""));
+    assert!(e.contains("line 6, column 21: field `eye.retina_resolution`"), "{e}");
+    assert!(e.contains("expected a whole number"), "{e}");
+    clean(&e);
+    let e = exp("pupil.toml", &base.replace("retina_resolution = 16", "retina_resolution = 16\npupil_diameter = [5]"));
+    assert!(
+        e.contains("line 7, column 18: field `eye.pupil_diameter`: invalid type: a list, expected a number"),
+        "{e}"
+    );
+    clean(&e);
+    let e = exp("noname.toml", &base.replace("name = \"Pin\"\n", ""));
+    assert!(e.contains("missing field `eye_cases.name`") && e.contains("[eye_cases] at line 7"), "{e}");
+    clean(&e);
+
+    // Sweeps: an axis's error at its key's line.
+    let sweep = |name: &str, axis: &str| {
+        let text = format!("name = \"s\"\nexperiment = \"builtin:paper\"\n\n[[axes]]\n{axis}\n");
+        write(dir.path(), name, &text);
+        inimtrace::sweep::SweepSpec::load(&dir.path().join(name)).unwrap_err().to_string()
+    };
+    for (name, axis, says) in [
+        ("string.toml", "\"eye.pupil_diameter\" = \"big\"", "expected a list of values or a range"),
+        (
+            "to.toml",
+            "\"eye.pupil_diameter\" = { from = 1, to = \"x\", step = 1 }",
+            "range `to` must be a finite number",
+        ),
+        ("noto.toml", "\"eye.pupil_diameter\" = { from = 1, step = 1 }", "a range needs `to`"),
+        ("empty.toml", "\"eye.pupil_diameter\" = []", "no values"),
+        ("key.toml", "\"eye..pupil\" = [1, 2]", ""),
+    ] {
+        let e = sweep(name, axis);
+        let field = if name == "key.toml" { "axes[0].\"eye..pupil\"" } else { "axes[0].\"eye.pupil_diameter\"" };
+        assert!(e.contains(&format!("{name}: line 5: field `{field}`: {says}")), "{e}");
+        clean(&e);
+    }
+    let e = sweep("type.toml", "\"eye.pupil_diameter\" = [2.0, 3.0]\n[[axes]]\n\"eye.position\" = 3");
+    assert!(e.contains("type.toml: line 7: field `axes[1].\"eye.position\"`"), "{e}");
+}

@@ -368,7 +368,20 @@ fn malformed_gltf_names_the_file_and_element() {
     let mut doc = base();
     doc["extensionsUsed"] = json!(["KHR_draco_mesh_compression"]);
     doc["extensionsRequired"] = json!(["KHR_draco_mesh_compression"]);
-    cases.push(("required", doc, vec!["KHR_draco_mesh_compression", "not supported"]));
+    cases.push((
+        "required",
+        doc,
+        vec!["required.gltf", "extensionsRequired", "KHR_draco_mesh_compression", "does not support"],
+    ));
+    // One the `gltf` crate can parse (with a feature) but this reader would ignore, beside another.
+    let mut doc = base();
+    doc["extensionsUsed"] = json!(["KHR_texture_transform", "EXT_meshopt_compression"]);
+    doc["extensionsRequired"] = json!(["KHR_texture_transform", "EXT_meshopt_compression"]);
+    cases.push((
+        "required2",
+        doc,
+        vec!["required2.gltf", "extensions `KHR_texture_transform`, `EXT_meshopt_compression`", "does not support"],
+    ));
     let mut doc = base();
     doc["meshes"][0]["primitives"][0]["mode"] = json!(0);
     cases.push(("points", doc, vec!["no triangles"]));
@@ -386,6 +399,15 @@ fn malformed_gltf_names_the_file_and_element() {
     let g = glb(&base(), &buf);
     let e = one_line_error(&write(dir.path(), "cut.glb", &g[..g.len() / 2]));
     assert!(e.contains("glTF"), "{e}");
+    // A binary file that requires an extension: refused alike.
+    let mut doc = base();
+    doc["buffers"][0] = json!({"byteLength": buf.len()});
+    doc["extensionsRequired"] = json!(["KHR_mesh_quantization"]);
+    let e = one_line_error(&write(dir.path(), "required.glb", glb(&doc, &buf)));
+    assert!(
+        e.contains("required.glb") && e.contains("`KHR_mesh_quantization`") && e.contains("does not support"),
+        "{e}"
+    );
     let mut doc = base();
     doc["buffers"][0] = json!({"byteLength": buf.len()});
     let e = one_line_error(&write(dir.path(), "noblob.gltf", serde_json::to_vec(&doc).unwrap()));

@@ -66,7 +66,7 @@ fn corrupt_records_are_reported_by_collect_and_run_again_on_resume() {
     let (stdout, stderr) = text(&o);
     assert!(o.status.success(), "{stderr}");
     assert!(stdout.starts_with("0 of 3 points complete"), "{stdout}");
-    assert!(stdout.contains("3 point record(s) cannot count"), "{stdout}");
+    assert!(stdout.contains("3 point records cannot count"), "{stdout}");
     for why in ["not valid (PSNR NaN dB", "unknown method `XX`", "record format 2"] {
         assert!(stdout.contains(why), "{why}: {stdout}");
     }
@@ -82,7 +82,7 @@ fn corrupt_records_are_reported_by_collect_and_run_again_on_resume() {
     let o = inimtrace(&["sweep", s, "--out", o_s, "--points", "0..3", "--quiet"]);
     let (_, stderr) = text(&o);
     assert!(o.status.success(), "{stderr}");
-    assert!(stderr.contains("3 point(s) asked for, 0 already complete, 3 run"), "{stderr}");
+    assert!(stderr.contains("3 points asked for, 0 already complete, 3 run"), "{stderr}");
     let o = inimtrace(&["--quiet", "sweep", s, "--out", o_s, "--collect"]);
     assert!(text(&o).0.starts_with("3 of 3 points complete") && !text(&o).0.contains("cannot count"), "{}", text(&o).0);
 }
@@ -109,7 +109,7 @@ fn records_are_checked_against_their_points_settings() {
         ("SSIM", Box::new(|v| v["scores"][0]["ssim"] = "1.5".into())),
         ("PSNR", Box::new(|v| v["scores"][0]["psnr_db"] = "-inf".into())),
         ("not this point's", Box::new(|v| v["id"] = "0123456789abcdef".into())),
-        ("score(s) of PC", Box::new(|v| v["scores"].as_array_mut().unwrap().truncate(1))),
+        ("scores of PC", Box::new(|v| v["scores"].as_array_mut().unwrap().truncate(1))),
         ("which the point does not run", Box::new(|v| v["scores"][1]["method"] = "LA".into())),
         ("not valid", Box::new(|v| v["scores"][0]["ssim_ci95"] = "NaN".into())),
         ("time", Box::new(|v| v["seconds"] = (-1.0).into())),

@@ -366,7 +366,7 @@ fn one_large_texture_shared_by_40_materials_is_decoded_once() {
     let o = run_budget(&["info", "--scene", s.to_str().unwrap()]);
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "{:?}: {}", o.status, stderr(&o));
-    assert!(out.contains("40 object(s)") && !out.contains("warning"), "{out}");
+    assert!(out.contains("40 objects") && !out.contains("warning"), "{out}");
 }
 
 #[test]

@@ -110,3 +110,102 @@ fn the_resolution_study_warns_of_its_displays_and_pupils_unit_mistakes() {
         inimtrace(&["--quiet", "resolution", "studies/tiny.toml", "--out", dir.path().join("ok").to_str().unwrap()]);
     assert!(o.status.success() && !stderr(&o).contains("warning"), "{}", stderr(&o));
 }
+
+/// Each example mistake is warned of by every command that reads a display (`assess`,
+/// `resolution`, `sweep`; `info` above), naming the field and the likely unit. `resolution`
+/// warns before its run (here the run is then refused: the folder holds another command's
+/// results), and a sweep warns once, before its points run, however many points share the value.
+#[test]
+fn assess_resolution_and_sweep_warn_of_each_unit_mistake() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = [
+        (
+            "pitch-um.toml",
+            "pitch",
+            "1200",
+            "display.lenslets.pitch=1200",
+            "lenslets.pitch",
+            "micrometres? 1200 µm = 1.2 mm",
+        ),
+        (
+            "f-m.toml",
+            "focal_length",
+            "0.006427",
+            "display.lenslets.focal_length=0.006427",
+            "lenslets.focal_length",
+            "metres? 0.006427 m = 6.427 mm",
+        ),
+        (
+            "lcd-cm.toml",
+            "size",
+            "[2.16, 2.16]",
+            "display.lcd.size=[2.16, 2.16]",
+            "lcd.size",
+            "centimetres? 2.16 cm = 21.6 mm",
+        ),
+    ];
+    let tiny =
+        ["--set", "display.lcd.resolution=[54, 54]", "--set", "eye.retina_resolution=16", "--set", "eye.pupil_grid=2"];
+    let warned = |what: &str, e: &str, field: &str, unit: &str| {
+        let lines: Vec<&str> = e.lines().filter(|l| l.starts_with("warning:") && l.contains(field)).collect();
+        assert_eq!(lines.len(), 1, "{what}: one warning on {field}: {e}");
+        assert!(lines[0].contains(unit), "{what}: {}", lines[0]);
+    };
+    // A folder that holds an assess run, which resolution refuses.
+    let taken = dir.path().join("taken");
+    let o = inimtrace(
+        &[&["--quiet", "assess", "experiments/paper.toml", "--out", taken.to_str().unwrap()][..], &tiny].concat(),
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    for (file, key, value, set, field, unit) in cases {
+        let out = dir.path().join(file.replace(".toml", ""));
+        let args = [
+            &["--quiet", "assess", "experiments/paper.toml", "--set", set, "--out"][..],
+            &[out.to_str().unwrap()],
+            &tiny,
+        ];
+        let o = inimtrace(&args.concat());
+        assert!(o.status.success(), "assess {file}: {}", stderr(&o));
+        warned(&format!("assess {file}"), &stderr(&o), field, unit);
+
+        let p = display_with(dir.path(), file, key, value);
+        let o = inimtrace(&[
+            "--quiet",
+            "resolution",
+            "studies/tiny.toml",
+            "--set",
+            &format!("display=\"{p}\""),
+            "--out",
+            taken.to_str().unwrap(),
+        ]);
+        let e = stderr(&o);
+        assert!(!o.status.success() && e.contains("error:"), "resolution {file}: refused: {e}");
+        warned(&format!("resolution {file}"), &e, field, unit);
+        assert!(e.find("warning:") < e.find("error:"), "resolution {file}: warns before: {e}");
+
+        let sweep = dir.path().join(format!("sweep-{file}"));
+        std::fs::write(
+            &sweep,
+            format!(
+                "name = \"units\"\nexperiment = \"{}\"\n[set]\n\"display.lcd.resolution\" = [54, 54]\n\
+                 \"eye.retina_resolution\" = 16\n\"eye.pupil_grid\" = 2\n\"eye_cases\" = [{{ name = \"Eye\", focus_mm = 1.5 }}]\n\
+                 [[axes]]\n\"eye.pupil_diameter\" = [4.0, 5.0]\n[[axes]]\n\"{}\" = [{}]\n",
+                std::fs::canonicalize("experiments/paper.toml").unwrap().display(),
+                set.split('=').next().unwrap(),
+                set.split_once('=').unwrap().1
+            ),
+        )
+        .unwrap();
+        let o = inimtrace(&[
+            "sweep",
+            sweep.to_str().unwrap(),
+            "--out",
+            dir.path().join(format!("sw-{file}")).to_str().unwrap(),
+        ]);
+        let e = stderr(&o);
+        assert!(o.status.success(), "sweep {file}: {e}");
+        warned(&format!("sweep {file}"), &e, field, unit);
+        warned(&format!("sweep {file}"), &e, "focus_mm", "metres? 1.5 m = 1500 mm");
+        assert!(e.find("warning:") < e.find("asked for"), "sweep {file}: warns before the run: {e}");
+    }
+}

@@ -128,12 +128,12 @@ fn an_assess_run_records_what_it_read_and_info_provenance_says_what_changed() {
     // Nothing changed: every file unchanged.
     let (code, out, e) = inimtrace(d, &["info", "--provenance", "run"]);
     assert_eq!(code, Some(0), "{e}");
-    assert!(out.contains("all 6 input file(s) unchanged"), "{out}");
+    assert!(out.contains("all 6 input files unchanged"), "{out}");
     assert!(out.contains("scene `pyramid-scene` (scene.toml)"), "{out}");
     // From another folder: relative paths resolve against the run's folder.
     let (code, out, e) = inimtrace(&root(), &["info", "--provenance", d.join("run").to_str().unwrap()]);
     assert_eq!(code, Some(0), "{e}");
-    assert!(out.contains("all 6 input file(s) unchanged"), "{out}");
+    assert!(out.contains("all 6 input files unchanged"), "{out}");
 
     // A texture edited and a material library removed: both named.
     let mut tex = inimtrace::raster::RgbImage::filled(4, 4, [0.2, 0.5, 0.8]);
@@ -145,7 +145,7 @@ fn an_assess_run_records_what_it_read_and_info_provenance_says_what_changed() {
     let line = |state: &str, name: &str| out.lines().any(|l| l.trim_start().starts_with(state) && l.contains(name));
     assert!(line("CHANGED", "stone.png") && line("MISSING", "pyramid.mtl"), "{out}");
     assert!(line("unchanged", "pyramid.obj") && line("unchanged", "exp.toml"), "{out}");
-    assert!(out.contains("2 of 6 input file(s) changed or missing since the run"), "{out}");
+    assert!(out.contains("2 of 6 input files changed or missing since the run"), "{out}");
 
     // A folder that is no run.
     let (code, _, e) = inimtrace(d, &["info", "--provenance", "in"]);
@@ -200,7 +200,7 @@ fn every_sweep_point_record_holds_its_provenance() {
     let (code, out, e) = inimtrace(d, &["info", "--provenance", "sw"]);
     assert_eq!(code, Some(0), "{e}");
     assert!(
-        out.contains("2 record(s)") && out.lines().any(|l| l.contains("CHANGED") && l.contains("pyramid.obj")),
+        out.contains("2 records") && out.lines().any(|l| l.contains("CHANGED") && l.contains("pyramid.obj")),
         "{out}"
     );
 }

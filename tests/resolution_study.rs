@@ -46,7 +46,8 @@ fn the_tiny_study_writes_every_file_with_the_issue_columns() {
     let mut lines = mtf.lines();
     assert_eq!(
         lines.next().unwrap(),
-        "source,target_diopters,focus_diopters,frequency_cpd,orientation_deg,measure,contrast,contrast_ci95"
+        "source,target_diopters,focus_diopters,frequency_cpd,orientation_deg,measure,contrast,contrast_ci95,\
+         samples_per_pixel,replicates"
     );
     // 3 sources x 2 depths x 3 focuses (1, 2, 3 D; 2.5 D added) ... 4 focuses x 3 frequencies x 2
     // measures; and the gratings at the default 45, 90 and 135 degrees with the eye on the content.
@@ -55,14 +56,32 @@ fn the_tiny_study_writes_every_file_with_the_issue_columns() {
     assert!(mtf.contains("\nground_truth,1,1,2,45,grating,") && mtf.contains("\nPC,2.5,2.5,4,135,grating,"));
     assert_eq!(
         read(&out, "mtf50.csv").lines().next().unwrap(),
-        "source,target_diopters,focus_diopters,mtf50_cpd,mtf50_ci95"
+        "source,target_diopters,focus_diopters,mtf50_cpd,mtf50_ci95,samples_per_pixel,replicates"
     );
     let acc = read(&out, "accommodation.csv");
     assert_eq!(
         acc.lines().next().unwrap(),
-        "source,target_diopters,rule,frequency_cpd,predicted_focus_diopters,contrast_at_peak"
+        "source,target_diopters,rule,frequency_cpd,predicted_focus_diopters,contrast_at_peak,contrast_at_peak_ci95,\
+         samples_per_pixel,replicates"
     );
     assert_eq!(acc.lines().count(), 1 + 3 * 2 * 2);
+    // Every row carries its precision: a finite positive half-width (the ground truth's too: the
+    // pupil is sampled), and the study's samples per pixel over all its replicates.
+    let tiny = read(Path::new("studies"), "tiny.toml");
+    let setting = |key: &str| -> u64 {
+        let line = tiny.lines().find(|l| l.trim_start().starts_with(key)).unwrap();
+        line.split('=').nth(1).unwrap().split('#').next().unwrap().trim().parse().unwrap()
+    };
+    let (spp, reps) = (setting("samples_per_pixel"), setting("replicates"));
+    let tail = format!(",{},{reps}", spp * reps);
+    for row in acc.lines().skip(1) {
+        assert!(row.ends_with(&tail), "{row}: not {tail}");
+        let ci95: f64 = row.split(',').nth(6).unwrap().parse().unwrap_or(f64::NAN);
+        assert!(ci95.is_finite() && ci95 > 0.0, "{row}");
+    }
+    for row in mtf.lines().skip(1).chain(read(&out, "mtf50.csv").lines().skip(1)) {
+        assert!(row.ends_with(&tail), "{row}: not {tail}");
+    }
     let json: serde_json::Value = serde_json::from_str(&read(&out, "study.json")).unwrap();
     assert_eq!(json["study"]["pupil_diameter_mm"], 5.0);
     assert_eq!(json["study"]["retina_pixel_deg"], 1.0 / 32.0);

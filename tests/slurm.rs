@@ -217,7 +217,7 @@ fn a_cancelled_task_leaves_no_partial_point_and_a_resubmission_runs_only_its_poi
     }
     let (ok, stdout, e) = inimtrace(&collect_args);
     assert!(ok, "{e}");
-    assert!(stdout.contains(&format!("missing {} point(s)", missing.len())), "{stdout}");
+    assert!(stdout.contains(&format!("missing {}", inimtrace::count::count(missing.len(), "point"))), "{stdout}");
 
     // Resubmit: one chunk of exactly the missing points; the others are untouched.
     let mut again = vec!["sweep", &file, "--out", &out_s, "--slurm", "--array-max", "4", "--wait"];

@@ -77,7 +77,7 @@ fn settings_paragraph(rep: &BenchReport, s: &mut String) {
     let _ = writeln!(
         s,
         "Scene `{}`, paper display at {} x {} LCD pixels, retina {} x {}; paper settings: LA {}x{}, {} mm pupil with \
-         an {}x{} grid, {} sample(s) per retina pixel. {} worker thread(s) on {} logical core(s), git revision `{}`, \
+         an {}x{} grid, {} per retina pixel. {} on {}, git revision `{}`, \
          `inimtrace bench` ({} run, {:.0} s of measuring; 1-minute load average {} at the start, {} at the end).\n",
         rep.scene,
         sz.lcd_resolution,
@@ -89,9 +89,9 @@ fn settings_paragraph(rep: &BenchReport, s: &mut String) {
         rep.pupil_diameter_mm,
         rep.pupil_grid,
         rep.pupil_grid,
-        rep.retina_samples,
-        rep.threads,
-        rep.cores,
+        crate::count::count(rep.retina_samples, "sample"),
+        crate::count::count(rep.threads, "worker thread"),
+        crate::count::count(rep.cores, "logical core"),
         rep.git_revision,
         rep.mode,
         rep.total_seconds,

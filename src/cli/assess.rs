@@ -59,11 +59,11 @@ pub(crate) fn assess(
     let missed = report.scores.iter().filter(|s| s.target_met == Some(false)).count();
     if missed > 0 {
         eprintln!(
-            "warning: {} of {} score(s) missed their precision target (PSNR ± {} dB, SSIM ± {}): marked * in {}, \
+            "warning: {} of {} missed their precision target (PSNR ± {} dB, SSIM ± {}): marked * in {}, \
              target_met = false in {}; the budget (measurement.max_seconds, measurement.max_samples_per_pixel) ran out \
              first",
             missed,
-            report.scores.len(),
+            inimtrace::count::count(report.scores.len(), "score"),
             exp.measurement.psnr_ci95_db,
             exp.measurement.ssim_ci95,
             out.join("table.md").display(),

@@ -76,10 +76,10 @@ pub fn table_note(report: &AssessReport, exp: &Experiment) -> String {
     } else {
         let _ = writeln!(
             s,
-            "\nTargets ({targets}): NOT met in {} of {} cells (marked *: {}); the budget (max_samples_per_pixel {}, \
+            "\nTargets ({targets}): NOT met in {} of {} (marked *: {}); the budget (max_samples_per_pixel {}, \
              max_seconds {}) was spent first.",
             missed.len(),
-            report.scores.len(),
+            crate::count::count(report.scores.len(), "cell"),
             missed.join(", "),
             m.max_samples_per_pixel,
             m.max_seconds

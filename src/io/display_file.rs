@@ -320,7 +320,11 @@ pub fn parse_opencv_display(text: &str, path: &Path) -> Result<Display> {
             other => vec![other],
         };
         if list.len() != n {
-            return Err(Error::invalid(&src, key, format!("expected {n} number(s), got {}", list.len())));
+            return Err(Error::invalid(
+                &src,
+                key,
+                format!("expected {}, got {}", crate::count::count(n, "number"), list.len()),
+            ));
         }
         list.iter()
             .map(|x| match x {

@@ -350,8 +350,9 @@ fn check_claimed_size(path: &Path, file_size: u64) -> Result<()> {
             return Err(Error::parse(
                 path,
                 format!(
-                    "header claims a {w} x {h} pixel data window with {channels} channel(s), which would need {} to \
+                    "header claims a {w} x {h} pixel data window with {}, which would need {} to \
                      decode, more than the memory limit of {} (--max-memory)",
+                    crate::count::count(channels, "channel"),
                     crate::budget::Bytes(decoded),
                     crate::budget::Bytes(limit)
                 ),

@@ -266,8 +266,8 @@ pub fn read(path: &Path, part: Option<&str>) -> Result<ExrInput> {
         return Err(Error::parse(
             path,
             format!(
-                "corrupt file: {} block(s) missing, the first at ({}, {}) (a damaged offset table or block header)",
-                missing.len(),
+                "corrupt file: {} missing, the first at ({}, {}) (a damaged offset table or block header)",
+                crate::count::count(missing.len(), "block"),
                 missing[0].0,
                 missing[0].1
             ),

@@ -241,7 +241,11 @@ fn drop_unnamed_usemtl(path: &Path, text: String, warnings: &mut Vec<String>) ->
         "{}: line {}: `usemtl` without a material name; read as no material{}",
         path.display(),
         lines[0],
-        if lines.len() > 1 { format!(" (and {} more such line(s))", lines.len() - 1) } else { String::new() }
+        if lines.len() > 1 {
+            format!(" (and {})", crate::count::count(lines.len() - 1, "more such line"))
+        } else {
+            String::new()
+        }
     ));
     let mut out = String::with_capacity(text.len() + lines.len());
     for l in text.split_inclusive('\n') {

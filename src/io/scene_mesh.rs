@@ -191,9 +191,9 @@ impl ObjectInput<'_> {
         warnings.extend(loaded.warnings.iter().map(|w| format!("{w} (objects[{i}])")));
         if loaded.dropped_degenerate > 0 {
             warnings.push(format!(
-                "{}: dropped {} degenerate (zero-area) triangle(s) of {} (objects[{i}])",
+                "{}: dropped {} of {} (objects[{i}])",
                 src,
-                loaded.dropped_degenerate,
+                crate::count::count(loaded.dropped_degenerate, "degenerate (zero-area) triangle"),
                 path.display()
             ));
         }
@@ -224,7 +224,8 @@ impl ObjectInput<'_> {
         }
         if flattened > 0 {
             warnings.push(format!(
-                "{src}: the transform of objects[{i}] made {flattened} triangle(s) of {} degenerate; dropped",
+                "{src}: the transform of objects[{i}] made {} of {} degenerate; dropped",
+                crate::count::count(flattened, "triangle"),
                 path.display()
             ));
         }

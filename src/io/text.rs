@@ -31,7 +31,14 @@ pub fn toml_error(path: &Path, text: &str, e: &toml::de::Error) -> Error {
             }
             match field_at(text, line_start) {
                 Some(field) => Error::parse(path, format!("line {line}, column {column}: field `{field}`: {message}")),
-                None => Error::parse(path, format!("line {line}, column {column}: {message}")),
+                None => match value_of_key_above(text, line_start) {
+                    // An element of a value written over several lines: the key it belongs to.
+                    Some((field, key_line)) => Error::parse(
+                        path,
+                        format!("line {line}, column {column}: field `{field}` (its value starts at line {key_line}): {message}"),
+                    ),
+                    None => Error::parse(path, format!("line {line}, column {column}: {message}")),
+                },
             }
         }
         None => Error::parse(path, message),
@@ -87,7 +94,46 @@ fn plain_message(message: String) -> String {
             m = format!("{}{words}", &m[..i]);
         }
     }
+    for (serde, words) in [
+        ("invalid type: sequence", "invalid type: a list"),
+        ("invalid type: map", "invalid type: a table"),
+        ("expected a sequence", "expected a list [a, b, ...]"),
+        ("expected a map", "expected a table"),
+    ] {
+        m = m.replace(serde, words);
+    }
     m.replace("floating point `", "number `")
+}
+
+/// The key whose value (a list or inline table written over several lines) holds the line
+/// starting at `line_start`, and that key's line: the nearest key-value line above whose
+/// brackets are still open at `line_start` (strings holding brackets aside, which settings
+/// values do not). `None` when a table header or a closed value comes first.
+fn value_of_key_above(text: &str, line_start: usize) -> Option<(String, usize)> {
+    let mut depth = 0i64;
+    let mut start = line_start;
+    for _ in 0..10_000 {
+        if start == 0 {
+            return None;
+        }
+        let prev = text[..start - 1].rfind('\n').map_or(0, |i| i + 1);
+        let line = text[prev..start - 1].split('#').next().unwrap_or("");
+        depth += line.matches(['[', '{']).count() as i64 - line.matches([']', '}']).count() as i64;
+        let header = line.trim().trim_start_matches('[').trim_end_matches(']');
+        if line.trim().starts_with('[')
+            && header.starts_with(|c: char| c.is_ascii_alphabetic() || c == '_' || c == '"')
+            && !header.contains([',', '='])
+        {
+            return None; // a [table] header
+        }
+        if line.contains('=') {
+            let field = field_at(text, prev)?;
+            let key_line = text[..prev].matches('\n').count() + 1;
+            return (depth > 0).then_some((field, key_line));
+        }
+        start = prev;
+    }
+    None
 }
 
 /// The key path of the key-value line starting at `line_start` (`eye.pupil_diameter`, with the

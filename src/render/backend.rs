@@ -209,7 +209,10 @@ fn with_embree<U: FieldUser>(scene: &Scene, user: U) -> Result<U::Output> {
         crate::error::Error::Embree { code, message } => crate::error::Error::invalid(
             format!("scene `{}`", scene.name),
             "objects",
-            format!("Embree could not build the scene of {} triangle(s): {code}: {message}", scene.triangle_count()),
+            format!(
+                "Embree could not build the scene of {}: {code}: {message}",
+                crate::count::count(scene.triangle_count(), "triangle")
+            ),
         ),
         other => other,
     })?;

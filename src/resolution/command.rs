@@ -37,9 +37,6 @@ pub struct ResolutionRun {
     pub results: StudyResults,
     /// Every stage, the files last.
     pub timings: Vec<Timing>,
-    /// Plausibility warnings of the study's display and pupil (likely unit mistakes,
-    /// `crate::optics::plausibility`).
-    pub warnings: Vec<String>,
 }
 
 impl ResolutionRun {
@@ -62,7 +59,8 @@ pub fn load_study(cmd: &ResolutionCommand) -> Result<Study> {
     }
 }
 
-/// The plausibility warnings of `study`: its display's fields and its pupil.
+/// The plausibility warnings of `study`: its display's fields and its pupil (likely unit
+/// mistakes, `crate::optics::plausibility`). The CLI and Python give them before the run starts.
 pub fn plausibility_warnings(study: &Study) -> Vec<String> {
     use crate::optics::plausibility::{check, display_warnings, PUPIL_DIAMETER};
     let mut w = display_warnings(&study.display, &study.display_source);
@@ -90,7 +88,7 @@ pub fn execute(cmd: &ResolutionCommand) -> Result<ResolutionRun> {
     let t = Instant::now();
     dir.write_bytes("mtf.csv", mtf_csv(&results).as_bytes())?;
     dir.write_bytes("mtf50.csv", mtf50_csv(&results).as_bytes())?;
-    dir.write_bytes("accommodation.csv", accommodation_csv(&accommodation).as_bytes())?;
+    dir.write_bytes("accommodation.csv", accommodation_csv(&accommodation, &study).as_bytes())?;
     dir.write_bytes("display.json", display_json(&limits).as_bytes())?;
     let md = display_md(&limits, &study) + &super::report::orientations_md(&results);
     dir.write_bytes("display.md", md.as_bytes())?;
@@ -101,5 +99,5 @@ pub fn execute(cmd: &ResolutionCommand) -> Result<ResolutionRun> {
     // study.json last: its presence marks a complete run.
     dir.finish("study.json", |files| Ok(study_json(&results, &timings, files).into_bytes()))?;
     results.timings = timings.clone();
-    Ok(ResolutionRun { out, results, timings, warnings: plausibility_warnings(&study) })
+    Ok(ResolutionRun { out, results, timings })
 }

@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 
 use serde::Serialize;
 
-use super::accommodation::{area_rule, frequency_rule};
+use super::accommodation::{area_rule, area_under, frequency_rule};
 use super::chart::Pattern;
 use super::limits::DisplayLimits;
 use super::run::{StudyResults, Timing};
@@ -29,6 +29,24 @@ pub struct AccommodationRow {
     /// The frequency rule: the contrast at the peak; the area rule: the mean contrast over the
     /// band (the area over its width) at the peak.
     pub contrast_at_peak: f64,
+    /// Half-width of the 95% interval of the contrast at the focus sample nearest the peak: the
+    /// frequency rule's measured contrast there; for the area rule, the band's mean of the
+    /// half-widths (an upper bound of the band mean's, whatever their correlation).
+    pub contrast_at_peak_ci95: f64,
+}
+
+/// The measurement's precision beside every table row: samples per retina pixel over all
+/// replicates (as `results.csv` counts them) and the replicates. The study samples a fixed
+/// number (`[measurement]`), so there is no precision target to meet.
+pub fn samples_per_pixel(study: &Study) -> u64 {
+    u64::from(study.measurement.samples_per_pixel) * study.measurement.replicates as u64
+}
+
+/// The index of the focus nearest `at` (the first of equals; `None` for NaN).
+fn nearest(focus: &[f64], at: f64) -> Option<usize> {
+    (!at.is_nan()).then(|| {
+        (0..focus.len()).fold(0, |best, j| if (focus[j] - at).abs() < (focus[best] - at).abs() { j } else { best })
+    })
 }
 
 /// Both rules for every source and content depth.
@@ -41,6 +59,7 @@ pub fn accommodation_rows(r: &StudyResults) -> Vec<AccommodationRow> {
             let at_f: Vec<f64> = r.grating[k][di].iter().map(|q| q[qf].value).collect();
             let nan = super::accommodation::Peak { at: f64::NAN, value: f64::NAN };
             let p = frequency_rule(&s.focus_diopters, &at_f).unwrap_or(nan);
+            let ci95 = nearest(&s.focus_diopters, p.at).map_or(f64::NAN, |j| r.grating[k][di][j][qf].ci95);
             rows.push(AccommodationRow {
                 source: source.clone(),
                 target_diopters: d.diopters,
@@ -48,10 +67,16 @@ pub fn accommodation_rows(r: &StudyResults) -> Vec<AccommodationRow> {
                 frequency_cpd: s.accommodation.frequency_cpd,
                 predicted_focus_diopters: p.at,
                 contrast_at_peak: p.value,
+                contrast_at_peak_ci95: ci95,
             });
             let mtf: Vec<Vec<f64>> = r.grating[k][di].iter().map(|q| q.iter().map(|v| v.value).collect()).collect();
             let p =
                 area_rule(&s.focus_diopters, &s.frequencies_cpd, &mtf, s.accommodation.area_limit_cpd).unwrap_or(nan);
+            let limit = s.accommodation.area_limit_cpd;
+            let ci95 = nearest(&s.focus_diopters, p.at).map_or(f64::NAN, |j| {
+                let h: Vec<f64> = r.grating[k][di][j].iter().map(|v| v.ci95).collect();
+                area_under(&s.frequencies_cpd, &h, limit) / (limit - s.frequencies_cpd[0])
+            });
             rows.push(AccommodationRow {
                 source: source.clone(),
                 target_diopters: d.diopters,
@@ -59,6 +84,7 @@ pub fn accommodation_rows(r: &StudyResults) -> Vec<AccommodationRow> {
                 frequency_cpd: s.accommodation.area_limit_cpd,
                 predicted_focus_diopters: p.at,
                 contrast_at_peak: p.value,
+                contrast_at_peak_ci95: ci95,
             });
         }
     }
@@ -75,14 +101,16 @@ fn num(v: f64) -> String {
 }
 
 /// `mtf.csv`: source, target_diopters, focus_diopters, frequency_cpd, orientation_deg, measure,
-/// contrast, contrast_ci95. For each source, depth and focus: the gratings at 0 degrees (vertical
+/// contrast, contrast_ci95, samples_per_pixel, replicates. For each source, depth and focus: the gratings at 0 degrees (vertical
 /// bars), the edge (its angle from vertical), then the gratings at each other orientation (only
 /// with the eye on the content unless `orientations_through_focus`), at every study frequency.
 pub fn mtf_csv(r: &StudyResults) -> String {
     let s = &r.study;
     let mut out = String::from(
-        "source,target_diopters,focus_diopters,frequency_cpd,orientation_deg,measure,contrast,contrast_ci95\n",
+        "source,target_diopters,focus_diopters,frequency_cpd,orientation_deg,measure,contrast,contrast_ci95,\
+         samples_per_pixel,replicates\n",
     );
+    let (spp, replicates) = (samples_per_pixel(s), s.measurement.replicates);
     let edge_angle = r
         .chart
         .patches
@@ -110,7 +138,7 @@ pub fn mtf_csv(r: &StudyResults) -> String {
                     for (q, v) in s.frequencies_cpd.iter().zip(values) {
                         let _ = writeln!(
                             out,
-                            "{source},{},{},{},{},{measure},{},{}",
+                            "{source},{},{},{},{},{measure},{},{},{spp},{replicates}",
                             num(d.diopters),
                             num(*f),
                             num(*q),
@@ -127,34 +155,50 @@ pub fn mtf_csv(r: &StudyResults) -> String {
 }
 
 /// `mtf50.csv`: source, target_diopters, focus_diopters, mtf50_cpd, mtf50_ci95 (slanted edge;
-/// empty when the MTF stays above 0.5 up to the retina's Nyquist frequency).
+/// empty when the MTF stays above 0.5 up to the retina's Nyquist frequency), samples_per_pixel,
+/// replicates.
 pub fn mtf50_csv(r: &StudyResults) -> String {
     let s = &r.study;
-    let mut out = String::from("source,target_diopters,focus_diopters,mtf50_cpd,mtf50_ci95\n");
+    let mut out =
+        String::from("source,target_diopters,focus_diopters,mtf50_cpd,mtf50_ci95,samples_per_pixel,replicates\n");
+    let (spp, replicates) = (samples_per_pixel(s), s.measurement.replicates);
     for (k, source) in r.sources.iter().enumerate() {
         for (di, d) in s.depths.iter().enumerate() {
             for (fi, f) in s.focus_diopters.iter().enumerate() {
                 let v = r.mtf50[k][di][fi];
-                let _ = writeln!(out, "{source},{},{},{},{}", num(d.diopters), num(*f), num(v.value), num(v.ci95));
+                let _ = writeln!(
+                    out,
+                    "{source},{},{},{},{},{spp},{replicates}",
+                    num(d.diopters),
+                    num(*f),
+                    num(v.value),
+                    num(v.ci95)
+                );
             }
         }
     }
     out
 }
 
-/// `accommodation.csv`.
-pub fn accommodation_csv(rows: &[AccommodationRow]) -> String {
-    let mut out = String::from("source,target_diopters,rule,frequency_cpd,predicted_focus_diopters,contrast_at_peak\n");
+/// `accommodation.csv`: the rows, each with its precision (`contrast_at_peak_ci95`, and the
+/// study's samples per pixel and replicates).
+pub fn accommodation_csv(rows: &[AccommodationRow], study: &Study) -> String {
+    let mut out = String::from(
+        "source,target_diopters,rule,frequency_cpd,predicted_focus_diopters,contrast_at_peak,contrast_at_peak_ci95,\
+         samples_per_pixel,replicates\n",
+    );
+    let (spp, replicates) = (samples_per_pixel(study), study.measurement.replicates);
     for a in rows {
         let _ = writeln!(
             out,
-            "{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{spp},{replicates}",
             a.source,
             num(a.target_diopters),
             a.rule,
             num(a.frequency_cpd),
             num(a.predicted_focus_diopters),
-            num(a.contrast_at_peak)
+            num(a.contrast_at_peak),
+            num(a.contrast_at_peak_ci95)
         );
     }
     out

@@ -10,6 +10,7 @@ use super::slurm::{submit, sweep_command_line, wait_for, SlurmOptions};
 use super::spec::parse_selection;
 use super::store::Store;
 use super::Sweep;
+use crate::count::count;
 use crate::error::{Error, Result};
 use crate::overrides::Override;
 use crate::render::BackendChoice;
@@ -69,14 +70,14 @@ fn missed_note(sweep: &Sweep, c: &Collected) -> Option<String> {
     let shown: Vec<String> = c.missed_points.iter().take(20).map(|i| i.to_string()).collect();
     let more = if c.missed_points.len() > 20 { ", ..." } else { "" };
     Some(format!(
-        "sweep `{}`: {} of {} score row(s) missed their precision target, in {} of {} point(s) (index {}{more}): \
+        "sweep `{}`: {} of {} missed their precision target, in {} of {} (index {}{more}): \
          target_met = false in {} (sweep.json: points_missing_target); the budget (measurement.max_seconds, \
          measurement.max_samples_per_pixel) ran out first",
         sweep.spec.name,
         c.missed_rows,
-        c.rows,
+        count(c.rows, "score row"),
         c.missed_points.len(),
-        c.complete,
+        count(c.complete, "point"),
         shown.join(", "),
         c.csv.display()
     ))
@@ -121,20 +122,21 @@ pub fn execute(cmd: &SweepCommand, log: &mut dyn FnMut(String)) -> Result<SweepO
         let sub = submit(&sweep, &resolved, &costs, &store, &opts)?;
         if opts.dry_run {
             if sub.points.is_empty() {
-                log(format!("{name}: all {n} points are complete; nothing to submit"));
+                log(format!("{name}: {} complete; nothing to submit", all_points(n)));
             }
             return Ok(sub.script.into());
         }
         let Some(job) = &sub.job_id else {
-            log(format!("{name}: all {n} points are complete; nothing to submit"));
+            log(format!("{name}: {} complete; nothing to submit", all_points(n)));
             let c = collect(&sweep, &resolved, &store)?;
             return Ok(collected(&sweep, &c));
         };
         log(format!(
-            "{name}: submitted job {job}: {} array task(s) for the {} missing of {n} points, spread by estimated cost \
+            "{name}: submitted job {job}: {} for the {} missing of {}, spread by estimated cost \
              (script {}, logs in {}/slurm/)",
-            sub.chunks.len(),
+            count(sub.chunks.len(), "array task"),
             sub.points.len(),
+            count(n, "point"),
             sub.script_path.as_ref().map(|p| p.display().to_string()).unwrap_or_default(),
             store.root().display()
         ));
@@ -150,9 +152,10 @@ pub fn execute(cmd: &SweepCommand, log: &mut dyn FnMut(String)) -> Result<SweepO
         let text = summary(&sweep, &c);
         if !c.missing.is_empty() {
             return Err(Error::Incomplete(format!(
-                "{text}job {job} ended with {} of {n} points missing (tasks failed, timed out or were cancelled; \
+                "{text}job {job} ended with {} of {} missing (tasks failed, timed out or were cancelled; \
                  see {}/slurm/): submit only those with `{}`",
                 c.missing.len(),
+                count(n, "point"),
                 store.root().display(),
                 sweep_command_line(&sweep, store.root(), &resubmit_flags(slurm, images, cmd.backend))
             )));
@@ -172,18 +175,15 @@ pub fn execute(cmd: &SweepCommand, log: &mut dyn FnMut(String)) -> Result<SweepO
         files,
         set: sweep.spec.set.iter().chain(&sweep.overrides).map(|o| o.to_arg()).collect(),
     };
-    let run = run_points(&resolved, &values, &selection, &store, opts, &inputs)?;
-    for w in &run.warnings {
-        log(format!("warning: {w}"));
-    }
+    let run = run_points(&resolved, &values, &selection, &store, opts, &inputs, &mut *log)?;
     log(format!(
-        "{name}: {} point(s) asked for, {} already complete, {} run in {:.2} s ({} display image(s) rendered, shared); {} thread(s)",
-        run.selected,
+        "{name}: {} asked for, {} already complete, {} run in {:.2} s ({} rendered, shared); {}",
+        count(run.selected, "point"),
         run.already_complete,
         run.ran,
         run.seconds,
-        run.display_images,
-        rayon::current_num_threads()
+        count(run.display_images, "display image"),
+        count(rayon::current_num_threads(), "thread")
     ));
     if cmd.points.is_some() {
         return Ok(SweepOutput::default());
@@ -192,25 +192,37 @@ pub fn execute(cmd: &SweepCommand, log: &mut dyn FnMut(String)) -> Result<SweepO
     Ok(collected(&sweep, &c))
 }
 
+/// "all 5 points are" (or "its only point is") of a sweep of `n` points.
+fn all_points(n: usize) -> String {
+    if n == 1 {
+        "its only point is".into()
+    } else {
+        format!("all {} are", count(n, "point"))
+    }
+}
+
 /// What a collection wrote and which points are missing.
 fn summary(sweep: &Sweep, c: &Collected) -> String {
     let mut s = format!(
-        "{} of {} points complete: {} ({} rows), {}, {} plot(s)\n",
+        "{} of {} complete: {} ({}), {}, {}\n",
         c.complete,
-        sweep.points.len(),
+        count(sweep.points.len(), "point"),
         c.csv.display(),
-        c.rows,
+        count(c.rows, "row"),
         c.json.display(),
-        c.plots.len()
+        count(c.plots.len(), "plot")
     );
     if !c.invalid.is_empty() {
-        s.push_str(&format!("{} point record(s) cannot count (they run again on the next run):\n", c.invalid.len()));
+        s.push_str(&format!(
+            "{} cannot count (they run again on the next run):\n",
+            count(c.invalid.len(), "point record")
+        ));
         for (i, why) in c.invalid.iter().take(50) {
             s.push_str(&format!("  point {i}: {why}\n"));
         }
     }
     if !c.missing.is_empty() {
-        s.push_str(&format!("missing {} point(s):\n", c.missing.len()));
+        s.push_str(&format!("missing {}:\n", count(c.missing.len(), "point")));
         let values = sweep.value_texts();
         for &i in c.missing.iter().take(50) {
             s.push_str(&format!("  point {i}: {}\n", values[i].join(" ")));

@@ -87,6 +87,7 @@ fn build(
     let mut scenes: Vec<SceneJobs> = Vec::new();
     let mut scene_files: Vec<Vec<crate::provenance::InputFile>> = Vec::new();
     let mut warnings = Vec::new();
+    let mut unit_mistakes: Vec<(String, String, Vec<usize>)> = Vec::new();
     for &i in todo {
         let r = &resolved[i];
         let slot = match scenes.iter().position(|(key, _, _)| *key == r.scene_key) {
@@ -101,6 +102,20 @@ fn build(
             }
         };
         let mut exp = r.experiment_with(scenes[slot].1.clone())?;
+        // Likely unit mistakes, each once however many points share the value: a display file's
+        // as it is, a point's with the points it concerns.
+        let point = format!(" point {i}");
+        for w in exp.plausibility_warnings() {
+            let of_point = exp.source.strip_suffix(&point).zip(w.strip_prefix(&format!("{}: ", exp.source)));
+            match of_point {
+                Some((file, tail)) => match unit_mistakes.iter_mut().find(|(f, t, _)| f == file && t == tail) {
+                    Some((_, _, points)) => points.push(i),
+                    None => unit_mistakes.push((file.to_string(), tail.to_string(), vec![i])),
+                },
+                None if !warnings.contains(&w) => warnings.push(w),
+                None => {}
+            }
+        }
         let values = values.get(i).cloned().unwrap_or_default();
         let mut files = inputs.files.clone();
         files.extend(scene_files[slot].iter().filter(|f| !inputs.files.iter().any(|g| g.path == f.path)).cloned());
@@ -108,6 +123,14 @@ fn build(
         p.set = inputs.set.iter().chain(&values).cloned().collect();
         exp.provenance = p;
         scenes[slot].2.push(Job { index: i, id: r.id.clone(), values, exp });
+    }
+    for (file, tail, mut points) in unit_mistakes {
+        points.sort_unstable();
+        let which = match points.len() {
+            1 => format!("point {}", points[0]),
+            _ => format!("points {}", super::spec::format_selection(&points)),
+        };
+        warnings.push(format!("{file} {which}: {tail}"));
     }
     Ok((scenes, warnings))
 }
@@ -132,7 +155,8 @@ pub fn point_costs(resolved: &[Resolved]) -> Result<Vec<u64>> {
 
 /// Runs the points `selection` (indices into `resolved`; `values` are their swept values as
 /// `KEY=VALUE`) that `store` has no record of. Every point is built and validated before the
-/// first one runs.
+/// first one runs; what building them noticed (a scene's warnings, a likely unit mistake) goes to
+/// `log` before any point runs.
 pub fn run_points(
     resolved: &[Resolved],
     values: &[Vec<String>],
@@ -140,6 +164,7 @@ pub fn run_points(
     store: &Store,
     opts: LocalOptions,
     inputs: &SweepInputs,
+    log: &mut dyn FnMut(String),
 ) -> Result<RunSummary> {
     let start = Instant::now();
     let mut summary = RunSummary { selected: selection.len(), ..Default::default() };
@@ -153,6 +178,9 @@ pub fn run_points(
         .collect();
     summary.already_complete = selection.len() - todo.len();
     let (scenes, warnings) = build(resolved, values, &todo, inputs)?;
+    for w in &warnings {
+        log(format!("warning: {w}"));
+    }
     let rays = scenes
         .iter()
         .flat_map(|(_, _, jobs)| jobs.iter())

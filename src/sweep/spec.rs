@@ -104,6 +104,18 @@ pub struct SweepSpec {
     pub axes: Vec<Axis>,
 }
 
+/// The line of key `key` of axis `i` in a sweep file's text (`None` when it cannot be told).
+fn axis_key_line(text: &str, i: usize, key: &str) -> Option<usize> {
+    #[derive(Deserialize)]
+    struct Spans {
+        #[serde(default)]
+        axes: Vec<std::collections::BTreeMap<String, toml::Spanned<toml::Value>>>,
+    }
+    let spans: Spans = toml::from_str(text).ok()?;
+    let start = spans.axes.get(i)?.get(key)?.span().start.min(text.len());
+    Some(text[..start].matches('\n').count() + 1)
+}
+
 impl SweepSpec {
     /// Reads and checks a sweep file; every error names the file and the field.
     pub fn load(path: &Path) -> Result<Self> {
@@ -136,13 +148,18 @@ impl SweepSpec {
             let mut keys = Vec::new();
             for (key, spec) in table {
                 let field = format!("axes[{i}].\"{key}\"");
-                crate::overrides::parse_key(key).map_err(|e| Error::invalid(&src, &field, e))?;
+                // At the key's line when the file shows it (an axis written as a [[axes]] table).
+                let bad = |e: String| match axis_key_line(&text, i, key) {
+                    Some(line) => Error::parse(path, format!("line {line}: field `{field}`: {e}")),
+                    None => Error::invalid(&src, &field, e),
+                };
+                crate::overrides::parse_key(key).map_err(|e| bad(e.to_string()))?;
                 if !seen.insert(key.clone()) {
-                    return Err(Error::invalid(&src, &field, "the key is swept by another axis too"));
+                    return Err(bad("the key is swept by another axis too".into()));
                 }
-                let values = axis_values(spec).map_err(|e| Error::invalid(&src, &field, e))?;
+                let values = axis_values(spec).map_err(|e| bad(e.to_string()))?;
                 if values.is_empty() {
-                    return Err(Error::invalid(&src, &field, "no values"));
+                    return Err(bad("no values".into()));
                 }
                 keys.push(AxisKey { key: key.clone(), values });
             }

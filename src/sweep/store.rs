@@ -161,7 +161,10 @@ impl PointRecord {
         let have =
             |(m, c): &(String, String)| self.scores.iter().filter(|s| s.method == *m && s.eye_case == *c).count();
         if let Some((m, c)) = expected.iter().find(|e| have(e) != 1) {
-            return Some(format!("{} score(s) of {m} under {c}, not one", have(&(m.clone(), c.clone()))));
+            return Some(format!(
+                "{} of {m} under {c}, not one",
+                crate::count::count(have(&(m.clone(), c.clone())), "score")
+            ));
         }
         if !(self.seconds.is_finite() && self.seconds >= 0.0) {
             return Some(format!("its time {} s is not valid", self.seconds));
