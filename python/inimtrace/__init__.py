@@ -98,6 +98,11 @@ class Assessment:
         `results.json`): `solver`, `initial`, the training `states` (name, weight), each state's
         training `initial_mse` and `final_mse`, `stop`, and `iterations` (records of `iteration`,
         `objective`, `projected_gradient`, `step`, `seconds`; iteration 0 is the start); else None.
+    provenance: where the scores come from, as `results.json`'s `provenance`: `scene_name`,
+        `scene_path` (as the experiment gives it), `experiment_path` and `display_path` (as
+        given), `files` (every file read to set the run up: `path`, `sha256`, `bytes`), `set`
+        (the `set=` overrides as `KEY=VALUE`), `budgets` (estimator, targets, sample and time
+        budgets, memory), `seed` (an int) and `working_directory`.
     """
 
     scores: List[Dict[str, Any]]
@@ -107,6 +112,7 @@ class Assessment:
     report: Dict[str, Any] = field(repr=False)
     out: Optional[str] = None
     optimization: Optional[Dict[str, Any]] = field(default=None, repr=False)
+    provenance: Dict[str, Any] = field(default_factory=dict, repr=False)
 
     def score(self, method: str, eye_case: str) -> Dict[str, Any]:
         """The score record of one method under one eye case."""
@@ -140,6 +146,7 @@ def assess(
         report=r["report"],
         out=r["out"],
         optimization=r["report"].get("optimization"),
+        provenance=r["report"]["provenance"],
     )
 
 

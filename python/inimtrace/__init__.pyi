@@ -191,6 +191,7 @@ class Assessment:
     report: Dict[str, Any]
     out: Optional[str] = None
     optimization: Optional[Dict[str, Any]] = None  # OPT's convergence record (results.json's "optimization")
+    provenance: Dict[str, Any] = ...
     def score(self, method: str, eye_case: str) -> Dict[str, Any]: ...
 
 def assess(

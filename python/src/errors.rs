@@ -2,7 +2,8 @@
 //! field): one class per kind of input that was wrong, each carrying the CLI's message and, as
 //! attributes, the file (`source`) and the field when the error names them. Memory refusals and
 //! allocation failures are `OutOfMemoryError`, a subclass of both `inimtrace.Error` and Python's
-//! `MemoryError`; a cancelled run is Python's `KeyboardInterrupt`.
+//! `MemoryError`; a cancelled run is Python's `KeyboardInterrupt`. Warnings (a value valid but
+//! implausible, most likely a unit mistake) are Python warnings (`UserWarning`), the CLI's text.
 
 use pyo3::exceptions::{PyException, PyKeyboardInterrupt, PyMemoryError, PyValueError};
 use pyo3::prelude::*;
@@ -136,6 +137,17 @@ impl<T> IntoPy<T> for inimtrace::Result<T> {
 }
 
 /// A `ValueError` for an argument outside a closed set or of the wrong shape.
+/// Issues each of `warnings` (the CLI's `warning:` lines, without the prefix) as a Python
+/// `UserWarning` at the caller's line.
+pub fn warn_all(py: Python<'_>, warnings: &[String]) -> PyResult<()> {
+    let category = py.get_type::<pyo3::exceptions::PyUserWarning>();
+    for w in warnings {
+        let text = std::ffi::CString::new(w.replace('\0', " ")).expect("no NUL left");
+        PyErr::warn(py, &category, &text, 1)?;
+    }
+    Ok(())
+}
+
 pub fn value_error(message: impl Into<String>) -> PyErr {
     PyValueError::new_err(message.into())
 }

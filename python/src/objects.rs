@@ -14,7 +14,8 @@ use inimtrace::scene::Scene;
 use inimtrace::settings::{load_display_part, load_experiment, load_scene_part};
 
 use crate::convert::{overrides, to_py};
-use crate::errors::{value_error, IntoPy};
+use crate::errors::{value_error, warn_all, IntoPy};
+use inimtrace::optics::plausibility::{check, display_warnings, focus_warning, PUPIL_DIAMETER};
 
 /// A near-eye integral-imaging display: lenslet array and LCD (lengths in mm).
 #[pyclass(name = "Display", module = "inimtrace", frozen)]
@@ -29,15 +30,19 @@ impl PyDisplay {
     /// (keys `display.…`, as `--set`).
     #[staticmethod]
     #[pyo3(signature = (path, set=None))]
-    fn load(path: PathBuf, set: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
-        Ok(Self { inner: load_display_part(Some(&path), &overrides(set)?).py_err()? })
+    fn load(py: Python<'_>, path: PathBuf, set: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
+        let inner = load_display_part(Some(&path), &overrides(set)?).py_err()?;
+        warn_all(py, &display_warnings(&inner, &path.display().to_string()))?;
+        Ok(Self { inner })
     }
 
     /// The paper's display (the framework's `lensletdisplay.yaml`); `set` overrides its settings.
     #[staticmethod]
     #[pyo3(signature = (set=None))]
-    fn paper(set: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
-        Ok(Self { inner: load_display_part(None, &overrides(set)?).py_err()? })
+    fn paper(py: Python<'_>, set: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
+        let inner = load_display_part(None, &overrides(set)?).py_err()?;
+        warn_all(py, &display_warnings(&inner, "Display.paper()"))?;
+        Ok(Self { inner })
     }
 
     #[getter]
@@ -155,6 +160,7 @@ impl PyEye {
         spectrum=None, stiles_crawford_rho=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
+        py: Python<'_>,
         pinhole: bool,
         focus_mm: Option<f64>,
         focus_diopters: Option<f64>,
@@ -179,6 +185,15 @@ impl PyEye {
             optics: None,
         };
         eye.validate("Eye()").py_err()?;
+        // Likely unit mistakes, as the CLI warns of them.
+        let mut warnings: Vec<String> =
+            check("Eye()", "pupil", pupil, PUPIL_DIAMETER).into_iter().filter(|_| !pinhole).collect();
+        if let Some(z) = focus_mm {
+            warnings.extend(focus_warning("Eye()", "focus_mm", z, false));
+        } else if let Some(d) = focus_diopters {
+            warnings.extend(focus_warning("Eye()", "focus_diopters", 1000.0 / d, true));
+        }
+        warn_all(py, &warnings)?;
         let settings =
             inimtrace::experiment::EyeModelSettings { model, spectrum, stiles_crawford_rho, ..Default::default() };
         let focus = if focus_mm.is_some() { "focus_mm" } else { "focus_diopters" };
@@ -299,7 +314,11 @@ impl PyScene {
         to_py(py, &inimtrace::info::scene_summary(&self.inner))
     }
     fn __repr__(&self) -> String {
-        format!("<inimtrace.Scene `{}`: {} object(s)>", self.inner.name, self.inner.objects.len())
+        format!(
+            "<inimtrace.Scene `{}`: {}>",
+            self.inner.name,
+            inimtrace::count::count(self.inner.objects.len(), "object")
+        )
     }
 }
 
@@ -316,22 +335,24 @@ impl PyExperiment {
     /// `"KEY=VALUE"` strings; `scene` replaces its scene (as `assess --scene`).
     #[staticmethod]
     #[pyo3(signature = (path, set=None, scene=None))]
-    fn load(path: PathBuf, set: Option<&Bound<'_, PyAny>>, scene: Option<PathBuf>) -> PyResult<Self> {
+    fn load(py: Python<'_>, path: PathBuf, set: Option<&Bound<'_, PyAny>>, scene: Option<PathBuf>) -> PyResult<Self> {
         let inner = load_experiment(Some(&path), scene.as_deref(), &overrides(set)?).py_err()?;
+        warn_all(py, &inner.plausibility_warnings())?;
         Ok(Self { inner })
     }
     /// The paper's experiment measured converged (what `inimtrace assess` runs with no file).
     #[staticmethod]
     #[pyo3(signature = (set=None, scene=None))]
-    fn paper(set: Option<&Bound<'_, PyAny>>, scene: Option<PathBuf>) -> PyResult<Self> {
+    fn paper(py: Python<'_>, set: Option<&Bound<'_, PyAny>>, scene: Option<PathBuf>) -> PyResult<Self> {
         let inner = load_experiment(None, scene.as_deref(), &overrides(set)?).py_err()?;
+        warn_all(py, &inner.plausibility_warnings())?;
         Ok(Self { inner })
     }
     /// The paper's experiment as its text states it, with the grid estimator
     /// (`experiments/paper.toml`).
     #[staticmethod]
     #[pyo3(signature = (set=None))]
-    fn paper_grid(set: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
+    fn paper_grid(py: Python<'_>, set: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
         let set = overrides(set)?;
         let s = inimtrace::settings::Settings::builtin(
             &ExperimentSpec::paper(),
@@ -339,7 +360,10 @@ impl PyExperiment {
             Path::new("."),
         )
         .py_err()?;
-        let inner = s.with_overrides(&set).resolve().and_then(|r| r.experiment()).py_err()?;
+        let mut inner = s.with_overrides(&set).resolve().and_then(|r| r.experiment()).py_err()?;
+        // Built in: no file read; its provenance names the scene and display, `set=` and the budgets.
+        inner.provenance = inimtrace::settings::provenance_of(&inner, None, Vec::new(), &set);
+        warn_all(py, &inner.plausibility_warnings())?;
         Ok(Self { inner })
     }
     #[getter]

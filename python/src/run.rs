@@ -544,6 +544,9 @@ pub fn resolution<'py>(
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let cmd = ResolutionCommand { study, out, overrides: overrides(set)?, quiet: true, force: false };
+    // Likely unit mistakes before the run (minutes), as the CLI gives them.
+    let loaded = inimtrace::resolution::command::load_study(&cmd).py_err()?;
+    crate::errors::warn_all(py, &inimtrace::resolution::command::plausibility_warnings(&loaded))?;
     let run = detached(py, threads, progress, || execute(&cmd))?;
     let result = PyDict::new(py);
     result.set_item("out", run.out.display().to_string())?;

@@ -26,6 +26,11 @@ def test_resolution_writes_the_clis_files_and_returns_them_as_records(cli, tmp_p
     assert all(isinstance(row["contrast"], float) for row in r.mtf)
     assert len(r.mtf) == sum(1 for _ in open(tmp_path / "cli" / "mtf.csv")) - 1
     assert {row["source"] for row in r.accommodation} >= {"ground_truth"}
+    # Every row carries its precision: the 95% half-width, samples per pixel and replicates.
+    for table, ci95 in ((r.mtf, "contrast_ci95"), (r.mtf50, "mtf50_ci95"), (r.accommodation, "contrast_at_peak_ci95")):
+        assert all({ci95, "samples_per_pixel", "replicates"} <= set(row) for row in table), table[0]
+        assert all(row["samples_per_pixel"] == 12 and row["replicates"] == 3 for row in table)  # 4 x 3 replicates
+    assert all(row["contrast_at_peak_ci95"] > 0 for row in r.accommodation)
     assert r.display == load_json(tmp_path / "cli" / "display.json")
     assert r.timings and all(t["seconds"] >= 0 for t in r.timings)
 
