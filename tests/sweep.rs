@@ -511,7 +511,7 @@ fn a_sweep_with_a_tiny_time_budget_marks_the_rows_that_missed_and_strict_exits_3
     let before = std::fs::read(out.join("sweep.csv")).unwrap();
     let (code, stderr) = status(&["--strict"]);
     assert_eq!(code, Some(3), "{stderr}");
-    assert!(stderr.contains("2 already complete, 0 run") && stderr.contains("--strict: 2 score(s)"), "{stderr}");
+    assert!(stderr.contains("2 already complete, 0 run") && stderr.contains("--strict: 2 scores"), "{stderr}");
     assert_eq!(std::fs::read(out.join("sweep.csv")).unwrap(), before);
     let (code, stderr) = status(&["--collect", "--strict"]);
     assert_eq!(code, Some(3), "{stderr}");
