@@ -485,7 +485,6 @@ fn check_precision_series(report: &serde_json::Value, stdout: &str, out: &Path, 
     for (e, counts) in &expect {
         let pts: Vec<&serde_json::Value> = points.iter().filter(|q| q["estimator"] == *e).collect();
         assert_eq!(pts.iter().map(|q| u(q, "samples_per_pixel")).collect::<Vec<_>>(), *counts, "{e}");
-        let mut seconds = 0.0;
         for q in &pts {
             let n = u(q, "samples_per_pixel");
             let pt: Vec<&serde_json::Value> =
@@ -506,9 +505,10 @@ fn check_precision_series(report: &serde_json::Value, stdout: &str, out: &Path, 
             }
             // The point's error is the largest over its rows.
             assert!((f(q, "max_psnr_error_db") - worst).abs() < 1e-9, "{e} {n}: {q} vs {worst}");
-            assert!(f(q, "max_ssim_error").is_finite() && f(q, "seconds") > seconds, "{q}");
-            seconds = f(q, "seconds");
-            errors.push((e, n, worst, seconds));
+            // Its time is recorded (not compared between points: wall time under a loaded machine is no
+            // property of the code; costs are measured in SPEED.md).
+            assert!(f(q, "max_ssim_error").is_finite() && f(q, "seconds") > 0.0, "{q}");
+            errors.push((e, n, worst, f(q, "seconds")));
         }
     }
     let err = |e: &str, n: usize| errors.iter().find(|x| x.0 == e && x.1 == n).unwrap().2;

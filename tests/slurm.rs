@@ -145,7 +145,7 @@ fn a_job_array_of_four_tasks_gives_the_local_table() {
         "--wait",
     ]);
     assert!(ok, "{e}");
-    assert!(e.contains("4 array task(s) for the 12 missing of 12 points"), "{e}");
+    assert!(e.contains("4 array tasks for the 12 missing of 12 points"), "{e}");
     assert!(stdout.contains("12 of 12 points complete"), "{stdout}");
     assert_eq!(csv_without_seconds(&remote), csv_without_seconds(&local), "Slurm and local tables differ");
     let logs = std::fs::read_dir(remote.join("slurm"))
