@@ -16,6 +16,8 @@
 #                                scripts/embree4-from-wheel.sh puts the library of PyPI's `embreex`
 #                                wheel into target/embree4/ when the system has no libembree4.so
 #                                (only a warning when PyPI cannot be reached)
+#   openexr                      exrheader, OpenEXR's own tool: tests/exr_output.rs checks that it
+#                                reads every numeric attribute of our EXRs as a number
 #   time util-linux              tests/memory_limits.rs: /usr/bin/time -v measures a run's peak
 #                                memory, prlimit caps its address space
 #   python3-venv                 a venv under target/venv-exr with OpenEXR's Python bindings
@@ -33,7 +35,7 @@ $SUDO apt-get update
 $SUDO apt-get install -y --no-install-recommends \
     build-essential pkg-config libembree-dev libclang-dev glmark2-data assimp-testmodels \
     libfontconfig1-dev libfreetype-dev fontconfig fonts-dejavu-core python3-venv slurm-wlm munge qemu-user \
-    time util-linux
+    time util-linux openexr
 cd "$(dirname "$0")/.."
 if [ ! -x target/venv-exr/bin/python ] || ! target/venv-exr/bin/python -c "import OpenEXR, numpy" 2>/dev/null; then
     mkdir -p target

@@ -445,3 +445,69 @@ fn the_classic_openexr_inputfile_api_reads_every_numeric_attribute_of_an_assess_
     }
     assert!(doubles >= 5 * files.len(), "{doubles} f64 attributes in {} files", files.len());
 }
+
+/// OpenEXR's own `exrheader` (Debian's `openexr`, installed by `scripts/install-deps.sh`) reads
+/// every f64 attribute inimtrace writes as a float, with its exact value as text beside it.
+#[test]
+fn openexrs_exrheader_reads_every_numeric_attribute_as_a_number() {
+    let probe = Command::new("exrheader").arg("--version").output();
+    if probe.is_err() {
+        assert!(
+            std::env::var_os("INIMTRACE_REQUIRE_OPENEXR").is_none(),
+            "INIMTRACE_REQUIRE_OPENEXR is set: no exrheader"
+        );
+        eprintln!("SKIPPED openexrs_exrheader_reads_every_numeric_attribute_as_a_number: exrheader not found");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let out = Command::new(env!("CARGO_BIN_EXE_inimtrace"))
+        .current_dir(root)
+        .args(["--quiet", "assess", "experiments/paper.toml", "--out"])
+        .arg(dir.path().join("run"))
+        .args(["--set", "display.lcd.resolution=[270, 270]", "--set", "eye.retina_resolution=16"])
+        .args(["--set", "eye_cases=[{ name = \"Eye\", focus_diopters = 2.5 }]", "--set", "methods=[\"LA\"]"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir.path().join("run"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "exr"))
+        .collect();
+    files.sort();
+    assert!(!files.is_empty());
+    let mut doubles = 0;
+    for path in &files {
+        let out = Command::new("exrheader").arg(path).output().unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let text = String::from_utf8_lossy(&out.stdout);
+        // `NAME (type TYPE): VALUE`, one line per attribute.
+        let line = |name: &str| -> (String, String) {
+            let head = format!("{name} (type ");
+            let l = text
+                .lines()
+                .map(str::trim_start)
+                .find(|l| l.starts_with(&head))
+                .unwrap_or_else(|| panic!("{}: exrheader does not list {name}:\n{text}", path.display()));
+            let rest = &l[head.len()..];
+            let (ty, value) = rest.split_once("): ").unwrap();
+            (ty.to_string(), value.trim().to_string())
+        };
+        for (name, value) in read_typed_attributes(path).unwrap() {
+            if let AttrValue::F64(x) = value {
+                doubles += 1;
+                let (ty, shown) = line(&name);
+                assert_eq!(ty, "float", "{}: {name}", path.display());
+                let read: f64 = shown.parse().unwrap_or_else(|_| panic!("{name}: {shown}"));
+                // exrheader prints six significant digits (printf's %g): the float within half a unit
+                // of the sixth; the exact f64 is the text beside it.
+                assert!((read - x).abs() <= 5e-6 * x.abs() + 1e-300, "{name}: {read} vs {x}");
+                let (ty, exact) = line(&format!("{name}.exact"));
+                assert_eq!(ty, "string");
+                assert_eq!(exact.trim_matches('"').parse::<f64>().unwrap().to_bits(), x.to_bits(), "{name}.exact");
+            }
+        }
+    }
+    assert!(doubles >= 5 * files.len(), "{doubles} f64 attributes in {} files", files.len());
+}
