@@ -394,23 +394,8 @@ fn the_classic_openexr_inputfile_api_reads_every_numeric_attribute_of_an_assess_
     // A small converged run: display images, ground truth and retinal images with every
     // attribute `assess` writes (seed, replicates, budgets, provenance).
     let dir = tempfile::tempdir().unwrap();
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let out = Command::new(env!("CARGO_BIN_EXE_inimtrace"))
-        .current_dir(root)
-        .args(["--quiet", "assess", "experiments/paper-converged.toml", "--out"])
-        .arg(dir.path().join("run"))
-        .args(["--set", "display.lcd.resolution=[270, 270]", "--set", "eye.retina_resolution=16"])
-        .args(["--set", "eye_cases=[{ name = \"Eye\", focus_diopters = 2.5 }]", "--set", "methods=[\"LC\", \"LA\"]"])
-        .args(["--set", "measurement.max_samples_per_pixel=64"])
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let mut files: Vec<PathBuf> = std::fs::read_dir(dir.path().join("run"))
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "exr"))
-        .collect();
-    files.sort();
+    let files =
+        small_assess_exrs(dir.path(), "paper-converged", &["LC", "LA"], &["measurement.max_samples_per_pixel=64"]);
     assert!(files.len() >= 5, "{files:?}");
     let script = dir.path().join("classic.py");
     std::fs::write(&script, CLASSIC_READER).unwrap();
@@ -460,22 +445,7 @@ fn openexrs_exrheader_reads_every_numeric_attribute_as_a_number() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let out = Command::new(env!("CARGO_BIN_EXE_inimtrace"))
-        .current_dir(root)
-        .args(["--quiet", "assess", "experiments/paper.toml", "--out"])
-        .arg(dir.path().join("run"))
-        .args(["--set", "display.lcd.resolution=[270, 270]", "--set", "eye.retina_resolution=16"])
-        .args(["--set", "eye_cases=[{ name = \"Eye\", focus_diopters = 2.5 }]", "--set", "methods=[\"LA\"]"])
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let mut files: Vec<PathBuf> = std::fs::read_dir(dir.path().join("run"))
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "exr"))
-        .collect();
-    files.sort();
+    let files = small_assess_exrs(dir.path(), "paper", &["LA"], &[]);
     assert!(!files.is_empty());
     let mut doubles = 0;
     for path in &files {
@@ -510,4 +480,28 @@ fn openexrs_exrheader_reads_every_numeric_attribute_as_a_number() {
         }
     }
     assert!(doubles >= 5 * files.len(), "{doubles} f64 attributes in {} files", files.len());
+}
+
+/// The EXR files, sorted, of a small `assess` of `experiments/EXPERIMENT.toml` into `dir/run`:
+/// a 270 x 270 LCD, a 16 x 16 retina, one eye case focused at 2.5 D, `methods`, and `sets`.
+fn small_assess_exrs(dir: &Path, experiment: &str, methods: &[&str], sets: &[&str]) -> Vec<PathBuf> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let methods = format!("methods=[{}]", methods.iter().map(|m| format!("\"{m}\"")).collect::<Vec<_>>().join(", "));
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_inimtrace"));
+    cmd.current_dir(root).args(["--quiet", "assess", &format!("experiments/{experiment}.toml"), "--out"]);
+    cmd.arg(dir.join("run"));
+    cmd.args(["--set", "display.lcd.resolution=[270, 270]", "--set", "eye.retina_resolution=16"]);
+    cmd.args(["--set", "eye_cases=[{ name = \"Eye\", focus_diopters = 2.5 }]", "--set", &methods]);
+    for s in sets {
+        cmd.args(["--set", s]);
+    }
+    let out = cmd.output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir.join("run"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "exr"))
+        .collect();
+    files.sort();
+    files
 }
