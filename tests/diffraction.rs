@@ -140,16 +140,7 @@ fn perceived_lcd_modulation(display: &Display, g: f64, axis: DVec2) -> f64 {
 fn perceived_lcd_modulations(display: &Display, g: f64, axis: DVec2, primaries: bool) -> [f64; 3] {
     let mut eye = Eye::pinhole();
     eye.optics = if primaries {
-        let spec = EyeOpticsSpec {
-            model: EyeModel::ThinLens,
-            criterion: FocusCriterion::Paraxial,
-            reference_nm: NM,
-            primaries: false,
-            wavelength_samples: 3,
-            stiles_crawford: None,
-            diffraction: Diffraction::None,
-        }
-        .with_diffraction(Diffraction::Apertures, false);
+        let spec = thin_lens_spec(Diffraction::Apertures, false);
         EyeOptics::build(&spec, &eye.aperture, eye.retina_distance, &Primaries::default(), 0.0, "t", "f").unwrap()
     } else {
         optics(&eye, Diffraction::Apertures)
@@ -459,16 +450,7 @@ fn the_batched_thin_lens_with_diffraction_equals_the_per_sample_path_bit_for_bit
         for diffraction in [Diffraction::Pupil, Diffraction::Apertures] {
             for primaries in [false, true] {
                 let mut eye = if pinhole { Eye::pinhole() } else { Eye::thin_lens(5.0, Focus::Millimetres(400.0), 8) };
-                let spec = EyeOpticsSpec {
-                    model: EyeModel::ThinLens,
-                    criterion: FocusCriterion::Paraxial,
-                    reference_nm: NM,
-                    primaries: false,
-                    wavelength_samples: 3,
-                    stiles_crawford: None,
-                    diffraction: Diffraction::None,
-                }
-                .with_diffraction(diffraction, !primaries);
+                let spec = thin_lens_spec(diffraction, !primaries);
                 eye.optics =
                     EyeOptics::build(&spec, &eye.aperture, eye.retina_distance, &Primaries::default(), 0.0, "t", "f")
                         .unwrap();
@@ -486,4 +468,20 @@ fn the_batched_thin_lens_with_diffraction_equals_the_per_sample_path_bit_for_bit
             }
         }
     }
+}
+
+/// The thin-lens eye's optics at `NM` (three wavelength samples, no Stiles-Crawford) with
+/// `diffraction`; `spectrum_stated`: the single wavelength stands as stated (else diffraction turns
+/// on each channel's display primary, as an experiment that names no spectrum does).
+fn thin_lens_spec(diffraction: Diffraction, spectrum_stated: bool) -> EyeOpticsSpec {
+    EyeOpticsSpec {
+        model: EyeModel::ThinLens,
+        criterion: FocusCriterion::Paraxial,
+        reference_nm: NM,
+        primaries: false,
+        wavelength_samples: 3,
+        stiles_crawford: None,
+        diffraction: Diffraction::None,
+    }
+    .with_diffraction(diffraction, spectrum_stated)
 }
