@@ -43,15 +43,7 @@ impl RadianceField for Grating {
 }
 
 fn optics(eye: &Eye, diffraction: Diffraction) -> Option<std::sync::Arc<EyeOptics>> {
-    let spec = EyeOpticsSpec {
-        model: EyeModel::ThinLens,
-        criterion: FocusCriterion::Paraxial,
-        reference_nm: NM,
-        primaries: false,
-        wavelength_samples: 3,
-        stiles_crawford: None,
-        diffraction,
-    };
+    let spec = thin_lens_spec(diffraction, true);
     EyeOptics::build(&spec, &eye.aperture, eye.retina_distance, &Primaries::default(), 0.0, "t", "f").unwrap()
 }
 
