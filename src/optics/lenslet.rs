@@ -413,7 +413,22 @@ impl ThickLenslet {
         nm: f64,
         how: Intersection,
     ) -> Option<EyeSide> {
-        let n = self.material.index(nm);
+        self.trace_from_lcd_in(center, front_z, lcd_z, lcd, p, self.material.index(nm), how)
+    }
+
+    /// [`ThickLenslet::trace_from_lcd`] with the material's index `n` given.
+    #[inline]
+    #[allow(clippy::too_many_arguments)]
+    pub fn trace_from_lcd_in(
+        &self,
+        center: DVec2,
+        front_z: f64,
+        lcd_z: f64,
+        lcd: DVec2,
+        p: DVec2,
+        n: f64,
+        how: Intersection,
+    ) -> Option<EyeSide> {
         let back_plane = front_z + self.thickness;
         let d = (p - lcd).extend(back_plane - lcd_z).normalize();
         let back_conic = self.back.conic_at(self.thickness);
@@ -456,7 +471,23 @@ impl ThickLenslet {
         reference_z: f64,
         nm: f64,
     ) -> Option<Ray> {
-        let out = self.trace_from_lcd(center, front_z, lcd_z, lcd, p, nm, Intersection::ClosedForm)?;
+        self.camera_ray_in(center, front_z, lcd_z, lcd, p, reference_z, self.material.index(nm))
+    }
+
+    /// [`ThickLenslet::camera_ray`] with the material's index `n` given.
+    #[inline]
+    #[allow(clippy::too_many_arguments)]
+    pub fn camera_ray_in(
+        &self,
+        center: DVec2,
+        front_z: f64,
+        lcd_z: f64,
+        lcd: DVec2,
+        p: DVec2,
+        reference_z: f64,
+        n: f64,
+    ) -> Option<Ray> {
+        let out = self.trace_from_lcd_in(center, front_z, lcd_z, lcd, p, n, Intersection::ClosedForm)?;
         let w = out.dir.truncate() / out.dir.z;
         let start = out.point.truncate() + w * (reference_z - out.point.z);
         Some(Ray { origin: start.extend(reference_z), dir: w.extend(1.0) })
@@ -477,26 +508,44 @@ impl ThickLenslet {
         guess: DVec2,
         nm: f64,
     ) -> Option<DVec2> {
-        let miss = |p: DVec2| -> Option<DVec2> {
-            let r = self.camera_ray(center, front_z, lcd_z, lcd, p, eye.z, nm)?;
-            Some(r.origin.truncate() - eye.truncate())
+        let n = self.material.index(nm);
+        self.pupil_center_ray(center, front_z, lcd_z, lcd, eye, guess, n).map(|(p, _)| p)
+    }
+
+    /// [`ThickLenslet::pupil_center_point`] with the material's index `n` given, returning with
+    /// the point its camera ray from the plane `z = eye.z` (the solve's last trace, the same ray
+    /// bit for bit as [`ThickLenslet::camera_ray_in`] at that point).
+    #[allow(clippy::too_many_arguments)]
+    pub fn pupil_center_ray(
+        &self,
+        center: DVec2,
+        front_z: f64,
+        lcd_z: f64,
+        lcd: DVec2,
+        eye: DVec3,
+        guess: DVec2,
+        n: f64,
+    ) -> Option<(DVec2, Ray)> {
+        let miss = |p: DVec2| -> Option<(Ray, DVec2)> {
+            let r = self.camera_ray_in(center, front_z, lcd_z, lcd, p, eye.z, n)?;
+            Some((r, r.origin.truncate() - eye.truncate()))
         };
         let mut p = if guess.is_finite() { guess } else { center };
         let h = 1e-7;
         for _ in 0..20 {
-            let f = miss(p)?;
+            let (ray, f) = miss(p)?;
             if f.length() < 1e-9 {
-                return Some(p);
+                return Some((p, ray));
             }
-            let dx = (miss(p + DVec2::new(h, 0.0))? - f) / h;
-            let dy = (miss(p + DVec2::new(0.0, h))? - f) / h;
+            let dx = (miss(p + DVec2::new(h, 0.0))?.1 - f) / h;
+            let dy = (miss(p + DVec2::new(0.0, h))?.1 - f) / h;
             let j = DMat2::from_cols(dx, dy);
             if j.determinant().abs() < 1e-300 {
                 return None;
             }
             p -= j.inverse() * f;
         }
-        miss(p).filter(|f| f.length() < 1e-9).map(|_| p)
+        miss(p).filter(|(_, f)| f.length() < 1e-9).map(|(ray, _)| (p, ray))
     }
 }
 

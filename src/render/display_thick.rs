@@ -66,7 +66,8 @@ struct Setup<'a> {
     method: Method,
     pixel_samples: Vec<DVec2>,
     offsets: Vec<DVec2>,
-    nm: [f64; 3],
+    /// The material's index at each channel's wavelength.
+    index: [f64; 3],
     front_z: f64,
     lcd_z: f64,
     z_ref: f64,
@@ -82,9 +83,9 @@ impl Setup<'_> {
         let c = if local { DVec2::ZERO } else { center };
         for frac in &self.pixel_samples {
             let x3 = self.display.lcd.pixel_point(row, col, *frac) - (center - c);
-            for &nm in &self.nm {
+            for &n in &self.index {
                 for o in &self.offsets {
-                    out.push(self.lens.camera_ray(c, self.front_z, self.lcd_z, x3, c + *o, self.z_ref, nm));
+                    out.push(self.lens.camera_ray_in(c, self.front_z, self.lcd_z, x3, c + *o, self.z_ref, n));
                 }
             }
         }
@@ -118,11 +119,15 @@ impl Setup<'_> {
         let mut rays = Vec::with_capacity(self.pixel_samples.len() * 3);
         for frac in &self.pixel_samples {
             let x3 = self.display.lcd.pixel_point(row, col, *frac);
-            for &nm in &self.nm {
-                let guess = pupil_center_point(self.display, x3, center, self.eye);
-                let p = self.lens.pupil_center_point(center, self.front_z, self.lcd_z, x3, self.eye, guess, nm);
-                let p = p.unwrap_or(center);
-                rays.push(self.lens.camera_ray(center, self.front_z, self.lcd_z, x3, p, self.z_ref, nm));
+            let guess = pupil_center_point(self.display, x3, center, self.eye);
+            for &n in &self.index {
+                let solved = self.lens.pupil_center_ray(center, self.front_z, self.lcd_z, x3, self.eye, guess, n);
+                // The solve's own ray when it starts on the reference plane, else traced anew.
+                rays.push(match solved {
+                    Some((_, ray)) if self.z_ref == self.eye.z => Some(ray),
+                    Some((p, _)) => self.lens.camera_ray_in(center, self.front_z, self.lcd_z, x3, p, self.z_ref, n),
+                    None => self.lens.camera_ray_in(center, self.front_z, self.lcd_z, x3, center, self.z_ref, n),
+                });
             }
         }
         self.sum(&rays, DVec2::ZERO, tracer)
@@ -183,7 +188,7 @@ fn render_into_with<R: RadianceField + ?Sized>(
                 .collect(),
             _ => vec![DVec2::ZERO],
         },
-        nm: display.channel_wavelengths(),
+        index: display.channel_wavelengths().map(|nm| lens.material.index(nm)),
         front_z: display.lenslet_z(),
         lcd_z: display.lcd_z(),
         z_ref: settings.reference_plane_z,
