@@ -414,3 +414,88 @@ fn ray_out_speed() {
         );
     }
 }
+
+/// A scene whose three channels differ along every direction.
+struct Colours;
+
+impl inimtrace::render::RadianceField for Colours {
+    fn radiance(&self, ray: &inimtrace::ray::Ray) -> DVec3 {
+        let t = (400.0 - ray.origin.z) / ray.dir.z;
+        let p = ray.origin + ray.dir * t;
+        DVec3::new(0.5 + 0.5 * (p.x * 3.1).cos(), 0.5 + 0.5 * (p.y * 2.3).sin(), 0.5 + 0.5 * ((p.x + p.y) * 4.7).cos())
+    }
+}
+
+#[test]
+fn the_batched_schematic_eye_equals_the_per_sample_path_bit_for_bit() {
+    use inimtrace::measure::estimator::{DisplaySource, EyeSample, PairedSource};
+    use inimtrace::optics::diffraction::Diffraction;
+    use inimtrace::optics::eye::{EyeOptics, EyeOpticsSpec};
+    use inimtrace::optics::spectrum::Primaries;
+    use inimtrace::optics::{Display, Eye, Focus};
+    use inimtrace::raster::RgbImage;
+    use inimtrace::render::retina::DisplayStack;
+    // The paper's display showing two images of distinct pixels; the Navarro eye (ray map and
+    // exact aim: samples beyond the map's field) with one wavelength or the primaries', with and
+    // without an off-centre Stiles-Crawford peak, pinhole or 5 mm pupil; odd batch lengths.
+    let display = Display::paper();
+    let (cols, rows) = (display.lcd.columns(), display.lcd.rows());
+    let image = |seed: u32| {
+        let mut img = RgbImage::new(cols, rows);
+        for (i, p) in img.pixels.iter_mut().enumerate() {
+            let h = (i as u32).wrapping_mul(2_654_435_761).wrapping_add(seed.wrapping_mul(40_503));
+            *p = [(h % 251) as f32 / 250.0, (h / 251 % 241) as f32 / 240.0, (h / 60_491 % 239) as f32 / 238.0];
+        }
+        img
+    };
+    let (a, b) = (image(1), image(2));
+    let stack = DisplayStack::new(&display, &[&a, &b]).unwrap();
+    let mut rng = Lcg(17);
+    let samples: Vec<EyeSample> = (0..2001)
+        .map(|i| {
+            // Every 50th sample outside the map's field (tangents up to 0.3 sqrt 2).
+            let reach = if i % 50 == 0 { 0.45 } else { 0.3 };
+            let tangent = DVec2::new(reach * (2.0 * rng.next() - 1.0), reach * (2.0 * rng.next() - 1.0));
+            let (r, phi) = (2.5 * rng.next().sqrt(), std::f64::consts::TAU * rng.next());
+            let pupil = DVec2::new(r * phi.cos(), r * phi.sin());
+            EyeSample { tangent, pupil, spectral: rng.next(), diffraction: [0.0; 4] }
+        })
+        .collect();
+    for pinhole in [false, true] {
+        for primaries in [false, true] {
+            for stiles_crawford in [None, Some((0.05, DVec2::new(0.4, -0.2)))] {
+                let mut eye = if pinhole { Eye::pinhole() } else { Eye::thin_lens(5.0, Focus::Millimetres(400.0), 8) };
+                let spec = EyeOpticsSpec {
+                    model: EyeModel::Navarro1985,
+                    criterion: FocusCriterion::Paraxial,
+                    reference_nm: 555.0,
+                    primaries,
+                    wavelength_samples: 3,
+                    stiles_crawford,
+                    diffraction: Diffraction::None,
+                };
+                let optics =
+                    EyeOptics::build(&spec, &eye.aperture, eye.retina_distance, &Primaries::default(), 0.43, "t", "f")
+                        .unwrap()
+                        .unwrap();
+                eye.optics = Some(optics);
+                let source = DisplaySource::new(&display, &eye, &Colours, &stack);
+                let k = source.images();
+                for n in [samples.len(), 7, 1] {
+                    let s = &samples[..n];
+                    let (mut fast, mut slow) = (vec![[f64::NAN; 3]; n * k], vec![[f64::NAN; 3]; n * k]);
+                    source.eval(s, &mut fast);
+                    source.eval_each_ray(s, &mut slow);
+                    let bits = |v: &[[f64; 3]]| v.iter().flatten().map(|x| x.to_bits()).collect::<Vec<_>>();
+                    let case = format!("pinhole {pinhole}, primaries {primaries}, {stiles_crawford:?}, {n} samples");
+                    assert_eq!(bits(&fast), bits(&slow), "{case}");
+                    if n > 100 {
+                        // Not trivially equal: the images and the channels differ.
+                        assert!(fast.iter().any(|v| v[0] != v[1] && v[1] != v[2]), "{case}");
+                        assert!(fast.chunks_exact(k).any(|o| o[1] != o[2]), "{case}");
+                    }
+                }
+            }
+        }
+    }
+}

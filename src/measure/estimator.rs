@@ -178,6 +178,9 @@ impl<F: RadianceField + ?Sized> PairedSource for DisplaySource<'_, F> {
             if self.is_thin_diffracted(optics) {
                 return self.eval_diffracted(optics, samples, out);
             }
+            if self.is_batched_through(optics) {
+                return self.eval_through_batched(optics, samples, out);
+            }
             return self.eval_through(optics, samples, out);
         }
         if self.field.prefers_batches() {
@@ -240,7 +243,8 @@ impl<F: RadianceField + ?Sized> PairedSource for DisplaySource<'_, F> {
 impl<F: RadianceField + ?Sized> DisplaySource<'_, F> {
     /// Slow twin of [`PairedSource::eval`] for an eye with optics beyond the thin lens's fast
     /// paths: every sample through the generic per-sample path (`through_optics.rs`), also
-    /// where a batched one serves the eye (the thin lens with diffraction). Same values.
+    /// where a batched one serves the eye (the thin lens with diffraction, the schematic eye
+    /// without it). Same values.
     pub fn eval_each_ray(&self, samples: &[EyeSample], out: &mut [[f64; 3]]) {
         match &self.eye.optics {
             Some(optics) => self.eval_through(optics, samples, out),

@@ -317,6 +317,20 @@ impl<'a> FastTransfer<'a> {
         );
     }
 
+    /// [`FastTransfer::pixel_index_of`] for the `out.len()` rays `ray(i)` (given as for it;
+    /// `u32::MAX`: off the LCD), in passes over the batch; same arithmetic, so the same pixels.
+    pub fn pixel_indices_of(&self, ray: impl Fn(usize) -> PlaneRay, scratch: &mut Vec<DVec2>, out: &mut [u32]) {
+        self.batch(
+            out.len(),
+            |i| {
+                let r = ray(i);
+                (r.position + r.slope * self.to_lenslets, r.slope)
+            },
+            scratch,
+            out,
+        );
+    }
+
     /// The batched trace: `ray(i)` is ray `i`'s (x2, w1) at the lenslet plane.
     #[inline(always)]
     fn batch(&self, n: usize, ray: impl Fn(usize) -> (DVec2, DVec2), scratch: &mut Vec<DVec2>, out: &mut [u32]) {

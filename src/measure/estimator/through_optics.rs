@@ -18,15 +18,123 @@
 //! [`FastTransfer::pixel_index_of`]: crate::optics::transfer::FastTransfer::pixel_index_of
 //! [`FastTransfer::pixel_index_in`]: crate::optics::transfer::FastTransfer::pixel_index_in
 
+use std::cell::RefCell;
+
+use glam::DVec2;
+
 use super::{DisplaySource, EyeSample};
+use crate::optics::eye::rays::SampleRays;
 use crate::optics::eye::EyeOptics;
 use crate::optics::PlaneRay;
 use crate::ray::Ray;
 use crate::render::{RadianceField, Sample};
 
+/// A worker's buffers for [`DisplaySource::eval_through_batched`], kept between batches (no
+/// allocation per batch once they have grown).
+#[derive(Default)]
+struct Buffers {
+    /// Every sample's rays.
+    rays: Vec<SampleRays>,
+    /// Every carried ray (in sample, then channel order), world x, y at the eye's plane.
+    lines: Vec<PlaneRay>,
+    /// Their scene rays and hits, for fields that take batches.
+    scene: Vec<Ray>,
+    hits: Vec<Sample>,
+    /// The ground truth's radiance along each line.
+    radiance: Vec<[f64; 3]>,
+    /// The LCD pixel each line meets (`u32::MAX`: none).
+    pixels: Vec<u32>,
+    scratch: Vec<DVec2>,
+}
+
+thread_local! {
+    static BUFFERS: RefCell<Buffers> = RefCell::new(Buffers::default());
+}
+
 impl<F: RadianceField + ?Sized> DisplaySource<'_, F> {
-    /// [`super::PairedSource::eval`] through `optics`: `out[i * images + k]` is image `k` of
-    /// sample `i`.
+    /// Whether [`DisplaySource::eval_through_batched`] serves `optics`: no diffraction and thin
+    /// lenslets (one LCD pixel per ray, [`FastTransfer::pixel_index_of`]).
+    ///
+    /// [`FastTransfer::pixel_index_of`]: crate::optics::transfer::FastTransfer::pixel_index_of
+    pub(super) fn is_batched_through(&self, optics: &EyeOptics) -> bool {
+        !optics.diffraction.is_on() && self.lenslet.is_none() && !self.transfer.transfer.is_thick()
+    }
+
+    /// [`DisplaySource::eval_through`] in passes over the batch (every sample's rays, the
+    /// scene along every ray, every ray's LCD pixel, the reads), in a worker's reused buffers,
+    /// for the eyes of [`DisplaySource::is_batched_through`]: the same arithmetic, so the same
+    /// values bit for bit (tested against `eval_through`, its slow twin).
+    pub(super) fn eval_through_batched(&self, optics: &EyeOptics, samples: &[EyeSample], out: &mut [[f64; 3]]) {
+        debug_assert!(self.is_batched_through(optics));
+        BUFFERS.with(|b| match b.try_borrow_mut() {
+            Ok(mut b) => self.eval_batched_in(optics, samples, out, &mut b),
+            // Re-entered on this thread (a field that runs parallel work): fresh buffers.
+            Err(_) => self.eval_batched_in(optics, samples, out, &mut Buffers::default()),
+        });
+    }
+
+    fn eval_batched_in(&self, optics: &EyeOptics, samples: &[EyeSample], out: &mut [[f64; 3]], b: &mut Buffers) {
+        let k = 1 + self.stack.len();
+        let eye_xy = self.eye.position.truncate();
+        let z = self.eye.position.z;
+        b.rays.clear();
+        let mut pairs = samples.chunks_exact(2);
+        for pair in &mut pairs {
+            let (x, y) = (&pair[0], &pair[1]);
+            b.rays.extend(optics.rays2((x.tangent, x.pupil, x.spectral), (y.tangent, y.pupil, y.spectral)));
+        }
+        b.rays.extend(pairs.remainder().iter().map(|s| optics.rays(s.tangent, s.pupil, s.spectral)));
+        b.lines.clear();
+        for sr in &b.rays {
+            let n = if sr.single { 1 } else { 3 };
+            let world = |r: &PlaneRay| PlaneRay { position: r.position + eye_xy, slope: r.slope };
+            b.lines.extend(sr.rays[..n].iter().flatten().map(world));
+        }
+        let n = b.lines.len();
+        let scene_ray = |w: &PlaneRay| Ray { origin: w.position.extend(z), dir: w.slope.extend(1.0) };
+        b.radiance.clear();
+        if self.field.prefers_batches() {
+            b.scene.clear();
+            b.scene.extend(b.lines.iter().map(scene_ray));
+            b.hits.clear();
+            b.hits.resize(n, Sample::default());
+            self.field.sample_many(&b.scene, &mut b.hits);
+            b.radiance.extend(b.hits.iter().map(|h| h.radiance.to_array()));
+        } else {
+            b.radiance.extend(b.lines.iter().map(|w| self.field.radiance(&scene_ray(w)).to_array()));
+        }
+        b.pixels.clear();
+        b.pixels.resize(n, 0);
+        let lines = &b.lines;
+        self.transfer.transfer.pixel_indices_of(|i| lines[i], &mut b.scratch, &mut b.pixels);
+        let mut next = 0;
+        for (o, sr) in out.chunks_exact_mut(k).zip(&b.rays) {
+            o.fill([0.0; 3]);
+            let channels = if sr.single { 0..1 } else { 0..3 };
+            for c in channels {
+                if sr.rays[c].is_none() {
+                    continue;
+                }
+                let (gt, idx) = (b.radiance[next], b.pixels[next]);
+                next += 1;
+                let px = (idx != u32::MAX).then(|| self.stack.pixel(idx as usize));
+                // The channels this ray carries: all three for one ray, else its own.
+                let carried = if sr.single { 0..3 } else { c..c + 1 };
+                for ch in carried {
+                    o[0][ch] = gt[ch] * sr.weight;
+                    if let Some(px) = px {
+                        for (j, v) in o[1..].iter_mut().enumerate() {
+                            v[ch] = f64::from(px[3 * j + ch]) * sr.weight;
+                        }
+                    }
+                }
+            }
+        }
+        debug_assert_eq!(next, n);
+    }
+
+    /// [`super::PairedSource::eval`] through `optics`, sample by sample: `out[i * images + k]`
+    /// is image `k` of sample `i`.
     pub(super) fn eval_through(&self, optics: &EyeOptics, samples: &[EyeSample], out: &mut [[f64; 3]]) {
         let k = 1 + self.stack.len();
         let eye_xy = self.eye.position.truncate();
