@@ -4,6 +4,10 @@
 //! inimtrace (and `--set`, sweeps and studies) sees that explicit display, as it sees the
 //! framework's OpenCV YAML through our format. `info --write-display` writes it out.
 //!
+//! A `[lenslet]` table of kind `"thick"` (as in an explicit file, [`super::display_lenslet`]) makes
+//! the derivation use the real lenslet's focal properties at the d line; `focal_length` may then be
+//! omitted (the surfaces give it) and is checked against them when given.
+//!
 //! ```toml
 //! name = "hexagonal 1 mm"          # optional
 //! [intent]
@@ -26,6 +30,7 @@ use super::display_file::{DisplaySpec, LcdSpec};
 use super::text::toml_error;
 use crate::error::{Error, Result};
 use crate::optics::intent::{Derivation, DisplayIntent, LatticeKind, PitchIntent, DEFAULT_PUPIL_MM};
+use crate::optics::lenslet::{LensletOptics, D_LINE_NM};
 use crate::optics::{Display, Lcd};
 
 /// The `[intent]` table.
@@ -36,8 +41,9 @@ pub struct IntentSpec {
     pub central_depth_plane: f64,
     /// v1, mm.
     pub eye_to_lenslets: f64,
-    /// The lenslets' focal length, mm.
-    pub focal_length: f64,
+    /// The lenslets' focal length, mm (optional with a thick lenslet: its effective focal length).
+    #[serde(default)]
+    pub focal_length: Option<f64>,
     /// `"square"` or `"hexagonal"`.
     pub lattice: LatticeName,
     /// Lenslet neighbour distance, mm.
@@ -75,27 +81,30 @@ pub struct IntentDisplaySpec {
     /// `[primaries]`.
     #[serde(default)]
     pub primaries: Option<crate::optics::spectrum::Primaries>,
-    /// `lenslet`: only the paraxial lenslet (`{ kind = "paraxial" }`, the default) has a derivation.
+    /// `[lenslet]`: the paraxial lenslet (the default) or a thick one, whose focal properties the
+    /// derivation uses.
     #[serde(default)]
-    pub lenslet: Option<toml::Value>,
+    pub lenslet: Option<super::display_lenslet::LensletOpticsSpec>,
 }
 
 impl IntentDisplaySpec {
     /// The intent, checked for what the file alone can tell (which fields were given).
     pub fn to_intent(&self, source: &str) -> Result<DisplayIntent> {
-        if let Some(l) = &self.lenslet {
-            let paraxial = l.get("kind").and_then(|k| k.as_str()) == Some("paraxial")
-                && l.as_table().is_some_and(|t| t.len() == 1);
-            if !paraxial {
+        let lenslet = match &self.lenslet {
+            Some(l) => l.to_optics(source)?,
+            None => LensletOptics::Paraxial,
+        };
+        let focal_length = match (self.intent.focal_length, lenslet.thick()) {
+            (Some(f), _) => f,
+            (None, Some(t)) => t.paraxial(D_LINE_NM).efl,
+            (None, None) => {
                 return Err(Error::invalid(
                     source,
-                    "lenslet",
-                    "a display stated by [intent] derives v2 and the elemental-image pitch for paraxial (thin) \
-                     lenslets only; for a thick lenslet state eye_to_lenslets, lenslets_to_lcd, [lenslets] and \
-                     [elemental_images] explicitly",
-                ));
+                    "intent.focal_length",
+                    "missing: give the lenslets' focal length in mm (or a thick [lenslet], whose surfaces give it)",
+                ))
             }
-        }
+        };
         let i = &self.intent;
         let pitch = match (i.lenslet_pitch, i.views_across_pupil) {
             (Some(p), None) => {
@@ -131,7 +140,8 @@ impl IntentDisplaySpec {
             name: self.name.clone().unwrap_or_else(|| source.to_string()),
             central_depth_plane: i.central_depth_plane,
             eye_to_lenslets: i.eye_to_lenslets,
-            focal_length: i.focal_length,
+            focal_length,
+            lenslet,
             pitch,
             lattice: match i.lattice {
                 LatticeName::Square => LatticeKind::Square,
