@@ -161,9 +161,10 @@ impl<F: RadianceField + ?Sized> PairedSource for DisplaySource<'_, F> {
     }
 
     fn reference_over(&self, tangents: (DVec2, DVec2), pupil_radius: f64) -> Option<[f64; 3]> {
-        if self.eye.optics.is_some() {
-            // The thin lens's ray family: not a schematic eye's.
-            return None;
+        if let Some(optics) = &self.eye.optics {
+            // The thin lens's ray family, widened by the pupil's diffraction core; not a
+            // schematic eye's.
+            return self.reference_over_diffracted(optics, tangents, pupil_radius);
         }
         let pupil = (DVec2::splat(-pupil_radius), DVec2::splat(pupil_radius));
         self.field.uniform(&eye_rays(self.eye, tangents, pupil)).map(|(c, _)| c.to_array())
@@ -176,7 +177,7 @@ impl<F: RadianceField + ?Sized> PairedSource for DisplaySource<'_, F> {
         debug_assert_eq!(out.len(), samples.len() * k);
         if let Some(optics) = &self.eye.optics {
             if self.is_thin_diffracted(optics) {
-                return self.eval_diffracted(optics, samples, out);
+                return self.eval_diffracted(optics, samples, known, out);
             }
             if self.is_batched_through(optics) {
                 return self.eval_through_batched(optics, samples, out);

@@ -10,16 +10,34 @@
 //! when the wavelengths are one or the eye is a pinhole); then all the batch's scene rays at
 //! once, all its LCD pixels (eq. (1) with the lenslet's deviation after the lenslet), and last
 //! the reads of the display images (independent loads the CPU overlaps).
+//!
+//! The ground truth's shortcut (exact, as `PairedSource::reference_over` without diffraction):
+//! a sample's pupil deviation is known from its draw before any ray is traced. When the field
+//! proves the pixel's ray family uniform with the tangents widened by a core radius
+//! ([`DisplaySource::pupil_core`], about 95% of the Airy pattern's mass), every sample whose
+//! deviations (every channel's) lie within that core has exactly that colour as its ground truth,
+//! and its scene rays are not traced; the samples in the Airy tail are traced as before.
+
+use std::f64::consts::PI;
+
+use glam::DVec2;
 
 use super::{DisplaySource, EyeSample};
 use crate::optics::diffraction::{disk_draw, ApertureDraw};
 use crate::optics::eye::EyeOptics;
 use crate::optics::PlaneRay;
 use crate::ray::Ray;
+use crate::render::retina::eye_rays;
 use crate::render::{RadianceField, Sample};
 
-/// Off the LCD (no pixel).
+/// Off the LCD (no pixel); also: no scene ray traced (the ground truth known).
 const MISS: u32 = u32::MAX;
+
+/// The core of the pupil's Airy pattern whose samples may skip their scene rays: the Airy radius
+/// `x = pi D theta / lambda` of the fourth dark ring (95.2% of the mass inside) ...
+const CORE_X: f64 = 13.3237;
+/// ... at this wavelength, nm (the deviations of longer wavelengths beyond the core are traced).
+const CORE_NM: f64 = 700.0;
 
 impl<F: RadianceField + ?Sized> DisplaySource<'_, F> {
     /// Whether [`DisplaySource::eval_diffracted`] serves `optics`: the thin lens without the
@@ -31,9 +49,47 @@ impl<F: RadianceField + ?Sized> DisplaySource<'_, F> {
             && !self.transfer.transfer.is_thick()
     }
 
-    /// [`super::PairedSource::eval`] of the thin-lens eye with diffraction, batched
-    /// ([`DisplaySource::is_thin_diffracted`]): `out[i * images + k]` is image `k` of sample `i`.
-    pub(super) fn eval_diffracted(&self, optics: &EyeOptics, samples: &[EyeSample], out: &mut [[f64; 3]]) {
+    /// The half-width (a tangent) by which a pixel's square is widened for the ground truth's
+    /// shortcut: the pupil's Airy core (`CORE_X` at `CORE_NM`); 0 without pupil diffraction
+    /// (a pinhole's rays do not deviate).
+    fn pupil_core(&self, optics: &EyeOptics) -> f64 {
+        if optics.pupil_diameter > 0.0 {
+            CORE_X * CORE_NM * 1e-6 / (PI * optics.pupil_diameter)
+        } else {
+            0.0
+        }
+    }
+
+    /// [`super::PairedSource::reference_over`] with `optics`: for the thin lens with diffraction
+    /// ([`DisplaySource::is_thin_diffracted`]), the field's uniform colour over the pixel's ray
+    /// family with its tangents widened by [`DisplaySource::pupil_core`], which is the ground
+    /// truth of every sample whose pupil deviations lie in the core; `None` otherwise.
+    pub(super) fn reference_over_diffracted(
+        &self,
+        optics: &EyeOptics,
+        tangents: (DVec2, DVec2),
+        pupil_radius: f64,
+    ) -> Option<[f64; 3]> {
+        if !self.is_thin_diffracted(optics) {
+            return None;
+        }
+        let core = DVec2::splat(self.pupil_core(optics));
+        let widened = (tangents.0.min(tangents.1) - core, tangents.0.max(tangents.1) + core);
+        let pupil = (DVec2::splat(-pupil_radius), DVec2::splat(pupil_radius));
+        self.field.uniform(&eye_rays(self.eye, widened, pupil)).map(|(c, _)| c.to_array())
+    }
+
+    /// [`super::PairedSource::eval_known`] of the thin-lens eye with diffraction, batched
+    /// ([`DisplaySource::is_thin_diffracted`]): `out[i * images + k]` is image `k` of sample `i`;
+    /// `known` (empty, or one entry per sample) holds [`DisplaySource::reference_over_diffracted`]'s
+    /// colour of the sample's pixel, the ground truth of the samples deviated within the core.
+    pub(super) fn eval_diffracted(
+        &self,
+        optics: &EyeOptics,
+        samples: &[EyeSample],
+        known: &[Option<[f64; 3]>],
+        out: &mut [[f64; 3]],
+    ) {
         let k = 1 + self.stack.len();
         let n = samples.len();
         let eye_xy = self.eye.position.truncate();
@@ -49,7 +105,11 @@ impl<F: RadianceField + ?Sized> DisplaySource<'_, F> {
         let mut nm = Vec::with_capacity(n);
         let mut lens_draw = Vec::with_capacity(if self.lenslet.is_some() { n } else { 0 });
         let mut rays = Vec::with_capacity(n * per_ray);
-        for s in samples {
+        let core = self.pupil_core(optics);
+        // Each sample's first ray among the scene rays, or MISS when its ground truth is known.
+        let mut slot = Vec::with_capacity(n);
+        let mut traced = 0u32;
+        for (i, s) in samples.iter().enumerate() {
             let u = s.spectral;
             let l: [f64; 3] =
                 if single { [optics.wavelength(0, u); 3] } else { std::array::from_fn(|c| optics.wavelength(c, u)) };
@@ -59,16 +119,33 @@ impl<F: RadianceField + ?Sized> DisplaySource<'_, F> {
             }
             // `EyeOptics::rays_diffracted`'s tangents: moved by the channel's Airy deviation.
             let draw = if pupil_on { disk_draw([s.diffraction[0], s.diffraction[1]]) } else { ApertureDraw::default() };
+            let mut in_core = matches!(known.get(i), Some(Some(_)));
             for &lc in &l[..per_ray] {
-                let tangent = if pupil_on { s.tangent + draw.disk(optics.pupil_diameter, lc) } else { s.tangent };
+                let tangent = if pupil_on {
+                    let d = draw.disk(optics.pupil_diameter, lc);
+                    in_core &= d.x.abs() <= core && d.y.abs() <= core;
+                    s.tangent + d
+                } else {
+                    s.tangent
+                };
                 let r = optics.rays(tangent, s.pupil, u).rays[0].expect("the thin lens passes every ray");
                 rays.push(PlaneRay { position: r.position + eye_xy, slope: r.slope });
             }
+            if in_core {
+                slot.push(MISS);
+            } else {
+                slot.push(traced);
+                traced += per_ray as u32;
+            }
         }
 
-        // The ground truth: every ray into the scene.
-        let scene: Vec<Ray> =
-            rays.iter().map(|w| Ray { origin: w.position.extend(z), dir: w.slope.extend(1.0) }).collect();
+        // The ground truth: the rays of the samples not known into the scene.
+        let scene: Vec<Ray> = rays
+            .chunks_exact(per_ray)
+            .zip(&slot)
+            .filter(|(_, &j)| j != MISS)
+            .flat_map(|(w, _)| w.iter().map(|w| Ray { origin: w.position.extend(z), dir: w.slope.extend(1.0) }))
+            .collect();
         let mut hits = vec![Sample::default(); scene.len()];
         if self.field.prefers_batches() {
             self.field.sample_many(&scene, &mut hits);
@@ -97,7 +174,10 @@ impl<F: RadianceField + ?Sized> DisplaySource<'_, F> {
         // c at channel c's pixel.
         for (i, o) in out.chunks_exact_mut(k).enumerate() {
             for c in 0..3 {
-                o[0][c] = hits[i * per_ray + c.min(per_ray - 1)].radiance.to_array()[c];
+                o[0][c] = match slot[i] {
+                    MISS => known[i].expect("a known ground truth")[c],
+                    j => hits[j as usize + c.min(per_ray - 1)].radiance.to_array()[c],
+                };
                 let idx = lcd[i * pixels + c.min(pixels - 1)];
                 if idx == MISS {
                     for v in o[1..].iter_mut() {
