@@ -384,9 +384,13 @@ fn the_ray_maps_lockstep_evaluation_equals_one_sample_at_a_time_bit_for_bit() {
     let point = |i: usize| {
         let t = DVec2::new(0.6 * frac(i, 0.754_877_666) - 0.3, 0.6 * frac(i, 0.569_840_290) - 0.3);
         let p = 2.5 * frac(i, 0.618_033_989).sqrt() * DVec2::from_angle(std::f64::consts::TAU * frac(i, 0.414_213_562));
-        let nm = [430.0 + 0.37 * i as f64, 540.0 + 0.11 * i as f64, 610.0 + 0.23 * i as f64];
+        // Inside the fitted range, 420-680 nm (a wavelength beyond is declined, below).
+        let nm = [430.0 + 0.37 * i as f64, 540.0 + 0.11 * i as f64, 610.0 + 0.11 * i as f64];
         (t, p, nm)
     };
+    // The map declines a wavelength outside its range (the caller aims that ray exactly).
+    assert!(map.ray(DVec2::new(0.1, 0.0), DVec2::new(1.0, 0.0), [700.0]).is_none());
+    assert!(map.ray(DVec2::new(0.1, 0.0), DVec2::new(1.0, 0.0), [600.0]).is_some());
     for i in 0..200 {
         let [a, b, mut c] = [point(3 * i), point(3 * i + 1), point(3 * i + 2)];
         if i % 7 == 0 {

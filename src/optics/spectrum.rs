@@ -172,9 +172,17 @@ pub struct SpectrumSampler {
     /// between `guide[j]` and `guide[j + 1]` for `j = floor(u GUIDE)`, so the search is short
     /// and finds the same entry as a search of the whole table.
     guide: Vec<u32>,
+    /// `step[j]`: the `cdf` entry every `u` of the cell `[j / CELLS, (j + 1) / CELLS)` finds
+    /// (the first one not below `u`), when one entry serves the whole cell; `u32::MAX` when the
+    /// cell holds a step's end (then the guide's search finds it). Same entries, so the same
+    /// wavelengths bit for bit, without a search for most `u`.
+    step: Vec<u32>,
     /// The spectrum's power-weighted mean wavelength, nm.
     mean_nm: f64,
 }
+
+/// Cells of the step table (a power of two, so `j / CELLS` and `u CELLS` are exact).
+const CELLS: usize = 4096;
 
 /// Cells of the guide table (a power of two, so `j / GUIDE` and `u GUIDE` are exact).
 const GUIDE: usize = 1024;
@@ -199,17 +207,37 @@ impl SpectrumSampler {
         let total = acc.max(f64::MIN_POSITIVE);
         cdf.iter_mut().for_each(|c| *c /= total);
         let guide = (0..=GUIDE).map(|j| cdf.partition_point(|&c| c < j as f64 / GUIDE as f64) as u32).collect();
-        Self { cdf, guide, mean_nm: moment / total }
+        let last = cdf.len() - 1;
+        let step = (0..CELLS)
+            .map(|j| {
+                // Every u of the cell (u = 1 too, in the last) finds entry i of the cell's lower
+                // end when none lies inside it: cdf[i - 1] < j / CELLS and cdf[i] >= (j + 1) / CELLS.
+                let (lo, hi) = (j as f64 / CELLS as f64, (j + 1) as f64 / CELLS as f64);
+                let i = cdf.partition_point(|&c| c < lo);
+                let whole = i >= 1 && i <= last && cdf[i] >= hi;
+                if whole {
+                    i as u32
+                } else {
+                    u32::MAX
+                }
+            })
+            .collect();
+        Self { cdf, guide, step, mean_nm: moment / total }
     }
 
     /// The wavelength (nm) of the uniform number `u` in [0, 1): the inverse distribution,
     /// linear within each step.
-    #[inline]
+    #[inline(always)]
     pub fn wavelength(&self, u: f64) -> f64 {
         let u = u.clamp(0.0, 1.0);
-        let j = ((u * GUIDE as f64) as usize).min(GUIDE - 1);
-        let (a, b) = (self.guide[j] as usize, self.guide[j + 1] as usize);
-        let i = (a + self.cdf[a..b].partition_point(|&c| c < u)).clamp(1, self.cdf.len() - 1);
+        let cell = self.step[((u * CELLS as f64) as usize).min(CELLS - 1)];
+        let i = if cell != u32::MAX {
+            cell as usize
+        } else {
+            let j = ((u * GUIDE as f64) as usize).min(GUIDE - 1);
+            let (a, b) = (self.guide[j] as usize, self.guide[j + 1] as usize);
+            (a + self.cdf[a..b].partition_point(|&c| c < u)).clamp(1, self.cdf.len() - 1)
+        };
         let (c0, c1) = (self.cdf[i - 1], self.cdf[i]);
         let f = if c1 > c0 { (u - c0) / (c1 - c0) } else { 0.5 };
         VISIBLE_NM.0 + (i as f64 - 1.0 + f) * STEP

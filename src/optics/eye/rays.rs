@@ -33,6 +33,10 @@ use crate::optics::diffraction::{disk_deviation, disk_draw, Diffraction};
 use crate::optics::spectrum::{Primaries, SpectrumSampler};
 use crate::optics::transfer::PlaneRay;
 
+/// The fraction of each primary's power at either end of its spectrum that the fitted ray map
+/// leaves to the exact aim (a narrower wavelength range needs fewer Chebyshev terms).
+const MAP_TAIL: f64 = 1e-5;
+
 /// How the eye's colour channels are traced.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Spectrum {
@@ -282,8 +286,10 @@ impl EyeOptics {
             Lens::Schematic(eye) if max_tangent > 0.0 && max_tangent.is_finite() => {
                 let range = match &spectrum {
                     Spectrum::Single(nm) => (*nm, *nm),
+                    // All but the primaries' outermost 1e-5 of their power: the rare
+                    // wavelength beyond is aimed exactly (`RayMap::ray` declines it).
                     Spectrum::Primaries(s) => s.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), s| {
-                        (lo.min(s.wavelength(0.0)), hi.max(s.wavelength(1.0)))
+                        (lo.min(s.wavelength(MAP_TAIL)), hi.max(s.wavelength(1.0 - MAP_TAIL)))
                     }),
                 };
                 let scale = if pupil_diameter > 0.0 { iris_diameter / pupil_diameter } else { 0.0 };
