@@ -318,3 +318,66 @@ fn built_in_materials_have_their_catalogue_indices() {
     let v2 = l.v2_for_image_distance(365.7, D_LINE_NM);
     assert!((l.lcd_image_distance(v2, D_LINE_NM).unwrap() - 365.7).abs() < 1e-9, "{v2}");
 }
+
+#[test]
+fn one_front_hit_for_three_channels_traces_what_three_traces_do() {
+    // `trace_to_lcd_each` finds the front surface's hit once and refracts it at each channel's
+    // index: bit for bit the three traces `trace_to_lcd_in`, blocked rays included (a strongly
+    // curved lens blocks many), with either intersection; and `pixel_indices_in` the three pixels
+    // of `pixel_index_in`, at the median wavelengths and at a sampled one.
+    let display = Display::paper();
+    let lattice = &display.lenslets;
+    let pmma = ThickLenslet::plano_convex(Material::pmma(), 6.427, 1.0);
+    let mut biconic = ThickLenslet { back: Surface { radius: -12.0, conic: -0.5 }, ..pmma.clone() };
+    biconic.front.conic = 0.8;
+    let strong = lens(1.0, 0.0, 0.6, 1.5);
+    let lcd_z = FRONT_Z + 1.0 + 5.8;
+    let mut rng = Lcg(29);
+    let (mut passed, mut blocked) = (0, 0);
+    for l in [&pmma, &biconic, &strong] {
+        let ns = [450.0, 550.0, 620.0].map(|nm| l.material.index(nm));
+        for i in 0..2_000 {
+            let eye = rng.point(2.5).extend(0.0);
+            let mut target = rng.point(9.0);
+            if i % 3 == 0 {
+                let c = lattice.center(lattice.nearest(target));
+                target = c + DVec2::new(0.6, rng.uniform(-0.6, 0.6)) + rng.point(1e-9);
+            }
+            let slope = (target - eye.truncate()) / FRONT_Z;
+            for how in [Intersection::ClosedForm, Intersection::RootFinding] {
+                if how == Intersection::RootFinding && i % 10 != 0 {
+                    continue;
+                }
+                let each = l.trace_to_lcd_each(lattice, FRONT_Z, lcd_z, eye, slope, ns, how);
+                for (c, &n) in ns.iter().enumerate() {
+                    let one = l.trace_to_lcd_in(lattice, FRONT_Z, lcd_z, eye, slope, n, how);
+                    assert_eq!(format!("{:?}", each[c]), format!("{one:?}"), "{eye} {slope} channel {c}");
+                    if one.is_some() {
+                        passed += 1;
+                    } else {
+                        blocked += 1;
+                    }
+                }
+            }
+        }
+    }
+    assert!(passed > 10_000 && blocked > 200, "{passed} passed, {blocked} blocked");
+
+    let mut d = Display::paper();
+    d.lenslet = inimtrace::optics::lenslet::LensletOptics::Thick(Box::new(pmma.clone()));
+    d.lenslets_to_lcd = 5.6451;
+    let eye = inimtrace::optics::Eye::pinhole();
+    let transfer = inimtrace::optics::transfer::FastTransfer::for_eye(&d, &eye);
+    let mut hits = 0;
+    for _ in 0..3_000 {
+        let ray = PlaneRay { position: rng.point(2.5), slope: rng.point(0.4) };
+        for u in [0.5, rng.uniform(0.0, 1.0)] {
+            let each = transfer.pixel_indices_in(ray, u);
+            for (c, pixel) in each.iter().enumerate() {
+                assert_eq!(*pixel, transfer.pixel_index_in(ray, c, u), "{ray:?} channel {c} at {u}");
+                hits += usize::from(pixel.is_some());
+            }
+        }
+    }
+    assert!(hits > 5_000, "{hits}");
+}
