@@ -381,3 +381,65 @@ fn one_front_hit_for_three_channels_traces_what_three_traces_do() {
     }
     assert!(hits > 5_000, "{hits}");
 }
+
+#[test]
+fn camera_rays_side_by_side_are_the_one_ray_traces_bit_for_bit() {
+    // `camera_rays_into` (lanes of 8, 4, 2, 1) against `camera_ray_in` ray by ray, passing and
+    // blocked alike, for a plano-convex, a biconic and a strongly curved lens; and the lockstep
+    // Newton solves of `pupil_center_rays` against three `pupil_center_ray`, over LCD points
+    // across an elemental image (most solves near its edge fail).
+    let display = Display::paper();
+    let lattice = &display.lenslets;
+    let pmma = ThickLenslet::plano_convex(Material::pmma(), 6.427, 1.0);
+    let mut biconic = ThickLenslet { back: Surface { radius: -12.0, conic: -0.5 }, ..pmma.clone() };
+    biconic.front.conic = 0.8;
+    let strong = lens(1.0, 0.0, 0.6, 1.5);
+    let lcd_z = FRONT_Z + 1.0 + 5.6451;
+    let mut rng = Lcg(31);
+    let (mut passed, mut blocked) = (0, 0);
+    for l in [&pmma, &biconic, &strong] {
+        let ns = [450.0, 550.0, 620.0].map(|nm| l.material.index(nm));
+        for _ in 0..300 {
+            let center = lattice.center(lattice.nearest(rng.point(8.0)));
+            let lcd = center * 1.3 + rng.point(0.9);
+            let k = 1 + (rng.uniform(0.0, 23.0) as usize);
+            let p: Vec<DVec2> = (0..k).map(|_| center + rng.point(1.5)).collect();
+            let n: Vec<f64> = (0..k).map(|i| ns[i % 3]).collect();
+            let z = if k.is_multiple_of(2) { 0.0 } else { -3.0 };
+            let mut out = vec![None; k];
+            l.camera_rays_into(center, FRONT_Z, lcd_z, lcd, &p, &n, z, &mut out);
+            for i in 0..k {
+                let one = l.camera_ray_in(center, FRONT_Z, lcd_z, lcd, p[i], z, n[i]);
+                assert_eq!(format!("{:?}", out[i]), format!("{one:?}"), "lane {i} of {k}");
+                if one.is_some() {
+                    passed += 1;
+                } else {
+                    blocked += 1;
+                }
+            }
+        }
+    }
+    assert!(passed > 3_000 && blocked > 300, "{passed} passed, {blocked} blocked");
+
+    let (mut solved, mut failed) = (0, 0);
+    for l in [&pmma, &biconic] {
+        let ns = [610.0, 535.0, 450.0].map(|nm| l.material.index(nm));
+        for i in 0..600 {
+            let center = lattice.center(lattice.nearest(rng.point(3.0)));
+            let lcd = center * (1.58 / 1.2) + rng.point(0.79);
+            let eye = DVec3::ZERO;
+            let guess = if i == 0 { DVec2::NAN } else { center + (lcd - center * (1.58 / 1.2)) * 3.0 };
+            let each = l.pupil_center_rays(center, FRONT_Z, lcd_z, lcd, eye, guess, ns);
+            for c in 0..3 {
+                let one = l.pupil_center_ray(center, FRONT_Z, lcd_z, lcd, eye, guess, ns[c]);
+                assert_eq!(format!("{:?}", each[c]), format!("{one:?}"), "{lcd} channel {c}");
+                if one.is_some() {
+                    solved += 1;
+                } else {
+                    failed += 1;
+                }
+            }
+        }
+    }
+    assert!(solved > 200 && failed > 200, "{solved} solved, {failed} failed");
+}
