@@ -115,3 +115,19 @@ fn more_tuples_than_16_bits_take_32_bit_indices_with_the_same_values() {
     let many = image(n, |r, c| [((r * n + c) % 100_000) as f32, 0.5, 0.25]);
     assert!(!build(&[&b, &many]).is_palette());
 }
+
+#[test]
+fn pupil_centers_lockstep_solves_render_the_one_ray_solves_bit_for_bit() {
+    // PupilCenter shares no trace between pixels: its fast path differs from the slow twin only
+    // by tracing a pixel's rays side by side and its channels' solves in lockstep, which changes
+    // no bit.
+    let d = pmma_display(360);
+    let lens = d.thick_lenslet().unwrap();
+    for spp in [1, 2] {
+        let settings = DisplayRenderSettings { samples_per_pixel: spp, ..Default::default() };
+        let fast = render_with(&d, lens, Method::PupilCenter, &settings, &Smooth, Sharing::Shared).unwrap();
+        let slow = render_with(&d, lens, Method::PupilCenter, &settings, &Smooth, Sharing::PerPixel).unwrap();
+        let same = fast.pixels.iter().zip(&slow.pixels).all(|(a, b)| (0..3).all(|c| a[c].to_bits() == b[c].to_bits()));
+        assert!(same, "{spp} samples per pixel");
+    }
+}

@@ -318,3 +318,128 @@ fn built_in_materials_have_their_catalogue_indices() {
     let v2 = l.v2_for_image_distance(365.7, D_LINE_NM);
     assert!((l.lcd_image_distance(v2, D_LINE_NM).unwrap() - 365.7).abs() < 1e-9, "{v2}");
 }
+
+#[test]
+fn one_front_hit_for_three_channels_traces_what_three_traces_do() {
+    // `trace_to_lcd_each` finds the front surface's hit once and refracts it at each channel's
+    // index: bit for bit the three traces `trace_to_lcd_in`, blocked rays included (a strongly
+    // curved lens blocks many), with either intersection; and `pixel_indices_in` the three pixels
+    // of `pixel_index_in`, at the median wavelengths and at a sampled one.
+    let display = Display::paper();
+    let lattice = &display.lenslets;
+    let pmma = ThickLenslet::plano_convex(Material::pmma(), 6.427, 1.0);
+    let mut biconic = ThickLenslet { back: Surface { radius: -12.0, conic: -0.5 }, ..pmma.clone() };
+    biconic.front.conic = 0.8;
+    let strong = lens(1.0, 0.0, 0.6, 1.5);
+    let lcd_z = FRONT_Z + 1.0 + 5.8;
+    let mut rng = Lcg(29);
+    let (mut passed, mut blocked) = (0, 0);
+    for l in [&pmma, &biconic, &strong] {
+        let ns = [450.0, 550.0, 620.0].map(|nm| l.material.index(nm));
+        for i in 0..2_000 {
+            let eye = rng.point(2.5).extend(0.0);
+            let mut target = rng.point(9.0);
+            if i % 3 == 0 {
+                let c = lattice.center(lattice.nearest(target));
+                target = c + DVec2::new(0.6, rng.uniform(-0.6, 0.6)) + rng.point(1e-9);
+            }
+            let slope = (target - eye.truncate()) / FRONT_Z;
+            for how in [Intersection::ClosedForm, Intersection::RootFinding] {
+                if how == Intersection::RootFinding && i % 10 != 0 {
+                    continue;
+                }
+                let each = l.trace_to_lcd_each(lattice, FRONT_Z, lcd_z, eye, slope, ns, how);
+                for (c, &n) in ns.iter().enumerate() {
+                    let one = l.trace_to_lcd_in(lattice, FRONT_Z, lcd_z, eye, slope, n, how);
+                    assert_eq!(format!("{:?}", each[c]), format!("{one:?}"), "{eye} {slope} channel {c}");
+                    if one.is_some() {
+                        passed += 1;
+                    } else {
+                        blocked += 1;
+                    }
+                }
+            }
+        }
+    }
+    assert!(passed > 10_000 && blocked > 200, "{passed} passed, {blocked} blocked");
+
+    let mut d = Display::paper();
+    d.lenslet = inimtrace::optics::lenslet::LensletOptics::Thick(Box::new(pmma.clone()));
+    d.lenslets_to_lcd = 5.6451;
+    let eye = inimtrace::optics::Eye::pinhole();
+    let transfer = inimtrace::optics::transfer::FastTransfer::for_eye(&d, &eye);
+    let mut hits = 0;
+    for _ in 0..3_000 {
+        let ray = PlaneRay { position: rng.point(2.5), slope: rng.point(0.4) };
+        for u in [0.5, rng.uniform(0.0, 1.0)] {
+            let each = transfer.pixel_indices_in(ray, u);
+            for (c, pixel) in each.iter().enumerate() {
+                assert_eq!(*pixel, transfer.pixel_index_in(ray, c, u), "{ray:?} channel {c} at {u}");
+                hits += usize::from(pixel.is_some());
+            }
+        }
+    }
+    assert!(hits > 5_000, "{hits}");
+}
+
+#[test]
+fn camera_rays_side_by_side_are_the_one_ray_traces_bit_for_bit() {
+    // `camera_rays_into` (lanes of 8, 4, 2, 1) against `camera_ray_in` ray by ray, passing and
+    // blocked alike, for a plano-convex, a biconic and a strongly curved lens; and the lockstep
+    // Newton solves of `pupil_center_rays` against three `pupil_center_ray`, over LCD points
+    // across an elemental image (most solves near its edge fail).
+    let display = Display::paper();
+    let lattice = &display.lenslets;
+    let pmma = ThickLenslet::plano_convex(Material::pmma(), 6.427, 1.0);
+    let mut biconic = ThickLenslet { back: Surface { radius: -12.0, conic: -0.5 }, ..pmma.clone() };
+    biconic.front.conic = 0.8;
+    let strong = lens(1.0, 0.0, 0.6, 1.5);
+    let lcd_z = FRONT_Z + 1.0 + 5.6451;
+    let mut rng = Lcg(31);
+    let (mut passed, mut blocked) = (0, 0);
+    for l in [&pmma, &biconic, &strong] {
+        let ns = [450.0, 550.0, 620.0].map(|nm| l.material.index(nm));
+        for _ in 0..300 {
+            let center = lattice.center(lattice.nearest(rng.point(8.0)));
+            let lcd = center * 1.3 + rng.point(0.9);
+            let k = 1 + (rng.uniform(0.0, 23.0) as usize);
+            let p: Vec<DVec2> = (0..k).map(|_| center + rng.point(1.5)).collect();
+            let n: Vec<f64> = (0..k).map(|i| ns[i % 3]).collect();
+            let z = if k.is_multiple_of(2) { 0.0 } else { -3.0 };
+            let mut out = vec![None; k];
+            l.camera_rays_into(center, FRONT_Z, lcd_z, lcd, &p, &n, z, &mut out);
+            for i in 0..k {
+                let one = l.camera_ray_in(center, FRONT_Z, lcd_z, lcd, p[i], z, n[i]);
+                assert_eq!(format!("{:?}", out[i]), format!("{one:?}"), "lane {i} of {k}");
+                if one.is_some() {
+                    passed += 1;
+                } else {
+                    blocked += 1;
+                }
+            }
+        }
+    }
+    assert!(passed > 3_000 && blocked > 300, "{passed} passed, {blocked} blocked");
+
+    let (mut solved, mut failed) = (0, 0);
+    for l in [&pmma, &biconic] {
+        let ns = [610.0, 535.0, 450.0].map(|nm| l.material.index(nm));
+        for i in 0..600 {
+            let center = lattice.center(lattice.nearest(rng.point(3.0)));
+            let lcd = center * (1.58 / 1.2) + rng.point(0.79);
+            let eye = DVec3::ZERO;
+            let guess = if i == 0 { DVec2::NAN } else { center + (lcd - center * (1.58 / 1.2)) * 3.0 };
+            let each = l.pupil_center_rays(center, FRONT_Z, lcd_z, lcd, eye, guess, ns);
+            for c in 0..3 {
+                let one = l.pupil_center_ray(center, FRONT_Z, lcd_z, lcd, eye, guess, ns[c]);
+                assert_eq!(format!("{:?}", each[c]), format!("{one:?}"), "{lcd} channel {c}");
+                if one.is_some() {
+                    solved += 1;
+                } else {
+                    failed += 1;
+                }
+            }
+        }
+    }
+    assert!(solved > 200 && failed > 200, "{solved} solved, {failed} failed");
+}

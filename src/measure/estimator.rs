@@ -208,9 +208,11 @@ impl<F: RadianceField + ?Sized> PairedSource for DisplaySource<'_, F> {
                 let r = crate::optics::transfer::eye_ray(self.eye, s.tangent, s.pupil);
                 let world = PlaneRay { position: r.position + eye_xy, slope: r.slope };
                 o[1..].fill([0.0; 3]);
-                for c in 0..3 {
-                    // Not spectral: each channel at its primary's median wavelength.
-                    if let Some(i) = self.transfer.transfer.pixel_index_in(world, c, 0.5) {
+                // Not spectral: each channel at its primary's median wavelength (the front
+                // surface's hit found once for the three).
+                let pixels = self.transfer.transfer.pixel_indices_in(world, 0.5);
+                for (c, pixel) in pixels.into_iter().enumerate() {
+                    if let Some(i) = pixel {
                         let px = self.stack.pixel(i);
                         for (j, v) in o[1..].iter_mut().enumerate() {
                             v[c] = f64::from(px[3 * j + c]);

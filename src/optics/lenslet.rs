@@ -194,6 +194,24 @@ pub struct ThickTrace {
     pub lcd: DVec2,
 }
 
+/// Where an eye -> LCD ray meets the front surface ([`ThickLenslet::front_hit`]): what the rest
+/// of its trace needs at any wavelength ([`ThickLenslet::trace_from_front`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrontHit {
+    /// The lenslet whose front surface the ray entered.
+    pub cell: IVec2,
+    /// Its centre (world x, y).
+    pub center: DVec2,
+    /// The hit in that lenslet's frame (x, y from its centre, z from the front vertex plane).
+    pub point: DVec3,
+    /// The ray's unit direction before it.
+    pub dir: DVec3,
+    /// The front surface's unit normal there.
+    pub normal: DVec3,
+    /// The local z the trace inside the material starts from.
+    zs: f64,
+}
+
 /// How a surface is intersected: the closed form, or the slow twin's root finding.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Intersection {
@@ -345,7 +363,8 @@ impl ThickLenslet {
         self.trace_to_lcd_in(lattice, front_z, lcd_z, origin, slope, self.material.index(nm), how)
     }
 
-    /// [`ThickLenslet::trace_to_lcd`] with the material's index `n` given.
+    /// [`ThickLenslet::trace_to_lcd`] with the material's index `n` given: [`ThickLenslet::front_hit`]
+    /// then [`ThickLenslet::trace_from_front`].
     #[inline]
     #[allow(clippy::too_many_arguments)]
     pub fn trace_to_lcd_in(
@@ -358,6 +377,45 @@ impl ThickLenslet {
         n: f64,
         how: Intersection,
     ) -> Option<ThickTrace> {
+        let front = self.front_hit(lattice, front_z, origin, slope, how)?;
+        self.trace_from_front(lattice, front_z, lcd_z, &front, n, how)
+    }
+
+    /// [`ThickLenslet::trace_to_lcd_in`] of one ray at each of the indices `ns` (the colour
+    /// channels'): the front surface's hit, which no index changes, found once and refracted at
+    /// each index. The same traces bit for bit as three calls (the same arithmetic in the same
+    /// order; tested).
+    #[inline]
+    #[allow(clippy::too_many_arguments)]
+    pub fn trace_to_lcd_each(
+        &self,
+        lattice: &Lattice,
+        front_z: f64,
+        lcd_z: f64,
+        origin: DVec3,
+        slope: DVec2,
+        ns: [f64; 3],
+        how: Intersection,
+    ) -> [Option<ThickTrace>; 3] {
+        match self.front_hit(lattice, front_z, origin, slope, how) {
+            Some(front) => ns.map(|n| self.trace_from_front(lattice, front_z, lcd_z, &front, n, how)),
+            None => [None; 3],
+        }
+    }
+
+    /// The first half of the exact eye -> LCD trace, the same at every wavelength: where the ray
+    /// through world point `origin` with slope `slope` meets the front surface of the array of
+    /// `lattice` (front vertex plane at `front_z`), in which lenslet, and that surface's normal
+    /// there. `None`: it misses the surface (blocked).
+    #[inline]
+    pub fn front_hit(
+        &self,
+        lattice: &Lattice,
+        front_z: f64,
+        origin: DVec3,
+        slope: DVec2,
+        how: Intersection,
+    ) -> Option<FrontHit> {
         let d = slope.extend(1.0).normalize();
         // Start on the front vertex plane, moved back along the ray to clear the surface's sag.
         let at_plane = origin.truncate() + slope * (front_z - origin.z);
@@ -366,18 +424,37 @@ impl ThickLenslet {
         let (cell, c, front) = settle(lattice, lattice.nearest(at_plane), self.front.curvature() == 0.0, |c| {
             how.hit(&self.front.conic_at(0.0), local(start, c, front_z), d)
         })?;
-        let front_conic = self.front.conic_at(0.0);
-        let d1 = refract(d, front_conic.normal(front.point), 1.0, n)?;
-        if d1.z <= 0.0 {
-            return None;
-        }
-        // Inside the material: start behind both the front hit and the back surface there, so
-        // that a zero-thickness lens (whose surfaces touch) is traced as two refractions at once.
+        let normal = self.front.conic_at(0.0).normal(front.point);
+        // Inside the material the trace starts behind both the front hit and the back surface
+        // there, so that a zero-thickness lens (whose surfaces touch) is traced as two
+        // refractions at once.
         let back_conic = self.back.conic_at(self.thickness);
         let r2 = front.point.x * front.point.x + front.point.y * front.point.y;
         let back_z = self.thickness + back_conic.sag(r2).unwrap_or(-self.back.radius.abs());
         let zs = front.point.z.min(back_z) - 1e-3 * (1.0 + self.thickness);
-        let inside = front.point + d1 * ((zs - front.point.z) / d1.z);
+        Some(FrontHit { cell, center: c, point: front.point, dir: d, normal, zs })
+    }
+
+    /// The rest of the exact eye -> LCD trace from its [`ThickLenslet::front_hit`]: refraction
+    /// into the material of index `n`, the back surface (in whichever cell the ray reaches it),
+    /// refraction out, on to the LCD plane at `lcd_z`. `None`: blocked.
+    #[inline]
+    pub fn trace_from_front(
+        &self,
+        lattice: &Lattice,
+        front_z: f64,
+        lcd_z: f64,
+        f: &FrontHit,
+        n: f64,
+        how: Intersection,
+    ) -> Option<ThickTrace> {
+        let (cell, c, front) = (f.cell, f.center, f.point);
+        let d1 = refract(f.dir, f.normal, 1.0, n)?;
+        if d1.z <= 0.0 {
+            return None;
+        }
+        let back_conic = self.back.conic_at(self.thickness);
+        let inside = front + d1 * ((f.zs - front.z) / d1.z);
         let world_inside = DVec3::new(inside.x + c.x, inside.y + c.y, inside.z + front_z);
         let (_, c2, back) = settle(lattice, cell, self.back.curvature() == 0.0, |c2| {
             how.hit(&back_conic, local(world_inside, c2, front_z), d1)
@@ -388,7 +465,7 @@ impl ThickLenslet {
         }
         let back_world = DVec3::new(back.point.x + c2.x, back.point.y + c2.y, back.point.z + front_z);
         let lcd = back_world.truncate() + d2.truncate() * ((lcd_z - back_world.z) / d2.z);
-        let front_world = DVec3::new(front.point.x + c.x, front.point.y + c.y, front.point.z + front_z);
+        let front_world = DVec3::new(front.x + c.x, front.y + c.y, front.z + front_z);
         Some(ThickTrace { cell, front: front_world, back: back_world, dir: d2, lcd })
     }
 

@@ -6,6 +6,7 @@ pub mod eye;
 pub mod intent;
 pub mod lattice;
 pub mod lenslet;
+pub mod lenslet_lanes;
 pub mod limits;
 pub mod plausibility;
 pub mod spectrum;

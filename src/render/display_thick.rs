@@ -15,7 +15,10 @@
 //! There are no ray families (the real lens is not affine in the lenslet point), but every
 //! lenslet is the same lens: when the lenslet pitch is a whole number of LCD pixels, LC's and LA's
 //! rays are traced once per place relative to the lenslet and moved to each lenslet
-//! ([`Sharing::Shared`], [`lattice_period`]); [`Sharing::PerPixel`] is the slow twin.
+//! ([`Sharing::Shared`], [`lattice_period`]); [`Sharing::PerPixel`] is the slow twin. A pixel's
+//! rays go through the lens side by side ([`ThickLenslet::camera_rays_into`]; PupilCenter's three
+//! channels' Newton solves in lockstep, [`ThickLenslet::pupil_center_rays`]), bit for bit the
+//! one-ray traces.
 
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
@@ -35,10 +38,12 @@ use crate::ray::Ray;
 /// sit at the same place relative to their lenslets ([`lattice_period`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Sharing {
-    /// Every pixel traces its own rays through its lenslet (the slow twin).
+    /// Every pixel traces its own rays through its lenslet, one ray at a time (the slow twin).
     PerPixel,
     /// Pixels at the same place relative to their lenslets share one trace, moved to each
-    /// lenslet, when the lattices allow it ([`lattice_period`]); otherwise per pixel.
+    /// lenslet, when the lattices allow it ([`lattice_period`]); otherwise per pixel. A pixel's
+    /// rays (and PupilCenter's three channels' Newton solves) are traced side by side
+    /// (`optics::lenslet_lanes`, the same rays bit for bit).
     Shared,
 }
 
@@ -72,6 +77,8 @@ struct Setup<'a> {
     lcd_z: f64,
     z_ref: f64,
     eye: DVec3,
+    /// `PerPixel`: every ray traced on its own as well (the slow twin of the lanes).
+    sharing: Sharing,
 }
 
 impl Setup<'_> {
@@ -80,6 +87,20 @@ impl Setup<'_> {
     /// lenslet's frame (LCD point and lenslet point relative to `center`, ray starts relative to
     /// it), else in the world.
     fn push_rays(&self, row: usize, col: usize, center: DVec2, local: bool, out: &mut Vec<Option<Ray>>) {
+        let c = if local { DVec2::ZERO } else { center };
+        // Every lenslet point at every channel's index, traced side by side.
+        let ps: Vec<DVec2> = self.index.iter().flat_map(|_| self.offsets.iter().map(|o| c + *o)).collect();
+        let ns: Vec<f64> = self.index.iter().flat_map(|&n| self.offsets.iter().map(move |_| n)).collect();
+        for frac in &self.pixel_samples {
+            let x3 = self.display.lcd.pixel_point(row, col, *frac) - (center - c);
+            let at = out.len();
+            out.resize(at + ps.len(), None);
+            self.lens.camera_rays_into(c, self.front_z, self.lcd_z, x3, &ps, &ns, self.z_ref, &mut out[at..]);
+        }
+    }
+
+    /// [`Setup::push_rays`] one ray at a time (the slow twin of its lanes; tested).
+    fn push_rays_each(&self, row: usize, col: usize, center: DVec2, local: bool, out: &mut Vec<Option<Ray>>) {
         let c = if local { DVec2::ZERO } else { center };
         for frac in &self.pixel_samples {
             let x3 = self.display.lcd.pixel_point(row, col, *frac) - (center - c);
@@ -113,24 +134,70 @@ impl Setup<'_> {
     fn pixel<R: RadianceField + ?Sized>(&self, row: usize, col: usize, center: DVec2, tracer: &R) -> BundleSum {
         if self.method != Method::PupilCenter {
             let mut rays = Vec::with_capacity(self.pixel_samples.len() * 3 * self.offsets.len());
-            self.push_rays(row, col, center, false, &mut rays);
+            if self.sharing == Sharing::PerPixel {
+                self.push_rays_each(row, col, center, false, &mut rays);
+            } else {
+                self.push_rays(row, col, center, false, &mut rays);
+            }
             return self.sum(&rays, DVec2::ZERO, tracer);
         }
         let mut rays = Vec::with_capacity(self.pixel_samples.len() * 3);
         for frac in &self.pixel_samples {
             let x3 = self.display.lcd.pixel_point(row, col, *frac);
             let guess = pupil_center_point(self.display, x3, center, self.eye);
-            for &n in &self.index {
-                let solved = self.lens.pupil_center_ray(center, self.front_z, self.lcd_z, x3, self.eye, guess, n);
-                // The solve's own ray when it starts on the reference plane, else traced anew.
-                rays.push(match solved {
-                    Some((_, ray)) if self.z_ref == self.eye.z => Some(ray),
-                    Some((p, _)) => self.lens.camera_ray_in(center, self.front_z, self.lcd_z, x3, p, self.z_ref, n),
-                    None => self.lens.camera_ray_in(center, self.front_z, self.lcd_z, x3, center, self.z_ref, n),
-                });
+            if self.sharing == Sharing::PerPixel {
+                self.pupil_center_each(x3, center, guess, &mut rays);
+                continue;
             }
+            // The three channels' solves in lockstep; the rays still to trace (LC's where a
+            // solve fails, the solved point's from the reference plane) side by side.
+            let solved = self.lens.pupil_center_rays(center, self.front_z, self.lcd_z, x3, self.eye, guess, self.index);
+            let mut out = [None; 3];
+            let (mut ps, mut ns, mut which) = ([DVec2::ZERO; 3], [0.0; 3], [0usize; 3]);
+            let mut m = 0;
+            for (c, s) in solved.into_iter().enumerate() {
+                let p = match s {
+                    Some((_, ray)) if self.z_ref == self.eye.z => {
+                        out[c] = Some(ray);
+                        continue;
+                    }
+                    Some((p, _)) => p,
+                    None => center,
+                };
+                (ps[m], ns[m], which[m]) = (p, self.index[c], c);
+                m += 1;
+            }
+            let mut traced = [None; 3];
+            self.lens.camera_rays_into(
+                center,
+                self.front_z,
+                self.lcd_z,
+                x3,
+                &ps[..m],
+                &ns[..m],
+                self.z_ref,
+                &mut traced[..m],
+            );
+            for (j, &c) in which[..m].iter().enumerate() {
+                out[c] = traced[j];
+            }
+            rays.extend(out);
         }
         self.sum(&rays, DVec2::ZERO, tracer)
+    }
+
+    /// PupilCenter's rays of one pixel sample, channel by channel and ray by ray (the slow twin
+    /// of the lockstep solves).
+    fn pupil_center_each(&self, x3: DVec2, center: DVec2, guess: DVec2, rays: &mut Vec<Option<Ray>>) {
+        for &n in &self.index {
+            let solved = self.lens.pupil_center_ray(center, self.front_z, self.lcd_z, x3, self.eye, guess, n);
+            // The solve's own ray when it starts on the reference plane, else traced anew.
+            rays.push(match solved {
+                Some((_, ray)) if self.z_ref == self.eye.z => Some(ray),
+                Some((p, _)) => self.lens.camera_ray_in(center, self.front_z, self.lcd_z, x3, p, self.z_ref, n),
+                None => self.lens.camera_ray_in(center, self.front_z, self.lcd_z, x3, center, self.z_ref, n),
+            });
+        }
     }
 }
 
@@ -193,6 +260,7 @@ fn render_into_with<R: RadianceField + ?Sized>(
         lcd_z: display.lcd_z(),
         z_ref: settings.reference_plane_z,
         eye: settings.eye_position,
+        sharing,
     };
     let inv_count = 1.0 / (setup.pixel_samples.len() * setup.offsets.len()) as f64;
     depth.resize(nx * ny, 0.0);
