@@ -558,6 +558,7 @@ impl Replicates {
                             let c = col0 + dc;
                             let owner = (dr * TILE + dc) as u32;
                             let mut points = sampler.points((row * n + c) as u64, r as u32, old);
+                            let later = diffraction.then(|| points.later_dims());
                             for _ in old..total {
                                 let (frac, raw) = points.next_point_raw();
                                 // Retina::tangent, with the step hoisted.
@@ -565,8 +566,8 @@ impl Replicates {
                                     -retina.half_tangent + (c as f64 + frac.x) * step,
                                     retina.half_tangent - (row as f64 + frac.y) * step,
                                 );
-                                let (spectral, diffraction) = if diffraction {
-                                    let (u, d) = points.spectral_and_diffraction_of_last();
+                                let (spectral, diffraction) = if let Some(later) = &later {
+                                    let (u, d) = points.spectral_and_diffraction_with(later);
                                     (if spectral { u } else { 0.0 }, d)
                                 } else {
                                     (if spectral { points.spectral_of_last() } else { 0.0 }, [0.0; 4])

@@ -21,7 +21,9 @@
 use std::f64::consts::FRAC_PI_4;
 
 use glam::DVec2;
-use sobol_burley::parts::{hash_int4, owen_scramble_int4_rev, sobol_int4_rev, Int4};
+use sobol_burley::parts::{
+    hash, hash_int4, owen_scramble_int4_rev, owen_scramble_rev, sobol_int4_rev, sobol_rev, u32_to_f32_norm, Int4,
+};
 
 /// Largest number of samples per replicate and pixel (the Sobol sequence's length in
 /// [`sobol_burley`]).
@@ -212,6 +214,25 @@ impl Points<'_> {
         (f64::from(d4), [f64::from(d5), f64::from(d6), f64::from(d7), f64::from(d8)])
     }
 
+    /// The later dimensions of this sequence's samples ([`LaterDims`]): built once per sequence,
+    /// then [`Points::spectral_and_diffraction_with`] gives what
+    /// [`Points::spectral_and_diffraction_of_last`] gives, bit for bit, without recomputing
+    /// the seed's hashes and the Sobol point bit by bit for every sample.
+    #[inline]
+    pub fn later_dims(&self) -> LaterDims {
+        LaterDims::new(self.seed)
+    }
+
+    /// [`Points::spectral_and_diffraction_of_last`] through `later` (this sequence's
+    /// [`Points::later_dims`]): the same numbers, bit for bit (tested).
+    #[inline(always)]
+    pub fn spectral_and_diffraction_with(&self, later: &LaterDims) -> (f64, [f64; 4]) {
+        if self.sampler.independent {
+            return self.spectral_and_diffraction_of_last();
+        }
+        later.at(self.index.wrapping_sub(1))
+    }
+
     /// The current sample's pixel point and the raw uniform pair of its pupil point (to map with
     /// [`concentric_disk_batch`]; `None` for the pinhole eye); then step to the next.
     #[inline(always)]
@@ -231,6 +252,66 @@ impl Points<'_> {
             return (frac, DVec2::ZERO);
         }
         (frac, concentric_disk(f64::from(c), f64::from(d)) * r)
+    }
+}
+
+/// Dimensions 4 to 8 of one seed's Owen-scrambled Sobol sequence, exactly as
+/// [`sobol_burley::sample_4d`] (dimension set 1) and [`sobol_burley::sample`] (dimension 8)
+/// compute them (Burley 2020: the sample index shuffled by a nested uniform scramble, the Sobol
+/// point of the shuffled index, each dimension Owen-scrambled), with the seed's three hashes
+/// computed once per sequence and the Sobol point of the shuffled index from two byte tables
+/// instead of one step per set bit: the point is the XOR of the direction numbers of the index's
+/// set bits (its top 16 bits, as `sobol_burley` takes them), so the XOR of the tables' entries for
+/// the index's two top bytes is the same point.
+#[derive(Clone, Copy)]
+pub struct LaterDims {
+    tables: &'static ByteTables,
+    index: u32,
+    set1: Int4,
+    dim8: u32,
+}
+
+/// The Sobol points of the index's top byte (`hi`) and second byte (`lo`), dimensions 4-7 and 8.
+struct ByteTables {
+    hi4: [Int4; 256],
+    lo4: [Int4; 256],
+    hi8: [u32; 256],
+    lo8: [u32; 256],
+}
+
+fn byte_tables() -> &'static ByteTables {
+    static T: std::sync::OnceLock<ByteTables> = std::sync::OnceLock::new();
+    T.get_or_init(|| ByteTables {
+        hi4: std::array::from_fn(|b| sobol_int4_rev((b as u32) << 24, 1)),
+        lo4: std::array::from_fn(|b| sobol_int4_rev((b as u32) << 16, 1)),
+        hi8: std::array::from_fn(|b| sobol_rev((b as u32) << 24, 8)),
+        lo8: std::array::from_fn(|b| sobol_rev((b as u32) << 16, 8)),
+    })
+}
+
+impl LaterDims {
+    /// The later dimensions of the sequence with scramble seed `seed`.
+    pub fn new(seed: u32) -> Self {
+        let s = seed.wrapping_mul(0x9c8f_2d3b);
+        let set1: Int4 = [s; 4].into();
+        let ds: Int4 = [1u32; 4].into();
+        Self {
+            tables: byte_tables(),
+            index: hash(seed ^ 0x79c6_8e4a),
+            set1: hash_int4(set1 ^ ds ^ [0x912f_69ba, 0x174f_18ab, 0x691e_72ca, 0xb40c_c1b8].into()),
+            dim8: hash(2 ^ s ^ 0x912f_69ba),
+        }
+    }
+
+    /// Dimension 4 and dimensions 5-8 of sample `i`.
+    #[inline(always)]
+    pub fn at(&self, i: u32) -> (f64, [f64; 4]) {
+        let t = self.tables;
+        let rev = owen_scramble_rev(i.reverse_bits(), self.index);
+        let (hi, lo) = ((rev >> 24) as usize, ((rev >> 16) & 0xff) as usize);
+        let [d4, d5, d6, d7] = owen_scramble_int4_rev(t.hi4[hi] ^ t.lo4[lo], self.set1).reverse_bits().to_f32_norm();
+        let d8 = u32_to_f32_norm(owen_scramble_rev(t.hi8[hi] ^ t.lo8[lo], self.dim8).reverse_bits());
+        (f64::from(d4), [f64::from(d5), f64::from(d6), f64::from(d7), f64::from(d8)])
     }
 }
 
@@ -318,6 +399,33 @@ pub(crate) fn mix64(mut z: u64) -> u64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn later_dims_from_byte_tables_equal_sobol_burley_bit_for_bit() {
+        // Every index of a replicate's first 4096 samples and the sequence's last ones,
+        // several scrambles, both samplers.
+        for sampler in [Sampler::new(3, 1, Some(2.5)), Sampler::independent(3, 1, Some(2.5))] {
+            for scramble in [0u32, 1, 0x9e37_79b9, 0x1234_5678, u32::MAX] {
+                let mut points = sampler.points_of(scramble, 0);
+                let later = points.later_dims();
+                for i in 0..(1u32 << 16) {
+                    points.next_raw();
+                    if i >= 4096 && i < (1 << 16) - 256 {
+                        continue;
+                    }
+                    let (u, d) = points.spectral_and_diffraction_with(&later);
+                    let (v, e) = points.spectral_and_diffraction_of_last();
+                    assert_eq!(u.to_bits(), v.to_bits(), "scramble {scramble}, sample {i}");
+                    assert_eq!(d.map(f64::to_bits), e.map(f64::to_bits), "scramble {scramble}, sample {i}");
+                    if !sampler.is_independent() {
+                        let [a, b, c, x] = sobol_burley::sample_4d(i, 1, scramble);
+                        assert_eq!([u, d[0], d[1], d[2]], [a, b, c, x].map(f64::from));
+                        assert_eq!(d[3], f64::from(sobol_burley::sample(i, 8, scramble)));
+                    }
+                }
+            }
+        }
+    }
 
     #[test]
     fn spectral_and_diffraction_together_equal_them_one_by_one_bit_for_bit() {

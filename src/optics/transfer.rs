@@ -222,6 +222,40 @@ impl<'a> FastTransfer<'a> {
         self.indexer.index(x2 + w2 * self.v2)
     }
 
+    /// [`FastTransfer::pixel_index_deviated`] (or, where `pair(j)` gives no deviation,
+    /// [`FastTransfer::pixel_index_of`]) of `out.len()` pairs of a ray and a deviation (`pair(j)`:
+    /// the index of pair `j`'s ray in `rays`, its deviation), in passes: every ray's point on the
+    /// lenslet plane and its lenslet's centre once (rays shared by several pairs are not traced
+    /// again), then each pair's LCD pixel (`u32::MAX`: off the LCD). The same arithmetic, so the
+    /// same pixels bit for bit. `scratch` is reused between calls.
+    #[inline(always)]
+    pub fn pixel_indices_deviated(
+        &self,
+        rays: &[PlaneRay],
+        pair: impl Fn(usize) -> (usize, Option<DVec2>),
+        scratch: &mut Vec<DVec2>,
+        out: &mut [u32],
+    ) {
+        let n = rays.len();
+        scratch.clear();
+        scratch.resize(2 * n, DVec2::ZERO);
+        let (x2s, centres) = scratch.split_at_mut(n);
+        for (x2, r) in x2s.iter_mut().zip(rays) {
+            *x2 = r.position + r.slope * self.to_lenslets;
+        }
+        centres.copy_from_slice(x2s);
+        self.display.lenslets.nearest_centers(centres);
+        for (j, o) in out.iter_mut().enumerate() {
+            let (i, deviation) = pair(j);
+            let (x2, c) = (x2s[i], centres[i]);
+            let w2 = match deviation {
+                Some(d) => rays[i].slope - (x2 - c) * self.lenslet_power + d,
+                None => rays[i].slope - (x2 - c) * self.lenslet_power,
+            };
+            *o = self.indexer.index_u32(x2 + w2 * self.v2);
+        }
+    }
+
     /// Whether the display's lenslets are real ones: then each colour channel has its own LCD
     /// pixel ([`FastTransfer::pixel_index_in`]) and the one-pixel paths above do not apply.
     pub fn is_thick(&self) -> bool {

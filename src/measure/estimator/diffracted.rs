@@ -18,6 +18,7 @@
 //! deviations (every channel's) lie within that core has exactly that colour as its ground truth,
 //! and its scene rays are not traced; the samples in the Airy tail are traced as before.
 
+use std::cell::RefCell;
 use std::f64::consts::PI;
 
 use glam::DVec2;
@@ -90,32 +91,50 @@ impl<F: RadianceField + ?Sized> DisplaySource<'_, F> {
         known: &[Option<[f64; 3]>],
         out: &mut [[f64; 3]],
     ) {
+        BUFFERS.with(|b| match b.try_borrow_mut() {
+            Ok(mut b) => self.eval_diffracted_in(optics, samples, known, out, &mut b),
+            // Re-entered on this thread (a field that runs parallel work): fresh buffers.
+            Err(_) => self.eval_diffracted_in(optics, samples, known, out, &mut Buffers::default()),
+        });
+    }
+
+    fn eval_diffracted_in(
+        &self,
+        optics: &EyeOptics,
+        samples: &[EyeSample],
+        known: &[Option<[f64; 3]>],
+        out: &mut [[f64; 3]],
+        b: &mut Buffers,
+    ) {
         let k = 1 + self.stack.len();
         let n = samples.len();
         let eye_xy = self.eye.position.truncate();
         let z = self.eye.position.z;
         let single = optics.is_single_wavelength();
         let pupil_on = optics.pupil_diameter > 0.0;
+        // `EyeOptics::rays` of the thin lens (no Stiles-Crawford weight: `is_thin_diffracted`),
+        // inlined: the same arithmetic.
+        let lens = optics.thin_lens_ray().expect("the thin lens (is_thin_diffracted)");
         // Three rays per sample when the channels' pupil deviations differ.
         let per_ray = if pupil_on && !single { 3 } else { 1 };
         // Each channel's own LCD pixel when its lenslet deviation (or its ray) is its own.
         let per_pixel = per_ray == 3 || (self.lenslet.is_some() && !single);
 
         // Wavelengths, draws and rays (world coordinates at the pupil plane).
-        let mut nm = Vec::with_capacity(n);
-        let mut lens_draw = Vec::with_capacity(if self.lenslet.is_some() { n } else { 0 });
-        let mut rays = Vec::with_capacity(n * per_ray);
+        b.nm.clear();
+        b.lens_draw.clear();
+        b.rays.clear();
+        b.slot.clear();
         let core = self.pupil_core(optics);
         // Each sample's first ray among the scene rays, or MISS when its ground truth is known.
-        let mut slot = Vec::with_capacity(n);
         let mut traced = 0u32;
         for (i, s) in samples.iter().enumerate() {
             let u = s.spectral;
             let l: [f64; 3] =
                 if single { [optics.wavelength(0, u); 3] } else { std::array::from_fn(|c| optics.wavelength(c, u)) };
-            nm.push(l);
+            b.nm.push(l);
             if let Some(shape) = &self.lenslet {
-                lens_draw.push(shape.draw([s.diffraction[2], s.diffraction[3]]));
+                b.lens_draw.push(shape.draw([s.diffraction[2], s.diffraction[3]]));
             }
             // `EyeOptics::rays_diffracted`'s tangents: moved by the channel's Airy deviation.
             let draw = if pupil_on { disk_draw([s.diffraction[0], s.diffraction[1]]) } else { ApertureDraw::default() };
@@ -128,57 +147,66 @@ impl<F: RadianceField + ?Sized> DisplaySource<'_, F> {
                 } else {
                     s.tangent
                 };
-                let r = optics.rays(tangent, s.pupil, u).rays[0].expect("the thin lens passes every ray");
-                rays.push(PlaneRay { position: r.position + eye_xy, slope: r.slope });
+                let r = lens.ray(tangent, s.pupil);
+                b.rays.push(PlaneRay { position: r.position + eye_xy, slope: r.slope });
             }
             if in_core {
-                slot.push(MISS);
+                b.slot.push(MISS);
             } else {
-                slot.push(traced);
+                b.slot.push(traced);
                 traced += per_ray as u32;
             }
         }
 
         // The ground truth: the rays of the samples not known into the scene.
-        let scene: Vec<Ray> = rays
-            .chunks_exact(per_ray)
-            .zip(&slot)
-            .filter(|(_, &j)| j != MISS)
-            .flat_map(|(w, _)| w.iter().map(|w| Ray { origin: w.position.extend(z), dir: w.slope.extend(1.0) }))
-            .collect();
-        let mut hits = vec![Sample::default(); scene.len()];
+        b.scene.clear();
+        b.scene.extend(
+            b.rays
+                .chunks_exact(per_ray)
+                .zip(&b.slot)
+                .filter(|(_, &j)| j != MISS)
+                .flat_map(|(w, _)| w.iter().map(|w| Ray { origin: w.position.extend(z), dir: w.slope.extend(1.0) })),
+        );
+        b.hits.clear();
+        b.hits.resize(b.scene.len(), Sample::default());
         if self.field.prefers_batches() {
-            self.field.sample_many(&scene, &mut hits);
+            self.field.sample_many(&b.scene, &mut b.hits);
         } else {
-            for (h, r) in hits.iter_mut().zip(&scene) {
+            for (h, r) in b.hits.iter_mut().zip(&b.scene) {
                 h.radiance = self.field.radiance(r);
             }
         }
 
-        // The LCD pixel of each sample's channels (one for all when `!per_pixel`).
+        // The LCD pixel of each sample's channels (one for all when `!per_pixel`), each ray's
+        // lenslet found once.
         let pixels = if per_pixel { 3 } else { 1 };
         let t = &self.transfer.transfer;
-        let mut lcd = vec![MISS; n * pixels];
-        for (i, px) in lcd.chunks_exact_mut(pixels).enumerate() {
-            for (c, p) in px.iter_mut().enumerate() {
-                let r = rays[i * per_ray + c.min(per_ray - 1)];
-                let index = match &self.lenslet {
-                    None => t.pixel_index_of(r),
-                    Some(shape) => t.pixel_index_deviated(r, shape.scaled(lens_draw[i], nm[i][c])),
-                };
-                *p = index.map_or(MISS, |j| j as u32);
-            }
+        b.lcd.clear();
+        b.lcd.resize(n * pixels, MISS);
+        let ray_of = |j: usize| (j / pixels) * per_ray + (j % pixels).min(per_ray - 1);
+        let (nm, lens_draw) = (&b.nm, &b.lens_draw);
+        match &self.lenslet {
+            None => t.pixel_indices_deviated(&b.rays, |j| (ray_of(j), None), &mut b.scratch, &mut b.lcd),
+            Some(shape) => t.pixel_indices_deviated(
+                &b.rays,
+                |j| {
+                    let (i, c) = (j / pixels, j % pixels);
+                    (ray_of(j), Some(shape.scaled(lens_draw[i], nm[i][c])))
+                },
+                &mut b.scratch,
+                &mut b.lcd,
+            ),
         }
 
         // The reads: the ground truth's channel c from channel c's ray, every image's channel
         // c at channel c's pixel.
         for (i, o) in out.chunks_exact_mut(k).enumerate() {
             for c in 0..3 {
-                o[0][c] = match slot[i] {
+                o[0][c] = match b.slot[i] {
                     MISS => known[i].expect("a known ground truth")[c],
-                    j => hits[j as usize + c.min(per_ray - 1)].radiance.to_array()[c],
+                    j => b.hits[j as usize + c.min(per_ray - 1)].radiance.to_array()[c],
                 };
-                let idx = lcd[i * pixels + c.min(pixels - 1)];
+                let idx = b.lcd[i * pixels + c.min(pixels - 1)];
                 if idx == MISS {
                     for v in o[1..].iter_mut() {
                         v[c] = 0.0;
@@ -192,4 +220,26 @@ impl<F: RadianceField + ?Sized> DisplaySource<'_, F> {
             }
         }
     }
+}
+
+/// A worker's buffers for [`DisplaySource::eval_diffracted`], kept between batches.
+#[derive(Default)]
+struct Buffers {
+    /// Each sample's three wavelengths, nm.
+    nm: Vec<[f64; 3]>,
+    /// Each sample's lenslet draw (with lenslet diffraction).
+    lens_draw: Vec<ApertureDraw>,
+    /// Each sample's rays (1 or 3), world x, y at the eye's plane.
+    rays: Vec<PlaneRay>,
+    /// Each sample's first scene ray, or MISS.
+    slot: Vec<u32>,
+    scene: Vec<Ray>,
+    hits: Vec<Sample>,
+    /// The LCD pixel of each sample's channels (MISS: none).
+    lcd: Vec<u32>,
+    scratch: Vec<DVec2>,
+}
+
+thread_local! {
+    static BUFFERS: RefCell<Buffers> = RefCell::new(Buffers::default());
 }

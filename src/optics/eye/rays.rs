@@ -115,6 +115,27 @@ fn polar(s: f64, angle: f64, radius: f64) -> DVec2 {
     DVec2::new(r * angle.cos(), r * angle.sin())
 }
 
+/// The thin lens's ray of eq. (1a), (1b) (as `transfer::eye_ray`): the one arithmetic of
+/// [`EyeOptics::rays`] for the thin lens and of the batched paths that inline it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ThinLensRay {
+    /// Pupil to retina, mm.
+    pub v0: f64,
+    /// The lens's power, 1/mm.
+    pub d1: f64,
+}
+
+impl ThinLensRay {
+    /// The object-space ray (at the pupil plane, eye coordinates) of retina tangent `tangent`
+    /// through pupil point `pupil`.
+    #[inline(always)]
+    pub fn ray(self, tangent: DVec2, pupil: DVec2) -> PlaneRay {
+        let x0 = -self.v0 * tangent;
+        let w0 = (pupil - x0) / self.v0;
+        PlaneRay { position: pupil, slope: w0 }.refract(DVec2::ZERO, self.d1)
+    }
+}
+
 /// The lens the rays go through.
 #[derive(Clone, Debug)]
 enum Lens {
@@ -354,6 +375,14 @@ impl EyeOptics {
         }
     }
 
+    /// The paper's thin lens (its [`ThinLensRay`]), or `None` for a schematic eye.
+    pub fn thin_lens_ray(&self) -> Option<ThinLensRay> {
+        match &self.lens {
+            Lens::ThinLens { v0, d1 } => Some(ThinLensRay { v0: *v0, d1: *d1 }),
+            Lens::Schematic(_) => None,
+        }
+    }
+
     /// True when every channel is traced at one wavelength (one ray per sample).
     pub fn is_single_wavelength(&self) -> bool {
         matches!(self.spectrum, Spectrum::Single(_)) || (self.schematic().is_none() && !self.diffraction.is_on())
@@ -424,10 +453,7 @@ impl EyeOptics {
         };
         match &self.lens {
             Lens::ThinLens { v0, d1 } => {
-                // eq. (1a), (1b) as `transfer::eye_ray`.
-                let x0 = -*v0 * tangent;
-                let w0 = (pupil - x0) / *v0;
-                let ray = PlaneRay { position: pupil, slope: w0 }.refract(DVec2::ZERO, *d1);
+                let ray = ThinLensRay { v0: *v0, d1: *d1 }.ray(tangent, pupil);
                 SampleRays { rays: [Some(ray); 3], single: true, weight }
             }
             Lens::Schematic(eye) => {
