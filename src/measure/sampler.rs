@@ -410,7 +410,7 @@ mod tests {
                 let later = points.later_dims();
                 for i in 0..(1u32 << 16) {
                     points.next_raw();
-                    if i >= 4096 && i < (1 << 16) - 256 {
+                    if (4096..(1 << 16) - 256).contains(&i) {
                         continue;
                     }
                     let (u, d) = points.spectral_and_diffraction_with(&later);

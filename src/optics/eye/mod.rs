@@ -19,6 +19,7 @@ pub mod describe;
 pub mod le_grand;
 pub mod medium;
 pub mod model;
+mod monomials;
 pub mod navarro;
 pub mod paraxial;
 pub mod ray_map;
