@@ -209,7 +209,7 @@ pub struct FrontHit {
     /// The front surface's unit normal there.
     pub normal: DVec3,
     /// The local z the trace inside the material starts from.
-    zs: f64,
+    pub(super) zs: f64,
 }
 
 /// How a surface is intersected: the closed form, or the slow twin's root finding.
@@ -383,8 +383,9 @@ impl ThickLenslet {
 
     /// [`ThickLenslet::trace_to_lcd_in`] of one ray at each of the indices `ns` (the colour
     /// channels'): the front surface's hit, which no index changes, found once and refracted at
-    /// each index. The same traces bit for bit as three calls (the same arithmetic in the same
-    /// order; tested).
+    /// each index (through a plane back, the three side by side:
+    /// [`ThickLenslet::traces_from_front`]). The same traces bit for bit as three calls (the same
+    /// arithmetic in the same order; tested).
     #[inline]
     #[allow(clippy::too_many_arguments)]
     pub fn trace_to_lcd_each(
@@ -398,6 +399,11 @@ impl ThickLenslet {
         how: Intersection,
     ) -> [Option<ThickTrace>; 3] {
         match self.front_hit(lattice, front_z, origin, slope, how) {
+            // A plane back (the same plane in every cell) in closed form: the three channels side
+            // by side (`optics::lenslet_lanes`, the same traces bit for bit).
+            Some(front) if how == Intersection::ClosedForm && self.back.curvature() == 0.0 => {
+                self.traces_from_front(lattice, front_z, lcd_z, &front, &ns)
+            }
             Some(front) => ns.map(|n| self.trace_from_front(lattice, front_z, lcd_z, &front, n, how)),
             None => [None; 3],
         }

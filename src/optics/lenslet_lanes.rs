@@ -1,16 +1,20 @@
-//! Camera rays of a real lenslet traced several at a time: [`ThickLenslet::camera_ray_in`] (the
-//! reverse trace from one LCD point through the pixel's extended lenslet, `optics::lenslet`) for
-//! `K` lenslet points and indices at once, each step of the trace a pass over the lanes without a
-//! branch (a blocked lane carries a flag, not an early return), so that the square roots and
-//! divisions of independent rays run side by side in the vector units.
+//! A real lenslet's traces run several at a time: the camera ray of
+//! [`ThickLenslet::camera_ray_in`] (the reverse trace from one LCD point through the pixel's
+//! extended lenslet, `optics::lenslet`) for `K` lenslet points and indices at once, and the second
+//! half of the eye -> LCD trace, [`ThickLenslet::trace_from_front`] through a plane back, for `K`
+//! indices at once. Each step of a trace is a pass over the lanes without a branch (a blocked
+//! lane carries a flag, not an early return), so that the square roots and divisions of
+//! independent rays run side by side in the vector units.
 //!
 //! Every lane does the arithmetic of the one-ray trace in the same order (the closed-form conic
 //! intersection, its normal and sag of `optics::eye::conic`, Snell's law of
-//! `optics::eye::refract`, glam's normalisation), so each lane's ray is bit for bit the one
-//! [`ThickLenslet::camera_ray_in`] returns, and `None` exactly where it returns `None` (tested in
+//! `optics::eye::refract`, glam's normalisation), so each lane's ray is bit for bit the one the
+//! one-ray trace returns, and `None` exactly where it returns `None` (tested in
 //! `tests/thick_lenslet.rs`, which holds the two together). The display-image renderer traces
 //! PupilCenter's Newton steps (the three colour channels' solves in lockstep) and
-//! LensletCenter's and LensletAverage's rays through it (`render/display_thick.rs`).
+//! LensletCenter's and LensletAverage's rays through it (`render/display_thick.rs`); the eye's
+//! rays reach the LCD in the three colour channels through it
+//! ([`ThickLenslet::trace_to_lcd_each`]).
 
 // Each pass indexes several lane arrays by the lane; the negated comparisons keep the one-ray
 // trace's NaN semantics (a NaN passes its `x < 0` tests).
@@ -19,7 +23,8 @@
 use glam::{DMat2, DVec2, DVec3};
 
 use super::eye::conic::Conic;
-use super::lenslet::ThickLenslet;
+use super::lattice::Lattice;
+use super::lenslet::{FrontHit, ThickLenslet, ThickTrace};
 use crate::ray::Ray;
 
 /// Three coordinates per lane.
@@ -34,6 +39,12 @@ impl<const K: usize> V<K> {
     #[inline(always)]
     fn zero() -> Self {
         Self { x: [0.0; K], y: [0.0; K], z: [0.0; K] }
+    }
+
+    /// `v` in every lane.
+    #[inline(always)]
+    fn splat(v: DVec3) -> Self {
+        Self { x: [v.x; K], y: [v.y; K], z: [v.z; K] }
     }
 }
 
@@ -110,6 +121,51 @@ fn refract<const K: usize>(d: &V<K>, nrm: &V<K>, n1: &[f64; K], n2: &[f64; K], o
 }
 
 impl ThickLenslet {
+    /// [`ThickLenslet::trace_from_front`] (closed-form intersection) of one front hit at each of
+    /// the indices `n[i]` side by side, for a lenslet whose back surface is a plane (the same
+    /// plane in every cell, so no lane changes cell); bit for bit the `K` one-index traces (see
+    /// the module's documentation). [`ThickLenslet::trace_to_lcd_each`] takes it for such
+    /// lenslets.
+    #[inline]
+    pub fn traces_from_front<const K: usize>(
+        &self,
+        lattice: &Lattice,
+        front_z: f64,
+        lcd_z: f64,
+        f: &FrontHit,
+        n: &[f64; K],
+    ) -> [Option<ThickTrace>; K] {
+        debug_assert!(self.back.curvature() == 0.0, "traces_from_front needs a plane back");
+        let (c, front) = (f.center, f.point);
+        let mut ok = [true; K];
+        let air = [1.0; K];
+        let d1 = refract(&V::splat(f.dir), &V::splat(f.normal), &air, n, &mut ok);
+        let back_conic = Conic::from_radius(self.thickness, self.back.radius, self.back.conic, f64::INFINITY);
+        // The plane's hit is looked for in the front hit's cell (`settle` of a plane).
+        let c2 = lattice.center(f.cell);
+        let mut start = V::zero();
+        for i in 0..K {
+            ok[i] &= !(d1.z[i] <= 0.0);
+            let s = (f.zs - front.z) / d1.z[i];
+            let (x, y, z) = (front.x + d1.x[i] * s, front.y + d1.y[i] * s, front.z + d1.z[i] * s);
+            start.x[i] = (x + c.x) - c2.x;
+            start.y[i] = (y + c.y) - c2.y;
+            start.z[i] = (z + front_z) - front_z;
+        }
+        let back = intersect(&back_conic, &start, &d1, &mut ok);
+        let d2 = refract(&d1, &normal(&back_conic, &back), n, &air, &mut ok);
+        let front_world = DVec3::new(front.x + c.x, front.y + c.y, front.z + front_z);
+        std::array::from_fn(|i| {
+            if !ok[i] || d2.z[i] <= 0.0 {
+                return None;
+            }
+            let back_world = DVec3::new(back.x[i] + c2.x, back.y[i] + c2.y, back.z[i] + front_z);
+            let dir = DVec3::new(d2.x[i], d2.y[i], d2.z[i]);
+            let lcd = back_world.truncate() + dir.truncate() * ((lcd_z - back_world.z) / dir.z);
+            Some(ThickTrace { cell: f.cell, front: front_world, back: back_world, dir, lcd })
+        })
+    }
+
     /// [`ThickLenslet::camera_ray_in`] from the LCD point `lcd` toward each lane's back-vertex
     /// point `p[i]` at index `n[i]`, through the lenslet centred at `center`: bit for bit the
     /// `K` one-ray traces (see the module's documentation).
