@@ -82,6 +82,28 @@ pub trait PairedSource: Sync {
         let _ = known;
         self.eval(samples, out);
     }
+
+    /// A handle of the scored images' radiance (images 1..) when it is known for every eye ray
+    /// of a retina pixel whose image 0 is known ([`PairedSource::reference_over`]) and whose
+    /// random deviations lie within the source's own bounds; `None` when that is not known (the
+    /// default). Only [`PairedSource::eval_known_images`] reads it.
+    fn images_over(&self, tangents: (DVec2, DVec2), pupil_radius: f64) -> Option<u32> {
+        let _ = (tangents, pupil_radius);
+        None
+    }
+
+    /// [`PairedSource::eval_known`], also told sample `i`'s pixel's [`PairedSource::images_over`]
+    /// handle in `images[i]` (`u32::MAX`: none; `images` may be empty). Same values.
+    fn eval_known_images(
+        &self,
+        samples: &[EyeSample],
+        known: &[Option<[f64; 3]>],
+        images: &[u32],
+        out: &mut [[f64; 3]],
+    ) {
+        let _ = images;
+        self.eval_known(samples, known, out);
+    }
 }
 
 /// Eq. (1) from the eye to the LCD for any retina tangent and pupil point: the grid
@@ -170,6 +192,25 @@ impl<F: RadianceField + ?Sized> PairedSource for DisplaySource<'_, F> {
         self.field.uniform(&eye_rays(self.eye, tangents, pupil)).map(|(c, _)| c.to_array())
     }
 
+    fn images_over(&self, tangents: (DVec2, DVec2), pupil_radius: f64) -> Option<u32> {
+        self.eye.optics.as_ref().and_then(|optics| self.images_over_diffracted(optics, tangents, pupil_radius))
+    }
+
+    fn eval_known_images(
+        &self,
+        samples: &[EyeSample],
+        known: &[Option<[f64; 3]>],
+        images: &[u32],
+        out: &mut [[f64; 3]],
+    ) {
+        match &self.eye.optics {
+            Some(optics) if self.is_thin_diffracted(optics) => {
+                self.eval_diffracted(optics, samples, known, images, out)
+            }
+            _ => self.eval_known(samples, known, out),
+        }
+    }
+
     /// `known` may be empty (nothing known) or hold one entry per sample.
     fn eval_known(&self, samples: &[EyeSample], known: &[Option<[f64; 3]>], out: &mut [[f64; 3]]) {
         let k = self.images();
@@ -177,7 +218,7 @@ impl<F: RadianceField + ?Sized> PairedSource for DisplaySource<'_, F> {
         debug_assert_eq!(out.len(), samples.len() * k);
         if let Some(optics) = &self.eye.optics {
             if self.is_thin_diffracted(optics) {
-                return self.eval_diffracted(optics, samples, known, out);
+                return self.eval_diffracted(optics, samples, known, &[], out);
             }
             if self.is_batched_through(optics) {
                 return self.eval_through_batched(optics, samples, out);
@@ -515,9 +556,13 @@ impl Replicates {
             // Image 0 of each sample, when known for its whole pixel (`reference_over`).
             let mut known = vec![None; batch];
             let mut pixel_known = vec![None; TILE * TILE];
+            // The other images' handle, when known for the whole pixel too (`images_over`).
+            let mut images = vec![u32::MAX; batch];
+            let mut pixel_images = vec![u32::MAX; TILE * TILE];
             let mut flush = |samples: &mut [EyeSample],
                              pupils: &mut [DVec2],
                              known: &[Option<[f64; 3]>],
+                             images: &[u32],
                              owners: &[u32],
                              sums: &mut [f64]| {
                 if radius != 0.0 {
@@ -527,7 +572,7 @@ impl Replicates {
                     }
                 }
                 let vals = &mut values[..samples.len() * k];
-                source.eval_known(samples, known, vals);
+                source.eval_known_images(samples, known, images, vals);
                 match k {
                     2 => accumulate::<2>(vals, owners, sums),
                     3 => accumulate::<3>(vals, owners, sums),
@@ -545,7 +590,10 @@ impl Replicates {
                         // The pixel's square of tangents.
                         let (row, col) = (row0 + dr, col0 + dc);
                         let square = (retina.tangent(row, col, DVec2::ZERO), retina.tangent(row, col, DVec2::ONE));
-                        pixel_known[dr * TILE + dc] = source.reference_over(square, radius);
+                        let k = source.reference_over(square, radius);
+                        pixel_known[dr * TILE + dc] = k;
+                        pixel_images[dr * TILE + dc] =
+                            if k.is_some() { source.images_over(square, radius).unwrap_or(u32::MAX) } else { u32::MAX };
                     }
                 }
                 for r in 0..nr {
@@ -576,9 +624,10 @@ impl Replicates {
                                 pupils[filled] = raw.unwrap_or(DVec2::ZERO);
                                 owners[filled] = owner;
                                 known[filled] = pixel_known[owner as usize];
+                                images[filled] = pixel_images[owner as usize];
                                 filled += 1;
                                 if filled == batch {
-                                    flush(&mut samples, &mut pupils, &known, &owners, &mut sums);
+                                    flush(&mut samples, &mut pupils, &known, &images, &owners, &mut sums);
                                     filled = 0;
                                 }
                             }
@@ -589,6 +638,7 @@ impl Replicates {
                             &mut samples[..filled],
                             &mut pupils[..filled],
                             &known[..filled],
+                            &images[..filled],
                             &owners[..filled],
                             &mut sums,
                         );

@@ -102,6 +102,32 @@ impl PixelIndexer {
         Some(r * self.nx + c)
     }
 
+    /// The columns and rows (inclusive ranges) of every pixel [`PixelIndexer::index`] gives a
+    /// point of the box `lo..=hi` (world x, y, mm), or `None` when part of the box is off the
+    /// panel (or NaN). The index's arithmetic is monotone in each coordinate, so the box's
+    /// corners bound the pixels of every point inside.
+    pub fn box_pixels(&self, lo: DVec2, hi: DVec2) -> Option<([usize; 2], [usize; 2])> {
+        let (fx0, fx1) = (lo.x * self.scale.x + self.half.x, hi.x * self.scale.x + self.half.x);
+        let (fy0, fy1) = (self.half.y - hi.y * self.scale.y, self.half.y - lo.y * self.scale.y);
+        if !(fx0 >= 0.0
+            && fx1 <= 2.0 * self.half.x
+            && fy0 >= 0.0
+            && fy1 <= 2.0 * self.half.y
+            && fx0 <= fx1
+            && fy0 <= fy1)
+        {
+            return None;
+        }
+        let col = |f: f64| (f as u32 as usize).min(self.nx - 1);
+        let row = |f: f64| (f as u32 as usize).min(self.ny - 1);
+        Some(([col(fx0), col(fx1)], [row(fy0), row(fy1)]))
+    }
+
+    /// The number of pixels per row.
+    pub fn columns(&self) -> usize {
+        self.nx
+    }
+
     /// [`PixelIndexer::index`] as a `u32`, `u32::MAX` for a point off the LCD (or NaN). For
     /// every LCD with fewer than `2^31` pixels per row and column and `u32::MAX` in all (any real
     /// one; the test is made once, in [`PixelIndexer::new`]) it has no branch, so loops over many

@@ -256,6 +256,74 @@ impl<'a> FastTransfer<'a> {
         }
     }
 
+    /// The LCD pixels every deviated thin-lens ray of a retina pixel can meet, for the
+    /// diffracted eye's shortcut (`measure/estimator/diffracted.rs`): the rays of
+    /// [`crate::optics::eye::ThinLensRay`] `(v0, d1)` with retina tangents in the box `tangents`
+    /// (already widened by the pupil's deviations), pupil points within `pupil_radius` mm of its
+    /// centre in x and y, through any lenslet their lenslet-plane points can reach, bent after
+    /// the lenslet by a deviation of at most `deviation` in x and y (as
+    /// [`FastTransfer::pixel_indices_deviated`]). Calls `each(columns, rows)` (inclusive ranges)
+    /// for one rectangle per lenslet, which together hold every such ray's pixel: eq. (1) is
+    /// affine in the pupil point, the tangent and the deviation for a given lenslet, so
+    /// intervals bound it; a margin of 1e-6 mm (about 1e-4 of a pixel, far beyond the rounding
+    /// of the arithmetic) on each bound. False (and no more calls) when `each` says false, part
+    /// of a rectangle lies off the LCD, the lattice is not axis-aligned or the rays reach more
+    /// than `max_lenslets` lenslets.
+    pub fn deviated_family_pixels(
+        &self,
+        (v0, d1): (f64, f64),
+        tangents: (DVec2, DVec2),
+        pupil_radius: f64,
+        deviation: f64,
+        max_lenslets: usize,
+        mut each: impl FnMut([usize; 2], [usize; 2]) -> bool,
+    ) -> bool {
+        const MARGIN: f64 = 1e-6;
+        let lattice = &self.display.lenslets;
+        if self.thick.is_some() || !lattice.is_axis_aligned() {
+            return false;
+        }
+        // a * [lo, hi] as an interval.
+        let scale = |a: f64, lo: DVec2, hi: DVec2| ((lo * a).min(hi * a), (lo * a).max(hi * a));
+        let add = |x: (DVec2, DVec2), y: (DVec2, DVec2)| (x.0 + y.0, x.1 + y.1);
+        let r = DVec2::splat(pupil_radius.abs() * (1.0 + 1e-9) + 1e-12);
+        let t = (tangents.0.min(tangents.1) - 1e-9, tangents.0.max(tangents.1) + 1e-9);
+        let (l, p, v2) = (self.to_lenslets, self.lenslet_power, self.v2);
+        // The slope t + s (1/v0 - d1); the lenslet-plane point eye + s (1 + k L) + t L.
+        let k = 1.0 / v0 - d1;
+        let x2 = add(scale(1.0 + k * l, -r, r), scale(l, t.0, t.1));
+        let x2 = (x2.0 + self.eye_xy - MARGIN, x2.1 + self.eye_xy + MARGIN);
+        let (i0, i1) = (lattice.nearest(x2.0), lattice.nearest(x2.1));
+        let (ilo, ihi) = (i0.min(i1), i0.max(i1));
+        let count = (ihi - ilo + 1).as_i64vec2();
+        if count.x * count.y > max_lenslets as i64 {
+            return false;
+        }
+        // The LCD point eye (1 - P v2) + s ((1 + k L)(1 - P v2) + k v2) + t (L (1 - P v2) + v2)
+        // + c P v2 + deviation v2.
+        let q = 1.0 - p * v2;
+        let base = add(scale((1.0 + k * l) * q + k * v2, -r, r), scale(l * q + v2, t.0, t.1));
+        let dev = DVec2::splat(deviation.abs() * v2.abs() + MARGIN);
+        let eye = self.eye_xy * q;
+        let base = (base.0 + eye - dev, base.1 + eye + dev);
+        for iy in ilo.y..=ihi.y {
+            for ix in ilo.x..=ihi.x {
+                let c = lattice.center(glam::IVec2::new(ix, iy)) * (p * v2);
+                let (lo, hi) = (base.0 + c, base.1 + c);
+                let Some((cols, rows)) = self.indexer.box_pixels(lo, hi) else { return false };
+                if !each(cols, rows) {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+
+    /// The LCD's pixels per row.
+    pub fn lcd_columns(&self) -> usize {
+        self.indexer.columns()
+    }
+
     /// Whether the display's lenslets are real ones: then each colour channel has its own LCD
     /// pixel ([`FastTransfer::pixel_index_in`]) and the one-pixel paths above do not apply.
     pub fn is_thick(&self) -> bool {

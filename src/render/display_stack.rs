@@ -154,6 +154,17 @@ impl DisplayStack {
         }
     }
 
+    /// Whether LCD pixels `a` and `b` hold the same values in every display image, bit for bit
+    /// (the same palette entry; without a palette, the same bits).
+    #[inline]
+    pub fn same_values(&self, a: usize, b: usize) -> bool {
+        match &self.layout {
+            Layout::Palette { index, .. } => index[a] == index[b],
+            Layout::Wide { index, .. } => index[a] == index[b],
+            Layout::Dense(_) => self.pixel(a).iter().zip(self.pixel(b)).all(|(x, y)| x.to_bits() == y.to_bits()),
+        }
+    }
+
     /// Every display image's value at LCD pixel `index` (row-major): `[image][channel]`.
     #[inline(always)]
     pub fn pixel(&self, index: usize) -> &[f32] {

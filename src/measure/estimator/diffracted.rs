@@ -39,6 +39,11 @@ const MISS: u32 = u32::MAX;
 const CORE_X: f64 = 13.3237;
 /// ... at this wavelength, nm (the deviations of longer wavelengths beyond the core are traced).
 const CORE_NM: f64 = 700.0;
+/// The lenslet aperture's core for the perceived images' shortcut, in units of its angle at
+/// `CORE_NM` (`ApertureShape::angle`).
+const LENS_CORE: f64 = 1.0;
+/// The most lenslets a pixel's ray family may reach for the perceived images' shortcut.
+const MAX_LENSLETS: usize = 64;
 
 impl<F: RadianceField + ?Sized> DisplaySource<'_, F> {
     /// Whether [`DisplaySource::eval_diffracted`] serves `optics`: the thin lens without the
@@ -80,21 +85,78 @@ impl<F: RadianceField + ?Sized> DisplaySource<'_, F> {
         self.field.uniform(&eye_rays(self.eye, widened, pupil)).map(|(c, _)| c.to_array())
     }
 
+    /// The half-width (a slope change, in x and y) of the lenslet deviations the perceived
+    /// images' shortcut covers: the aperture's pattern out to `LENS_CORE` times its angle at
+    /// `CORE_NM` (for the square lenslet, the sinc^2 draws within +-1: its central lobe, about
+    /// 90% of each axis's mass); 0 without lenslet diffraction.
+    fn lenslet_core(&self) -> f64 {
+        self.lenslet.as_ref().map_or(0.0, |shape| LENS_CORE * shape.angle(CORE_NM))
+    }
+
+    /// [`super::PairedSource::images_over`] with `optics`: for the thin lens with diffraction,
+    /// an LCD pixel whose values every display image holds on every LCD pixel that the pixel's
+    /// ray family can meet with its tangents widened by [`DisplaySource::pupil_core`] and the
+    /// lenslets' deviations within [`DisplaySource::lenslet_core`]
+    /// (`FastTransfer::deviated_family_pixels`); so every sample of the pixel whose deviations
+    /// (each channel's) lie in those cores perceives exactly that pixel's values. `None`
+    /// otherwise.
+    pub(super) fn images_over_diffracted(
+        &self,
+        optics: &EyeOptics,
+        tangents: (DVec2, DVec2),
+        pupil_radius: f64,
+    ) -> Option<u32> {
+        if !self.is_thin_diffracted(optics) {
+            return None;
+        }
+        let lens = optics.thin_lens_ray()?;
+        let core = DVec2::splat(self.pupil_core(optics));
+        let widened = (tangents.0.min(tangents.1) - core, tangents.0.max(tangents.1) + core);
+        let t = &self.transfer.transfer;
+        let nx = t.lcd_columns();
+        let mut first: Option<usize> = None;
+        let same = t.deviated_family_pixels(
+            (lens.v0, lens.d1),
+            widened,
+            pupil_radius,
+            self.lenslet_core(),
+            MAX_LENSLETS,
+            |cols, rows| {
+                for row in rows[0]..=rows[1] {
+                    for col in cols[0]..=cols[1] {
+                        let idx = row * nx + col;
+                        match first {
+                            None => first = Some(idx),
+                            Some(f) if self.stack.same_values(f, idx) => {}
+                            Some(_) => return false,
+                        }
+                    }
+                }
+                true
+            },
+        );
+        first.filter(|_| same).and_then(|f| u32::try_from(f).ok()).filter(|&f| f != MISS)
+    }
+
     /// [`super::PairedSource::eval_known`] of the thin-lens eye with diffraction, batched
     /// ([`DisplaySource::is_thin_diffracted`]): `out[i * images + k]` is image `k` of sample `i`;
     /// `known` (empty, or one entry per sample) holds [`DisplaySource::reference_over_diffracted`]'s
-    /// colour of the sample's pixel, the ground truth of the samples deviated within the core.
+    /// colour of the sample's pixel, the ground truth of the samples deviated within the core;
+    /// `images` (empty, or one entry per sample) [`DisplaySource::images_over_diffracted`]'s
+    /// LCD pixel (`u32::MAX`: none), whose values the samples deviated within both cores
+    /// perceive: those samples trace nothing and read that pixel.
     pub(super) fn eval_diffracted(
         &self,
         optics: &EyeOptics,
         samples: &[EyeSample],
         known: &[Option<[f64; 3]>],
+        images: &[u32],
         out: &mut [[f64; 3]],
     ) {
         BUFFERS.with(|b| match b.try_borrow_mut() {
-            Ok(mut b) => self.eval_diffracted_in(optics, samples, known, out, &mut b),
+            Ok(mut b) => self.eval_diffracted_in(optics, samples, known, images, out, &mut b),
             // Re-entered on this thread (a field that runs parallel work): fresh buffers.
-            Err(_) => self.eval_diffracted_in(optics, samples, known, out, &mut Buffers::default()),
+            Err(_) => self.eval_diffracted_in(optics, samples, known, images, out, &mut Buffers::default()),
         });
     }
 
@@ -103,11 +165,11 @@ impl<F: RadianceField + ?Sized> DisplaySource<'_, F> {
         optics: &EyeOptics,
         samples: &[EyeSample],
         known: &[Option<[f64; 3]>],
+        images: &[u32],
         out: &mut [[f64; 3]],
         b: &mut Buffers,
     ) {
         let k = 1 + self.stack.len();
-        let n = samples.len();
         let eye_xy = self.eye.position.truncate();
         let z = self.eye.position.z;
         let single = optics.is_single_wavelength();
@@ -125,7 +187,10 @@ impl<F: RadianceField + ?Sized> DisplaySource<'_, F> {
         b.lens_draw.clear();
         b.rays.clear();
         b.slot.clear();
+        b.active.clear();
+        b.pos.clear();
         let core = self.pupil_core(optics);
+        let lens_core = self.lenslet_core();
         // Each sample's first ray among the scene rays, or MISS when its ground truth is known.
         let mut traced = 0u32;
         for (i, s) in samples.iter().enumerate() {
@@ -133,20 +198,38 @@ impl<F: RadianceField + ?Sized> DisplaySource<'_, F> {
             let l: [f64; 3] =
                 if single { [optics.wavelength(0, u); 3] } else { std::array::from_fn(|c| optics.wavelength(c, u)) };
             b.nm.push(l);
-            if let Some(shape) = &self.lenslet {
-                b.lens_draw.push(shape.draw([s.diffraction[2], s.diffraction[3]]));
+            let lens_draw = self.lenslet.as_ref().map(|shape| shape.draw([s.diffraction[2], s.diffraction[3]]));
+            if let Some(d) = lens_draw {
+                b.lens_draw.push(d);
             }
             // `EyeOptics::rays_diffracted`'s tangents: moved by the channel's Airy deviation.
             let draw = if pupil_on { disk_draw([s.diffraction[0], s.diffraction[1]]) } else { ApertureDraw::default() };
             let mut in_core = matches!(known.get(i), Some(Some(_)));
-            for &lc in &l[..per_ray] {
-                let tangent = if pupil_on {
+            let mut tangents = [s.tangent; 3];
+            for (t, &lc) in tangents.iter_mut().zip(&l[..per_ray]) {
+                if pupil_on {
                     let d = draw.disk(optics.pupil_diameter, lc);
                     in_core &= d.x.abs() <= core && d.y.abs() <= core;
-                    s.tangent + d
-                } else {
-                    s.tangent
+                    *t = s.tangent + d;
+                }
+            }
+            // The perceived images known too: every channel's lenslet deviation in its core.
+            let seen = in_core
+                && images.get(i).is_some_and(|&p| p != MISS)
+                && match (&self.lenslet, lens_draw) {
+                    (Some(shape), Some(d)) => l.iter().all(|&lc| {
+                        let v = shape.scaled(d, lc);
+                        v.x.abs() <= lens_core && v.y.abs() <= lens_core
+                    }),
+                    _ => true,
                 };
+            if seen {
+                b.pos.push(MISS);
+                continue;
+            }
+            b.pos.push(b.active.len() as u32);
+            b.active.push(i as u32);
+            for &tangent in &tangents[..per_ray] {
                 let r = lens.ray(tangent, s.pupil);
                 b.rays.push(PlaneRay { position: r.position + eye_xy, slope: r.slope });
             }
@@ -157,6 +240,7 @@ impl<F: RadianceField + ?Sized> DisplaySource<'_, F> {
                 traced += per_ray as u32;
             }
         }
+        let na = b.active.len();
 
         // The ground truth: the rays of the samples not known into the scene.
         b.scene.clear();
@@ -182,15 +266,15 @@ impl<F: RadianceField + ?Sized> DisplaySource<'_, F> {
         let pixels = if per_pixel { 3 } else { 1 };
         let t = &self.transfer.transfer;
         b.lcd.clear();
-        b.lcd.resize(n * pixels, MISS);
+        b.lcd.resize(na * pixels, MISS);
         let ray_of = |j: usize| (j / pixels) * per_ray + (j % pixels).min(per_ray - 1);
-        let (nm, lens_draw) = (&b.nm, &b.lens_draw);
+        let (nm, lens_draw, active) = (&b.nm, &b.lens_draw, &b.active);
         match &self.lenslet {
             None => t.pixel_indices_deviated(&b.rays, |j| (ray_of(j), None), &mut b.scratch, &mut b.lcd),
             Some(shape) => t.pixel_indices_deviated(
                 &b.rays,
                 |j| {
-                    let (i, c) = (j / pixels, j % pixels);
+                    let (i, c) = (active[j / pixels] as usize, j % pixels);
                     (ray_of(j), Some(shape.scaled(lens_draw[i], nm[i][c])))
                 },
                 &mut b.scratch,
@@ -201,12 +285,23 @@ impl<F: RadianceField + ?Sized> DisplaySource<'_, F> {
         // The reads: the ground truth's channel c from channel c's ray, every image's channel
         // c at channel c's pixel.
         for (i, o) in out.chunks_exact_mut(k).enumerate() {
+            let a = b.pos[i];
+            if a == MISS {
+                // Both known: the pixel's ground truth and its LCD pixel's values.
+                o[0] = known[i].expect("a known ground truth");
+                let px = self.stack.pixel(images[i] as usize);
+                for (j, v) in o[1..].iter_mut().enumerate() {
+                    *v = std::array::from_fn(|c| f64::from(px[3 * j + c]));
+                }
+                continue;
+            }
+            let a = a as usize;
             for c in 0..3 {
-                o[0][c] = match b.slot[i] {
+                o[0][c] = match b.slot[a] {
                     MISS => known[i].expect("a known ground truth")[c],
                     j => b.hits[j as usize + c.min(per_ray - 1)].radiance.to_array()[c],
                 };
-                let idx = b.lcd[i * pixels + c.min(pixels - 1)];
+                let idx = b.lcd[a * pixels + c.min(pixels - 1)];
                 if idx == MISS {
                     for v in o[1..].iter_mut() {
                         v[c] = 0.0;
@@ -231,8 +326,12 @@ struct Buffers {
     lens_draw: Vec<ApertureDraw>,
     /// Each sample's rays (1 or 3), world x, y at the eye's plane.
     rays: Vec<PlaneRay>,
-    /// Each sample's first scene ray, or MISS.
+    /// Each traced sample's first scene ray, or MISS.
     slot: Vec<u32>,
+    /// The samples traced (not known in both cores), in order.
+    active: Vec<u32>,
+    /// Each sample's place in `active`, or MISS when known in both cores.
+    pos: Vec<u32>,
     scene: Vec<Ray>,
     hits: Vec<Sample>,
     /// The LCD pixel of each sample's channels (MISS: none).
