@@ -135,6 +135,8 @@ pub struct DisplayDesign {
     pub lenslet_pixel_beams_in_pupil: usize,
     /// Diffraction's angles at the pupil and the lenslet aperture, per colour channel.
     pub diffraction: DiffractionInfo,
+    /// The panel's luminance: peak, black, ambient light, the primaries' luminance shares.
+    pub photometry: crate::optics::photometry::PhotometryInfo,
     /// A real lenslet's focal properties (absent for the paper's thin lens).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub lenslet: Option<LensletReport>,
@@ -385,6 +387,7 @@ pub fn display_design(d: &Display, pupil_diameter: f64) -> DisplayDesign {
         pixel_beam_spacing_mm: (m * pitch).to_array(),
         lenslet_pixel_beams_in_pupil: views,
         diffraction: diffraction_info(d, pupil_diameter, Diffraction::None),
+        photometry: crate::optics::photometry::PhotometryInfo::of(d),
         lenslet,
         warnings,
     }
@@ -480,6 +483,7 @@ pub fn display_design_text(x: &DisplayDesign, summary: &str) -> String {
     }
     s.pop();
     s += "\n";
+    s += &x.photometry.text();
     if let Some(l) = &x.lenslet {
         let cdp = |z: Option<f64>| z.map_or("none".to_string(), |z| format!("{z:.1}"));
         s += &format!(

@@ -118,6 +118,7 @@ fn single_lenslet_display(lattice: Lattice) -> Display {
         lcd: Lcd { size: DVec2::splat(8.0), resolution: [800, 800] },
         primaries: None,
         lenslet: Default::default(),
+        photometry: None,
     }
 }
 

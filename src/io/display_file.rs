@@ -12,6 +12,7 @@ use serde::{Deserialize, Serialize};
 
 use super::text::{read_text, toml_error};
 use crate::error::{Error, Result};
+use crate::optics::photometry::PhotometrySpec;
 use crate::optics::{Display, Lattice, Lcd};
 
 /// A lattice's pitch: a number (square), a pair (rectangular) or a row-major 2x2 matrix.
@@ -131,6 +132,10 @@ pub struct DisplaySpec {
     /// `[lenslet]`: the lenslets' optics (default: the paper's thin lens).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub lenslet: Option<super::display_lenslet::LensletOpticsSpec>,
+    /// `[photometry]`: peak white, black level or contrast ratio, ambient light (default: a
+    /// typical near-eye LCD's, [`crate::optics::photometry`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub photometry: Option<PhotometrySpec>,
 }
 
 impl DisplaySpec {
@@ -152,6 +157,7 @@ impl DisplaySpec {
                 Some(l) => l.to_optics(source)?,
                 None => crate::optics::lenslet::LensletOptics::Paraxial,
             },
+            photometry: self.photometry.as_ref().map(|p| p.resolve(source)).transpose()?,
         };
         if let Some(p) = &d.primaries {
             p.validate(source)?;
@@ -172,6 +178,7 @@ impl DisplaySpec {
             lcd: LcdSpec { size: d.lcd.size.to_array(), resolution: d.lcd.resolution },
             primaries: d.primaries.clone(),
             lenslet: super::display_lenslet::LensletOpticsSpec::from_optics(&d.lenslet),
+            photometry: d.photometry.as_ref().map(PhotometrySpec::of),
         }
     }
 }
@@ -373,6 +380,7 @@ pub fn parse_opencv_display(text: &str, path: &Path) -> Result<Display> {
         lcd: Lcd { size: DVec2::new(size[0], size[1]), resolution: [res[0] as usize, res[1] as usize] },
         primaries: None,
         lenslet: crate::optics::lenslet::LensletOptics::Paraxial,
+        photometry: None,
     };
     // Name the framework's keys in validation errors.
     d.validate(&src).map_err(|e| match e {

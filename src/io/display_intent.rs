@@ -85,6 +85,9 @@ pub struct IntentDisplaySpec {
     /// derivation uses.
     #[serde(default)]
     pub lenslet: Option<super::display_lenslet::LensletOpticsSpec>,
+    /// `[photometry]`, passed through.
+    #[serde(default)]
+    pub photometry: Option<crate::optics::photometry::PhotometrySpec>,
 }
 
 impl IntentDisplaySpec {
@@ -149,6 +152,7 @@ impl IntentDisplaySpec {
             },
             lcd: Lcd { size: DVec2::from_array(self.lcd.size), resolution: self.lcd.resolution },
             primaries: self.primaries.clone(),
+            photometry: self.photometry.as_ref().map(|p| p.resolve(source)).transpose()?,
         })
     }
 

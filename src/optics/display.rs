@@ -175,6 +175,10 @@ pub struct Display {
     /// The lenslets' optics: the paper's thin lens of `focal_length` (the default), or a real
     /// thick lenslet traced exactly ([`crate::optics::lenslet`]).
     pub lenslet: LensletOptics,
+    /// The panel's photometry (`[photometry]`; `None`: the documented default,
+    /// [`crate::optics::photometry::Photometry::typical_near_eye_lcd`]): how its values become
+    /// cd/m^2. No rendered or simulated value reads it.
+    pub photometry: Option<super::photometry::Photometry>,
 }
 
 impl Display {
@@ -191,6 +195,7 @@ impl Display {
             lcd: Lcd { size: DVec2::splat(21.6), resolution: [2160, 2160] },
             primaries: None,
             lenslet: LensletOptics::Paraxial,
+            photometry: None,
         }
     }
 
@@ -216,6 +221,20 @@ impl Display {
     /// camera rays of display rendering and the eye rays of the grid estimator.
     pub fn channel_wavelengths(&self) -> [f64; 3] {
         self.channel_samplers().map(|s| s.wavelength(0.5))
+    }
+
+    /// The panel's photometry (`photometry`, or the typical near-eye LCD's).
+    pub fn photometry(&self) -> super::photometry::Photometry {
+        self.photometry.unwrap_or_default()
+    }
+
+    /// Each channel's share of the display's luminance, from its primary's spectrum (`primaries`,
+    /// or the typical LCD's) weighted by V(lambda); sums to 1.
+    pub fn luminance_weights(&self) -> [f64; 3] {
+        match &self.primaries {
+            Some(p) if p.validate("display").is_ok() => p.luminance_weights(),
+            _ => crate::optics::spectrum::Primaries::typical_lcd().luminance_weights(),
+        }
     }
 
     /// The real lenslet, if the display has one.
@@ -272,6 +291,9 @@ impl Display {
         limits::LCD_SIZE.check(source, "lcd.size[1] (height)", self.lcd.size.y)?;
         if let Some(t) = self.thick_lenslet() {
             t.validate(&self.lenslets, source, "lenslet")?;
+        }
+        if let Some(p) = &self.photometry {
+            p.validate(source)?;
         }
         for (i, n) in self.lcd.resolution.iter().enumerate() {
             if *n == 0 {

@@ -104,6 +104,8 @@ pub struct DisplayIntent {
     pub lcd: Lcd,
     /// The LCD primaries, passed through.
     pub primaries: Option<super::spectrum::Primaries>,
+    /// The panel's photometry, passed through.
+    pub photometry: Option<super::photometry::Photometry>,
 }
 
 /// How the explicit display follows from the intent: every derived number, for `info`.
@@ -324,6 +326,7 @@ impl DisplayIntent {
             elemental_images: lattice(x.elemental_image_matrix_mm, "intent.lenslet_pitch")?,
             lcd: self.lcd,
             primaries: self.primaries.clone(),
+            photometry: self.photometry,
             lenslet: match &self.lenslet {
                 LensletOptics::Paraxial => LensletOptics::Paraxial,
                 LensletOptics::Thick(t) => LensletOptics::Thick(Box::new(ThickLenslet {
@@ -455,6 +458,7 @@ mod tests {
             lattice: LatticeKind::Square,
             lcd: Display::paper().lcd,
             primaries: None,
+            photometry: None,
             lenslet: LensletOptics::Paraxial,
         }
     }

@@ -8,6 +8,7 @@ pub mod lattice;
 pub mod lenslet;
 pub mod lenslet_lanes;
 pub mod limits;
+pub mod photometry;
 pub mod plausibility;
 pub mod spectrum;
 pub mod transfer;

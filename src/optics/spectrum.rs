@@ -11,6 +11,14 @@
 //! these are representative values, not a measured panel: give a panel's own spectra in the
 //! display file (`[primaries]`) for its numbers. Wavelengths are drawn by the inverse of each
 //! spectrum's cumulative distribution, tabulated on a 0.25 nm grid.
+//!
+//! Each primary's share of the display's luminance is its spectrum weighted by the photopic
+//! luminous efficiency function V(lambda) of the CIE 1924 standard observer (equal to the
+//! y-bar colour-matching function of the CIE 1931 2-degree observer; CIE 015:2018 *Colorimetry*,
+//! Sec. 3), read from the 1 nm table of the `colorimetry` crate and linear between its entries:
+//! `w_c = int S_c V dl / sum_k int S_k V dl`. The spectra are in one relative power scale common to
+//! the three primaries (a Gaussian's peak is 1, a table's powers as written): the emission of
+//! each channel at full drive.
 
 use serde::{Deserialize, Serialize};
 
@@ -73,6 +81,14 @@ impl Primaries {
 
     fn channels(&self) -> [(&'static str, &PrimarySpec); 3] {
         [("red", &self.red), ("green", &self.green), ("blue", &self.blue)]
+    }
+
+    /// Each channel's share of the display's luminance (module comment): `[red, green, blue]`,
+    /// summing to 1. The spectra must be valid (they are, once the display is loaded).
+    pub fn luminance_weights(&self) -> [f64; 3] {
+        let y = self.channels().map(|(_, p)| p.luminous_power());
+        let total: f64 = y.iter().sum();
+        y.map(|v| v / total)
     }
 
     /// The wavelength samplers of the three channels (validated first).
@@ -140,6 +156,17 @@ impl PrimarySpec {
         Ok(())
     }
 
+    /// The spectrum's power weighted by V(lambda), `int S V dl` on the sampler's 0.25 nm grid
+    /// (trapezoids), in the spectrum's own relative power times nm.
+    pub fn luminous_power(&self) -> f64 {
+        let n = ((VISIBLE_NM.1 - VISIBLE_NM.0) / STEP).round() as usize;
+        let f = |i: usize| {
+            let nm = VISIBLE_NM.0 + i as f64 * STEP;
+            self.power(nm) * photopic_efficiency(nm)
+        };
+        (0..n).map(|i| 0.5 * (f(i) + f(i + 1)) * STEP).sum()
+    }
+
     /// Relative power at `nm` (zero outside the visible range and the table).
     pub fn power(&self, nm: f64) -> f64 {
         if !(VISIBLE_NM.0..=VISIBLE_NM.1).contains(&nm) {
@@ -159,6 +186,24 @@ impl PrimarySpec {
                 p0 + (p1 - p0) * (nm - l0) / (l1 - l0)
             }
         }
+    }
+}
+
+/// The photopic luminous efficiency V(lambda) of the CIE 1924 standard observer at `nm`
+/// (module comment): the 1 nm table, linear between its entries, zero outside 380-780 nm.
+pub fn photopic_efficiency(nm: f64) -> f64 {
+    if !(VISIBLE_NM.0..=VISIBLE_NM.1).contains(&nm) {
+        return 0.0;
+    }
+    let v =
+        |l: usize| colorimetry::observer::Observer::Cie1931.xyz_at_wavelength(l).map_or(0.0, |xyz| xyz.to_array()[1]);
+    let lo = nm.floor();
+    let f = nm - lo;
+    let a = v(lo as usize);
+    if f == 0.0 {
+        a
+    } else {
+        a + (v(lo as usize + 1) - a) * f
     }
 }
 
@@ -313,6 +358,28 @@ mod tests {
         }
         assert!((s.wavelength(0.5) - 510.0).abs() < 1e-9);
         assert_eq!(s.quantiles(2).len(), 2);
+    }
+
+    #[test]
+    fn v_lambda_is_the_cie_1924_table_and_weights_follow_it() {
+        // CIE 1924 V(lambda) at tabulated wavelengths (CIE 015:2018, Table T.4's y-bar).
+        for (nm, v) in [(450.0, 0.038), (500.0, 0.323), (555.0, 1.0), (610.0, 0.503), (650.0, 0.107)] {
+            assert!((photopic_efficiency(nm) - v).abs() < 1e-9, "{nm}: {}", photopic_efficiency(nm));
+        }
+        // Linear between entries, zero outside the visible range.
+        let mid = 0.5 * (photopic_efficiency(555.0) + photopic_efficiency(556.0));
+        assert!((photopic_efficiency(555.5) - mid).abs() < 1e-15);
+        assert_eq!(photopic_efficiency(379.0), 0.0);
+        // Narrow lines weigh as V at their wavelength times their power: two 2 nm boxes of
+        // equal power at 555 and 450 nm have weights in the ratio V(555) : V(450).
+        let b = |c: f64| PrimarySpec::Table {
+            table: vec![[c - 1.0, 0.0], [c - 0.75, 1.0], [c + 0.75, 1.0], [c + 1.0, 0.0]],
+        };
+        let p = Primaries { red: b(555.0), green: b(555.0), blue: b(450.0) };
+        let w = p.luminance_weights();
+        assert!((w.iter().sum::<f64>() - 1.0).abs() < 1e-15);
+        assert_eq!(w[0], w[1]);
+        assert!((w[2] / w[0] - 0.038).abs() < 2e-3, "{w:?}");
     }
 
     #[test]
