@@ -277,7 +277,8 @@ impl PhotometryInfo {
     pub fn text(&self) -> String {
         let w = self.luminance_weights;
         format!(
-            "photometry{}: peak white {} cd/m^2, black {} cd/m^2 (contrast {:.0}:1), ambient {} lux x reflectance {}              (reflected {:.4} cd/m^2; effective contrast {:.0}:1); luminance shares R / G / B {:.4} / {:.4} / {:.4}\n",
+            "photometry{}: peak white {} cd/m^2, black {} cd/m^2 (contrast {:.0}:1), ambient {} lux x reflectance {} \
+             (reflected {:.4} cd/m^2; effective contrast {:.0}:1); luminance shares R / G / B {:.4} / {:.4} / {:.4}\n",
             if self.stated { "" } else { " (default: a typical near-eye LCD)" },
             self.peak_luminance_cd_m2,
             self.black_level_cd_m2,
