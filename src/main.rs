@@ -261,12 +261,16 @@ enum Command {
         /// Display TOML or OpenCV YAML (default: the paper's).
         #[arg(long)]
         display: Option<PathBuf>,
-        /// Describe this scene TOML instead of a display.
-        #[arg(long, conflicts_with = "display")]
+        /// Describe this scene TOML instead of a display (with --pupil auto: the scene the
+        /// display shows, for the adapting luminance).
+        #[arg(long)]
         scene: Option<PathBuf>,
-        /// Pupil diameter (mm) for the views through the pupil and the pixel beams in it.
-        #[arg(long, default_value_t = 5.0)]
-        pupil: f64,
+        /// Pupil diameter (mm) for the views through the pupil and the pixel beams in it, or
+        /// `auto`: the light-adapted pupil (Watson & Yellott 2012) of the display's field of view
+        /// over --scene (default: the paper's scene) at the display's photometry, for an observer
+        /// of 30 years adapted with both eyes.
+        #[arg(long, default_value = "5")]
+        pupil: String,
         /// Print JSON.
         #[arg(long)]
         json: bool,
@@ -498,6 +502,9 @@ fn run() -> Result<()> {
                 }
             };
             let criterion = inimtrace::optics::eye::FocusCriterion::Paraxial;
+            let Ok(pupil) = pupil.parse::<f64>() else {
+                anyhow::bail!("--pupil must be a diameter in mm with --eye, got `{pupil}`");
+            };
             let d = inimtrace::optics::eye::describe::describe(&model, focus, pupil, criterion, 555.0)?;
             match json {
                 true => outln!("{}", serde_json::to_string_pretty(&d)?),

@@ -611,7 +611,7 @@ mod tests {
             "display_render.la_grid=3",
         ]));
         let r = s.resolve().unwrap();
-        assert_eq!(r.experiment.eye.pupil_diameter, 3.0);
+        assert_eq!(r.experiment.eye.pupil_diameter, crate::optics::eye::pupil::PupilSetting::Mm(3.0));
         assert_eq!(r.experiment.eye_cases[1].focus_mm, Some(250.0));
         assert_eq!(r.experiment.display_render.la_grid, 3);
         let exp = r.experiment().unwrap();

@@ -50,6 +50,17 @@ def test_experiment_fields_and_set_forms():
     assert exp.scene.name == "paper" and exp.display.lcd_resolution == [2160, 2160]
 
 
+def test_auto_pupil_follows_the_display_luminance():
+    path = ROOT / "experiments" / "paper.toml"
+    dim = inimtrace.Experiment.load(path, set={"eye.pupil_diameter": "auto"})
+    bright = inimtrace.Experiment.load(
+        path, set={"eye.pupil_diameter": "auto", "display.photometry.peak_luminance": 1000}
+    )
+    assert dim.settings()["eye"]["pupil_diameter"] == "auto"
+    # Watson & Yellott (2012): a brighter display, a smaller pupil, within the formula's range.
+    assert 2.0 < bright.eye_cases[1][1].pupil < dim.eye_cases[1][1].pupil < 8.0
+
+
 def test_scene_fields():
     s = inimtrace.Scene.paper()
     assert s.name == "paper" and s.object_count == 4 and s.triangle_count == 8 and s.warnings == []

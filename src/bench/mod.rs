@@ -207,7 +207,7 @@ pub fn run(opts: &BenchOptions, scene: &Scene, scene_label: &str) -> Result<Benc
         cores: ctx.cores,
         sizes: sz.clone(),
         la_grid: paper.la,
-        pupil_diameter_mm: base.spec.eye.pupil_diameter,
+        pupil_diameter_mm: base.pupil_diameter(),
         pupil_grid: paper.pupil,
         retina_samples: paper.retina,
         eye_cases: pipeline::focused_cases(&base)?

@@ -34,6 +34,9 @@ pub(crate) fn assess(
     let out = out.unwrap_or_else(|| PathBuf::from("out").join(&exp.name));
     if !quiet {
         eprintln!("{}", exp.display.summary());
+        if let Some(p) = &exp.auto_pupil {
+            eprintln!("{}", p.text());
+        }
     }
     if keep_replicates && exp.measurement.estimator != inimtrace::measure::spec::EstimatorKind::Converged {
         eprintln!(

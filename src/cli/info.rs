@@ -18,7 +18,7 @@ pub(crate) fn info(
     g: &Globals,
     display: Option<PathBuf>,
     scene: Option<PathBuf>,
-    (pupil, diffraction): (f64, inimtrace::optics::diffraction::Diffraction),
+    (pupil, diffraction): (String, inimtrace::optics::diffraction::Diffraction),
     json: bool,
     print: Option<PrintTarget>,
     write_display: Option<(PathBuf, bool)>,
@@ -38,10 +38,14 @@ pub(crate) fn info(
         out!("{text}");
         return Ok(true);
     }
-    if let Some(p) = scene {
+    let auto = pupil == "auto";
+    if let (Some(p), false) = (&scene, auto) {
+        if display.is_some() {
+            bail!("--display with --scene needs --pupil auto (the scene then sets the adapting luminance)");
+        }
         let scene = match set.is_empty() {
             true => load_scene(&p.to_string_lossy(), Path::new(""))?,
-            false => scene_with(Some(&p), set)?,
+            false => scene_with(Some(p), set)?,
         };
         let summary = inimtrace::info::scene_summary(&scene);
         match json {
@@ -53,13 +57,19 @@ pub(crate) fn info(
         }
         return Ok(true);
     }
-    if !(pupil.is_finite() && pupil > 0.0) {
-        bail!("--pupil must be a positive number of mm, got {pupil}");
-    }
     let d = match display {
         _ if !set.is_empty() => display_with(display.as_deref(), set)?,
         Some(ref p) => load_display(&p.to_string_lossy(), Path::new(""))?,
         None => Display::paper(),
+    };
+    let auto_pupil = match auto {
+        true => Some(auto_pupil(scene.as_deref(), &d)?),
+        false => None,
+    };
+    let pupil = match (&auto_pupil, pupil.parse::<f64>()) {
+        (Some(a), _) => (a.diameter_mm * 1000.0).round() / 1000.0,
+        (None, Ok(p)) if p.is_finite() && p > 0.0 => p,
+        _ => bail!("--pupil must be a positive number of mm or `auto`, got {pupil}"),
     };
     let source = display.as_ref().map_or_else(|| "builtin:paper".to_string(), |p| p.display().to_string());
     for w in inimtrace::optics::plausibility::display_warnings(&d, &source) {
@@ -89,6 +99,9 @@ pub(crate) fn info(
             if let (Some(x), Some(map)) = (&derivation, v.as_object_mut()) {
                 map.insert("intent_derivation".into(), serde_json::to_value(x)?);
             }
+            if let (Some(p), Some(map)) = (&auto_pupil, v.as_object_mut()) {
+                map.insert("auto_pupil".into(), serde_json::to_value(p)?);
+            }
             outln!("{}", serde_json::to_string_pretty(&v)?)
         }
         false => {
@@ -96,8 +109,22 @@ pub(crate) fn info(
                 out!("{}", x.text());
             }
             out!("{}", inimtrace::info::display_design_text(&design, &d.summary()));
+            if let Some(p) = &auto_pupil {
+                outln!("{}", p.text());
+            }
             outln!("backend library: {}", inimtrace::version::embree_loaded());
         }
     }
     Ok(false)
+}
+
+/// `--pupil auto`: the light-adapted pupil of the default observer for `scene` (a file, or the
+/// paper's scene) shown by `d` to an eye at the origin.
+fn auto_pupil(scene: Option<&Path>, d: &Display) -> Result<inimtrace::optics::eye::pupil::AutoPupil> {
+    let scene = match scene {
+        Some(p) => load_scene(&p.to_string_lossy(), Path::new(""))?,
+        None => load_scene("builtin:paper", Path::new(""))?,
+    };
+    let observer = inimtrace::optics::eye::pupil::Observer::default();
+    Ok(inimtrace::render::adapting::auto_pupil(&scene, d, glam::DVec3::ZERO, observer)?)
 }

@@ -250,6 +250,7 @@ fn assess_with<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
         display: display.into(),
         central_depth_plane_mm: display.central_depth_plane(),
         eyes: super::report::EyeReport::of(exp),
+        pupil: exp.auto_pupil,
         scores,
         stages,
         total_seconds: start.elapsed().as_secs_f64(),

@@ -7,6 +7,7 @@ use glam::DVec2;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
+use crate::optics::eye::pupil::{AutoPupil, Observer, PupilSetting};
 use crate::optics::eye::{EyeModel, EyeOptics, EyeOpticsSpec, FocusCriterion, UserEye};
 use crate::optics::{Aperture, Eye};
 
@@ -16,8 +17,10 @@ use crate::optics::{Aperture, Eye};
 pub struct EyeSpec {
     /// v0, mm.
     pub retina_distance: f64,
-    /// Pupil diameter, mm.
-    pub pupil_diameter: f64,
+    /// Pupil diameter, mm, or `"auto"`: the light-adapted pupil of Watson & Yellott (2012) for
+    /// the display's photometry and the scene ([`crate::optics::eye::pupil`],
+    /// [`crate::render::adapting`]).
+    pub pupil_diameter: PupilSetting,
     /// n: n x n grid over the pupil's bounding square, kept inside the circle.
     pub pupil_grid: usize,
     /// Retina pixels per side.
@@ -56,11 +59,24 @@ pub struct EyeSpec {
     /// The Stiles-Crawford peak in the entrance pupil, mm from its centre ([0, 0]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub stiles_crawford_peak: Option<[f64; 2]>,
+    /// The observer's age for `pupil_diameter = "auto"`, years (default 30).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub age: Option<f64>,
+    /// Eyes adapted to the display for `pupil_diameter = "auto"`: 1 or 2 (default 2).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub adapted_eyes: Option<u8>,
 }
 
 impl EyeSpec {
-    /// The eye beyond the thin lens these settings ask for; errors name `source` and the field.
-    pub fn optics_spec(&self, source: &str) -> Result<EyeOpticsSpec> {
+    /// The observer of `pupil_diameter = "auto"` (`None` for a stated diameter); errors name
+    /// `source` and the field.
+    pub fn observer(&self, source: &str) -> Result<Option<Observer>> {
+        observer_of(self.pupil_diameter, self.age, self.adapted_eyes, source, "eye.", "eye.pupil_diameter")
+    }
+
+    /// The eye beyond the thin lens these settings ask for, with the pupil `pupil_diameter` mm
+    /// (stated, or chosen by `"auto"`); errors name `source` and the field.
+    pub fn optics_spec(&self, pupil_diameter: f64, source: &str) -> Result<EyeOpticsSpec> {
         let m = EyeModelSettings {
             model: self.model.clone(),
             user: self.user.clone(),
@@ -70,9 +86,40 @@ impl EyeSpec {
             wavelength_samples: self.wavelength_samples,
             stiles_crawford_rho: self.stiles_crawford_rho,
             stiles_crawford_peak: self.stiles_crawford_peak,
+            age: None,
+            adapted_eyes: None,
         };
-        m.optics_spec(self.pupil_diameter, source, "eye.")
+        m.optics_spec(pupil_diameter, source, "eye.")
     }
+}
+
+/// The observer of a pupil setting (the field `pupil_key`) with its `age` and `adapted_eyes`
+/// (`None` for a stated diameter, which reads neither); errors name `source` and `prefix` + the
+/// field.
+pub fn observer_of(
+    pupil: PupilSetting,
+    age: Option<f64>,
+    eyes: Option<u8>,
+    source: &str,
+    prefix: &str,
+    pupil_key: &str,
+) -> Result<Option<Observer>> {
+    if pupil != PupilSetting::Auto {
+        for (given, field) in [(age.is_some(), "age"), (eyes.is_some(), "adapted_eyes")] {
+            if given {
+                return Err(Error::invalid(
+                    source,
+                    format!("{prefix}{field}"),
+                    format!("is only read with `{pupil_key} = \"auto\"` (the light-adapted pupil)"),
+                ));
+            }
+        }
+        return Ok(None);
+    }
+    let d = Observer::default();
+    let o = Observer { age: age.unwrap_or(d.age), eyes: eyes.unwrap_or(d.eyes) };
+    o.validate(source, prefix)?;
+    Ok(Some(o))
 }
 
 /// The eye-model settings of an experiment's `[eye]` (there among the eye's other fields) and of
@@ -105,6 +152,12 @@ pub struct EyeModelSettings {
     /// See [`EyeSpec::stiles_crawford_peak`].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub stiles_crawford_peak: Option<[f64; 2]>,
+    /// See [`EyeSpec::age`] (a study's `pupil_diameter_mm = "auto"`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub age: Option<f64>,
+    /// See [`EyeSpec::adapted_eyes`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub adapted_eyes: Option<u8>,
 }
 
 impl EyeModelSettings {
@@ -209,6 +262,28 @@ impl EyeModelSettings {
     }
 }
 
+impl EyeModelSettings {
+    /// A resolution study's pupil (`pupil_diameter_mm`), mm, and how `"auto"` chose it: the light-
+    /// adapted pupil of the chart's grey `grey` (`target.mean`) at `display`'s photometry over its
+    /// field ([`crate::render::adapting::grey_field`]), for the observer of these settings' `age`
+    /// and `adapted_eyes`. Errors name `source` and the field.
+    pub fn study_pupil(
+        &self,
+        setting: PupilSetting,
+        grey: f64,
+        display: &crate::optics::Display,
+        source: &str,
+    ) -> Result<(f64, Option<AutoPupil>)> {
+        let key = "pupil_diameter_mm";
+        let observer = observer_of(setting, self.age, self.adapted_eyes, source, "eye.", key)?;
+        let (l, a) = crate::render::adapting::grey_field(display, grey);
+        let auto = observer.map(|o| AutoPupil::new(o, l, a));
+        let pupil = auto.map_or(setting.stated().unwrap_or(f64::NAN), |p| p.diameter_mm);
+        crate::optics::limits::PUPIL_DIAMETER.check(source, key, pupil)?;
+        Ok((pupil, auto))
+    }
+}
+
 /// An error of the model's own fields (`eye.model`, `eye.user...`) renamed under `prefix`.
 fn prefix_model_field(e: Error, prefix: &str) -> Error {
     match e {
@@ -225,7 +300,7 @@ impl Default for EyeSpec {
     fn default() -> Self {
         Self {
             retina_distance: 17.0,
-            pupil_diameter: 5.0,
+            pupil_diameter: PupilSetting::Mm(5.0),
             pupil_grid: 8,
             retina_resolution: 512,
             retina_half_tangent: 0.3,
@@ -239,6 +314,8 @@ impl Default for EyeSpec {
             wavelength_samples: None,
             stiles_crawford_rho: None,
             stiles_crawford_peak: None,
+            age: None,
+            adapted_eyes: None,
         }
     }
 }

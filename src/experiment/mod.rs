@@ -34,6 +34,7 @@ use crate::io::{load_display, load_scene};
 use crate::measure::spec::MeasurementSpec;
 use crate::metrics::SsimConstants;
 use crate::optics::diffraction::OpticsSpec;
+use crate::optics::eye::pupil::{AutoPupil, PupilSetting};
 use crate::optics::eye::EyeOptics;
 use crate::optics::{Aperture, Display, Eye, Focus, Retina};
 use crate::render::{DisplayRenderSettings, Method};
@@ -145,7 +146,7 @@ impl ExperimentSpec {
             name: "framework-2020".into(),
             description: Some("What the published framework (2020) actually ran: 2 mm pupil (ApertureRadius default 1 mm), 5 x 5 pupil grid (21 samples), one sample per pixel, SSIM with 8-bit constants.".into()),
             ssim: SsimConstants::Framework8Bit,
-            eye: EyeSpec { pupil_diameter: 2.0, pupil_grid: 5, ..EyeSpec::default() },
+            eye: EyeSpec { pupil_diameter: PupilSetting::Mm(2.0), pupil_grid: 5, ..EyeSpec::default() },
             ..Self::paper()
         }
     }
@@ -202,6 +203,8 @@ pub struct Experiment {
     pub measurement: MeasurementSpec,
     /// How OPT is trained (`[optimize]`), when `methods` lists it.
     pub optimize: Option<crate::optimize::Optimization>,
+    /// How `eye.pupil_diameter = "auto"` chose the pupil (absent for a stated diameter).
+    pub auto_pupil: Option<AutoPupil>,
     /// The spec it was resolved from (what reports echo).
     pub spec: ExperimentSpec,
     /// What the run read and how it was asked to run (filled in by the loaders of
@@ -309,7 +312,8 @@ impl Experiment {
             return Err(Error::invalid(source, "eye_cases", "list at least one eye case"));
         }
         let diffraction = spec.optics.as_ref().map(|o| o.diffraction).unwrap_or_default();
-        let optics_spec = e.optics_spec(source)?.with_diffraction(diffraction, e.spectrum.is_some());
+        let (pupil_diameter, auto_pupil) = resolve_pupil(e, &scene, &display, position, source)?;
+        let optics_spec = e.optics_spec(pupil_diameter, source)?.with_diffraction(diffraction, e.spectrum.is_some());
         let primaries = display.primaries.clone().unwrap_or_default();
         let mut cases = Vec::new();
         let mut names = std::collections::HashSet::new();
@@ -326,7 +330,7 @@ impl Experiment {
                 return Err(Error::invalid(source, format!("{field}.name"), format!("`{}` appears twice", c.name)));
             }
             let aperture =
-                Aperture::stated(c.pinhole, c.focus_mm, c.focus_diopters, e.pupil_diameter).ok_or_else(|| {
+                Aperture::stated(c.pinhole, c.focus_mm, c.focus_diopters, pupil_diameter).ok_or_else(|| {
                     Error::invalid(
                         source,
                         &field,
@@ -379,7 +383,7 @@ impl Experiment {
                 let named: Vec<(String, Eye)> = cases.iter().map(|c| (c.name.clone(), c.eye.clone())).collect();
                 let base = crate::optimize::spec::BaseEye {
                     retina_distance: e.retina_distance,
-                    pupil_diameter: e.pupil_diameter,
+                    pupil_diameter,
                     pupil_grid: e.pupil_grid,
                     position,
                     retina,
@@ -434,9 +438,18 @@ impl Experiment {
             ssim: spec.ssim,
             measurement,
             optimize,
+            auto_pupil,
             spec,
             provenance: Default::default(),
         })
+    }
+
+    /// The entrance pupil's diameter, mm: `[eye] pupil_diameter`, or the one `"auto"` chose.
+    pub fn pupil_diameter(&self) -> f64 {
+        match &self.auto_pupil {
+            Some(p) => p.diameter_mm,
+            None => self.spec.eye.pupil_diameter.stated().unwrap_or(f64::NAN),
+        }
     }
 
     /// Values that are valid but implausible for a near-eye display and a human eye (a unit
@@ -481,6 +494,22 @@ impl Experiment {
         Self::from_spec(ExperimentSpec::paper_converged(), "built-in paper-converged experiment", Path::new("."))
             .expect("built-in experiment is valid")
     }
+}
+
+/// The pupil diameter of `[eye]` (mm): stated, or for `"auto"` the light-adapted pupil of the
+/// display's field over `scene` seen from `position`, with how it was chosen.
+fn resolve_pupil(
+    e: &EyeSpec,
+    scene: &Scene,
+    display: &Display,
+    position: DVec3,
+    source: &str,
+) -> Result<(f64, Option<AutoPupil>)> {
+    let Some(observer) = e.observer(source)? else {
+        return Ok((e.pupil_diameter.stated().unwrap_or(f64::NAN), None));
+    };
+    let p = crate::render::adapting::auto_pupil(scene, display, position, observer)?;
+    Ok((p.diameter_mm, Some(p)))
 }
 
 /// The name becomes the default output folder `out/<name>`: letters, digits, -, _ and . only,

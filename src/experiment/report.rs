@@ -123,6 +123,10 @@ pub struct AssessReport {
     /// wavelengths, Stiles-Crawford): its model and solved accommodation. Absent for thin lenses.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub eyes: Vec<EyeReport>,
+    /// How `eye.pupil_diameter = "auto"` chose the pupil: the adapting luminance and field, the
+    /// observer and the diameter. Absent for a stated diameter.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pupil: Option<crate::optics::eye::pupil::AutoPupil>,
     /// Table 1: every method under every eye case.
     pub scores: Vec<Score>,
     /// Wall time of every stage.

@@ -1,6 +1,7 @@
 //! Rendering: display images (paper Sec. 3) and retinal images (paper Sec. 2.3, 4), reading the
 //! scene through the radiance-field interface ([`field`]).
 
+pub mod adapting;
 pub mod backend;
 pub mod display_image;
 pub mod display_stack;

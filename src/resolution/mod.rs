@@ -27,4 +27,5 @@ pub(crate) mod plots;
 pub mod report;
 pub mod run;
 pub mod study;
+pub mod values;
 pub mod window;

@@ -31,6 +31,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Error, Result};
 use crate::io::display_file::load_display;
 use crate::io::text::{base_dir, read_text, toml_error};
+use crate::optics::eye::pupil::{AutoPupil, PupilSetting};
 use crate::optics::Display;
 use crate::overrides::Override;
 use crate::render::Method;
@@ -38,69 +39,7 @@ use crate::render::Method;
 /// The default study, `studies/paper.toml`, built in.
 pub const PAPER_STUDY: &str = include_str!("../../studies/paper.toml");
 
-/// A list of values, or a range `{ from, to, step }` (both ends included when on the grid).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(untagged)]
-pub enum Values {
-    /// An explicit list.
-    List(Vec<f64>),
-    /// `{ from, to, step }`: every `from + i step` up to `to`.
-    Range {
-        /// First value.
-        from: f64,
-        /// Last value (included when on the grid).
-        to: f64,
-        /// Step between values.
-        step: f64,
-    },
-}
-
-impl Values {
-    /// The values; `field` names the setting in errors.
-    fn expand(&self, source: &str, field: &str) -> Result<Vec<f64>> {
-        let v = self.expand_any(source, field)?;
-        if v.is_empty() {
-            return Err(Error::invalid(source, field, "needs at least one value"));
-        }
-        Ok(v)
-    }
-
-    /// [`Values::expand`], an empty list allowed.
-    fn expand_any(&self, source: &str, field: &str) -> Result<Vec<f64>> {
-        let v = match *self {
-            Values::List(ref v) => v.clone(),
-            Values::Range { from, to, step } => {
-                if !(from.is_finite() && to.is_finite() && step.is_finite() && step > 0.0 && to >= from) {
-                    return Err(Error::invalid(
-                        source,
-                        field,
-                        format!("a range needs finite from <= to and step > 0, got from {from}, to {to}, step {step}"),
-                    ));
-                }
-                let n = ((to - from) / step + 1e-9).floor() as usize + 1;
-                if n > 10_000 {
-                    return Err(Error::invalid(source, field, format!("{n} values is more than 10000")));
-                }
-                (0..n).map(|i| round12(from + i as f64 * step)).collect()
-            }
-        };
-        for (i, x) in v.iter().enumerate() {
-            if !x.is_finite() {
-                return Err(Error::invalid(source, format!("{field}[{i}]"), format!("must be finite, got {x}")));
-            }
-        }
-        Ok(v)
-    }
-}
-
-/// Rounds to 12 significant digits (ranges: 0.1 + 2 x 0.1 is 0.3).
-fn round12(x: f64) -> f64 {
-    if x == 0.0 {
-        return 0.0;
-    }
-    let scale = 10f64.powi(11 - x.abs().log10().floor() as i32);
-    (x * scale).round() / scale
-}
+pub use super::values::Values;
 
 /// `[target]`: the gratings' and the edge's luminance.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -176,8 +115,8 @@ pub struct StudySpec {
     pub display: String,
     /// Methods measured: "LC", "PC", "LA", `LA<k>`.
     pub methods: Vec<String>,
-    /// Pupil diameter, mm.
-    pub pupil_diameter_mm: f64,
+    /// Pupil diameter, mm, or `"auto"` (the light-adapted pupil; `[eye] age`, `adapted_eyes`).
+    pub pupil_diameter_mm: PupilSetting,
     /// v0: pupil to retina, mm (default 17).
     #[serde(default = "default_retina_distance")]
     pub retina_distance_mm: f64,
@@ -252,8 +191,11 @@ pub struct Study {
     /// Methods measured.
     #[serde(serialize_with = "method_names")]
     pub methods: Vec<Method>,
-    /// Pupil diameter, mm.
+    /// Pupil diameter, mm (stated, or chosen by `"auto"`).
     pub pupil_diameter_mm: f64,
+    /// How `"auto"` chose it: the chart's grey at the display's photometry over its field.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub auto_pupil: Option<AutoPupil>,
     /// v0, mm.
     pub retina_distance_mm: f64,
     /// Content depths, far to near (increasing diopters), duplicates merged.
@@ -333,7 +275,6 @@ impl Study {
         let display = load_display(&spec.display, base)?;
         display.validate(&spec.display)?;
         let methods = study_methods(spec, source)?;
-        crate::optics::limits::PUPIL_DIAMETER.check(source, "pupil_diameter_mm", spec.pupil_diameter_mm)?;
         crate::optics::limits::RETINA_DISTANCE.check(source, "retina_distance_mm", spec.retina_distance_mm)?;
         let depths = content_depths(spec, source, &display)?;
 
@@ -350,6 +291,8 @@ impl Study {
         let frequencies = study_frequencies(spec, source)?;
         let nyquist = 0.5 * r.pixels_per_degree;
         check_target_and_measurement(spec, source)?;
+        let eye = spec.eye.clone().unwrap_or_default();
+        let (pupil, auto_pupil) = eye.study_pupil(spec.pupil_diameter_mm, spec.target.mean, &display, source)?;
         check_listed_frequencies(spec, source, &frequencies)?;
         let orientations = study_orientations(spec, source)?;
         Ok(Study {
@@ -359,7 +302,8 @@ impl Study {
             display_source: spec.display.clone(),
             display,
             methods,
-            pupil_diameter_mm: spec.pupil_diameter_mm,
+            pupil_diameter_mm: pupil,
+            auto_pupil,
             retina_distance_mm: spec.retina_distance_mm,
             depths,
             focus_diopters: focus,
@@ -373,15 +317,10 @@ impl Study {
             retina_nyquist_cpd: nyquist,
             measurement: spec.measurement,
             eye: spec.eye.clone(),
-            eye_optics: spec
-                .eye
-                .clone()
-                .unwrap_or_default()
-                .optics_spec(spec.pupil_diameter_mm, source, "eye.")?
-                .with_diffraction(
-                    spec.optics.as_ref().map(|o| o.diffraction).unwrap_or_default(),
-                    spec.eye.as_ref().is_some_and(|e| e.spectrum.is_some()),
-                ),
+            eye_optics: spec.eye.clone().unwrap_or_default().optics_spec(pupil, source, "eye.")?.with_diffraction(
+                spec.optics.as_ref().map(|o| o.diffraction).unwrap_or_default(),
+                spec.eye.as_ref().is_some_and(|e| e.spectrum.is_some()),
+            ),
             accommodation: spec.accommodation,
             limits: spec.limits.clone(),
         })
@@ -677,14 +616,5 @@ mod tests {
         }
         let e = with("nonsense", "1").unwrap_err().to_string();
         assert!(e.contains("nonsense"), "{e}");
-    }
-
-    #[test]
-    fn ranges_expand_with_both_ends_and_round() {
-        let v = Values::Range { from: 0.0, to: 0.3, step: 0.1 }.expand("x", "f").unwrap();
-        assert_eq!(v, [0.0, 0.1, 0.2, 0.3]);
-        let v = Values::Range { from: 0.5, to: 3.5, step: 0.5 }.expand("x", "f").unwrap();
-        assert_eq!(v.len(), 7);
-        assert!(Values::List(vec![]).expand("x", "f").is_err());
     }
 }

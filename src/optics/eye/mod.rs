@@ -22,6 +22,7 @@ pub mod model;
 mod monomials;
 pub mod navarro;
 pub mod paraxial;
+pub mod pupil;
 pub mod ray_map;
 pub mod refract;
 pub mod schematic;
