@@ -15,7 +15,7 @@ use rayon::prelude::*;
 
 use super::chart::{Chart, ChartField, Pattern};
 use super::study::Study;
-use super::window::{measure_windows, progress_steps, WindowSamples};
+use super::window::{measure_windows_as, progress_steps, Grey, WindowSamples};
 use super::{edge, grating};
 use crate::error::Result;
 use crate::measure::estimator::DisplaySource;
@@ -299,6 +299,7 @@ pub fn run_study(study: &Study, quiet: bool) -> Result<StudyResults> {
     let rays_of = |windows: &[WindowSamples]| -> u64 {
         windows.iter().map(|w| (w.cols * w.rows * reps) as u64 * u64::from(spp)).sum::<u64>()
     };
+    let grey = Grey::of_display(study.measurement.channels, &display);
     for (di, depth) in study.depths.iter().enumerate() {
         let field = ChartField { chart: &chart, depth: depth.mm };
         let t = Instant::now();
@@ -314,7 +315,7 @@ pub fn run_study(study: &Study, quiet: bool) -> Result<StudyResults> {
             let t = Instant::now();
             let source = DisplaySource::new(&display, eye, &field, &stack);
             let sampler = Sampler::new(study.measurement.seed, (di * nf + fi) as u64, Some(radius));
-            let windows = measure_windows(&source, &sampler, &chart, reps, spp, &measure_bar);
+            let windows = measure_windows_as(&source, &sampler, &chart, (reps, spp), grey, &measure_bar);
             measure_bar.check()?;
             eye_rays += rays_of(&windows);
             t_measure += t.elapsed().as_secs_f64();
@@ -368,7 +369,7 @@ pub fn run_study(study: &Study, quiet: bool) -> Result<StudyResults> {
                 let source = DisplaySource::new(tdisplay, eye, &field, &stack);
                 let stream = ((1 + ti) * nd * nf + di * nf + fi) as u64;
                 let sampler = Sampler::new(study.measurement.seed, stream, Some(radius));
-                let windows = measure_windows(&source, &sampler, tchart, reps, spp, &measure_bar);
+                let windows = measure_windows_as(&source, &sampler, tchart, (reps, spp), grey, &measure_bar);
                 measure_bar.check()?;
                 turned_eye_rays += rays_of(&windows);
                 t_turned_measure += t.elapsed().as_secs_f64();

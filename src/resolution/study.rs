@@ -79,6 +79,10 @@ pub struct SamplingSpec {
     pub replicates: usize,
     /// Seed of the Sobol scrambles.
     pub seed: u64,
+    /// How the colour channels combine into the measured grey: `"luminance"` (the default, the
+    /// primaries' V(lambda) shares) or `"mean"` ([`super::window::Channels`]).
+    #[serde(default)]
+    pub channels: super::window::Channels,
 }
 
 /// `[accommodation]`: the two rules' settings.

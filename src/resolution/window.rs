@@ -10,21 +10,73 @@
 //! [`crate::measure::estimator::Replicates::extend`], with the same sums in `f64` per pixel in
 //! sample order (results do not depend on the thread count). The windows of a turned chart
 //! ([`Chart::turned`]) are its layout's windows turned with it: every sample's tangent is turned.
+//!
+//! **Channels.** A window's value per pixel is one grey, combined from the three colour channels
+//! as the eye combines them for accommodation and visibility ([`Grey`]): by default the
+//! luminance, each channel weighted by its display primary's share of the luminance (its spectrum
+//! weighted by the CIE 1924 photopic V(lambda), [`crate::optics::spectrum`]); the plain mean of
+//! R, G and B is the named alternative (`[measurement] channels = "mean"`). On an achromatic
+//! chart seen without chromatic aberration the three channels are equal and both give the same
+//! grey (to rounding).
 
 use glam::DVec2;
 use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
 
 use super::chart::Chart;
 use crate::measure::estimator::{EyeSample, PairedSource, Replicates};
 use crate::measure::sampler::Sampler;
 use crate::progress::Progress;
 
+/// `[measurement] channels` of a study: how the colour channels combine into the grey whose
+/// contrasts are measured.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Channels {
+    /// The luminance: the primaries' luminance shares (the default).
+    #[default]
+    Luminance,
+    /// The plain mean of R, G and B.
+    Mean,
+}
+
+/// How the colour channels of a sample combine into one grey (module comment).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Grey {
+    /// `(R + G + B) / 3`.
+    Mean,
+    /// `w_R R + w_G G + w_B B`, the weights summing to 1.
+    Weighted([f64; 3]),
+}
+
+impl Grey {
+    /// The grey of `channels` for `display` (its primaries' luminance shares).
+    pub fn of_display(channels: Channels, display: &crate::optics::Display) -> Self {
+        match channels {
+            Channels::Mean => Grey::Mean,
+            Channels::Luminance => Grey::Weighted(display.luminance_weights()),
+        }
+    }
+
+    /// The grey of one sample's linear RGB. A grey sample (three equal channels) is its own
+    /// luminance; it is taken as the channel mean's arithmetic, so that an achromatic image gives
+    /// the channel mean's numbers bit for bit (the weighted sum of equal channels differs from it
+    /// by rounding, which the `f32` window values would turn into differences of 1e-10).
+    #[inline(always)]
+    pub fn of(&self, rgb: [f64; 3]) -> f64 {
+        match self {
+            Grey::Weighted(w) if rgb[0] != rgb[1] || rgb[1] != rgb[2] => w[0] * rgb[0] + w[1] * rgb[1] + w[2] * rgb[2],
+            _ => (rgb[0] + rgb[1] + rgb[2]) / 3.0,
+        }
+    }
+}
+
 /// Rows of a window traced as one task.
 const BAND: usize = 4;
 /// Samples handed to the source at once.
 const BATCH: usize = 2048;
 
-/// One window's measurement: luminance (mean of R, G, B) per replicate, source and pixel.
+/// One window's measurement: the grey ([`Grey`]) per replicate, source and pixel.
 #[derive(Clone, Debug, PartialEq)]
 pub struct WindowSamples {
     /// Window columns, retina pixels.
@@ -43,6 +95,11 @@ impl WindowSamples {
     /// The grey (mean of R, G and B) of every image of a square retina's replicates, as one
     /// window covering the whole retina.
     pub fn from_replicates(reps: &Replicates) -> Self {
+        Self::from_replicates_as(reps, Grey::Mean)
+    }
+
+    /// [`WindowSamples::from_replicates`] with the channels combined into `grey`.
+    pub fn from_replicates_as(reps: &Replicates, grey: Grey) -> Self {
         let n = reps.resolution();
         let (replicates, sources) = (reps.replicates(), reps.images());
         let mut values = Vec::with_capacity(replicates * sources * n * n);
@@ -53,7 +110,7 @@ impl WindowSamples {
                     pr.iter()
                         .zip(pg)
                         .zip(pb)
-                        .map(|((a, b), c)| ((f64::from(*a) + f64::from(*b) + f64::from(*c)) / 3.0) as f32),
+                        .map(|((a, b), c)| grey.of([f64::from(*a), f64::from(*b), f64::from(*c)]) as f32),
                 );
             }
         }
@@ -85,14 +142,28 @@ impl WindowSamples {
 }
 
 /// Measures every patch window of `chart` through `source` with `samples` samples per pixel and
-/// replicate. Pixel `p` of window `w` uses the sampler's pixel index `offset(w) + p`, so that no
-/// two pixels of a case share a scramble. `progress` advances once per band of rows.
+/// replicate, each sample's channels averaged ([`Grey::Mean`]; [`measure_windows_as`] for
+/// another grey). Pixel `p` of window `w` uses the sampler's pixel index `offset(w) + p`, so that
+/// no two pixels of a case share a scramble. `progress` advances once per band of rows.
 pub fn measure_windows<S: PairedSource + ?Sized>(
     source: &S,
     sampler: &Sampler,
     chart: &Chart,
     replicates: usize,
     samples: u32,
+    progress: &Progress,
+) -> Vec<WindowSamples> {
+    measure_windows_as(source, sampler, chart, (replicates, samples), Grey::Mean, progress)
+}
+
+/// [`measure_windows`] with each sample's channels combined into `grey`; `(replicates,
+/// samples)` per pixel.
+pub fn measure_windows_as<S: PairedSource + ?Sized>(
+    source: &S,
+    sampler: &Sampler,
+    chart: &Chart,
+    (replicates, samples): (usize, u32),
+    grey: Grey,
     progress: &Progress,
 ) -> Vec<WindowSamples> {
     let k = source.images();
@@ -134,7 +205,7 @@ pub fn measure_windows<S: PairedSource + ?Sized>(
                     source.eval(batch, vals);
                     for (v, &o) in vals.chunks_exact(k).zip(owners.iter()) {
                         for (j, rgb) in v.iter().enumerate() {
-                            sums[o as usize * k + j] += (rgb[0] + rgb[1] + rgb[2]) / 3.0;
+                            sums[o as usize * k + j] += grey.of(*rgb);
                         }
                     }
                     batch.clear();
