@@ -127,7 +127,7 @@ impl<'de> Deserialize<'de> for PupilSetting {
         impl serde::de::Visitor<'_> for V {
             type Value = PupilSetting;
             fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-                f.write_str("a pupil diameter in mm or \"auto\"")
+                f.write_str("a number (the pupil diameter in mm) or \"auto\"")
             }
             fn visit_f64<E: serde::de::Error>(self, v: f64) -> std::result::Result<PupilSetting, E> {
                 Ok(PupilSetting::Mm(v))
