@@ -91,6 +91,7 @@ pub mod info;
 pub mod io;
 pub mod long_run;
 pub mod measure;
+pub mod methods;
 pub mod metrics;
 pub mod optics;
 pub mod optimize;

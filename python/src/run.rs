@@ -17,9 +17,10 @@ use pyo3::types::{PyDict, PyList};
 use inimtrace::experiment::{assess_images, Assessment, RunOptions, Score};
 use inimtrace::io::exr::ExrCompression;
 use inimtrace::metrics::{self, SsimConstants};
+use inimtrace::optimize::Optimization;
 use inimtrace::progress::{with_sink, Progress, ProgressSink};
 use inimtrace::render::retina::simulate as simulate_images;
-use inimtrace::render::{ground_truth as ground_truth_image, render_display_image_with_depth, with_fields};
+use inimtrace::render::{ground_truth as ground_truth_image, with_fields};
 use inimtrace::render::{BackendChoice, DisplayRenderSettings, Method};
 use inimtrace::resolution::command::{execute, ResolutionCommand};
 
@@ -210,11 +211,14 @@ pub fn render_display<'py>(
     )?;
     let settings = DisplayRenderSettings { samples_per_pixel, reference_plane_z: reference_plane, eye_position };
     let (img, z) = detached(py, threads, progress, || {
+        // Without an experiment, OPT trains on the paper's eye states around the eye position.
+        let training = (method == Method::Optimized).then(|| Optimization::paper_default(eye_position));
         with_fields(scene, backend, |fields| {
-            let p = Progress::new(display.lcd.rows() as u64, &format!("display image {}", method.name()), true);
-            let out = render_display_image_with_depth(display, method, &settings, fields.with_depth, &p)?;
+            let p = inimtrace::methods::progress(display, method, training.as_ref(), true);
+            let (img, z, _) =
+                inimtrace::methods::render(display, method, &settings, training.as_ref(), fields.with_depth, &p)?;
             p.finish();
-            Ok(out)
+            Ok((img, z))
         })
     })?;
     let (rows, columns) = (img.height, img.width);

@@ -7,9 +7,10 @@ use anyhow::{Context, Result};
 use glam::DVec3;
 
 use inimtrace::experiment::metadata;
+use inimtrace::optimize::Optimization;
 use inimtrace::progress::Progress;
 use inimtrace::render::retina::simulate;
-use inimtrace::render::{ground_truth, render_display_image_with_depth, DisplayRenderSettings, Method};
+use inimtrace::render::{ground_truth, DisplayRenderSettings, Method};
 
 use super::{announce, check_memory, load_setup, read_exr_input, with_field, write_image, EyeArgs, Setup};
 use crate::{BackendArg, Globals};
@@ -48,9 +49,12 @@ pub(crate) fn render_display(
             .saturating_mul((samples_per_pixel as u64).saturating_pow(2))
             .saturating_mul(per_pixel),
     );
+    // Without an experiment, OPT trains on the paper's eye states around the eye position.
+    let training = (method == Method::Optimized).then(|| Optimization::paper_default(eye_position));
     let (img, depth, name) = with_field(&scene, backend, |fields| {
-        let p = Progress::new(display.lcd.rows() as u64, &format!("display image {}", method.name()), quiet);
-        let (img, depth) = render_display_image_with_depth(&display, method, &settings, fields.with_depth, &p)?;
+        let p = inimtrace::methods::progress(&display, method, training.as_ref(), quiet);
+        let (img, depth, _) =
+            inimtrace::methods::render(&display, method, &settings, training.as_ref(), fields.with_depth, &p)?;
         p.finish();
         Ok((img, depth, fields.name))
     })?;

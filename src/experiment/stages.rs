@@ -15,7 +15,7 @@ use crate::progress::Progress;
 use crate::raster::{RgbImage, RgbView};
 use crate::render::display_stack::StackBuilder;
 use crate::render::retina::{simulate_stack, DisplayStack};
-use crate::render::{ground_truth, render_display_image_into, render_display_image_with_depth, Method, RadianceField};
+use crate::render::{ground_truth, Method, RadianceField};
 
 pub(super) fn stage_time(
     stages: &mut Vec<StageTime>,
@@ -49,16 +49,8 @@ pub fn render_display_images<D: RadianceField + ?Sized>(
     let mut depths = Vec::new();
     for m in &exp.methods {
         let t = Instant::now();
-        if *m == Method::Optimized {
-            let mut image = RgbImage::try_new(display.lcd.columns(), display.lcd.rows(), "the display image")?;
-            render_optimized(exp, with_depth, quiet, &mut image)?;
-            stage_time(stages, "render_display", Some(m.name().as_str()), None, t);
-            displays.push(image);
-            depths.push(None);
-            continue;
-        }
-        let p = Progress::new(display.lcd.rows() as u64, &format!("display image {}", m.name()), quiet);
-        let (img, depth) = render_display_image_with_depth(display, *m, &exp.render, with_depth, &p)?;
+        let p = crate::methods::progress(display, *m, exp.optimize.as_ref(), quiet);
+        let (img, depth, _) = crate::methods::render(display, *m, &exp.render, exp.optimize.as_ref(), with_depth, &p)?;
         p.finish();
         stage_time(stages, "render_display", Some(m.name().as_str()), None, t);
         displays.push(img);
@@ -75,13 +67,11 @@ pub fn render_optimized<D: RadianceField + ?Sized>(
     quiet: bool,
     image: &mut RgbImage,
 ) -> Result<OptimizationReport> {
-    let Some(opt) = &exp.optimize else {
-        return Err(Error::Mismatch("OPT's display image needs the experiment's [optimize] settings".into()));
-    };
-    let p = Progress::new(opt.solver.max_iterations as u64, "display image OPT (iterations)", quiet);
-    let report = crate::optimize::render_optimal_into(&exp.display, &exp.render, opt, field, &p, image)?;
+    let (opt, m) = (exp.optimize.as_ref(), Method::Optimized);
+    let p = crate::methods::progress(&exp.display, m, opt, quiet);
+    let r = crate::methods::render_into(&exp.display, m, &exp.render, opt, field, &p, image, &mut Vec::new())?;
     p.finish();
-    Ok(report)
+    r.optimization.ok_or_else(|| Error::Mismatch("OPT's display image came without its record".into()))
 }
 
 /// Stage 1 as `assess` runs it: every method's display image rendered into one reused image
@@ -106,15 +96,22 @@ pub fn render_display_stack<D: RadianceField + ?Sized>(
     let mut stack = StackBuilder::new(display, exp.methods.len());
     for (k, m) in exp.methods.iter().enumerate() {
         let t = Instant::now();
-        let known = if *m == Method::Optimized {
-            optimized = Some(render_optimized(exp, with_depth, quiet, &mut image)?);
-            false
-        } else {
-            let p = Progress::new(display.lcd.rows() as u64, &format!("display image {}", m.name()), quiet);
-            let known = render_display_image_into(display, *m, &exp.render, with_depth, &p, &mut image, &mut depth)?;
-            p.finish();
-            known
-        };
+        let p = crate::methods::progress(display, *m, exp.optimize.as_ref(), quiet);
+        let r = crate::methods::render_into(
+            display,
+            *m,
+            &exp.render,
+            exp.optimize.as_ref(),
+            with_depth,
+            &p,
+            &mut image,
+            &mut depth,
+        )?;
+        p.finish();
+        let known = r.depth_known;
+        if r.optimization.is_some() {
+            optimized = r.optimization;
+        }
         stage_time(stages, "render_display", Some(m.name().as_str()), None, t);
         let t = Instant::now();
         finished(k, RgbView::from(&image), known.then_some(depth.as_slice()))?;

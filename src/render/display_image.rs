@@ -16,7 +16,7 @@
 //!
 //! The fourth method, Optimized (OPT), traces no camera rays of its own: its image is the
 //! least-squares best over a set of eye states (`crate::optimize`, docs/OPTIMAL.md), started
-//! from LA's.
+//! from LA's, and `crate::methods` routes it; this renderer refuses it.
 //!
 //! The camera ray itself is eq. (1) and lives with it ([`camera_ray`]); the scene is read
 //! through a [`RadianceField`]. A display with real lenslets renders through them
@@ -261,6 +261,12 @@ fn render_into<R: RadianceField + ?Sized>(
     dst: &mut [[f32; 3]],
     mut depth: Vec<f32>,
 ) -> Result<(Vec<f32>, bool)> {
+    if method == Method::Optimized {
+        // OPT traces no camera rays: its image is solved for (`crate::methods` routes it).
+        return Err(Error::Mismatch(
+            "OPT's display image is solved for, not traced: render it through inimtrace::methods".into(),
+        ));
+    }
     check_eye_in_front(display, settings.eye_position.z, "display render settings", "eye_position")?;
     if method == Method::PupilCenter && display.thick_lenslet().is_none() {
         check_pupil_center(display, settings.eye_position)?;
@@ -282,16 +288,6 @@ fn render_into<R: RadianceField + ?Sized>(
     }
     let lcd = display.lcd;
     let (nx, ny) = (lcd.columns(), lcd.rows());
-    if method == Method::Optimized {
-        // The paper's eye states around the settings' eye (an experiment's stages pass its own).
-        let opt = crate::optimize::Optimization::paper_default(settings.eye_position);
-        let mut image = RgbImage::try_new(nx, ny, "OPT's display image")?;
-        crate::optimize::render_optimal_into(display, settings, &opt, tracer, progress, &mut image)?;
-        dst.copy_from_slice(&image.pixels);
-        depth.clear();
-        depth.resize(nx * ny, f32::INFINITY);
-        return Ok((depth, false));
-    }
     let pixel_samples = stratified(settings.samples_per_pixel);
     // LA's samples p = c + offset give camera rays that differ from the LC ray (p = c) by a
     // constant start and slope shift per offset (eq. (1b) is affine in p):

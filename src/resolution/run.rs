@@ -23,10 +23,11 @@ use crate::measure::sampler::Sampler;
 use crate::optics::display::Lcd;
 use crate::optics::eye::EyeOptics;
 use crate::optics::{Display, Eye, Focus};
+use crate::optimize::Optimization;
 use crate::progress::Progress;
 use crate::raster::RgbImage;
 use crate::render::retina::DisplayStack;
-use crate::render::{render_display_image, DisplayRenderSettings};
+use crate::render::{DisplayRenderSettings, Method};
 
 /// The smallest centred part of `display`'s LCD, on the full panel's pixel grid, that holds
 /// every LCD point an eye ray can reach for retina tangents within `half_tangent` (per axis),
@@ -278,6 +279,9 @@ pub fn run_study(study: &Study, quiet: bool) -> Result<StudyResults> {
     let mut timings = vec![Timing { stage: "chart and LCD crop".into(), seconds: t.elapsed().as_secs_f64() }];
 
     let settings = DisplayRenderSettings::default();
+    // A study states no [optimize]: OPT trains on the paper's eye states.
+    let training =
+        study.methods.contains(&Method::Optimized).then(|| Optimization::paper_default(settings.eye_position));
     let display_rows = display.lcd.rows() + turned.iter().map(|(_, d)| d.lcd.rows()).sum::<usize>();
     let display_bar = Progress::new((nd * study.methods.len() * display_rows) as u64, "display images", quiet);
     let turned_steps: u64 = turned.iter().map(|(c, _)| progress_steps(c)).sum::<u64>() * turned_focuses as u64;
@@ -306,7 +310,9 @@ pub fn run_study(study: &Study, quiet: bool) -> Result<StudyResults> {
         let images: Vec<RgbImage> = study
             .methods
             .iter()
-            .map(|&m| render_display_image(&display, m, &settings, &field, &display_bar))
+            .map(|&m| {
+                crate::methods::render(&display, m, &settings, training.as_ref(), &field, &display_bar).map(|r| r.0)
+            })
             .collect::<Result<_>>()?;
         let refs: Vec<&RgbImage> = images.iter().collect();
         let stack = DisplayStack::new(&display, &refs)?;
@@ -356,7 +362,9 @@ pub fn run_study(study: &Study, quiet: bool) -> Result<StudyResults> {
             let images: Vec<RgbImage> = study
                 .methods
                 .iter()
-                .map(|&m| render_display_image(tdisplay, m, &settings, &field, &display_bar))
+                .map(|&m| {
+                    crate::methods::render(tdisplay, m, &settings, training.as_ref(), &field, &display_bar).map(|r| r.0)
+                })
                 .collect::<Result<_>>()?;
             let refs: Vec<&RgbImage> = images.iter().collect();
             let stack = DisplayStack::new(tdisplay, &refs)?;

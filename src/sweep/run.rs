@@ -16,9 +16,7 @@ use crate::experiment::{self, Experiment, Score};
 use crate::progress::Progress;
 use crate::raster::RgbImage;
 use crate::render::retina::DisplayStack;
-use crate::render::{
-    render_display_image_with_depth, with_scene_fields, BackendChoice, FieldUser, Method, RadianceField,
-};
+use crate::render::{with_scene_fields, BackendChoice, FieldUser, Method, RadianceField};
 use crate::scene::Scene;
 use crate::settings::{hash_json, Resolved};
 
@@ -254,17 +252,6 @@ fn image_key(exp: &Experiment, method: Method) -> String {
     }
 }
 
-/// OPT's display image for `exp` (its resolved `[optimize]`), without its convergence record
-/// (which `--images` writes, as `assess` does).
-fn optimized_image<D: RadianceField + ?Sized>(exp: &Experiment, field: &D) -> Result<RgbImage> {
-    let Some(opt) = &exp.optimize else {
-        return Err(crate::error::Error::Mismatch("OPT's display image needs the experiment's [optimize]".into()));
-    };
-    let mut image = RgbImage::try_new(exp.display.lcd.columns(), exp.display.lcd.rows(), "the display image")?;
-    crate::optimize::render_optimal_into(&exp.display, &exp.render, opt, field, &Progress::hidden(), &mut image)?;
-    Ok(image)
-}
-
 /// Bytes of the images one point holds while it runs: per eye case the ground truth and one
 /// perceived image per method, f32 RGB.
 fn point_bytes(exp: &Experiment) -> u64 {
@@ -300,18 +287,14 @@ impl FieldUser for SharedDisplays<'_> {
             let t = Instant::now();
             for (method, key) in first.methods.iter().zip(keys) {
                 if !cache.contains_key(key) {
-                    let image = if *method == Method::Optimized {
-                        optimized_image(first, with_depth)?
-                    } else {
-                        render_display_image_with_depth(
-                            &first.display,
-                            *method,
-                            &first.render,
-                            with_depth,
-                            &Progress::hidden(),
-                        )?
-                        .0
-                    };
+                    let (image, _, _) = crate::methods::render(
+                        &first.display,
+                        *method,
+                        &first.render,
+                        first.optimize.as_ref(),
+                        with_depth,
+                        &Progress::hidden(),
+                    )?;
                     cache.insert(key.clone(), image);
                     rendered += 1;
                 }
