@@ -202,3 +202,53 @@ fn with_diffraction_the_operator_is_the_converged_simulation_on_its_fixed_sample
         assert_is_the_diffracting_simulation(name, d, (&e, &eye(d, model, Diffraction::None)), &mut rng);
     }
 }
+
+/// One schema for the eye's states: a row of `[[optimize.states]]` takes the fields of an
+/// `[[eye_cases]]` row (its own pupil included) and resolves to the same eye through the
+/// experiment's eye model and diffraction; `weight` is refused in `[[eye_cases]]`.
+#[test]
+fn an_optimize_state_is_an_eye_case_row_and_resolves_to_the_same_eye() {
+    use inimtrace::experiment::{Experiment, ExperimentSpec, EyeCaseSpec};
+    use inimtrace::optimize::OptimizeSpec;
+    let row = EyeCaseSpec {
+        name: "Mid".into(),
+        pinhole: false,
+        focus_mm: Some(350.0),
+        focus_diopters: None,
+        position: Some([0.5, 0.0, 0.0]),
+        pupil_diameter: Some(3.0),
+        weight: None,
+    };
+    let mut spec = ExperimentSpec::paper_converged();
+    spec.methods = vec!["LA".into(), "OPT".into()];
+    spec.eye.model = Some("navarro".into());
+    spec.optics = Some(toml::from_str("diffraction = \"pupil\"").unwrap());
+    spec.eye_cases.push(row.clone());
+    spec.optimize = Some(OptimizeSpec {
+        train_cases: Some(vec!["Cen".into()]),
+        states: vec![EyeCaseSpec { weight: Some(2.0), ..row }],
+        ..OptimizeSpec::default()
+    });
+    let resolve = |spec: ExperimentSpec| {
+        Experiment::from_parts(spec, inimtrace::fixtures::white_wall(), display(false), "e.toml")
+    };
+    let exp = resolve(spec.clone()).unwrap();
+    let case = &exp.cases.iter().find(|c| c.name == "Mid").unwrap().eye;
+    let state = exp.optimize.as_ref().unwrap().states.iter().find(|s| s.name == "Mid").unwrap();
+    assert_eq!(state.weight, 2.0);
+    assert!(
+        matches!(case.aperture, inimtrace::optics::Aperture::ThinLens { pupil_diameter, .. } if pupil_diameter == 3.0)
+    );
+    assert_eq!(case.position, DVec3::new(0.5, 0.0, 0.0));
+    let (c, s) = (case.optics.as_ref().unwrap(), state.eye.optics.as_ref().unwrap());
+    assert!(c.schematic().is_some() && c.diffraction == Diffraction::Pupil);
+    assert!(**c == **s, "the state's optics are the case's");
+    assert_eq!(
+        (case.aperture, case.position, case.retina_distance),
+        (state.eye.aperture, state.eye.position, state.eye.retina_distance)
+    );
+    // A weight belongs to a training state.
+    spec.eye_cases[4].weight = Some(2.0);
+    let e = resolve(spec).unwrap_err().to_string();
+    assert!(e.contains("e.toml") && e.contains("eye_cases[4].weight") && e.contains("optimize.states"), "{e}");
+}

@@ -10,13 +10,12 @@
 mod assess;
 pub mod converged;
 pub(crate) mod converged_report;
-mod eye_spec;
 pub mod metadata;
 mod report;
 mod stages;
 
+pub use crate::optics::eye::settings::{BaseEye, EyeCaseSpec, EyeModelSettings, EyeSpec};
 pub use assess::{assess, assess_images, estimate, prepare_output_dir, Assessment, RunOptions, Z_CHANNEL_NOTE};
-pub use eye_spec::{EyeCaseSpec, EyeModelSettings, EyeSpec};
 pub use report::{table_markdown, AssessReport, Score, StageTime};
 pub use stages::{
     ground_truth_image, pack_display_images, perceived_images, render_display_images, render_display_stack,
@@ -35,7 +34,6 @@ use crate::measure::spec::MeasurementSpec;
 use crate::metrics::SsimConstants;
 use crate::optics::diffraction::OpticsSpec;
 use crate::optics::eye::pupil::{AutoPupil, PupilSetting};
-use crate::optics::eye::EyeOptics;
 use crate::optics::{Aperture, Display, Eye, Focus, Retina};
 use crate::render::{DisplayRenderSettings, Method};
 use crate::scene::Scene;
@@ -116,6 +114,8 @@ impl ExperimentSpec {
             focus_mm: focus,
             focus_diopters: None,
             position: None,
+            pupil_diameter: None,
+            weight: None,
         };
         vec![case("Pin", None), case("Near", Some(300.0)), case("Cen", Some(400.0)), case("Far", Some(600.0))]
     }
@@ -313,8 +313,15 @@ impl Experiment {
         }
         let diffraction = spec.optics.as_ref().map(|o| o.diffraction).unwrap_or_default();
         let (pupil_diameter, auto_pupil) = resolve_pupil(e, &scene, &display, position, source)?;
-        let optics_spec = e.optics_spec(pupil_diameter, source)?.with_diffraction(diffraction, e.spectrum.is_some());
-        let primaries = display.primaries.clone().unwrap_or_default();
+        let base = BaseEye {
+            retina_distance: e.retina_distance,
+            pupil_diameter,
+            pupil_grid: e.pupil_grid,
+            position,
+            retina,
+            optics: e.optics_spec(pupil_diameter, source)?.with_diffraction(diffraction, e.spectrum.is_some()),
+            primaries: display.primaries.clone().unwrap_or_default(),
+        };
         let mut cases = Vec::new();
         let mut names = std::collections::HashSet::new();
         for (i, c) in spec.eye_cases.iter().enumerate() {
@@ -329,38 +336,18 @@ impl Experiment {
             if !names.insert(c.name.as_str()) {
                 return Err(Error::invalid(source, format!("{field}.name"), format!("`{}` appears twice", c.name)));
             }
-            let aperture =
-                Aperture::stated(c.pinhole, c.focus_mm, c.focus_diopters, pupil_diameter).ok_or_else(|| {
-                    Error::invalid(
-                        source,
-                        &field,
-                        "give exactly one of `pinhole = true`, `focus_mm` or `focus_diopters`",
-                    )
-                })?;
-            let position = match c.position {
-                Some(p) if !DVec3::from_array(p).is_finite() => {
-                    return Err(Error::invalid(source, format!("{field}.position"), "must be finite"))
-                }
-                Some(p) => {
-                    crate::optics::transfer::check_eye_in_front(&display, p[2], source, &format!("{field}.position"))?;
-                    DVec3::from_array(p)
-                }
-                None => position,
-            };
-            let mut eye =
-                Eye { retina_distance: e.retina_distance, aperture, pupil_grid: e.pupil_grid, position, optics: None };
-            eye.validate(source).map_err(|err| prefix_field(err, &format!("{field} / eye.")))?;
-            let focus_field =
-                if c.focus_mm.is_some() { format!("{field}.focus_mm") } else { format!("{field}.focus_diopters") };
-            eye.optics = EyeOptics::build(
-                &optics_spec,
-                &aperture,
-                e.retina_distance,
-                &primaries,
-                e.retina_half_tangent * std::f64::consts::SQRT_2,
-                source,
-                &focus_field,
-            )?;
+            if c.weight.is_some() {
+                return Err(Error::invalid(
+                    source,
+                    format!("{field}.weight"),
+                    "is read only in [[optimize.states]] (OPT's training weights of the eye cases are \
+                     optimize.case_weights)",
+                ));
+            }
+            if let Some(p) = c.position.filter(|p| DVec3::from_array(*p).is_finite()) {
+                crate::optics::transfer::check_eye_in_front(&display, p[2], source, &format!("{field}.position"))?;
+            }
+            let eye = c.resolve(&base, source, &field)?;
             cases.push(EyeCase { name: c.name.clone(), eye });
         }
         if methods.contains(&Method::PupilCenter) {
@@ -381,29 +368,9 @@ impl Experiment {
             }
             (true, o) => {
                 let named: Vec<(String, Eye)> = cases.iter().map(|c| (c.name.clone(), c.eye.clone())).collect();
-                let base = crate::optimize::spec::BaseEye {
-                    retina_distance: e.retina_distance,
-                    pupil_diameter,
-                    pupil_grid: e.pupil_grid,
-                    position,
-                    retina,
-                };
-                let mut opt = o.clone().unwrap_or_default().resolve(&named, &base, dr.la_grid, source)?;
-                // The explicit [[optimize.states]] see through the experiment's eye optics, as
-                // its cases do (a schematic eye, the primaries' wavelengths, diffraction).
-                let explicit = o.as_ref().map_or(0, |o| o.states.len());
-                let first = opt.states.len() - explicit;
-                for (i, s) in opt.states.iter_mut().enumerate().skip(first) {
-                    s.eye.optics = EyeOptics::build(
-                        &optics_spec,
-                        &s.eye.aperture,
-                        e.retina_distance,
-                        &primaries,
-                        e.retina_half_tangent * std::f64::consts::SQRT_2,
-                        source,
-                        &format!("optimize.states[{}]", i - first),
-                    )?;
-                }
+                // The explicit [[optimize.states]] are eye states of the experiment's eye, as its
+                // cases are (a schematic eye, the primaries' wavelengths, diffraction).
+                let opt = o.clone().unwrap_or_default().resolve(&named, &base, dr.la_grid, source)?;
                 Some(opt)
             }
         };

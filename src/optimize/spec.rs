@@ -11,31 +11,9 @@ use crate::error::{Error, Result};
 use crate::optics::{Aperture, Eye, Focus, Retina};
 use crate::render::Method;
 
-/// `[[optimize.states]]`: a training state beyond the experiment's eye cases.
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct StateSpec {
-    /// A label for reports.
-    pub name: String,
-    /// A pinhole eye.
-    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
-    pub pinhole: bool,
-    /// Focus distance from the pupil, mm.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub focus_mm: Option<f64>,
-    /// Focus as vergence, dioptres.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub focus_diopters: Option<f64>,
-    /// Pupil centre, mm (default: the experiment's `eye.position`).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub position: Option<[f64; 3]>,
-    /// Pupil diameter, mm (default: the experiment's `eye.pupil_diameter`).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub pupil_diameter: Option<f64>,
-    /// The state's weight w_s (1).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub weight: Option<f64>,
-}
+/// `[[optimize.states]]`: a training state beyond the experiment's eye cases, an eye state of the
+/// same schema as `[[eye_cases]]` (with its `weight`).
+pub type StateSpec = crate::optics::eye::settings::EyeCaseSpec;
 
 /// `[optimize]`: how OPT's display image is optimised.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
@@ -116,21 +94,7 @@ pub struct Optimization {
     pub solver: SolverSettings,
 }
 
-/// The eye the experiment's `[eye]` gives, before a case's focus: what [`OptimizeSpec::resolve`]
-/// builds training states from.
-#[derive(Clone, Debug)]
-pub struct BaseEye {
-    /// v0, mm.
-    pub retina_distance: f64,
-    /// Pupil diameter, mm.
-    pub pupil_diameter: f64,
-    /// Pupil grid n.
-    pub pupil_grid: usize,
-    /// Pupil centre.
-    pub position: DVec3,
-    /// The retina of Table 1.
-    pub retina: Retina,
-}
+pub use crate::optics::eye::settings::BaseEye;
 
 impl OptimizeSpec {
     /// Resolves the table against the experiment's eye cases `(name, eye)` and `[eye]`; errors
@@ -218,17 +182,8 @@ impl OptimizeSpec {
             states.push(TrainingState { name: name.clone(), retina: retina_of(&eye), eye, weight });
         }
         for (i, s) in self.states.iter().enumerate() {
-            let field = format!("optimize.states[{i}]");
-            let pupil = s.pupil_diameter.unwrap_or(base.pupil_diameter);
-            let aperture = Aperture::stated(s.pinhole, s.focus_mm, s.focus_diopters, pupil).ok_or_else(|| {
-                Error::invalid(source, &field, "give exactly one of `pinhole = true`, `focus_mm` or `focus_diopters`")
-            })?;
-            let position = s.position.map(DVec3::from_array).unwrap_or(base.position);
-            let eye = Eye { retina_distance: base.retina_distance, aperture, pupil_grid, position, optics: None };
-            eye.validate(source).map_err(|e| Error::in_field(source, &field, e))?;
-            if !position.is_finite() {
-                return Err(Error::invalid(source, format!("{field}.position"), "must be finite"));
-            }
+            let mut eye = s.resolve(base, source, &format!("optimize.states[{i}]"))?;
+            eye.pupil_grid = pupil_grid;
             states.push(TrainingState {
                 name: s.name.clone(),
                 retina: retina_of(&eye),

@@ -1,15 +1,19 @@
-//! The experiment's eye settings: the `[eye]` table shared by every eye case (the paper's
-//! thin-lens eye of Sec. 3, or a schematic eye of docs/EYE.md with its wavelengths and the
-//! Stiles-Crawford effect), the eye-model settings a resolution study shares with it, and the
-//! `[[eye_cases]]` rows of Table 1 (Sec. 4.1: Pin, Near, Cen, Far).
+//! The eye's settings, one schema for every file that states an eye: the `[eye]` table shared by
+//! every eye state of an experiment (the paper's thin-lens eye of Sec. 3, or a schematic eye of
+//! docs/EYE.md with its wavelengths and the Stiles-Crawford effect), the eye-model settings a
+//! resolution study, the single-stage commands and Python share with it, and the eye-state rows:
+//! `[[eye_cases]]` (Table 1, Sec. 4.1: Pin, Near, Cen, Far) and `[[optimize.states]]` (OPT's
+//! further training states, docs/OPTIMAL.md), both resolved by [`EyeCaseSpec::resolve`] against
+//! the `[eye]` table ([`BaseEye`]).
 
-use glam::DVec2;
+use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::optics::eye::pupil::{AutoPupil, Observer, PupilSetting};
 use crate::optics::eye::{EyeModel, EyeOptics, EyeOpticsSpec, FocusCriterion, UserEye};
-use crate::optics::{Aperture, Eye};
+use crate::optics::spectrum::Primaries;
+use crate::optics::{Aperture, Eye, Retina};
 
 /// `[eye]`: the eye shared by all eye cases.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
@@ -320,7 +324,9 @@ impl Default for EyeSpec {
     }
 }
 
-/// `[[eye_cases]]`: one row of Table 1.
+/// One eye state: a row of `[[eye_cases]]` (Table 1) or of `[[optimize.states]]` (a training state
+/// of OPT beyond the eye cases). Both tables take the same fields, resolved by one function
+/// ([`EyeCaseSpec::resolve`]); `weight` is read only in `[[optimize.states]]`.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct EyeCaseSpec {
@@ -335,7 +341,86 @@ pub struct EyeCaseSpec {
     /// Focus as vergence, dioptres (0 = infinity).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub focus_diopters: Option<f64>,
-    /// This case's pupil centre, mm (default: `eye.position`): an eye displaced in the eye box.
+    /// This state's pupil centre, mm (default: `eye.position`): an eye displaced in the eye box.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub position: Option<[f64; 3]>,
+    /// This state's pupil diameter, mm (default: `eye.pupil_diameter`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pupil_diameter: Option<f64>,
+    /// OPT's weight w_s of this state (1); only in `[[optimize.states]]`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub weight: Option<f64>,
+}
+
+/// The eye the `[eye]` table gives, before a state's own focus, pupil and position: what
+/// [`EyeCaseSpec::resolve`] builds every eye state from.
+#[derive(Clone, Debug)]
+pub struct BaseEye {
+    /// v0, mm.
+    pub retina_distance: f64,
+    /// Pupil diameter, mm.
+    pub pupil_diameter: f64,
+    /// Pupil grid n.
+    pub pupil_grid: usize,
+    /// Pupil centre.
+    pub position: DVec3,
+    /// The retina of Table 1 (its half field is what a schematic eye's ray map covers).
+    pub retina: Retina,
+    /// The eye beyond the thin lens (model, wavelengths, Stiles-Crawford, diffraction).
+    pub optics: EyeOpticsSpec,
+    /// The display's primaries (each channel's wavelengths).
+    pub primaries: Primaries,
+}
+
+impl EyeCaseSpec {
+    /// The eye of this state on `base`: its aperture (exactly one of `pinhole`, `focus_mm`,
+    /// `focus_diopters`, with its own pupil or the base's), its position (or the base's), checked,
+    /// and its optics beyond the thin lens solved for its focus. Errors name `source` and `field`
+    /// (the row: `eye_cases[2]`, `optimize.states[0]`).
+    pub fn resolve(&self, base: &BaseEye, source: &str, field: &str) -> Result<Eye> {
+        let pupil = self.pupil_diameter.unwrap_or(base.pupil_diameter);
+        let aperture = Aperture::stated(self.pinhole, self.focus_mm, self.focus_diopters, pupil).ok_or_else(|| {
+            Error::invalid(source, field, "give exactly one of `pinhole = true`, `focus_mm` or `focus_diopters`")
+        })?;
+        let position = match self.position {
+            Some(p) if !DVec3::from_array(p).is_finite() => {
+                return Err(Error::invalid(source, format!("{field}.position"), "must be finite"))
+            }
+            Some(p) => DVec3::from_array(p),
+            None => base.position,
+        };
+        let mut eye = Eye {
+            retina_distance: base.retina_distance,
+            aperture,
+            pupil_grid: base.pupil_grid,
+            position,
+            optics: None,
+        };
+        eye.validate(source).map_err(|err| prefix_field(err, &format!("{field} / eye.")))?;
+        let focus_field =
+            if self.focus_mm.is_some() { format!("{field}.focus_mm") } else { format!("{field}.focus_diopters") };
+        eye.optics = EyeOptics::build(
+            &base.optics,
+            &aperture,
+            base.retina_distance,
+            &base.primaries,
+            base.retina.half_tangent * std::f64::consts::SQRT_2,
+            source,
+            &focus_field,
+        )?;
+        Ok(eye)
+    }
+}
+
+/// `err` with its field under `prefix`.
+fn prefix_field(err: Error, prefix: &str) -> Error {
+    match err {
+        Error::Invalid { source_name, field, message } => {
+            Error::Invalid { source_name, field: format!("{prefix}{field}"), message }
+        }
+        Error::Lattice { source_name, field, message } => {
+            Error::Lattice { source_name, field: format!("{prefix}{field}"), message }
+        }
+        other => other,
+    }
 }
