@@ -23,6 +23,12 @@
 //! * **pixel beams of one lenslet in the pupil** (pupil diameter `D`, centred on the axis): the
 //!   pixels of the central elemental image whose rays through the lenslet's centre enter the
 //!   pupil (spots `m p` apart), a different, much larger count.
+//! * **real lenslets**: every quantity above is paraxial and angular, so a thick lenslet enters
+//!   through its principal planes (at the d line): `v1` is read as the pupil-to-front-principal-
+//!   plane distance `v1 + h1` and `v2` as the back-principal-plane-to-LCD distance `v2 - h2`, the
+//!   rays through lenslet centres as rays through its nodal points (W. J. Smith, "Modern Optical
+//!   Engineering", 4th ed., Sec. 2.3-2.4). The numbers are then those of the optically equivalent
+//!   thin design, and the text says so.
 //! * A warning when the elemental-image lattice is not a scaled copy of the lenslet lattice
 //!   (square elemental images under hexagonal lenslets), or the eye box is empty.
 
@@ -137,6 +143,10 @@ pub struct DisplayDesign {
     pub diffraction: DiffractionInfo,
     /// The panel's luminance: peak, black, ambient light, the primaries' luminance shares.
     pub photometry: crate::optics::photometry::PhotometryInfo,
+    /// A real lenslet's principal planes `[h1, h2]`, mm beyond its front and back vertex (d line):
+    /// every angular quantity above uses `v1 + h1` and `v2 - h2` (absent for the thin lens).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub principal_planes_mm: Option<[f64; 2]>,
     /// A real lenslet's focal properties (absent for the paper's thin lens).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub lenslet: Option<LensletReport>,
@@ -283,7 +293,8 @@ fn cell_half_extent(l: &Lattice, dir: DVec2) -> f64 {
 
 /// The design quantities of `d` for a pupil of `pupil_diameter` mm centred on the axis.
 pub fn display_design(d: &Display, pupil_diameter: f64) -> DisplayDesign {
-    let (v1, v2) = (d.eye_to_lenslets, d.lenslets_to_lcd);
+    // Through a real lenslet's principal planes (module documentation); the eye relief stays v1.
+    let (v1, v2) = d.principal_plane_distances();
     let m = v1 / v2;
     let pitch = d.lcd.pixel_pitch();
     let half =
@@ -319,9 +330,10 @@ pub fn display_design(d: &Display, pupil_diameter: f64) -> DisplayDesign {
     let eye_box = (count > 0 && box_hi.cmpgt(box_lo).all()).then(|| (box_hi - box_lo, 0.5 * (box_lo + box_hi)));
     if eye_box.is_none() {
         warnings.push(format!(
-            "no eye box: the viewing zones of the {} do not overlap at the eye relief ({v1} mm); \
+            "no eye box: the viewing zones of the {} do not overlap at the eye relief ({} mm); \
              the elemental-image pitch does not suit the lenslet pitch and distances (ideal ratio (v1 + v2) / v1 = {:.5})",
             crate::count::count(count, "lenslet"),
+            d.eye_to_lenslets,
             (v1 + v2) / v1
         ));
     }
@@ -370,7 +382,7 @@ pub fn display_design(d: &Display, pupil_diameter: f64) -> DisplayDesign {
 
     DisplayDesign {
         display: d.into(),
-        eye_relief_mm: v1,
+        eye_relief_mm: d.eye_to_lenslets,
         viewing_zone_mm: zone.to_array(),
         eye_box_mm: eye_box.map(|(s, _)| s.to_array()),
         eye_box_center_mm: eye_box.map(|(_, c)| c.to_array()),
@@ -388,6 +400,7 @@ pub fn display_design(d: &Display, pupil_diameter: f64) -> DisplayDesign {
         lenslet_pixel_beams_in_pupil: views,
         diffraction: diffraction_info(d, pupil_diameter, Diffraction::None),
         photometry: crate::optics::photometry::PhotometryInfo::of(d),
+        principal_planes_mm: d.thick_lenslet().map(|_| [v1 - d.eye_to_lenslets, d.lenslets_to_lcd - v2]),
         lenslet,
         warnings,
     }
@@ -395,14 +408,15 @@ pub fn display_design(d: &Display, pupil_diameter: f64) -> DisplayDesign {
 
 /// The views a point on the axis at the central depth plane sends through a pupil of
 /// `pupil_diameter` mm: per axis (the pupil diameter over the spacing at the pupil plane of its
-/// rays through neighbouring lenslet centres) and the rays that enter the pupil disk; `None` when
-/// the central depth plane is at infinity or real.
+/// rays through neighbouring lenslet centres, a real lenslet's nodal points) and the rays that
+/// enter the pupil disk; `None` when the central depth plane is at infinity or real.
 pub fn views_of_a_cdp_point(display: &Display, pupil_diameter: f64) -> (Option<[f64; 2]>, Option<usize>) {
     let cdp = display.central_depth_plane();
-    let v1 = display.eye_to_lenslets;
+    let (v1, _) = display.principal_plane_distances();
     let lenslet = display.lenslets.reduced_matrix();
     let pitch = [lenslet.x_axis.length(), lenslet.y_axis.length()];
-    // Rays from (0, 0, z) through lenslet centres c reach the pupil plane at c z / (z - v1).
+    // Rays from (0, 0, z) through lenslet centres c (a real lenslet's nodal points, at v1 + h1)
+    // reach the pupil plane at c z / (z - v1).
     let scale = cdp.map(|z| z / (z - v1));
     let views_across = scale.map(|s| [pupil_diameter / (pitch[0] * s), pupil_diameter / (pitch[1] * s)]);
     let views_in = scale.map(|s| {
@@ -426,6 +440,16 @@ pub fn views_of_a_cdp_point(display: &Display, pupil_diameter: f64) -> (Option<[
 pub fn display_design_text(x: &DisplayDesign, summary: &str) -> String {
     let pair = |v: [f64; 2], digits: usize| format!("{:.digits$} x {:.digits$}", v[0], v[1]);
     let mut s = format!("{summary}\n");
+    if let Some([h1, h2]) = x.principal_planes_mm {
+        let d = &x.display;
+        s += &format!(
+            "real lenslet: the quantities below are paraxial, through its principal planes (d line): front {h1:.4} \
+             mm beyond the front vertex, back {h2:.4} mm beyond the back vertex, so v1 + h1 = {:.4} mm and v2 - h2 \
+             = {:.4} mm stand for the thin lens's v1 and v2\n",
+            d.eye_to_lenslets_mm + h1,
+            d.lenslets_to_lcd_mm - h2
+        );
+    }
     s += &format!(
         "eye box at the eye relief ({} mm): {}\n",
         x.eye_relief_mm,

@@ -241,6 +241,22 @@ impl Display {
     pub fn thick_lenslet(&self) -> Option<&ThickLenslet> {
         self.lenslet.thick()
     }
+    /// The distances eq. (1)'s angular quantities use, `(v1', v2')`: pupil to the lenslets' front
+    /// principal plane and back principal plane to the LCD. The thin lens's are `(v1, v2)`; a real
+    /// lenslet's principal planes `h1`, `h2` (at the d line, [`Paraxial::principal_planes`]) give
+    /// `(v1 + h1, v2 - h2)`, the thin design it is paraxially equivalent to.
+    ///
+    /// [`Paraxial::principal_planes`]: super::lenslet::Paraxial::principal_planes
+    pub fn principal_plane_distances(&self) -> (f64, f64) {
+        match self.thick_lenslet() {
+            None => (self.eye_to_lenslets, self.lenslets_to_lcd),
+            Some(t) => {
+                let (h1, h2) = t.paraxial(D_LINE_NM).principal_planes();
+                (self.eye_to_lenslets + h1, self.lenslets_to_lcd - h2)
+            }
+        }
+    }
+
     /// Lenslet optical power d2 = 1/f.
     pub fn lenslet_power(&self) -> f64 {
         1.0 / self.focal_length

@@ -255,9 +255,8 @@ impl DisplayIntent {
             None => (self.focal_length, 0.0, 0.0),
             Some(t) => {
                 let p = t.paraxial(D_LINE_NM);
-                // Front focal point at ffd from the front vertex, front principal plane f beyond it;
-                // back principal plane f before the back focal point.
-                (p.efl, p.ffd + p.efl, p.bfd - p.efl)
+                let (h1, h2) = p.principal_planes();
+                (p.efl, h1, h2)
             }
         }
     }

@@ -88,7 +88,8 @@ pub fn lc_cdp_contrast(frequency_cpd: f64, a_deg: f64, s_deg: f64) -> f64 {
 pub fn display_limits(display: &Display, pupil_diameter: f64) -> DisplayLimits {
     let d = display_design(display, pupil_diameter);
     let cdp = display.central_depth_plane();
-    let v1 = display.eye_to_lenslets;
+    // A real lenslet's centre is seen at its front principal (nodal) plane, as `info` reads it.
+    let (v1, _) = display.principal_plane_distances();
     let lenslet = display.lenslets.reduced_matrix();
     let pitch = [lenslet.x_axis.length(), lenslet.y_axis.length()];
     DisplayLimits {
