@@ -209,3 +209,35 @@ fn assess_resolution_and_sweep_warn_of_each_unit_mistake() {
         assert!(e.find("warning:") < e.find("asked for"), "sweep {file}: warns before the run: {e}");
     }
 }
+
+#[test]
+fn a_colour_channel_without_central_depth_plane_is_warned_by_assess_even_quiet() {
+    // displays/paper-pmma.toml: PMMA's dispersion puts the blue channel's back focal distance
+    // before the LCD, so blue has no central depth plane; red and green have one.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("pmma");
+    let o = inimtrace(&[
+        "--quiet",
+        "assess",
+        "experiments/paper-pmma.toml",
+        "--out",
+        out.to_str().unwrap(),
+        "--set",
+        "display.lcd.resolution=[54, 54]",
+        "--set",
+        "eye.retina_resolution=8",
+        "--set",
+        "eye.pupil_grid=2",
+        "--set",
+        "measurement.estimator=\"grid\"",
+    ]);
+    let e = stderr(&o);
+    assert!(o.status.success(), "{e}");
+    let lines: Vec<&str> =
+        e.lines().filter(|l| l.starts_with("warning:") && l.contains("no central depth plane")).collect();
+    assert_eq!(lines.len(), 1, "{e}");
+    assert!(lines[0].contains("blue") && !lines[0].contains("red") && !lines[0].contains("green ("), "{}", lines[0]);
+    // The thin design has a central depth plane in every channel.
+    let e = stderr(&inimtrace(&["info", "--display", "displays/paper.toml"]));
+    assert!(!e.contains("no central depth plane"), "{e}");
+}

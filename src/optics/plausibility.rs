@@ -91,7 +91,9 @@ pub fn display_warnings(display: &Display, source: &str) -> Vec<String> {
     let side = if LCD_SIZE.min <= size.x.min(size.y) { size.x.max(size.y) } else { size.x.min(size.y) };
     w.extend(check(source, "lcd.size", side, LCD_SIZE));
     let (v2, f) = (display.lenslets_to_lcd, display.focal_length);
-    if (v2 - f).abs() <= 1e-9 * f {
+    if display.thick_lenslet().is_some() {
+        w.extend(channel_cdp_warning(display, source));
+    } else if (v2 - f).abs() <= 1e-9 * f {
         w.push(format!(
             "{source}: the central depth plane is at infinity (lenslets_to_lcd = lenslets.focal_length = {f} mm): \
              content is sharpest at optical infinity, and the display has no finite central depth plane"
@@ -106,6 +108,35 @@ pub fn display_warnings(display: &Display, source: &str) -> Vec<String> {
         ));
     }
     w
+}
+
+/// The warning for a real lenslet that images the LCD at no central depth plane in some colour
+/// channel (at the channel's median wavelength, where the simulation refracts it): its dispersion
+/// shortens the back focal distance toward blue, and an LCD beyond it is imaged at infinity or as
+/// a real image on the eye's side, so that channel's content has no depth the eye can focus on.
+fn channel_cdp_warning(display: &Display, source: &str) -> Option<String> {
+    let t = display.thick_lenslet()?;
+    let v2 = display.lenslets_to_lcd;
+    let nm = display.channel_wavelengths();
+    let names = ["red", "green", "blue"];
+    let missing: Vec<usize> = (0..3).filter(|&c| t.lcd_image_distance(v2, nm[c]).is_none()).collect();
+    if missing.is_empty() {
+        return None;
+    }
+    let which: Vec<String> = missing
+        .iter()
+        .map(|&c| {
+            let p = t.paraxial(nm[c]);
+            format!("{} ({} nm: back focal distance {} mm)", names[c], round(nm[c]), round(p.bfd))
+        })
+        .collect();
+    Some(format!(
+        "{source}: the real lenslets image the LCD at no central depth plane in the {} channel: lenslets_to_lcd = \
+         {v2} mm is at or beyond the lenslet's back focal distance there (its dispersion), so that channel's image \
+         of the LCD is at infinity or real, on the eye's side; no accommodation focuses it as a plane behind the \
+         lenslets (`inimtrace info --display` lists each channel's central depth plane)",
+        which.join(", ")
+    ))
 }
 
 /// The warning for an eye's focus distance `focus_mm` (mm from the pupil), stated as `field`;
