@@ -21,6 +21,11 @@ use crate::optics::PlaneRay;
 /// Rays (rings) of the RMS-spot quadrature.
 const RMS_RAYS: usize = 16;
 
+/// How close (D) a stated focus must be to one the eye reaches beyond which it is refused: a fixed
+/// eye's one focus, or an end of an accommodating eye's range. A thousandth of the eye's depth of
+/// field at a 5 mm pupil (about 0.1 D), and far above a value printed to 4 decimals.
+pub const FOCUS_MATCH_D: f64 = 1e-4;
+
 /// Gauss-Legendre nodes and weights on [-1, 1] (Newton's method on P_n).
 pub(crate) fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
     let (mut x, mut w) = (vec![0.0; n], vec![0.0; n]);
@@ -162,23 +167,36 @@ impl SchematicEye {
         let (f_lo, f_hi) =
             (best(lo)? - object_vergence_d, if hi > lo { best(hi)? } else { f64::NAN } - object_vergence_d);
         let tol = 1e-9;
+        // A stated focus this close to one the eye reaches (its fixed focus, or an end of its
+        // range) is taken as that focus: a value typed back from a message rounded to 4 decimals.
+        let near = FOCUS_MATCH_D;
         let unreachable = || {
             let (v_lo, v_hi) =
                 (f_lo + object_vergence_d, if hi > lo { f_hi + object_vergence_d } else { f_lo + object_vergence_d });
             Error::invalid(
                 source,
                 field,
-                format!(
-                    "{object_vergence_d} D is out of reach of the {} eye at {wavelength_nm} nm ({criterion:?} focus, {pupil_diameter} mm pupil): \
-                     its accommodation {lo}..{hi} D focuses {:.4}..{:.4} D",
-                    model.name(),
-                    v_lo.min(v_hi),
-                    v_lo.max(v_hi)
-                ),
+                // Shortest round-trip forms: the values typed back are accepted.
+                if hi > lo {
+                    format!(
+                        "{object_vergence_d} D is out of reach of the {} eye at {wavelength_nm} nm ({criterion:?} focus, \
+                         {pupil_diameter} mm pupil): its accommodation {lo}..{hi} D focuses {}..{} D",
+                        model.name(),
+                        v_lo.min(v_hi),
+                        v_lo.max(v_hi)
+                    )
+                } else {
+                    format!(
+                        "{object_vergence_d} D is out of reach of the {} eye at {wavelength_nm} nm ({criterion:?} focus, \
+                         {pupil_diameter} mm pupil): it does not accommodate and focuses {v_lo} D (a focus within \
+                         {near} D of it is taken as it; an accommodation law gives a user eye a range, docs/EYE.md)",
+                        model.name(),
+                    )
+                },
             )
         };
         let a = if hi <= lo {
-            if f_lo.abs() > 1e-6 {
+            if f_lo.abs() > near {
                 return Err(unreachable());
             }
             lo
@@ -187,7 +205,13 @@ impl SchematicEye {
         } else if f_hi.abs() <= tol {
             hi
         } else if (f_lo < 0.0) == (f_hi < 0.0) {
-            return Err(unreachable());
+            // Beyond the range: within `near` of its nearer end is that end.
+            match (f_lo.abs() <= near, f_hi.abs() <= near) {
+                (true, _) if f_lo.abs() <= f_hi.abs() => lo,
+                (_, true) => hi,
+                (true, false) => lo,
+                (false, false) => return Err(unreachable()),
+            }
         } else {
             // Illinois regula falsi.
             let (mut a0, mut fa, mut b0, mut fb) = (lo, f_lo, hi, f_hi);

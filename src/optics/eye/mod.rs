@@ -29,6 +29,7 @@ pub mod schematic;
 pub mod settings;
 pub mod trace;
 pub mod user;
+pub mod user_accommodation;
 
 use crate::error::{Error, Result};
 pub use medium::Dispersion;

@@ -92,10 +92,11 @@ impl EyeModel {
     }
 
     /// The range of the model's accommodation parameter, dioptres; (0, 0) for Le Grand and
-    /// the user eye (no accommodation).
+    /// a user eye without an accommodation law (one fixed focus).
     pub fn accommodation_range(&self) -> (f64, f64) {
         match self {
             EyeModel::Navarro1985 | EyeModel::Navarro1999 | EyeModel::Arizona => (0.0, 10.0),
+            EyeModel::User(u) => u.accommodation_range(),
             _ => (0.0, 0.0),
         }
     }
@@ -108,7 +109,7 @@ impl EyeModel {
             EyeModel::Navarro1999 => Some(super::navarro::definition(a, true)),
             EyeModel::Arizona => Some(super::arizona::definition(a)),
             EyeModel::LeGrand => Some(super::le_grand::definition()),
-            EyeModel::User(u) => Some(u.definition()),
+            EyeModel::User(u) => Some(u.definition(a)),
         }
     }
 }

@@ -14,11 +14,15 @@
 //! semi_diameter = 5.5
 //! medium = { constant = 1.376 }
 //! ```
+//!
+//! An optional `[eye.user.accommodation]` ([`super::user_accommodation`]) lets surface
+//! parameters change with the accommodation; without it the eye has one fixed focus.
 
 use serde::{Deserialize, Serialize};
 
 use super::medium::Dispersion;
 use super::model::{EyeDefinition, SurfaceDef, REFERENCE_WAVELENGTH};
+use super::user_accommodation::{surface_index, LawParameter, UserAccommodation};
 use crate::error::{Error, Result};
 
 /// One surface of a user eye, in order from the cornea toward the retina.
@@ -68,6 +72,9 @@ pub struct UserEye {
     /// The wavelength at which the eye's frame and retina map are built, nm (555 by default).
     #[serde(default)]
     pub reference_wavelength: Option<f64>,
+    /// The accommodation law (`None`: one fixed focus).
+    #[serde(default)]
+    pub accommodation: Option<UserAccommodation>,
 }
 
 impl UserEye {
@@ -79,8 +86,55 @@ impl UserEye {
             .or_else(|| self.iris.after.parse::<usize>().ok().filter(|&i| i < self.surfaces.len()))
     }
 
-    /// Checks the table; errors name the field (`eye.surfaces[2].radius`).
+    /// The accommodation range, D: the law's, or `(0, 0)` for a fixed eye.
+    pub fn accommodation_range(&self) -> (f64, f64) {
+        self.accommodation.as_ref().map_or((0.0, 0.0), |l| (l.range[0], l.range[1]))
+    }
+
+    /// The eye with its accommodation law applied at `a` (the law itself then dropped).
+    pub fn at(&self, a: f64) -> UserEye {
+        let mut eye = self.clone();
+        let Some(law) = eye.accommodation.take() else { return eye };
+        let names: Vec<Option<String>> = self.surfaces.iter().map(|s| s.name.clone()).collect();
+        for l in &law.laws {
+            let Some(k) = surface_index(&names, &l.surface) else { continue };
+            let (v, s) = (l.value(a), &mut eye.surfaces[k]);
+            match l.parameter {
+                LawParameter::Radius => s.radius = v,
+                LawParameter::Conic => s.conic = v,
+                LawParameter::Thickness => s.thickness = v,
+                LawParameter::Index => match &mut s.medium {
+                    Dispersion::Constant(n) => *n = v,
+                    Dispersion::Abbe { nd, .. } => *nd = v,
+                    _ => {}
+                },
+            }
+        }
+        eye
+    }
+
+    /// Checks the table, and with an accommodation law the law and the table it makes at every
+    /// accommodation in steps of at most 0.25 D (errors then say at which `A`); errors name the
+    /// field (`eye.surfaces[2].radius`).
     pub fn validate(&self, source: &str) -> Result<()> {
+        self.validate_table(source)?;
+        let Some(law) = &self.accommodation else { return Ok(()) };
+        let names: Vec<Option<String>> = self.surfaces.iter().map(|s| s.name.clone()).collect();
+        let media: Vec<Dispersion> = self.surfaces.iter().map(|s| s.medium.clone()).collect();
+        law.validate(&names, &media, source)?;
+        for a in law.checkpoints() {
+            self.at(a).validate_table(source).map_err(|e| match e {
+                Error::Invalid { source_name, field, message } => {
+                    Error::Invalid { source_name, field: format!("{field} (eye.accommodation at A = {a} D)"), message }
+                }
+                other => other,
+            })?;
+        }
+        Ok(())
+    }
+
+    /// The checks of one surface table (no accommodation law).
+    fn validate_table(&self, source: &str) -> Result<()> {
         let err = |f: String, m: String| Err(Error::invalid(source, f, m));
         if self.surfaces.is_empty() || self.surfaces.len() > 64 {
             return err("eye.surfaces".into(), format!("needs 1 to 64 surfaces, got {}", self.surfaces.len()));
@@ -138,8 +192,12 @@ impl UserEye {
         Ok(())
     }
 
-    /// The surface table (the eye must have been validated).
-    pub(crate) fn definition(&self) -> EyeDefinition {
+    /// The surface table at accommodation `a` (the eye must have been validated; a fixed eye
+    /// ignores `a`).
+    pub(crate) fn definition(&self, a: f64) -> EyeDefinition {
+        if self.accommodation.is_some() {
+            return self.at(a).definition(a);
+        }
         EyeDefinition {
             surfaces: self
                 .surfaces
@@ -171,7 +229,7 @@ mod tests {
     fn a_user_eye_reads_from_toml_and_validates() {
         let u: UserEye = toml::from_str(NAVARRO_LIKE).unwrap();
         u.validate("e.toml").unwrap();
-        assert_eq!(u.definition().iris_after, 1);
+        assert_eq!(u.definition(0.0).iris_after, 1);
         assert_eq!(u.surfaces[1].medium, Dispersion::Cauchy { a: 1.3247, b: 0.0044, c: 0.0 });
     }
 
