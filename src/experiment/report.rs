@@ -161,7 +161,12 @@ pub fn table_markdown(report: &AssessReport, exp: &Experiment) -> String {
     s.push_str(&"---:|".repeat(2 * methods.len()));
     s.push('\n');
     for case in &exp.cases {
-        s.push_str(&format!("| {} |", case.name));
+        match &exp.optimize {
+            Some(opt) => {
+                s.push_str(&format!("| {} ({}) |", case.name, crate::optimize::report::case_role(opt, &case.name)))
+            }
+            None => s.push_str(&format!("| {} |", case.name)),
+        }
         let find = |m: &str| report.scores.iter().find(|x| x.method == m && x.eye_case == case.name);
         for m in &methods {
             let v = find(m).map(crate::experiment::converged_report::psnr_cell).unwrap_or_default();
@@ -181,6 +186,9 @@ pub fn table_markdown(report: &AssessReport, exp: &Experiment) -> String {
     ));
     if exp.measurement.estimator == EstimatorKind::Converged {
         s.push_str(&crate::experiment::converged_report::table_note(report, exp));
+    }
+    if let Some(opt) = &exp.optimize {
+        s.push_str(&crate::optimize::report::table_note(opt, report.optimization.as_ref()));
     }
     s
 }

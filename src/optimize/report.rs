@@ -122,3 +122,56 @@ impl OptimizationReport {
         area.present().map_err(e2s)
     }
 }
+
+/// Whether eye case `case` is one of OPT's training states ("trained") or not ("held out"):
+/// the label beside its row of `table.md`.
+pub fn case_role(opt: &super::Optimization, case: &str) -> &'static str {
+    if opt.states.iter().any(|s| s.name == case) {
+        "trained"
+    } else {
+        "held out"
+    }
+}
+
+/// The paragraph beside `table.md` when the methods list OPT: what it was trained on (the
+/// states, the training's pupil grid and retina samples), how the solve ended, and which bound
+/// is which.
+pub fn table_note(opt: &super::Optimization, report: Option<&OptimizationReport>) -> String {
+    let states: Vec<String> = opt
+        .states
+        .iter()
+        .map(|s| {
+            let grid = match s.eye.aperture {
+                crate::optics::Aperture::Pinhole => "pinhole".to_string(),
+                _ => format!(
+                    "{n} x {n} pupil grid ({} points inside the pupil)",
+                    s.eye.pupil_samples().len(),
+                    n = s.eye.pupil_grid
+                ),
+            };
+            format!(
+                "{} ({grid}, {} x {} rays per retina pixel)",
+                s.name, s.retina.samples_per_pixel, s.retina.samples_per_pixel
+            )
+        })
+        .collect();
+    let end = report.map_or(String::new(), |r| {
+        let iterations = r.iterations.last().map_or(0, |i| i.iteration);
+        let why = match r.stop {
+            super::solver::Stop::Converged => "its tolerance was met",
+            super::solver::Stop::Iterations => "its iteration budget was spent",
+            super::solver::Stop::Stalled => "no further decrease was possible",
+        };
+        format!(" The solve stopped after {} because {why}.", crate::count::count(iterations, "iteration"))
+    });
+    format!(
+        "\nOPT was optimised from {} by the `{}` solver on the rows marked trained, each state sampled as the training \
+         samples it: {}.{end} On the trained states OPT's score bounds what LC, PC and LA, display images it could \
+         have chosen, reach there; its gain over them is a lower bound on the headroom, because the solve stops at \
+         its budget. Rows marked held out are eye states it never saw: its gain there says whether the \
+         optimisation carries over.\n",
+        opt.initial.name(),
+        format!("{:?}", opt.solver.method).to_lowercase(),
+        states.join("; ")
+    )
+}
