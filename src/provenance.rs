@@ -6,7 +6,7 @@
 //! material library, glTF buffer and texture). A [`Provenance`] holds those with the scene's
 //! name and path as given, the `--set` overrides, the measurement's budgets and targets and the
 //! seed; [`check`] hashes the files on disk again and says which changed (`inimtrace info
-//! --provenance RUN_DIR`).
+//! --provenance RUN_DIR`, for an `assess` run, a sweep or a resolution study).
 
 use std::cell::RefCell;
 use std::path::Path;
@@ -48,6 +48,10 @@ pub struct Provenance {
     /// The experiment file as given (`None`: a built-in experiment).
     #[serde(default)]
     pub experiment_path: Option<String>,
+    /// A resolution study's file as given (`builtin:paper` for the built-in study); absent for
+    /// an experiment.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub study_path: Option<String>,
     /// The scene's name.
     pub scene_name: String,
     /// The scene as the experiment (or `--scene`) gives it: a path relative to the experiment
@@ -148,8 +152,8 @@ pub fn check(provenance: &Provenance, base: &Path) -> Vec<(InputFile, FileState)
         .collect()
 }
 
-/// The provenances a run folder holds: its `results.json` (an `assess` run) or the records in
-/// `points/` (a sweep), each with the file it came from.
+/// The provenances a run folder holds: its `results.json` (an `assess` run), its `study.json`
+/// (a resolution study) or the records in `points/` (a sweep), each with the file it came from.
 pub fn of_run(dir: &Path) -> crate::error::Result<Vec<(std::path::PathBuf, Provenance)>> {
     use crate::error::Error;
     let read = |path: &Path| -> crate::error::Result<Option<Provenance>> {
@@ -164,10 +168,15 @@ pub fn of_run(dir: &Path) -> crate::error::Result<Vec<(std::path::PathBuf, Prove
         }
     };
     let results = dir.join("results.json");
+    let study = dir.join("study.json");
     let mut out = Vec::new();
     if results.is_file() {
         if let Some(p) = read(&results)? {
             out.push((results, p));
+        }
+    } else if study.is_file() {
+        if let Some(p) = read(&study)? {
+            out.push((study, p));
         }
     } else if dir.join("points").is_dir() {
         let mut records: Vec<std::path::PathBuf> = std::fs::read_dir(dir.join("points"))
@@ -187,7 +196,7 @@ pub fn of_run(dir: &Path) -> crate::error::Result<Vec<(std::path::PathBuf, Prove
         return Err(Error::invalid(
             dir.display().to_string(),
             "RUN_DIR",
-            "holds neither results.json (an assess run) nor points/ (a sweep)",
+            "holds neither results.json (an assess run), study.json (a resolution study) nor points/ (a sweep)",
         ));
     }
     if out.is_empty() {
@@ -207,12 +216,14 @@ pub fn report(dir: &Path) -> crate::error::Result<(String, usize)> {
     let runs = of_run(dir)?;
     let mut text = String::new();
     let first = &runs[0].1;
+    let what = match &first.study_path {
+        Some(study) => format!("study {study}"),
+        None => format!("scene `{}` ({})", first.scene_name, first.scene_path),
+    };
     let _ = writeln!(
         text,
-        "{}: scene `{}` ({}), display {}{}; seed {}; {}",
+        "{}: {what}, display {}{}; seed {}; {}",
         dir.display(),
-        first.scene_name,
-        first.scene_path,
         first.display_path,
         if first.set.is_empty() { String::new() } else { format!("; --set {}", first.set.join(" ")) },
         first.seed,

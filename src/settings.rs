@@ -418,6 +418,7 @@ pub fn provenance_of(
     let m = &exp.measurement;
     crate::provenance::Provenance {
         experiment_path,
+        study_path: None,
         scene_name: exp.scene.name.clone(),
         scene_path: exp.spec.scene.clone(),
         display_path: exp.spec.display.clone(),

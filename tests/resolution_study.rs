@@ -61,8 +61,8 @@ fn the_tiny_study_writes_every_file_with_the_issue_columns() {
     let acc = read(&out, "accommodation.csv");
     assert_eq!(
         acc.lines().next().unwrap(),
-        "source,target_diopters,rule,frequency_cpd,predicted_focus_diopters,contrast_at_peak,contrast_at_peak_ci95,\
-         samples_per_pixel,replicates"
+        "source,target_diopters,rule,frequency_cpd,predicted_focus_diopters,predicted_focus_ci95,grid_edge,\
+         contrast_at_peak,contrast_at_peak_ci95,samples_per_pixel,replicates"
     );
     assert_eq!(acc.lines().count(), 1 + 3 * 2 * 2);
     // Every row carries its precision: a finite positive half-width (the ground truth's too: the
@@ -76,8 +76,20 @@ fn the_tiny_study_writes_every_file_with_the_issue_columns() {
     let tail = format!(",{},{reps}", spp * reps);
     for row in acc.lines().skip(1) {
         assert!(row.ends_with(&tail), "{row}: not {tail}");
-        let ci95: f64 = row.split(',').nth(6).unwrap().parse().unwrap_or(f64::NAN);
+        let cells: Vec<&str> = row.split(',').collect();
+        let ci95: f64 = cells[8].parse().unwrap_or(f64::NAN);
         assert!(ci95.is_finite() && ci95 > 0.0, "{row}");
+        // The ground truth of content at 1 D peaks on the focus grid's floor (1, 2, 3 D): flagged,
+        // with no interval; content at 2.5 D peaks inside the grid, with a finite interval.
+        let (focus, edge) = (cells[4].parse::<f64>().unwrap(), cells[6]);
+        let focus_ci95: f64 = cells[5].parse().unwrap_or(f64::NAN);
+        match (cells[0], cells[1]) {
+            ("ground_truth", "1") => assert!(edge == "floor" && focus == 1.0 && cells[5].is_empty(), "{row}"),
+            ("ground_truth", "2.5") => {
+                assert!(edge.is_empty() && focus_ci95 > 0.0 && focus_ci95 < 0.5, "{row}")
+            }
+            _ => assert_eq!(edge.is_empty(), focus > 1.0 && focus < 3.0, "{row}"),
+        }
     }
     for row in mtf.lines().skip(1).chain(read(&out, "mtf50.csv").lines().skip(1)) {
         assert!(row.ends_with(&tail), "{row}: not {tail}");
@@ -104,6 +116,40 @@ fn the_tiny_study_writes_every_file_with_the_issue_columns() {
         .unwrap();
     let e = String::from_utf8_lossy(&st.stderr);
     assert!(!st.status.success() && e.contains("bad.toml") && e.contains("frequencies_cpd[2]"), "{e}");
+
+    // The same mistake made by --set: the error names the override as well as the file.
+    let st = Command::new(env!("CARGO_BIN_EXE_inimtrace"))
+        .args(["--quiet", "resolution", "studies/tiny.toml", "--set", "frequencies_cpd=[1, 2, 4.3]", "--out"])
+        .arg(tmp.path().join("c"))
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&st.stderr);
+    assert!(
+        !st.status.success()
+            && e.contains("tiny.toml with --set frequencies_cpd=[1, 2, 4.3]")
+            && e.contains("frequencies_cpd[2]"),
+        "{e}"
+    );
+
+    // The study folder records its inputs' hashes, and `info --provenance` checks them again.
+    let json: serde_json::Value = serde_json::from_str(&read(&out, "study.json")).unwrap();
+    let p = &json["provenance"];
+    assert_eq!(p["study_path"], "studies/tiny.toml");
+    let tiny = std::fs::read("studies/tiny.toml").unwrap();
+    let file =
+        p["files"].as_array().unwrap().iter().find(|f| f["path"] == "studies/tiny.toml").expect("the study file");
+    assert_eq!(file["sha256"], inimtrace::provenance::sha256_hex(&tiny));
+    assert_eq!(file["bytes"], tiny.len() as u64);
+    assert_eq!(p["seed"], 1);
+    let info = Command::new(env!("CARGO_BIN_EXE_inimtrace")).args(["info", "--provenance"]).arg(&out).output().unwrap();
+    let text = String::from_utf8_lossy(&info.stdout);
+    assert!(info.status.success(), "{}", String::from_utf8_lossy(&info.stderr));
+    assert!(
+        text.contains("study studies/tiny.toml")
+            && text.contains("unchanged")
+            && text.contains("all 1 input file unchanged"),
+        "{text}"
+    );
 }
 
 /// A study of `body` plus the common tables.

@@ -10,7 +10,10 @@
 //!
 //! Both search the measured focus grid for its best point and refine it by the parabola through
 //! that point and its two neighbours (on an uneven grid too); a best point at the end of the grid
-//! is reported as is. Pure functions of the measured numbers.
+//! is reported as is and flagged ([`GridEdge`]): the true peak may lie beyond it. The focus's
+//! interval is the 95% half-width of the three contrasts carried through the parabola's vertex
+//! (first-order error propagation, the three taken as independent). Pure functions of the
+//! measured numbers.
 
 /// The peak of a sampled curve: where it is and how high.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -21,19 +24,79 @@ pub struct Peak {
     pub value: f64,
 }
 
+/// Where a peak lies on the focus grid: inside it, or on its first or last point (where the
+/// curve may still rise beyond the grid: not a normal prediction).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum GridEdge {
+    /// Between the grid's ends.
+    Inside,
+    /// On the grid's first (lowest) focus.
+    Floor,
+    /// On the grid's last (highest) focus.
+    Ceiling,
+}
+
+impl GridEdge {
+    /// Where `at` lies on the grid `xs` (increasing).
+    pub fn of(xs: &[f64], at: f64) -> Self {
+        match (xs.first(), xs.last()) {
+            (Some(&lo), _) if at <= lo => GridEdge::Floor,
+            (_, Some(&hi)) if at >= hi => GridEdge::Ceiling,
+            _ => GridEdge::Inside,
+        }
+    }
+
+    /// The CSV's word: empty inside, `floor` or `ceiling`.
+    pub fn name(self) -> &'static str {
+        match self {
+            GridEdge::Inside => "",
+            GridEdge::Floor => "floor",
+            GridEdge::Ceiling => "ceiling",
+        }
+    }
+}
+
+/// The 95% half-width of [`refined_peak`]'s position when each `ys[j]` has the 95% half-width
+/// `hs[j]`: the vertex's derivative with respect to the three contrasts it is placed by (central
+/// differences), the three taken as independent. `None` when the peak is not a parabola's vertex
+/// strictly inside the grid (an end point, a flat top, a clamped vertex, or NaN).
+pub fn peak_half_width(xs: &[f64], ys: &[f64], hs: &[f64]) -> Option<f64> {
+    assert_eq!(xs.len(), hs.len(), "one half-width per point");
+    let peak = refined_peak(xs, ys)?;
+    let (i, _) = best_index(ys)?;
+    if i == 0 || i + 1 == xs.len() {
+        return None;
+    }
+    let vertex = |y: [f64; 3]| -> f64 {
+        let (x0, x1, x2) = (xs[i - 1], xs[i], xs[i + 1]);
+        let a = (y[1] - y[0]) / (x1 - x0);
+        let c = ((y[2] - y[1]) / (x2 - x1) - a) / (x2 - x0);
+        0.5 * (x0 + x1 - a / c)
+    };
+    let y = [ys[i - 1], ys[i], ys[i + 1]];
+    let at = vertex(y);
+    if !(at > xs[i - 1] && at < xs[i + 1]) || (at - peak.at).abs() > 1e-9 * (1.0 + at.abs()) {
+        return None;
+    }
+    let mut sum = 0.0;
+    for k in 0..3 {
+        let step = 1e-6 * y[k].abs().max(1e-3);
+        let (mut up, mut down) = (y, y);
+        up[k] += step;
+        down[k] -= step;
+        let slope = (vertex(up) - vertex(down)) / (2.0 * step);
+        sum += (slope * hs[i - 1 + k]).powi(2);
+    }
+    Some(sum.sqrt()).filter(|w| w.is_finite())
+}
+
 /// The maximum of `ys` over `xs` (increasing), refined by the parabola through the best sample
 /// and its neighbours; the vertex is kept within the neighbours' span. `None` when no value is
 /// finite.
 pub fn refined_peak(xs: &[f64], ys: &[f64]) -> Option<Peak> {
     assert_eq!(xs.len(), ys.len(), "one value per point");
-    // The first of equal maxima.
-    let (i, best) = ys.iter().enumerate().filter(|(_, y)| y.is_finite()).fold(
-        None,
-        |acc: Option<(usize, f64)>, (i, &y)| match acc {
-            Some((_, b)) if b >= y => acc,
-            _ => Some((i, y)),
-        },
-    )?;
+    let (i, best) = best_index(ys)?;
     if i == 0 || i + 1 == xs.len() || !ys[i - 1].is_finite() || !ys[i + 1].is_finite() {
         return Some(Peak { at: xs[i], value: best });
     }
@@ -49,6 +112,14 @@ pub fn refined_peak(xs: &[f64], ys: &[f64]) -> Option<Peak> {
     let at = (0.5 * (x0 + x1 - a / c)).clamp(x0, x2);
     let value = y0 + a * (at - x0) + c * (at - x0) * (at - x1);
     Some(Peak { at, value })
+}
+
+/// The index and value of the first of the equal maxima of `ys`'s finite values.
+fn best_index(ys: &[f64]) -> Option<(usize, f64)> {
+    ys.iter().enumerate().filter(|(_, y)| y.is_finite()).fold(None, |acc: Option<(usize, f64)>, (i, &y)| match acc {
+        Some((_, b)) if b >= y => acc,
+        _ => Some((i, y)),
+    })
 }
 
 /// The area under `mtf` (over increasing `frequencies`) from the first frequency up to `limit`
@@ -115,6 +186,48 @@ mod tests {
         assert!(refined_peak(&xs, &[f64::NAN; 3]).is_none());
         // A flat top: no curvature, the sample itself.
         assert_eq!(refined_peak(&xs, &[1.0, 1.0, 1.0]).unwrap().at, 0.0);
+    }
+
+    #[test]
+    fn grid_ends_are_flagged_and_carry_no_interval() {
+        let xs = [0.25, 0.5, 0.75, 1.0];
+        let falling = [0.9, 0.8, 0.7, 0.6];
+        let p = refined_peak(&xs, &falling).unwrap();
+        assert_eq!(GridEdge::of(&xs, p.at), GridEdge::Floor);
+        assert_eq!(GridEdge::of(&xs, refined_peak(&xs, &[0.1, 0.2, 0.3, 0.4]).unwrap().at), GridEdge::Ceiling);
+        assert_eq!(GridEdge::of(&xs, 0.6), GridEdge::Inside);
+        assert!(peak_half_width(&xs, &falling, &[0.01; 4]).is_none());
+    }
+
+    #[test]
+    fn the_focus_interval_is_the_vertex_moved_by_the_contrasts_half_widths() {
+        // y = 1 - (x - 1.1)^2 on a 0.5 D grid: peak at 1.1 placed by the points 0.5, 1.0, 1.5.
+        let xs = [0.0, 0.5, 1.0, 1.5, 2.0];
+        let ys: Vec<f64> = xs.iter().map(|x| 1.0 - (x - 1.1) * (x - 1.1)).collect();
+        let hs = [0.5, 0.02, 0.01, 0.03, 0.5];
+        let w = peak_half_width(&xs, &ys, &hs).unwrap();
+        // The same first-order sum from finite moves of each contrast by a small fraction of its
+        // half-width (the ends' large half-widths do not enter).
+        let mut sum = 0.0;
+        for k in 1..4 {
+            let mut moved = ys.clone();
+            let e = 1e-4;
+            moved[k] += e * hs[k];
+            let shift = (refined_peak(&xs, &moved).unwrap().at - 1.1) / e;
+            sum += shift * shift;
+        }
+        assert!((w - sum.sqrt()).abs() < 1e-4 * w, "{w} vs {}", sum.sqrt());
+        // Analytically on an even grid h: x* = x1 + h (y2 - y0) / (2 q), q = 2 y1 - y0 - y2
+        // (here y0, y1, y2 at 0.5, 1, 1.5, q = 2 h^2 = 0.5): dx*/dy1 = -h (y2 - y0) / q^2.
+        let (h, q) = (0.5, 0.5);
+        let (y0, y2) = (ys[1], ys[3]);
+        let d0 = h * (-1.0 / (2.0 * q) + (y2 - y0) / (2.0 * q * q));
+        let d1 = -h * (y2 - y0) / (q * q);
+        let d2 = h * (1.0 / (2.0 * q) + (y2 - y0) / (2.0 * q * q));
+        let exact = ((d0 * hs[1]).powi(2) + (d1 * hs[2]).powi(2) + (d2 * hs[3]).powi(2)).sqrt();
+        assert!((w - exact).abs() < 1e-8, "{w} vs {exact}");
+        // Exact contrasts: no interval width.
+        assert_eq!(peak_half_width(&xs, &ys, &[0.0; 5]), Some(0.0));
     }
 
     #[test]

@@ -10,9 +10,10 @@ use super::limits::{depth_ranges, display_limits};
 use super::report::{accommodation_csv, accommodation_rows, display_json, display_md, mtf50_csv, mtf_csv, study_json};
 use super::run::{run_study, StudyResults, Timing};
 use super::study::Study;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::io::output::{OutputDir, RunKind};
 use crate::overrides::Override;
+use crate::provenance::{Budgets, InputFile, Provenance};
 
 /// What `inimtrace resolution` was asked.
 #[derive(Clone, Debug, Default)]
@@ -51,11 +52,63 @@ impl ResolutionRun {
     }
 }
 
-/// Loads the study of `cmd`.
+/// Loads the study of `cmd`; an error names the `--set` overrides too.
 pub fn load_study(cmd: &ResolutionCommand) -> Result<Study> {
-    match &cmd.study {
+    load_recorded(cmd).0
+}
+
+/// [`load_study`], with the files it read.
+fn load_recorded(cmd: &ResolutionCommand) -> (Result<Study>, Vec<InputFile>) {
+    let (study, files) = crate::provenance::recording(|| match &cmd.study {
         Some(p) => Study::load(p, &cmd.overrides),
         None => Study::paper(&cmd.overrides),
+    });
+    (study.map_err(|e| with_overrides(e, &cmd.overrides)), files)
+}
+
+/// `e` with the `--set` overrides of the run named after the file it names (as `assess` labels
+/// its errors): the file alone did not make it fail.
+pub fn with_overrides(e: Error, overrides: &[Override]) -> Error {
+    if overrides.is_empty() {
+        return e;
+    }
+    let set = format!(" with --set {}", overrides.iter().map(Override::to_arg).collect::<Vec<_>>().join(" --set "));
+    match e {
+        Error::Invalid { source_name, field, message } => {
+            Error::Invalid { source_name: source_name + &set, field, message }
+        }
+        Error::Load { source_name, field, reference, source } => {
+            Error::Load { source_name: source_name + &set, field, reference, source }
+        }
+        Error::InField { source_name, field, source } => {
+            Error::InField { source_name: source_name + &set, field, source }
+        }
+        Error::Lattice { source_name, field, message } => {
+            Error::Lattice { source_name: source_name + &set, field, message }
+        }
+        Error::Parse { path, message } => Error::Parse { path, message: format!("{message}{set}") },
+        other => other,
+    }
+}
+
+/// The provenance of a study run: the files read to set it up, with their hashes, and how it
+/// was asked to run.
+fn provenance(cmd: &ResolutionCommand, study: &Study, files: Vec<InputFile>) -> Provenance {
+    Provenance {
+        experiment_path: None,
+        study_path: Some(cmd.study.as_ref().map_or_else(|| "builtin:paper".into(), |p| p.display().to_string())),
+        scene_name: "resolution chart".into(),
+        scene_path: String::new(),
+        display_path: study.display_source.clone(),
+        files,
+        set: cmd.overrides.iter().map(Override::to_arg).collect(),
+        budgets: Budgets {
+            estimator: "converged".into(),
+            max_samples_per_pixel: super::report::samples_per_pixel(study),
+            ..Default::default()
+        },
+        seed: study.measurement.seed,
+        working_directory: std::env::current_dir().map(|d| d.display().to_string()).unwrap_or_default(),
     }
 }
 
@@ -71,11 +124,13 @@ pub fn plausibility_warnings(study: &Study) -> Vec<String> {
 /// Runs the study and writes its files.
 pub fn execute(cmd: &ResolutionCommand) -> Result<ResolutionRun> {
     let t = Instant::now();
-    let study = load_study(cmd)?;
+    let (study, files) = load_recorded(cmd);
+    let study = study?;
+    let provenance = provenance(cmd, &study, files);
     let out = cmd.out.clone().unwrap_or_else(|| Path::new("out").join(format!("resolution-{}", study.name)));
     let dir = OutputDir::open(&out, RunKind::Resolution, cmd.force)?;
     let setup = t.elapsed().as_secs_f64();
-    let mut results = run_study(&study, cmd.quiet)?;
+    let mut results = run_study(&study, cmd.quiet).map_err(|e| with_overrides(e, &cmd.overrides))?;
     let mut timings = vec![Timing { stage: "study and output folder".into(), seconds: setup }];
     timings.append(&mut results.timings.clone());
 
@@ -97,7 +152,7 @@ pub fn execute(cmd: &ResolutionCommand) -> Result<ResolutionRun> {
     super::plots::write_plots(&results, &accommodation, &dir)?;
     timings.push(Timing { stage: "plots (PNG, SVG)".into(), seconds: t.elapsed().as_secs_f64() });
     // study.json last: its presence marks a complete run.
-    dir.finish("study.json", |files| Ok(study_json(&results, &timings, files).into_bytes()))?;
+    dir.finish("study.json", |files| Ok(study_json(&results, &timings, files, &provenance).into_bytes()))?;
     results.timings = timings.clone();
     Ok(ResolutionRun { out, results, timings })
 }

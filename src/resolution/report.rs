@@ -6,12 +6,13 @@ use std::fmt::Write as _;
 
 use serde::Serialize;
 
-use super::accommodation::{area_rule, area_under, frequency_rule};
+use super::accommodation::{area_rule, area_under, frequency_rule, peak_half_width, GridEdge};
 use super::chart::Pattern;
 use super::limits::DisplayLimits;
 use super::run::{StudyResults, Timing};
 use super::study::Study;
 use crate::io::output::OutputFile;
+use crate::provenance::Provenance;
 
 /// One row of `accommodation.csv`.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -26,6 +27,11 @@ pub struct AccommodationRow {
     pub frequency_cpd: f64,
     /// The eye focus the rule predicts, dioptres.
     pub predicted_focus_diopters: f64,
+    /// Half-width of its 95% interval: the contrasts' half-widths carried through the parabola
+    /// that places the peak (`resolution::accommodation::peak_half_width`); NaN on a grid edge.
+    pub predicted_focus_ci95: f64,
+    /// Whether the prediction is the focus grid's floor or ceiling (the response may lie beyond).
+    pub grid_edge: GridEdge,
     /// The frequency rule: the contrast at the peak; the area rule: the mean contrast over the
     /// band (the area over its width) at the peak.
     pub contrast_at_peak: f64,
@@ -60,12 +66,16 @@ pub fn accommodation_rows(r: &StudyResults) -> Vec<AccommodationRow> {
             let nan = super::accommodation::Peak { at: f64::NAN, value: f64::NAN };
             let p = frequency_rule(&s.focus_diopters, &at_f).unwrap_or(nan);
             let ci95 = nearest(&s.focus_diopters, p.at).map_or(f64::NAN, |j| r.grating[k][di][j][qf].ci95);
+            let hs: Vec<f64> = r.grating[k][di].iter().map(|q| q[qf].ci95).collect();
+            let focus_ci95 = peak_half_width(&s.focus_diopters, &at_f, &hs).unwrap_or(f64::NAN);
             rows.push(AccommodationRow {
                 source: source.clone(),
                 target_diopters: d.diopters,
                 rule: "contrast_at_frequency",
                 frequency_cpd: s.accommodation.frequency_cpd,
                 predicted_focus_diopters: p.at,
+                predicted_focus_ci95: focus_ci95,
+                grid_edge: GridEdge::of(&s.focus_diopters, p.at),
                 contrast_at_peak: p.value,
                 contrast_at_peak_ci95: ci95,
             });
@@ -73,16 +83,27 @@ pub fn accommodation_rows(r: &StudyResults) -> Vec<AccommodationRow> {
             let p =
                 area_rule(&s.focus_diopters, &s.frequencies_cpd, &mtf, s.accommodation.area_limit_cpd).unwrap_or(nan);
             let limit = s.accommodation.area_limit_cpd;
-            let ci95 = nearest(&s.focus_diopters, p.at).map_or(f64::NAN, |j| {
-                let h: Vec<f64> = r.grating[k][di][j].iter().map(|v| v.ci95).collect();
-                area_under(&s.frequencies_cpd, &h, limit) / (limit - s.frequencies_cpd[0])
-            });
+            // The band mean of the half-widths at each focus (an upper bound of the band mean's).
+            let band_ci95: Vec<f64> = r.grating[k][di]
+                .iter()
+                .map(|q| {
+                    let h: Vec<f64> = q.iter().map(|v| v.ci95).collect();
+                    area_under(&s.frequencies_cpd, &h, limit) / (limit - s.frequencies_cpd[0])
+                })
+                .collect();
+            let ci95 = nearest(&s.focus_diopters, p.at).map_or(f64::NAN, |j| band_ci95[j]);
+            let areas: Vec<f64> = mtf.iter().map(|m| area_under(&s.frequencies_cpd, m, limit)).collect();
+            let width = limit - s.frequencies_cpd[0];
+            let means: Vec<f64> = areas.iter().map(|a| a / width).collect();
+            let focus_ci95 = peak_half_width(&s.focus_diopters, &means, &band_ci95).unwrap_or(f64::NAN);
             rows.push(AccommodationRow {
                 source: source.clone(),
                 target_diopters: d.diopters,
                 rule: "mtf_area",
                 frequency_cpd: s.accommodation.area_limit_cpd,
                 predicted_focus_diopters: p.at,
+                predicted_focus_ci95: focus_ci95,
+                grid_edge: GridEdge::of(&s.focus_diopters, p.at),
                 contrast_at_peak: p.value,
                 contrast_at_peak_ci95: ci95,
             });
@@ -184,19 +205,21 @@ pub fn mtf50_csv(r: &StudyResults) -> String {
 /// study's samples per pixel and replicates).
 pub fn accommodation_csv(rows: &[AccommodationRow], study: &Study) -> String {
     let mut out = String::from(
-        "source,target_diopters,rule,frequency_cpd,predicted_focus_diopters,contrast_at_peak,contrast_at_peak_ci95,\
-         samples_per_pixel,replicates\n",
+        "source,target_diopters,rule,frequency_cpd,predicted_focus_diopters,predicted_focus_ci95,grid_edge,\
+         contrast_at_peak,contrast_at_peak_ci95,samples_per_pixel,replicates\n",
     );
     let (spp, replicates) = (samples_per_pixel(study), study.measurement.replicates);
     for a in rows {
         let _ = writeln!(
             out,
-            "{},{},{},{},{},{},{},{spp},{replicates}",
+            "{},{},{},{},{},{},{},{},{},{spp},{replicates}",
             a.source,
             num(a.target_diopters),
             a.rule,
             num(a.frequency_cpd),
             num(a.predicted_focus_diopters),
+            num(a.predicted_focus_ci95),
+            a.grid_edge.name(),
             num(a.contrast_at_peak),
             num(a.contrast_at_peak_ci95)
         );
@@ -231,10 +254,12 @@ struct StudyRecord<'a> {
     total_seconds: f64,
     /// Every other file of the run, with its size and CRC-32.
     files: &'a [OutputFile],
+    /// What the run read (with SHA-256) and how it was asked (`inimtrace info --provenance`).
+    provenance: &'a Provenance,
 }
 
 /// The text of `study.json`: the resolved study, its results, stage timings and output files.
-pub fn study_json(r: &StudyResults, timings: &[Timing], files: &[OutputFile]) -> String {
+pub fn study_json(r: &StudyResults, timings: &[Timing], files: &[OutputFile], provenance: &Provenance) -> String {
     let cdp = r.study.display.central_depth_plane();
     let rec = StudyRecord {
         inimtrace_version: crate::version::software(),
@@ -270,6 +295,7 @@ pub fn study_json(r: &StudyResults, timings: &[Timing], files: &[OutputFile]) ->
         timings,
         total_seconds: timings.iter().map(|t| t.seconds).sum(),
         files,
+        provenance,
     };
     serde_json::to_string_pretty(&rec).unwrap_or_default() + "\n"
 }
