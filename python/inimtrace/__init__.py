@@ -163,17 +163,21 @@ class Resolution:
     timings: List[Dict[str, Any]] = field(default_factory=list)
 
 
+# Columns of the study's CSV files that are counts: ints, as the assessment's records give them.
+_COUNT_COLUMNS = frozenset({"samples_per_pixel", "replicates"})
+
+
 def _records(path: str) -> List[Dict[str, Any]]:
     import csv
 
-    def value(v: str) -> Any:
+    def value(k: str, v: str) -> Any:
         try:
-            return float(v)
+            return int(v) if k in _COUNT_COLUMNS else float(v)
         except ValueError:
             return v
 
     with open(path, newline="") as f:
-        return [{k: value(v) for k, v in row.items()} for row in csv.DictReader(f)]
+        return [{k: value(k, v) for k, v in row.items()} for row in csv.DictReader(f)]
 
 
 def resolution(

@@ -260,6 +260,12 @@ impl PyEye {
     fn position(&self) -> (f64, f64, f64) {
         self.eye.position.into()
     }
+    /// The eye model's canonical name (`[eye] model`): "thin-lens", "navarro-1985",
+    /// "navarro-1999", "arizona", "le-grand" or "user".
+    #[getter]
+    fn model(&self) -> &'static str {
+        self.eye.optics.as_ref().map_or("thin-lens", |o| o.model.name())
+    }
     fn __repr__(&self) -> String {
         let what = match self.eye.aperture {
             Aperture::Pinhole => "pinhole".to_string(),
@@ -267,7 +273,7 @@ impl PyEye {
                 format!("pupil {pupil_diameter} mm, focus {:.1} mm ({:.3} D)", focus.distance_mm(), focus.diopters())
             }
         };
-        format!("<inimtrace.Eye {what}, retina {}>", self.retina.resolution)
+        format!("<inimtrace.Eye {}, {what}, retina {}>", self.model(), self.retina.resolution)
     }
 }
 

@@ -32,6 +32,10 @@ def test_eye_fields():
     assert inimtrace.Eye(focus_mm=400).pupil_samples == 52  # 8 x 8 grid kept inside the circle
     p = inimtrace.Eye(pinhole=True)
     assert p.pinhole and p.focus_mm is None and p.pupil is None
+    # The model is named, and so is it in the repr.
+    assert e.model == "thin-lens" and "thin-lens" in repr(e)
+    n = inimtrace.Eye(focus_diopters=2.5, retina=16, model="navarro")
+    assert n.model == "navarro-1985" and "navarro-1985" in repr(n), repr(n)
 
 
 def test_experiment_fields_and_set_forms():

@@ -30,6 +30,7 @@ def test_resolution_writes_the_clis_files_and_returns_them_as_records(cli, tmp_p
     for table, ci95 in ((r.mtf, "contrast_ci95"), (r.mtf50, "mtf50_ci95"), (r.accommodation, "contrast_at_peak_ci95")):
         assert all({ci95, "samples_per_pixel", "replicates"} <= set(row) for row in table), table[0]
         assert all(row["samples_per_pixel"] == 12 and row["replicates"] == 3 for row in table)  # 4 x 3 replicates
+        assert all(type(row["samples_per_pixel"]) is int and type(row["replicates"]) is int for row in table)
     assert all(row["contrast_at_peak_ci95"] > 0 for row in r.accommodation)
     assert r.display == load_json(tmp_path / "cli" / "display.json")
     assert r.timings and all(t["seconds"] >= 0 for t in r.timings)
