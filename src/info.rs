@@ -23,12 +23,9 @@
 //! * **pixel beams of one lenslet in the pupil** (pupil diameter `D`, centred on the axis): the
 //!   pixels of the central elemental image whose rays through the lenslet's centre enter the
 //!   pupil (spots `m p` apart), a different, much larger count.
-//! * **real lenslets**: every quantity above is paraxial and angular, so a thick lenslet enters
-//!   through its principal planes (at the d line): `v1` is read as the pupil-to-front-principal-
-//!   plane distance `v1 + h1` and `v2` as the back-principal-plane-to-LCD distance `v2 - h2`, the
-//!   rays through lenslet centres as rays through its nodal points (W. J. Smith, "Modern Optical
-//!   Engineering", 4th ed., Sec. 2.3-2.4). The numbers are then those of the optically equivalent
-//!   thin design, and the text says so.
+//! * **real lenslets**: a thick lenslet enters through its principal planes (d line,
+//!   `optics::lenslet_paraxial`): `v1 + h1` and `v2 - h2` for `v1` and `v2`, rays through its
+//!   nodal points for rays through lenslet centres: the optically equivalent thin design's numbers.
 //! * A warning when the elemental-image lattice is not a scaled copy of the lenslet lattice
 //!   (square elemental images under hexagonal lenslets), or the eye box is empty.
 
@@ -143,8 +140,7 @@ pub struct DisplayDesign {
     pub diffraction: DiffractionInfo,
     /// The panel's luminance: peak, black, ambient light, the primaries' luminance shares.
     pub photometry: crate::optics::photometry::PhotometryInfo,
-    /// A real lenslet's principal planes `[h1, h2]`, mm beyond its front and back vertex (d line):
-    /// every angular quantity above uses `v1 + h1` and `v2 - h2` (absent for the thin lens).
+    /// A real lenslet's principal planes `[h1, h2]` (d line; module documentation), mm.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub principal_planes_mm: Option<[f64; 2]>,
     /// A real lenslet's focal properties (absent for the paper's thin lens).
@@ -408,15 +404,14 @@ pub fn display_design(d: &Display, pupil_diameter: f64) -> DisplayDesign {
 
 /// The views a point on the axis at the central depth plane sends through a pupil of
 /// `pupil_diameter` mm: per axis (the pupil diameter over the spacing at the pupil plane of its
-/// rays through neighbouring lenslet centres, a real lenslet's nodal points) and the rays that
-/// enter the pupil disk; `None` when the central depth plane is at infinity or real.
+/// rays through neighbouring lenslet centres or nodal points) and the rays that enter the pupil
+/// disk; `None` when the central depth plane is at infinity or real.
 pub fn views_of_a_cdp_point(display: &Display, pupil_diameter: f64) -> (Option<[f64; 2]>, Option<usize>) {
     let cdp = display.central_depth_plane();
     let (v1, _) = display.principal_plane_distances();
     let lenslet = display.lenslets.reduced_matrix();
     let pitch = [lenslet.x_axis.length(), lenslet.y_axis.length()];
-    // Rays from (0, 0, z) through lenslet centres c (a real lenslet's nodal points, at v1 + h1)
-    // reach the pupil plane at c z / (z - v1).
+    // Rays from (0, 0, z) through lenslet centres c (nodal points) reach the pupil at c z / (z - v1).
     let scale = cdp.map(|z| z / (z - v1));
     let views_across = scale.map(|s| [pupil_diameter / (pitch[0] * s), pupil_diameter / (pitch[1] * s)]);
     let views_in = scale.map(|s| {
@@ -441,13 +436,11 @@ pub fn display_design_text(x: &DisplayDesign, summary: &str) -> String {
     let pair = |v: [f64; 2], digits: usize| format!("{:.digits$} x {:.digits$}", v[0], v[1]);
     let mut s = format!("{summary}\n");
     if let Some([h1, h2]) = x.principal_planes_mm {
-        let d = &x.display;
+        let (v1, v2) = (x.display.eye_to_lenslets_mm + h1, x.display.lenslets_to_lcd_mm - h2);
         s += &format!(
             "real lenslet: the quantities below are paraxial, through its principal planes (d line): front {h1:.4} \
-             mm beyond the front vertex, back {h2:.4} mm beyond the back vertex, so v1 + h1 = {:.4} mm and v2 - h2 \
-             = {:.4} mm stand for the thin lens's v1 and v2\n",
-            d.eye_to_lenslets_mm + h1,
-            d.lenslets_to_lcd_mm - h2
+             mm beyond the front vertex, back {h2:.4} mm beyond the back vertex, so v1 + h1 = {v1:.4} mm and v2 - h2 \
+             = {v2:.4} mm stand for the thin lens's v1 and v2\n"
         );
     }
     s += &format!(

@@ -153,16 +153,6 @@ pub struct Paraxial {
     pub ffd: f64,
 }
 
-impl Paraxial {
-    /// The principal planes `(h1, h2)`: the front one `h1` mm beyond the front vertex (the front
-    /// focal point lies `ffd` from the front vertex, the principal plane `efl` beyond it), the back
-    /// one `h2` mm beyond the back vertex (`efl` before the back focal point); both toward the LCD
-    /// when positive. In air on both sides they hold the nodal points.
-    pub fn principal_planes(&self) -> (f64, f64) {
-        (self.ffd + self.efl, self.bfd - self.efl)
-    }
-}
-
 /// A real lenslet (the module's documentation gives its frame and conventions).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ThickLenslet {

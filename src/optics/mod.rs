@@ -7,6 +7,7 @@ pub mod intent;
 pub mod lattice;
 pub mod lenslet;
 pub mod lenslet_lanes;
+pub mod lenslet_paraxial;
 pub mod limits;
 pub mod photometry;
 pub mod plausibility;

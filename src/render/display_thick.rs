@@ -7,7 +7,13 @@
 //! - PC: the point of the back vertex plane whose ray reaches the pupil centre, by Newton's
 //!   method ([`ThickLenslet::pupil_center_point`]) from the thin lens's closed form; where the
 //!   real lenslet sends no light from the pixel to the pupil centre (the point would lie where
-//!   the rays are totally reflected or miss the lens), LC's ray;
+//!   the rays are totally reflected or miss the lens: from the pupil centre a lenslet shows only
+//!   the middle of its elemental image, the paper display's real lenslets about a tenth of its
+//!   pixels), the ray through the pupil centre of the lens's paraxial equivalent, its principal
+//!   planes extended as eq. (1b) extends the thin lens
+//!   ([`ThickLenslet::paraxial_pupil_center_ray`]; LC's ray only where that is singular). LC's
+//!   ray there would make PC show LC's light field on most pixels, and give LC's focus cues
+//!   (docs/OPTICS.md);
 //! - LA: the k x k cell-centre points of the lenslet's pitch cell on the back vertex plane.
 //!
 //! The pixel's lenslet is its elemental image's, treated as extended (as eq. (1b) does). A ray
@@ -162,7 +168,13 @@ impl Setup<'_> {
                         continue;
                     }
                     Some((p, _)) => p,
-                    None => center,
+                    None => match self.paraxial_ray(x3, center, self.index[c]) {
+                        Some(ray) => {
+                            out[c] = Some(ray);
+                            continue;
+                        }
+                        None => center,
+                    },
                 };
                 (ps[m], ns[m], which[m]) = (p, self.index[c], c);
                 m += 1;
@@ -195,9 +207,17 @@ impl Setup<'_> {
             rays.push(match solved {
                 Some((_, ray)) if self.z_ref == self.eye.z => Some(ray),
                 Some((p, _)) => self.lens.camera_ray_in(center, self.front_z, self.lcd_z, x3, p, self.z_ref, n),
-                None => self.lens.camera_ray_in(center, self.front_z, self.lcd_z, x3, center, self.z_ref, n),
+                None => self
+                    .paraxial_ray(x3, center, n)
+                    .or_else(|| self.lens.camera_ray_in(center, self.front_z, self.lcd_z, x3, center, self.z_ref, n)),
             });
         }
+    }
+
+    /// PupilCenter's ray of the lens's paraxial equivalent (where the real lens sends no light
+    /// from the pixel to the pupil centre).
+    fn paraxial_ray(&self, x3: DVec2, center: DVec2, n: f64) -> Option<Ray> {
+        self.lens.paraxial_pupil_center_ray(center, self.front_z, self.lcd_z, x3, self.eye, self.z_ref, n)
     }
 }
 
