@@ -241,3 +241,32 @@ fn a_colour_channel_without_central_depth_plane_is_warned_by_assess_even_quiet()
     let e = stderr(&inimtrace(&["info", "--display", "displays/paper.toml"]));
     assert!(!e.contains("no central depth plane"), "{e}");
 }
+
+#[test]
+fn a_case_whose_eye_aims_every_ray_exactly_is_warned_with_the_reason() {
+    // The Arizona eye focused at 300 mm (A = 3.17 D): its fitted ray map fails its checks, so
+    // every ray of that case is aimed exactly (issue #53: 10x the time of the 400 mm case). The
+    // other cases have the map.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("arizona");
+    let o = inimtrace(&[
+        "--quiet",
+        "assess",
+        "experiments/paper.toml",
+        "--out",
+        out.to_str().unwrap(),
+        "--set",
+        "eye.model=\"arizona\"",
+        "--set",
+        "display.lcd.resolution=[54, 54]",
+        "--set",
+        "eye.retina_resolution=8",
+        "--set",
+        "eye.pupil_grid=2",
+    ]);
+    let e = stderr(&o);
+    assert!(o.status.success(), "{e}");
+    let lines: Vec<&str> = e.lines().filter(|l| l.starts_with("warning:") && l.contains("aimed exactly")).collect();
+    assert_eq!(lines.len(), 1, "{e}");
+    assert!(lines[0].contains("eye case `Near`") && lines[0].contains("arizona") && lines[0].contains("ray map"), "{}", lines[0]);
+}

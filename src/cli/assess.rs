@@ -47,6 +47,9 @@ pub(crate) fn assess(
     }
     let options = RunOptions { quiet, backend, exr_compression: g.exr_compression, force, keep_replicates };
     let report = experiment::assess(&exp, &out, options)?;
+    for w in experiment::sampling_cost_warnings(&report, &exp) {
+        eprintln!("warning: {w}");
+    }
     out!("{}", experiment::table_markdown(&report, &exp));
     if g.timings {
         printed_total = true;

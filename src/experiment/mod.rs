@@ -16,7 +16,7 @@ mod stages;
 
 pub use crate::optics::eye::settings::{BaseEye, EyeCaseSpec, EyeModelSettings, EyeSpec};
 pub use assess::{assess, assess_images, estimate, prepare_output_dir, Assessment, RunOptions, Z_CHANNEL_NOTE};
-pub use report::{table_markdown, AssessReport, Score, StageTime};
+pub use report::{sampling_cost_warnings, table_markdown, AssessReport, Score, StageTime};
 pub use stages::{
     ground_truth_image, pack_display_images, perceived_images, render_display_images, render_display_stack,
     render_optimized, table1, table1_each, table1_scores, CaseResult, DisplayImages, Table1,
@@ -440,6 +440,7 @@ impl Experiment {
                 });
             }
         }
+        w.extend(self.cases.iter().filter_map(|c| exact_aim_note(c, &self.cases)));
         w
     }
 
@@ -506,4 +507,24 @@ fn prefix_field(err: Error, prefix: &str) -> Error {
         }
         other => other,
     }
+}
+
+/// Why eye case `case` will cost several times the others to sample: its schematic eye's fitted
+/// ray map fails its checks at the case's accommodation (the optics cut the map's domain, or it
+/// misses its tolerances), so every ray is aimed exactly, while another case's eye has the map.
+pub fn exact_aim_note(case: &EyeCase, cases: &[EyeCase]) -> Option<String> {
+    let optics = case.eye.optics.as_ref()?;
+    optics.schematic()?;
+    let mapped = |c: &EyeCase| c.eye.optics.as_ref().is_some_and(|o| o.has_ray_map());
+    if mapped(case) || !cases.iter().any(mapped) {
+        return None;
+    }
+    Some(format!(
+        "eye case `{}`: the {} eye's fitted ray map fails its checks at this accommodation (A = {:.3} D: its optics \
+         cut the map's domain or it misses its tolerances), so each of its rays is aimed exactly, an iterative solve: \
+         expect its sampling to cost about ten times the other cases'",
+        case.name,
+        optics.model.name(),
+        optics.accommodation.unwrap_or(f64::NAN)
+    ))
 }

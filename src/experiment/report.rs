@@ -193,6 +193,48 @@ pub fn table_markdown(report: &AssessReport, exp: &Experiment) -> String {
     s
 }
 
+/// The eye cases whose converged sampling cost per sample is more than three times their
+/// neighbours' (the cases before and after in the table), each with its reason where inimtrace
+/// knows it (a schematic eye aiming every ray exactly: [`super::exact_aim_note`]).
+pub fn sampling_cost_warnings(report: &AssessReport, exp: &Experiment) -> Vec<String> {
+    let cost: Vec<Option<f64>> = exp
+        .cases
+        .iter()
+        .map(|c| {
+            let seconds: f64 = report
+                .stages
+                .iter()
+                .filter(|s| s.stage == "converged_sampling" && s.eye_case.as_deref() == Some(c.name.as_str()))
+                .map(|s| s.seconds)
+                .sum();
+            let samples = report.scores.iter().find(|s| s.eye_case == c.name)?.samples_per_pixel?;
+            (samples > 0 && seconds > 0.0).then(|| seconds / samples as f64)
+        })
+        .collect();
+    let mut out = Vec::new();
+    for (i, case) in exp.cases.iter().enumerate() {
+        let neighbours: Vec<f64> = [i.checked_sub(1), Some(i + 1)]
+            .into_iter()
+            .flatten()
+            .filter_map(|j| cost.get(j).copied().flatten())
+            .collect();
+        let (Some(mine), false) = (cost[i], neighbours.is_empty()) else { continue };
+        let theirs = neighbours.iter().sum::<f64>() / neighbours.len() as f64;
+        if mine > 3.0 * theirs {
+            let why = super::exact_aim_note(case, &exp.cases).map_or_else(
+                || "inimtrace knows no reason (another load on the machine during the case?)".to_string(),
+                |n| n.split_once(": ").map_or(n.clone(), |(_, r)| r.to_string()),
+            );
+            out.push(format!(
+                "eye case `{}` cost {:.1}x its neighbours' sampling time per sample: {why}",
+                case.name,
+                mine / theirs
+            ));
+        }
+    }
+    out
+}
+
 pub(super) fn write_reports(report: &AssessReport, exp: &Experiment, dir: &OutputDir) -> Result<()> {
     let write = |name: &str, text: String| -> Result<()> { dir.write_bytes(name, text.as_bytes()) };
     write("table.md", table_markdown(report, exp))?;

@@ -367,6 +367,12 @@ impl EyeOptics {
         }
     }
 
+    /// Whether the fitted ray map serves this eye's rays (else a schematic eye aims each ray
+    /// exactly, an iterative solve about ten times the map's cost).
+    pub fn has_ray_map(&self) -> bool {
+        self.map.is_some()
+    }
+
     /// The schematic eye, if this is one.
     pub fn schematic(&self) -> Option<&SchematicEye> {
         match &self.lens {
