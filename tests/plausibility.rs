@@ -225,7 +225,7 @@ fn a_colour_channel_without_central_depth_plane_is_warned_by_assess_even_quiet()
         "--set",
         "display.lcd.resolution=[54, 54]",
         "--set",
-        "eye.retina_resolution=8",
+        "eye.retina_resolution=12",
         "--set",
         "eye.pupil_grid=2",
         "--set",
@@ -260,7 +260,7 @@ fn a_case_whose_eye_aims_every_ray_exactly_is_warned_with_the_reason() {
         "--set",
         "display.lcd.resolution=[54, 54]",
         "--set",
-        "eye.retina_resolution=8",
+        "eye.retina_resolution=12",
         "--set",
         "eye.pupil_grid=2",
     ]);

@@ -39,13 +39,13 @@ fn from_the_pupil_centre_a_real_lenslet_reaches_only_the_middle_of_its_elemental
     let n = lens.material.index(d.channel_wavelengths()[1]);
     let (c, e) = (d.lenslets.center(IVec2::ZERO), d.elemental_images.center(IVec2::ZERO));
     let (mut solved, mut total) = (0, 0);
-    for i in -78..=78 {
-        let x3 = e + DVec2::new(i as f64 * 0.01, 0.0);
+    for (i, j) in (-78..=78).step_by(6).flat_map(|i| (-78..=78).step_by(6).map(move |j| (i, j))) {
+        let x3 = e + DVec2::new(i as f64 * 0.01, j as f64 * 0.01);
         let guess = inimtrace::optics::transfer::pupil_center_point(&d, x3, c, DVec3::ZERO);
         total += 1;
         solved += lens.pupil_center_ray(c, d.eye_to_lenslets, d.lcd_z(), x3, DVec3::ZERO, guess, n).is_some() as usize;
     }
-    assert!(solved > 0 && solved * 4 < total, "{solved} of {total} pixels reach the pupil centre");
+    assert!(solved > 0 && solved * 2 < total, "{solved} of {total} pixels reach the pupil centre");
 }
 
 #[test]
