@@ -26,6 +26,7 @@ pub mod pupil;
 pub mod ray_map;
 pub mod refract;
 pub mod schematic;
+pub mod stiles_crawford;
 pub mod trace;
 pub mod user;
 
