@@ -15,7 +15,9 @@ pub mod metadata;
 mod report;
 mod stages;
 
-pub use assess::{assess, assess_images, estimate, prepare_output_dir, Assessment, RunOptions, Z_CHANNEL_NOTE};
+pub use assess::{
+    assess, assess_images, check, check_text, estimate, prepare_output_dir, Assessment, RunOptions, Z_CHANNEL_NOTE,
+};
 pub use eye_spec::{EyeCaseSpec, EyeModelSettings, EyeSpec};
 pub use report::{table_markdown, AssessReport, Score, StageTime};
 pub use stages::{
@@ -426,6 +428,13 @@ impl Experiment {
             source,
             [("pupil_grid", e.pupil_grid, d.pupil_grid), ("retina_samples", e.retina_samples, d.retina_samples)],
         )?;
+        let converged = measurement.estimator == crate::measure::spec::EstimatorKind::Converged;
+        eye_spec::check_applicable(e, &optics_spec, converged, source)?;
+        if !converged {
+            for c in &cases {
+                eye_spec::check_grid_stiles_crawford(&c.eye, &c.name, source)?;
+            }
+        }
         Ok(Self {
             name: spec.name.clone(),
             source: source.into(),
