@@ -74,6 +74,14 @@ fn huge_and_subnormal_spectral_powers_are_handled_safely() {
     let s = SpectrumSampler::new(&huge);
     assert!(s.mean_nm().is_finite() && (s.mean_nm() - 510.0).abs() < 1e-9, "{}", s.mean_nm());
     assert!((500.0..=520.0).contains(&s.wavelength(0.3)));
+    // The luminance shares (CIE 1924 V(lambda)) of such tables: finite, and a narrow line at
+    // 555 nm beside the same line at 450 nm in the ratio of V there (0.038).
+    let w = Primaries { red: huge.clone(), green: huge.clone(), blue: huge }.luminance_weights();
+    assert!(w.iter().all(|x| x.is_finite()) && (w[0] - 1.0 / 3.0).abs() < 1e-12, "{w:?}");
+    let narrow = |c: f64| PrimarySpec::Table { table: vec![[c - 0.05, 0.0], [c, 1.0], [c + 0.05, 0.0]] };
+    let w = Primaries { red: narrow(555.1), green: narrow(555.1), blue: narrow(450.1) }.luminance_weights();
+    assert!(w.iter().all(|x| x.is_finite()), "{w:?}");
+    assert!((w[2] / w[0] - 0.038).abs() < 2e-3, "{w:?}");
     // Powers that are all sub-normal carry no usable spectrum: refused, naming the table.
     let tiny = PrimarySpec::Table { table: vec![[500.0, 1e-310], [510.0, 2e-310]] };
     let e = Primaries { blue: tiny, ..Primaries::typical_lcd() }.validate("d.toml").unwrap_err().to_string();
