@@ -109,6 +109,13 @@ impl EyeArgs {
             optics: None,
         };
         eye.validate("command line")?;
+        // The plausibility warning every command gives a pupil it uses, whatever the eye model.
+        if let Aperture::ThinLens { pupil_diameter, .. } = eye.aperture {
+            use inimtrace::optics::plausibility::{check, PUPIL_DIAMETER};
+            if let Some(w) = check("command line", "--pupil", pupil_diameter, PUPIL_DIAMETER) {
+                eprintln!("warning: {w}");
+            }
+        }
         let model = inimtrace::experiment::EyeModelSettings {
             model: self.eye_model.clone(),
             spectrum: self.spectrum.clone(),
@@ -215,10 +222,13 @@ pub(crate) fn announce(scene: &Scene, backend: BackendChoice, quiet: bool) {
     }
 }
 
-/// The RGB image of an input EXR (of part `part`), printing the reader's note on a multipart
-/// file.
-pub(crate) fn read_exr_input(path: &std::path::Path, part: Option<&str>) -> Result<inimtrace::raster::RgbImage> {
-    let input = inimtrace::io::exr::read_input(path, part)?;
+/// The RGB image of an input EXR read through the gate (of part `part`), printing the reader's
+/// note on a multipart file.
+pub(crate) fn read_exr_input(
+    file: &inimtrace::io::exr::ExrFile,
+    part: Option<&str>,
+) -> Result<inimtrace::raster::RgbImage> {
+    let input = file.input(part)?;
     if let Some(note) = input.note {
         eprintln!("{note}");
     }

@@ -91,6 +91,10 @@ enum Command {
         /// per replicate): `compare` on two of them gives the table's de-biased scores.
         #[arg(long)]
         keep_replicates: bool,
+        /// Load and validate every input (files, settings, eyes, the memory estimate), print what
+        /// would run, and exit without running or writing anything.
+        #[arg(long)]
+        check: bool,
         #[command(flatten)]
         backend: BackendArg,
     },
@@ -232,6 +236,10 @@ enum Command {
         /// The sweep's id at submission (array tasks refuse to run a changed sweep).
         #[arg(long, hide = true)]
         sweep_id: Option<String>,
+        /// Build and validate every point (files, settings, eyes, the memory estimate), print
+        /// the sweep's size, and exit without running or writing anything.
+        #[arg(long, conflicts_with_all = ["slurm", "collect", "points"])]
+        check: bool,
         /// Exit with status 3 when a score's 95% interval missed its precision target (the
         /// results are still written; without it a miss is reported on stderr and exits 0).
         #[arg(long)]
@@ -253,6 +261,10 @@ enum Command {
         /// the files that command's report lists (and nothing else).
         #[arg(long)]
         force: bool,
+        /// Load and validate every input (files, settings, eyes, the memory estimate), print what
+        /// would run, and exit without running or writing anything.
+        #[arg(long)]
+        check: bool,
     },
     /// Describe a display design (central depth plane, eye box, field of view, pixels per
     /// degree, views through the pupil, pixel beams in it) or a scene (objects, sizes, depth range), and write the
@@ -384,7 +396,14 @@ fn run() -> Result<()> {
     // `assess` and `bench` print their own total with --timings.
     let mut printed_total = false;
     match cli.command {
-        Command::Assess { experiment, out, scene, force, strict, keep_replicates, backend } => {
+        Command::Assess { experiment, scene, check: true, .. } => {
+            let exp = inimtrace::settings::load_experiment(experiment.as_deref(), scene.as_deref(), &set)?;
+            for w in exp.plausibility_warnings() {
+                eprintln!("warning: {w}");
+            }
+            outln!("{}", inimtrace::experiment::check_text(&exp)?);
+        }
+        Command::Assess { experiment, out, scene, force, strict, keep_replicates, backend, .. } => {
             printed_total = assess(&g, experiment, out, scene, force, strict, keep_replicates, backend)?;
         }
         Command::RenderDisplay { method, setup, samples_per_pixel, reference_plane, eye_position, out, backend } => {
@@ -436,7 +455,13 @@ fn run() -> Result<()> {
             sweep_id,
             strict,
             backend,
+            check,
         } => {
+            if check {
+                let text = inimtrace::sweep::check(&sweep, &set, &mut |m| eprintln!("{m}"))?;
+                outln!("{text}");
+                return Ok(());
+            }
             let slurm = slurm.then(|| inimtrace::sweep::SlurmOptions {
                 partition,
                 array_max,
@@ -471,13 +496,17 @@ fn run() -> Result<()> {
                 return Err(TargetsMissed(output.missed_rows).into());
             }
         }
-        Command::Resolution { study, out, force } => {
+        Command::Resolution { study, out, force, check } => {
             let cmd =
                 inimtrace::resolution::command::ResolutionCommand { study, out, overrides: set.clone(), quiet, force };
             // Likely unit mistakes before the run (which may take minutes), not after it.
             let study = inimtrace::resolution::command::load_study(&cmd)?;
             for w in inimtrace::resolution::command::plausibility_warnings(&study) {
                 eprintln!("warning: {w}");
+            }
+            if check {
+                outln!("{}", inimtrace::resolution::command::check_text(&study)?);
+                return Ok(());
             }
             let run = inimtrace::resolution::command::execute(&cmd)?;
             if !quiet {

@@ -1,29 +1,20 @@
 //! Provenance of a run: what it read and how it was asked to run, so that a result can be traced
 //! back to its inputs and checked against them later. Every input file passes the input gate
-//! ([`crate::io::input::read_regular`]); while a [`recording`] is active on the thread, the gate
-//! notes each file's path (as it was opened) and the SHA-256 of the bytes it read, so the hashes
-//! are of exactly what the run used (the experiment, scene and display files, every mesh,
-//! material library, glTF buffer and texture). A [`Provenance`] holds those with the scene's
-//! name and path as given, the `--set` overrides, the measurement's budgets and targets and the
-//! seed; [`check`] hashes the files on disk again and says which changed (`inimtrace info
-//! --provenance RUN_DIR`, for an `assess` run, a sweep or a resolution study).
+//! (`io::input`), EXR images included; while a [`recording`] is active on the thread, the gate
+//! notes in its log (`io::input_log`) each file's path (as it was opened) and the SHA-256 of the
+//! bytes it read, so the hashes are of exactly what the run used (the experiment, scene and
+//! display files, every mesh, material library, glTF buffer, texture and input image). A
+//! [`Provenance`] holds those with the scene's name and path as given, the `--set` overrides, the
+//! measurement's budgets and targets and the seed; [`check`] hashes the files on disk again and
+//! says which changed (`inimtrace info
+//! --provenance RUN_DIR`, for an `assess` run, a sweep or a resolution study). The gate's log is the lower layer:
+//! `io` never imports this module.
 
-use std::cell::RefCell;
 use std::path::Path;
 
 use serde::{Deserialize, Serialize};
-use sha2::{Digest, Sha256};
 
-/// A file a run read.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub struct InputFile {
-    /// The path as it was opened (relative to the working directory of the run, or absolute).
-    pub path: String,
-    /// SHA-256 of its bytes, 64 hex digits.
-    pub sha256: String,
-    /// Its size, bytes.
-    pub bytes: u64,
-}
+pub use crate::io::input_log::{recording, sha256_hex, InputFile};
 
 /// The measurement's budgets and targets (`[measurement]`; see `measure::spec`).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -80,41 +71,6 @@ impl Provenance {
         let scene = Path::new(&self.scene_path);
         self.files.iter().find(|f| Path::new(&f.path).ends_with(scene)).map(|f| f.sha256.as_str())
     }
-}
-
-thread_local! {
-    /// The recordings active on this thread, innermost last.
-    static RECORDINGS: RefCell<Vec<Vec<InputFile>>> = const { RefCell::new(Vec::new()) };
-}
-
-/// Runs `f`, returning with its result every file the input gate read on this thread meanwhile
-/// (each once, in the order first read). Recordings nest: an outer one sees the inner one's files.
-pub fn recording<T>(f: impl FnOnce() -> T) -> (T, Vec<InputFile>) {
-    RECORDINGS.with(|r| r.borrow_mut().push(Vec::new()));
-    let out = f();
-    let files = RECORDINGS.with(|r| r.borrow_mut().pop()).unwrap_or_default();
-    (out, files)
-}
-
-/// Notes that the input gate read `bytes` from `path` (nothing when no recording is active).
-pub(crate) fn note_read(path: &Path, bytes: &[u8]) {
-    let active = RECORDINGS.with(|r| !r.borrow().is_empty());
-    if !active {
-        return;
-    }
-    let file = InputFile { path: path.display().to_string(), sha256: sha256_hex(bytes), bytes: bytes.len() as u64 };
-    RECORDINGS.with(|r| {
-        for level in r.borrow_mut().iter_mut() {
-            if !level.iter().any(|f| f.path == file.path) {
-                level.push(file.clone());
-            }
-        }
-    });
-}
-
-/// SHA-256 of `bytes` as 64 lower-case hex digits.
-pub fn sha256_hex(bytes: &[u8]) -> String {
-    Sha256::digest(bytes).iter().map(|b| format!("{b:02x}")).collect()
 }
 
 /// What a file of a provenance is now.

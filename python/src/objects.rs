@@ -289,8 +289,11 @@ impl PyScene {
     /// Loads a scene TOML; `set` overrides its settings (keys `scene.…`, as `--set`).
     #[staticmethod]
     #[pyo3(signature = (path, set=None))]
-    fn load(path: PathBuf, set: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
-        Ok(Self { inner: load_scene_part(Some(&path), &overrides(set)?).py_err()? })
+    fn load(py: Python<'_>, path: PathBuf, set: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
+        let inner = load_scene_part(Some(&path), &overrides(set)?).py_err()?;
+        // What loading noticed (an unreadable texture or material library), as the CLI says it.
+        warn_all(py, &inner.warnings)?;
+        Ok(Self { inner })
     }
     /// The paper's scene (USAF-1951 charts); `set` overrides its settings.
     #[staticmethod]

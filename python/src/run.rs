@@ -423,11 +423,16 @@ pub fn compare<'py>(
             d.set_item(*name, x)?;
         }
         d.set_item("mean", mean)?;
+        // One schema with replicate sets': no interval for plain images.
+        d.set_item("ci95", py.None())?;
+        d.set_item("channels_ci95", py.None())?;
         Ok(d)
     };
     let out = PyDict::new(py);
     out.set_item("width", ia.width)?;
     out.set_item("height", ia.height)?;
+    out.set_item("replicate_sets", false)?;
+    out.set_item("replicates", py.None())?;
     out.set_item("psnr_db", channels(p.channels, p.mean)?)?;
     out.set_item("ssim", channels(s.channels, s.mean)?)?;
     out.set_item("ssim_constants", constants.name())?;
@@ -479,12 +484,15 @@ fn compare_sets<'py>(
         }
         d.set_item("mean", e.mean)?;
         d.set_item("ci95", e.ci95)?;
-        if let Some(h) = e.channels_ci95 {
-            let c = PyDict::new(py);
-            for (name, x) in ["R", "G", "B"].iter().zip(h) {
-                c.set_item(*name, x)?;
+        match e.channels_ci95 {
+            Some(h) => {
+                let c = PyDict::new(py);
+                for (name, x) in ["R", "G", "B"].iter().zip(h) {
+                    c.set_item(*name, x)?;
+                }
+                d.set_item("channels_ci95", c)?;
             }
-            d.set_item("channels_ci95", c)?;
+            None => d.set_item("channels_ci95", py.None())?,
         }
         Ok(d)
     };

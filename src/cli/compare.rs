@@ -1,13 +1,19 @@
 //! `inimtrace compare`: PSNR and SSIM of two images, or the de-biased scores and 95% intervals
-//! of two replicate sets (what the table reports).
+//! of two replicate sets (what the table reports). Each file is read once, through the input
+//! gate; two replicate sets must come from one measurement's sample pattern (the same seed and
+//! samples per pixel: the de-biasing pairs replicate r of one with replicate r of the other), and
+//! sets from different experiments are compared with a warning. `--json` has one schema for both
+//! kinds: every score with its channels, mean and 95% half-widths (`null` where unknown or
+//! infinite).
 
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 
+use inimtrace::io::exr::ExrFile;
+use inimtrace::measure::stats::Estimate;
 use inimtrace::metrics::{self, SsimConstants};
 
-use super::read_exr_input;
 use crate::Globals;
 
 /// `inimtrace compare`; returns whether it printed its own total time.
@@ -23,15 +29,16 @@ pub(crate) fn compare(
     if !set.is_empty() {
         bail!("--set does not apply to compare (it reads no experiment, scene or display)");
     }
+    let (fa, fb) = (ExrFile::open(&a)?, ExrFile::open(&b)?);
     if part.is_none() {
-        if let Some((p, s)) = compare_replicate_sets(&a, &b, constants)? {
-            return print_replicate_scores(&a, &b, &p, &s, constants, json);
+        if let Some((p, s, n)) = compare_replicate_sets(&fa, &fb, constants)? {
+            return print(&a, &b, (n.0, n.0, Some(n.1)), &p, &s, constants, json);
         }
     }
-    let ia = read_exr_input(&a, part)?;
-    let ib = read_exr_input(&b, part)?;
-    let noisy = [&a, &b].iter().any(|p| {
-        inimtrace::io::exr::read_attributes(p)
+    let ia = read(&fa, part)?;
+    let ib = read(&fb, part)?;
+    let noisy = [&fa, &fb].iter().any(|f| {
+        f.attributes()
             .is_ok_and(|attrs| attrs.iter().any(|(k, v)| k == "inimtrace:estimator" && v.starts_with("converged")))
     });
     if noisy {
@@ -44,60 +51,93 @@ pub(crate) fn compare(
     let p = metrics::psnr(&ia, &ib).with_context(|| format!("comparing {} and {}", a.display(), b.display()))?;
     let s =
         metrics::ssim(&ia, &ib, constants).with_context(|| format!("comparing {} and {}", a.display(), b.display()))?;
-    if json {
-        let channels = |v: [f64; 3], m: f64, f: &dyn Fn(f64) -> serde_json::Value| serde_json::json!({"R": f(v[0]), "G": f(v[1]), "B": f(v[2]), "mean": f(m)});
-        let db = |x: f64| serde_json::json!(metrics::finite_db(x));
-        let out = serde_json::json!({
-            "a": a.display().to_string(),
-            "b": b.display().to_string(),
-            "width": ia.width,
-            "height": ia.height,
-            "psnr_db": channels(p.channels, p.mean, &db),
-            "ssim": channels(s.channels, s.mean, &|x| serde_json::json!(x)),
-            "ssim_constants": constants.name(),
-            "tool": inimtrace::version::TOOL,
-        });
-        outln!("{}", serde_json::to_string_pretty(&out)?);
-        return Ok(true);
-    }
-    use inimtrace::measure::stats::Estimate;
-    print_scores(&Estimate::exact(p.channels, p.mean), &Estimate::exact(s.channels, s.mean), constants, "")?;
-    Ok(false)
+    let (p, s) = (Estimate::exact(p.channels, p.mean), Estimate::exact(s.channels, s.mean));
+    print(&a, &b, (ia.width, ia.height, None), &p, &s, constants, json)
 }
 
-/// The table's scores of two replicate sets (`None` when neither file is one).
-fn compare_replicate_sets(
-    a: &Path,
-    b: &Path,
-    constants: SsimConstants,
-) -> Result<Option<(inimtrace::measure::stats::Estimate, inimtrace::measure::stats::Estimate)>> {
+/// The RGB image of part `part` of an input file, printing the reader's note on a multipart file.
+fn read(file: &ExrFile, part: Option<&str>) -> Result<inimtrace::raster::RgbImage> {
+    let input = file.input(part)?;
+    if let Some(note) = input.note {
+        eprintln!("{note}");
+    }
+    Ok(input.image)
+}
+
+/// PSNR and SSIM of two replicate sets with their images' size and their replicate count.
+type SetScores = (Estimate, Estimate, (usize, usize));
+
+/// The table's scores of two replicate sets, with their size and replicate count (`None` when
+/// neither file is one).
+fn compare_replicate_sets(a: &ExrFile, b: &ExrFile, constants: SsimConstants) -> Result<Option<SetScores>> {
     use inimtrace::io::exr_replicates as sets;
-    let (ca, cb) = (sets::count(a)?, sets::count(b)?);
+    let (ca, cb) = (sets::count_of(a)?, sets::count_of(b)?);
     match (ca, cb) {
         (None, None) => Ok(None),
         (Some(ra), Some(rb)) => {
-            let (sa, sb) = (sets::read(a, ra)?, sets::read(b, rb)?);
-            let (na, nb) = (a.display().to_string(), b.display().to_string());
+            check_one_measurement(a, b)?;
+            let (sa, sb) = (sets::read_of(a, ra)?, sets::read_of(b, rb)?);
+            let (na, nb) = (a.path().display().to_string(), b.path().display().to_string());
             let reps = sets::pair((&na, &sa), (&nb, &sb), 1)?;
-            Ok(inimtrace::measure::adaptive::estimates(&reps, constants).pop())
+            let (p, s) = inimtrace::measure::adaptive::estimates(&reps, constants).pop().context("no image scored")?;
+            Ok(Some((p, s, (sa[0].width, ra))))
         }
         (Some(_), None) | (None, Some(_)) => {
             let (set, plain) = if ca.is_some() { (a, b) } else { (b, a) };
             bail!(
                 "{} is a replicate set and {} is one image: compare two replicate sets (the table's de-biased \
                  scores) or two images",
-                set.display(),
-                plain.display()
+                set.path().display(),
+                plain.path().display()
             )
         }
     }
 }
 
-fn print_replicate_scores(
+/// Two replicate sets pair replicate r with replicate r: they must share the measurement's
+/// sample pattern (`inimtrace:seed`, `inimtrace:retina_samples_per_pixel`), or the de-biasing
+/// is meaningless; another experiment (`inimtrace:experiment`) is allowed, with a warning.
+fn check_one_measurement(a: &ExrFile, b: &ExrFile) -> Result<()> {
+    let (ta, tb) = (a.attributes()?, b.attributes()?);
+    let get = |t: &[(String, String)], k: &str| t.iter().find(|(n, _)| n == k).map(|(_, v)| v.clone());
+    for (key, what) in [("inimtrace:seed", "seed"), ("inimtrace:retina_samples_per_pixel", "samples per pixel")] {
+        match (get(&ta, key), get(&tb, key)) {
+            (Some(x), Some(y)) if x != y => bail!(
+                "{} ({what} {x}) and {} ({what} {y}) are replicate sets of different measurements: their replicates \
+                 do not pair, so their scores cannot be de-biased; compare sets written by one run (or runs with \
+                 one measurement.seed and sample count)",
+                a.path().display(),
+                b.path().display()
+            ),
+            (Some(_), Some(_)) => {}
+            _ => eprintln!(
+                "warning: {} or {} does not say its {what} ({key}): whether their replicates pair cannot be \
+                 checked",
+                a.path().display(),
+                b.path().display()
+            ),
+        }
+    }
+    if let (Some(x), Some(y)) = (get(&ta, "inimtrace:experiment"), get(&tb, "inimtrace:experiment")) {
+        if x != y {
+            eprintln!(
+                "warning: {} is from experiment `{x}` and {} from `{y}`: their replicates pair only if both \
+                 experiments sampled the same retina and pupil points",
+                a.path().display(),
+                b.path().display()
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Prints the scores (two lines, or `--json`). `size` is (width, height, replicates).
+fn print(
     a: &Path,
     b: &Path,
-    p: &inimtrace::measure::stats::Estimate,
-    s: &inimtrace::measure::stats::Estimate,
+    size: (usize, usize, Option<usize>),
+    p: &Estimate,
+    s: &Estimate,
     constants: SsimConstants,
     json: bool,
 ) -> Result<bool> {
@@ -105,27 +145,41 @@ fn print_replicate_scores(
         let out = serde_json::json!({
             "a": a.display().to_string(),
             "b": b.display().to_string(),
-            "replicate_sets": true,
-            "psnr_db": p,
-            "ssim": s,
+            "width": size.0,
+            "height": size.1,
+            "replicate_sets": size.2.is_some(),
+            "replicates": size.2,
+            "psnr_db": score_json(p),
+            "ssim": score_json(s),
             "ssim_constants": constants.name(),
             "tool": inimtrace::version::TOOL,
         });
         outln!("{}", serde_json::to_string_pretty(&out)?);
         return Ok(true);
     }
-    print_scores(p, s, constants, "; de-biased over replicates, 95% interval")?;
+    let note = if size.2.is_some() { "; de-biased over replicates, 95% interval" } else { "" };
+    print_scores(p, s, constants, note)?;
     Ok(false)
 }
 
+/// A score in `compare --json`'s one schema: `R`, `G`, `B`, `mean`, `ci95` and `channels_ci95`
+/// (`{R, G, B}`), `null` for an infinite value (identical channels) and for an unknown interval.
+fn score_json(e: &Estimate) -> serde_json::Value {
+    let num = |x: f64| serde_json::json!(metrics::finite_db(x));
+    let channels = |v: [f64; 3]| serde_json::json!({"R": num(v[0]), "G": num(v[1]), "B": num(v[2])});
+    serde_json::json!({
+        "R": num(e.channels[0]),
+        "G": num(e.channels[1]),
+        "B": num(e.channels[2]),
+        "mean": num(e.mean),
+        "ci95": e.ci95.map(num),
+        "channels_ci95": e.channels_ci95.map(channels),
+    })
+}
+
 /// `compare`'s two lines: PSNR and SSIM, their channels, and the 95% half-widths when known.
-fn print_scores(
-    p: &inimtrace::measure::stats::Estimate,
-    s: &inimtrace::measure::stats::Estimate,
-    constants: SsimConstants,
-    note: &str,
-) -> Result<()> {
-    let ci = |e: &inimtrace::measure::stats::Estimate, digits: usize| match e.ci95 {
+fn print_scores(p: &Estimate, s: &Estimate, constants: SsimConstants, note: &str) -> Result<()> {
+    let ci = |e: &Estimate, digits: usize| match e.ci95 {
         Some(h) => format!(" ± {h:.digits$}"),
         None => String::new(),
     };

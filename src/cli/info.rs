@@ -47,6 +47,10 @@ pub(crate) fn info(
             true => load_scene(&p.to_string_lossy(), Path::new(""))?,
             false => scene_with(Some(p), set)?,
         };
+        // What loading noticed (an unreadable texture or material library), always.
+        for w in &scene.warnings {
+            eprintln!("warning: {w}");
+        }
         let summary = inimtrace::info::scene_summary(&scene);
         match json {
             true => outln!("{}", serde_json::to_string_pretty(&summary)?),

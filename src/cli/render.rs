@@ -14,6 +14,7 @@ use inimtrace::render::{ground_truth, DisplayRenderSettings, Method};
 
 use super::{announce, check_memory, load_setup, read_exr_input, with_field, write_image, EyeArgs, Setup};
 use crate::{BackendArg, Globals};
+use inimtrace::io::exr::ExrFile;
 
 /// `inimtrace render-display`; returns whether it printed its own total time.
 #[allow(clippy::too_many_arguments)] // the command's flags, as clap parsed them
@@ -74,11 +75,17 @@ pub(crate) fn simulate_command(
     out: PathBuf,
 ) -> Result<bool> {
     let (set, quiet) = (&g.set[..], g.quiet);
-    let (_, display) = load_setup(&setup, set)?;
+    // Every input (the display image too) is read once through the input gate and recorded:
+    // the output's header lists them with their SHA-256.
+    let (loaded, files) = inimtrace::provenance::recording(|| -> Result<_> {
+        let (scene, display) = load_setup(&setup, set)?;
+        Ok((scene, display, ExrFile::open(&display_image)?))
+    });
+    let (scene, display, file) = loaded?;
     let (eye, retina) = eye.eye(&display)?;
     inimtrace::optics::transfer::check_eye_in_front(&display, eye.position.z, "command line", "--eye-position")?;
     check_memory("the retinal image", "--retina", retina.resolution * retina.resolution, 24)?;
-    let img = read_exr_input(&display_image, part)?;
+    let img = read_exr_input(&file, part)?;
     let pupil = eye.pupil_samples().len();
     inimtrace::long_run::announce(inimtrace::long_run::retina_rays(
         retina.resolution,
@@ -87,7 +94,8 @@ pub(crate) fn simulate_command(
         1,
     ));
     // The method, when the display image says which.
-    let method = inimtrace::io::exr::read_attributes(&display_image)?
+    let method = file
+        .attributes()?
         .into_iter()
         .find(|(k, _)| k == "inimtrace:method")
         .and_then(|(_, v)| v.parse::<Method>().ok());
@@ -96,7 +104,17 @@ pub(crate) fn simulate_command(
         .with_context(|| format!("simulating {}", display_image.display()))?;
     p.finish();
     let source = display_image.display().to_string();
-    let attrs = metadata::perceived(None, method, None, &eye, &retina, &display, Some(&source));
+    let mut attrs = metadata::perceived(None, method, None, &eye, &retina, &display, Some(&source));
+    let provenance = inimtrace::provenance::Provenance {
+        scene_name: scene.name.clone(),
+        scene_path: setup.scene.as_ref().map_or_else(|| "builtin:paper".into(), |p| p.display().to_string()),
+        display_path: setup.display.as_ref().map_or_else(|| "builtin:paper".into(), |p| p.display().to_string()),
+        files,
+        set: set.iter().map(inimtrace::overrides::Override::to_arg).collect(),
+        working_directory: std::env::current_dir().map(|d| d.display().to_string()).unwrap_or_default(),
+        ..Default::default()
+    };
+    attrs.extend(metadata::provenance(&provenance));
     write_image(&out, &sim[0], None, &attrs, g.exr_compression)?;
     Ok(false)
 }

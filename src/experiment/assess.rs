@@ -73,8 +73,7 @@ fn run(exp: &Experiment, out: Option<&Path>, opts: RunOptions, keep: bool) -> Re
     let start = Instant::now();
     // Refuse settings that cannot fit in memory before anything is allocated; say so when the
     // run will be long, even when stderr is not a terminal.
-    let estimate = estimate(exp);
-    estimate.check_memory(&crate::budget::memory_budget(), &exp.source)?;
+    let estimate = check(exp)?;
     crate::long_run::announce(estimate.rays);
     // The folder is owned by this run (a second run into it fails at once) and every file
     // appears under its final name only when complete; `results.json` comes last.
@@ -109,6 +108,27 @@ pub fn prepare_output_dir(out: &Path, force: bool) -> Result<()> {
     OutputDir::open(out, RunKind::Assess, force).map(|_| ())
 }
 
+/// The run's estimate ([`estimate`]), refused when its memory exceeds the budget: what a run
+/// checks before it allocates anything.
+pub fn check(exp: &Experiment) -> Result<Estimate> {
+    let e = estimate(exp);
+    e.check_memory(&crate::budget::memory_budget(), &exp.source)?;
+    Ok(e)
+}
+
+/// `assess --check`: the experiment checked ([`check`]) and one line saying what would run.
+pub fn check_text(exp: &Experiment) -> Result<String> {
+    let e = check(exp)?;
+    Ok(format!(
+        "{}: valid; {} x {}, about {} of memory and {:.2e} rays (nothing run)",
+        exp.source,
+        crate::count::count(exp.methods.len(), "method"),
+        crate::count::count(exp.cases.len(), "eye case"),
+        crate::budget::Bytes(e.bytes()),
+        e.rays as f64
+    ))
+}
+
 /// The run's peak memory and its rays, from the settings alone (before anything is allocated).
 pub fn estimate(exp: &Experiment) -> Estimate {
     let mut e = Estimate::default();
@@ -131,6 +151,9 @@ pub fn estimate(exp: &Experiment) -> Estimate {
             _ => 1,
         };
         e.add_rays(lcd.saturating_mul(spp).saturating_mul(per_pixel));
+    }
+    if let Some(opt) = &exp.optimize {
+        opt.add_to_estimate(&mut e, lcd);
     }
     if exp.measurement.estimator == crate::measure::spec::EstimatorKind::Converged {
         let r = exp.measurement.replicates as u64;

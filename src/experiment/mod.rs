@@ -1,6 +1,6 @@
 //! Experiments: the paper's assessment (Sec. 4, Table 1, Fig. 3) as data. This file holds the
 //! experiment file's spec types and their resolution into an [`Experiment`]; the eye's settings
-//! and the pipeline that runs one live beside it, one concept per file: `eye_spec.rs` (the
+//! and the pipeline that runs one live beside it, one concept per file: `optics/eye/settings.rs` (the
 //! `[eye]` and `[[eye_cases]]` settings), `stages.rs` (render the display image of every method,
 //! simulate what each eye case perceives, render the ground truth, score with PSNR and SSIM),
 //! `assess.rs` (the run and its image outputs), `metadata.rs` (the typed EXR header of every
@@ -15,7 +15,9 @@ mod report;
 mod stages;
 
 pub use crate::optics::eye::settings::{BaseEye, EyeCaseSpec, EyeModelSettings, EyeSpec};
-pub use assess::{assess, assess_images, estimate, prepare_output_dir, Assessment, RunOptions, Z_CHANNEL_NOTE};
+pub use assess::{
+    assess, assess_images, check, check_text, estimate, prepare_output_dir, Assessment, RunOptions, Z_CHANNEL_NOTE,
+};
 pub use report::{sampling_cost_warnings, table_markdown, AssessReport, Score, StageTime};
 pub use stages::{
     ground_truth_image, pack_display_images, perceived_images, render_display_images, render_display_stack,
@@ -393,6 +395,13 @@ impl Experiment {
             source,
             [("pupil_grid", e.pupil_grid, d.pupil_grid), ("retina_samples", e.retina_samples, d.retina_samples)],
         )?;
+        let converged = measurement.estimator == crate::measure::spec::EstimatorKind::Converged;
+        crate::optics::eye::settings::check_applicable(e, &base.optics, converged, source)?;
+        if !converged {
+            for c in &cases {
+                crate::optics::eye::settings::check_grid_stiles_crawford(&c.eye, &c.name, source)?;
+            }
+        }
         Ok(Self {
             name: spec.name.clone(),
             source: source.into(),

@@ -44,8 +44,9 @@ pub enum MaterialSpec {
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
 pub enum LensletOpticsSpec {
-    /// The paper's thin lens (eq. (1b)).
-    Paraxial,
+    /// The paper's thin lens (eq. (1b)); it takes no other field (a struct variant, so that a
+    /// thick lenslet's field beside `kind = "paraxial"` is refused as unknown, not ignored).
+    Paraxial {},
     /// A real lenslet.
     Thick {
         /// Centre thickness, mm.

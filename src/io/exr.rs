@@ -38,6 +38,7 @@ use exr::meta::header::{standard_names, LayerAttributes};
 use exr::prelude::{Blocks, Compression, LineOrder, WritableImage};
 
 pub use super::exr_attributes::{AttrValue, Attributes};
+pub use super::exr_file::ExrFile;
 pub use super::exr_read::ExrInput;
 use crate::error::{Error, Result};
 use crate::raster::{RgbImage, RgbView};
@@ -219,12 +220,20 @@ pub(super) fn write_view_by(
             ));
         }
     }
-    // The same policy as reading: no NaN or infinite radiance ever leaves inimtrace.
+    // The same policy as reading: no NaN or infinite radiance ever leaves inimtrace. The last
+    // guard: the causes are refused where they arise; this names the inputs behind the image.
     if let Some(i) = (0..n).find(|&i| img.pixel(i).iter().any(|v| !v.is_finite())) {
         return Err(Error::invalid(
             source,
-            format!("pixel (row {}, col {})", i / img.width, i % img.width),
-            format!("refusing to write a non-finite value {:?} (this is a bug in the renderer)", img.pixel(i)),
+            "pixels",
+            format!(
+                "refusing to write the non-finite value {:?} at pixel (row {}, col {}); the image comes from {}: \
+                 check those settings",
+                img.pixel(i),
+                i / img.width,
+                i % img.width,
+                inputs_of(attributes)
+            ),
         ));
     }
 
@@ -264,6 +273,31 @@ pub(super) fn write_view_by(
                 });
             finish(path, &Image::from_layer(Layer::new(size, layer_attributes, encoding, channels)), zip)
         }
+    }
+}
+
+/// The inputs an image's attributes name (experiment, scene, eye case, method, eye model,
+/// Stiles-Crawford, spectrum, source image), for an error about its values.
+fn inputs_of(attributes: &Attributes) -> String {
+    const NAMED: [(&str, &str); 9] = [
+        ("inimtrace:experiment", "experiment"),
+        ("inimtrace:experiment_path", "experiment file"),
+        ("inimtrace:scene", "scene"),
+        ("inimtrace:eye_case", "eye case"),
+        ("inimtrace:method", "method"),
+        ("inimtrace:eye_model", "eye model"),
+        ("inimtrace:stiles_crawford_rho", "Stiles-Crawford rho"),
+        ("inimtrace:spectrum", "spectrum"),
+        ("inimtrace:source", "input image"),
+    ];
+    let named: Vec<String> = NAMED
+        .iter()
+        .filter_map(|(key, what)| attributes.0.iter().find(|(k, _)| k == key).map(|(_, v)| format!("{what} `{v}`")))
+        .collect();
+    if named.is_empty() {
+        "settings its header does not name".into()
+    } else {
+        named.join(", ")
     }
 }
 
@@ -322,69 +356,6 @@ fn finish<'i, L: WritableLayers<'i>>(
     }
 }
 
-/// A regular, non-empty file; returns its size.
-fn check_readable_file(path: &Path) -> Result<u64> {
-    let size = crate::io::input::check_regular(path)?;
-    if size == 0 {
-        return Err(Error::parse(path, "file is empty, not an OpenEXR file"));
-    }
-    Ok(size)
-}
-
-/// Reads the headers alone and refuses a file whose data windows would need more memory to
-/// decode than the memory limit ([`crate::budget::memory_limit`]), or whose uncompressed
-/// pixels cannot fit in the file: a few bytes of header must not make the reader allocate.
-fn check_claimed_size(path: &Path, file_size: u64) -> Result<()> {
-    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| exr_error(path, e))?;
-    let limit = crate::budget::memory_limit();
-    // Every part is decoded: their sizes are summed, not checked one by one.
-    let mut all_parts = 0u64;
-    for header in &meta.headers {
-        let (w, h) = (header.layer_size.0 as u64, header.layer_size.1 as u64);
-        let pixels = w.saturating_mul(h);
-        let channels = header.channels.list.len() as u64;
-        // Decoded samples are f32 (4 bytes each); our image and depth add 16 bytes per pixel.
-        let decoded = pixels.saturating_mul(channels.saturating_mul(4).saturating_add(16));
-        all_parts = all_parts.saturating_add(decoded);
-        if decoded > limit {
-            return Err(Error::parse(
-                path,
-                format!(
-                    "header claims a {w} x {h} pixel data window with {}, which would need {} to \
-                     decode, more than the memory limit of {} (--max-memory)",
-                    crate::count::count(channels, "channel"),
-                    crate::budget::Bytes(decoded),
-                    crate::budget::Bytes(limit)
-                ),
-            ));
-        }
-        let stored: u64 = header.channels.list.iter().map(|c| c.sample_type.bytes_per_sample() as u64).sum();
-        if header.compression == Compression::Uncompressed && pixels.saturating_mul(stored) > file_size {
-            return Err(Error::parse(
-                path,
-                format!(
-                    "header claims {w} x {h} uncompressed pixels ({} of samples) but the file has only {} \
-                     (truncated file?)",
-                    crate::budget::Bytes(pixels.saturating_mul(stored)),
-                    crate::budget::Bytes(file_size)
-                ),
-            ));
-        }
-    }
-    if all_parts > limit {
-        return Err(Error::parse(
-            path,
-            format!(
-                "its {} parts would need {} to decode together, more than the memory limit of {} (--max-memory)",
-                meta.headers.len(),
-                crate::budget::Bytes(all_parts),
-                crate::budget::Bytes(limit)
-            ),
-        ));
-    }
-    Ok(())
-}
-
 /// Reads the `R`, `G`, `B` channels of an OpenEXR file as a linear [`RgbImage`] (row 0 at top).
 /// See the module comment for accepted files and the input policy (finite, non-negative).
 pub fn read_rgb(path: &Path) -> Result<RgbImage> {
@@ -400,81 +371,20 @@ pub fn read_rgb_depth(path: &Path) -> Result<(RgbImage, Option<Vec<f32>>)> {
 
 /// [`read_rgb_depth`] of part `part` (by name) of a multipart file, or of the only part with
 /// R, G and B; the returned note says which part was read when the file had several and none
-/// was named. See [`super::exr_read`] for the part choice and the checks of windows, channel
-/// types and blocks, and the module comment for the input policy.
+/// was named. The file is read once through the input gate ([`ExrFile`]).
 pub fn read_input(path: &Path, part: Option<&str>) -> Result<ExrInput> {
-    let size = check_readable_file(path)?;
-    check_claimed_size(path, size)?;
-    let ExrInput { image: img, depth, note } = super::exr_read::read(path, part)?;
-    let width = img.width;
-    for (c, name) in ["R", "G", "B"].into_iter().enumerate() {
-        for (i, px) in img.pixels.iter().enumerate() {
-            let v = px[c];
-            if let Some(kind) = crate::raster::bad_sample(v) {
-                return Err(Error::parse(
-                    path,
-                    format!(
-                        "pixel (row {}, col {}) channel {name} is {kind} ({v}); linear RGB samples must be finite and non-negative",
-                        i / width,
-                        i % width
-                    ),
-                ));
-            }
-        }
-    }
-    if let Some(z) = &depth {
-        if let Some(i) = z.iter().position(|v| v.is_nan() || *v < 0.0) {
-            return Err(Error::parse(
-                path,
-                format!(
-                    "pixel (row {}, col {}) channel Z is {}; depth must be non-negative (+inf for no hit)",
-                    i / width,
-                    i % width,
-                    z[i]
-                ),
-            ));
-        }
-    }
-    Ok(ExrInput { image: img, depth, note })
+    ExrFile::open(path)?.input(part)
 }
 
 /// The attributes in the headers of an OpenEXR file as text, `(name, value)` pairs sorted by
-/// name: the custom ones written by [`write_rgb_with`] (numbers printed as Rust prints them,
-/// `300`, `2.5925`) and the standard text attributes `owner`, `comments`, `capDate` and
-/// `software` when present. Errors name the file.
+/// name (see [`ExrFile::attributes`]). Errors name the file.
 pub fn read_attributes(path: &Path) -> Result<Vec<(String, String)>> {
-    Ok(read_typed_attributes(path)?.into_iter().map(|(k, v)| (k, v.to_string())).collect())
+    ExrFile::open(path)?.attributes()
 }
 
-/// Like [`read_attributes`], keeping each value's type (`string`, `double`, `float`, `int`;
-/// other OpenEXR attribute types are left out).
+/// Like [`read_attributes`], keeping each value's type ([`ExrFile::typed_attributes`]).
 pub fn read_typed_attributes(path: &Path) -> Result<Vec<(String, AttrValue)>> {
-    check_readable_file(path)?;
-    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| exr_error(path, e))?;
-    let mut out = Vec::new();
-    for header in &meta.headers {
-        let own = &header.own_attributes;
-        for (name, value) in [
-            ("owner", &own.owner),
-            ("comments", &own.comments),
-            ("capDate", &own.capture_date),
-            ("software", &own.software_name),
-        ] {
-            if let Some(v) = value {
-                out.push((name.to_string(), AttrValue::Text(v.to_string())));
-            }
-        }
-        for map in [&own.other, &header.shared_attributes.other] {
-            for (name, value) in map {
-                if let Some(v) = AttrValue::from_exr(value) {
-                    out.push((name.to_string(), v));
-                }
-            }
-        }
-    }
-    out.sort_by(|a, b| a.0.cmp(&b.0));
-    out.dedup();
-    Ok(merge_exact(out))
+    ExrFile::open(path)?.typed_attributes()
 }
 
 /// A `double` as this module writes it: the attribute `NAME` as a `float` and `NAME` followed by
@@ -482,39 +392,8 @@ pub fn read_typed_attributes(path: &Path) -> Result<Vec<(String, AttrValue)>> {
 /// Python's `float()` reads to the same bits).
 pub const EXACT_SUFFIX: &str = ".exact";
 
-/// `NAME` (`float`) with `NAME.exact` (`string`) as the one `double` they encode; `NAME.exact`
-/// is dropped. Any other attribute, an old file's `double` included, is kept as it is.
-fn merge_exact(attrs: Vec<(String, AttrValue)>) -> Vec<(String, AttrValue)> {
-    let exact = |name: &str| {
-        attrs.iter().find_map(|(n, v)| match v {
-            AttrValue::Text(s) if n.strip_suffix(EXACT_SUFFIX) == Some(name) => s.parse::<f64>().ok(),
-            _ => None,
-        })
-    };
-    let merged: Vec<(String, AttrValue)> = attrs
-        .iter()
-        .map(|(n, v)| match (v, exact(n)) {
-            (AttrValue::F32(f), Some(x)) if x as f32 == *f || (x.is_nan() && f.is_nan()) => {
-                (n.clone(), AttrValue::F64(x))
-            }
-            _ => (n.clone(), v.clone()),
-        })
-        .collect();
-    merged
-        .iter()
-        .filter(|(n, _)| {
-            !n.strip_suffix(EXACT_SUFFIX)
-                .is_some_and(|base| merged.iter().any(|(m, v)| m == base && matches!(v, AttrValue::F64(_))))
-        })
-        .cloned()
-        .collect()
-}
-
 /// The compression of the first header of an OpenEXR file (`None` for one this crate does not
 /// write, e.g. DWAA). Errors name the file.
 pub fn read_compression(path: &Path) -> Result<Option<ExrCompression>> {
-    check_readable_file(path)?;
-    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| exr_error(path, e))?;
-    let c = meta.headers.first().map(|h| h.compression);
-    Ok(ExrCompression::ALL.into_iter().find(|x| Some(x.to_exr()) == c))
+    ExrFile::open(path)?.compression()
 }

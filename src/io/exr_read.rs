@@ -18,8 +18,7 @@
 //!   1950), so a flipped byte in compressed data is an error too.
 
 use std::collections::HashMap;
-use std::fs::File;
-use std::io::BufReader;
+use std::io::Cursor;
 use std::path::Path;
 
 use exr::block::reader::ChunksReader;
@@ -161,13 +160,13 @@ enum Target {
     Skip,
 }
 
-/// Reads part `part` (by name; see the module comment for the choice) of an OpenEXR file: its
+/// Reads part `part` (by name; see the module comment for the choice) of the OpenEXR file
+/// `bytes` (read from `path` by [`super::exr_file::ExrFile`]; `path` names it in errors): its
 /// `R`, `G`, `B` samples and its `Z` samples when present, unchecked for value (the caller
 /// applies the input policy).
-pub fn read(path: &Path, part: Option<&str>) -> Result<ExrInput> {
+pub fn read(path: &Path, bytes: &[u8], part: Option<&str>) -> Result<ExrInput> {
     let exr_error = |e: exr::error::Error| super::exr::exr_error(path, e);
-    let file = File::open(path).map_err(|e| Error::io(path, e))?;
-    let reader = exr::block::read(BufReader::new(file), false).map_err(exr_error)?;
+    let reader = exr::block::read(Cursor::new(bytes), false).map_err(exr_error)?;
     let (index, note) = choose_part(path, reader.headers(), part)?;
     let header = reader.headers()[index].clone();
     check_header(path, &header)?;

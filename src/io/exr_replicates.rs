@@ -18,7 +18,7 @@ use exr::meta::attribute::Text;
 use exr::meta::header::ImageAttributes;
 use exr::prelude::{Blocks, LineOrder, WritableImage};
 
-use super::exr::{exr_error, header_attributes, AttrValue, Attributes, ExrCompression};
+use super::exr::{exr_error, header_attributes, AttrValue, Attributes, ExrCompression, ExrFile};
 use crate::error::{Error, Result};
 use crate::measure::estimator::Replicates;
 use crate::raster::RgbImage;
@@ -73,20 +73,28 @@ pub fn write(
 }
 
 /// How many replicate parts `path` has when it is a replicate set (at least two parts, named
-/// `replicate 0` ... in order), else `None` (a plain image). Reads the headers only.
+/// `replicate 0` ... in order), else `None` (a plain image). Reads the file through the input
+/// gate ([`ExrFile`]).
 pub fn count(path: &Path) -> Result<Option<usize>> {
-    crate::io::input::check_regular(path)?;
-    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| exr_error(path, e))?;
-    let names: Vec<Option<String>> =
-        meta.headers.iter().map(|h| h.own_attributes.layer_name.as_ref().map(|t| t.to_string())).collect();
+    count_of(&ExrFile::open(path)?)
+}
+
+/// [`count`] of a file already read.
+pub fn count_of(file: &ExrFile) -> Result<Option<usize>> {
+    let names = file.part_names()?;
     let set = names.len() >= 2 && names.iter().enumerate().all(|(r, n)| n.as_deref() == Some(part_name(r).as_str()));
     Ok(set.then_some(names.len()))
 }
 
 /// Reads the `replicates` replicate images of a set (see [`count`]), each by the strict reader
-/// and the input policy of [`crate::io::exr::read_input`].
+/// and the input policy of [`ExrFile::input`], from one read of the file.
 pub fn read(path: &Path, replicates: usize) -> Result<Vec<RgbImage>> {
-    (0..replicates).map(|r| super::exr::read_input(path, Some(&part_name(r))).map(|input| input.image)).collect()
+    read_of(&ExrFile::open(path)?, replicates)
+}
+
+/// [`read`] of a file already read.
+pub fn read_of(file: &ExrFile, replicates: usize) -> Result<Vec<RgbImage>> {
+    (0..replicates).map(|r| file.input(Some(&part_name(r))).map(|input| input.image)).collect()
 }
 
 /// The replicates of two sets as the estimator's storage: image 0 from `a`, image 1 from `b`

@@ -1,6 +1,9 @@
 //! The input gate: every file inimtrace reads as input (experiment, sweep, study, scene and
 //! display files, meshes, the files a mesh names (glTF buffers and images, OBJ `mtllib` and
-//! `map_Kd`), textures, bar lists, EXR images, and files named by `--set`) is opened here.
+//! `map_Kd`), textures, bar lists, EXR images, and files named by `--set`) is opened here, and
+//! read through the handle it checked (no reader opens an input by its path again; OpenEXR
+//! files are read whole and parsed from memory, `io::exr_file`). What it reads is noted in its
+//! log (`io::input_log`), the provenance of a run.
 //!
 //! * Only regular files: a FIFO, socket, device (`/dev/zero`) or folder is refused with its
 //!   name. The file is opened without blocking and checked through its own handle, so nothing
@@ -84,12 +87,6 @@ fn on_system_fs(meta: &std::fs::Metadata) -> bool {
     SYSTEM_ROOTS.iter().any(|root| std::fs::metadata(root).is_ok_and(|m| m.dev() == meta.dev()))
 }
 
-/// Checks that `path` passes the gate (a regular file outside `/proc` and `/sys`) and returns
-/// its size in bytes, for readers that open the file themselves (OpenEXR).
-pub fn check_regular(path: &Path) -> Result<u64> {
-    open_regular(path).map(|(_, size)| size)
-}
-
 /// The most bytes an input file may have: the memory budget, since it is read whole.
 fn byte_limit() -> crate::budget::Budget {
     crate::budget::memory_budget()
@@ -142,7 +139,7 @@ fn read_open(path: &Path, file: File, size: u64) -> Result<Vec<u8>> {
         ))
     })?;
     file.take(size).read_to_end(&mut bytes).map_err(|e| Error::io(path, e))?;
-    crate::provenance::note_read(path, &bytes);
+    super::input_log::note_read(path, &bytes);
     Ok(bytes)
 }
 

@@ -21,11 +21,13 @@
 //!   (`--force`); a report that is not an inimtrace report (no manifest) is always refused, never
 //!   deleted. Opening a folder removes the previous run's report first, then the files its
 //!   manifest listed, so no earlier output stands next to a new report. Files are only ever
-//!   removed because a manifest lists them.
-//! - **Journal**: before each file is renamed into place its name is added to a journal
-//!   (`.inimtrace-journal.json`, with the command), removed when the report is written. A killed
-//!   run therefore leaves a journal, and the next run into the folder removes exactly the files it
-//!   lists (or refuses, when another command left them).
+//!   removed because a manifest lists them, and only while their size and CRC-32 still match
+//!   the listing ([`crate::io::manifest`]): a listed file changed since makes the run refuse
+//!   the folder, naming it, before anything is removed.
+//! - **Journal**: before each file is renamed into place it is added, with its size and CRC-32,
+//!   to a journal (`.inimtrace-journal.json`, with the command), removed when the report is
+//!   written. A killed run therefore leaves a journal, and the next run into the folder removes
+//!   exactly the files it lists (or refuses, when another command left them).
 //! - **Released**: the lock file is removed when the run ends (the OS lock goes with the
 //!   process), so a finished folder holds only the run's files.
 //!
@@ -43,6 +45,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::io::input::file_kind;
+use crate::io::manifest::{describe, Listed, ListedState};
+pub use crate::io::manifest::{verify, OutputFile};
 
 /// Name of the lock file inside an output folder.
 pub const LOCK_FILE: &str = ".inimtrace.lock";
@@ -82,29 +86,18 @@ impl RunKind {
     }
 }
 
-/// The journal's content: the command of the run and the names of the files it has put (or is
-/// about to put) in the folder.
+/// The journal's content: the command of the run and the files it has put (or is about to put)
+/// in the folder, each with its size and CRC-32 (taken before the rename).
 #[derive(Debug, Default, Serialize, Deserialize)]
 struct Journal {
     command: String,
-    files: Vec<String>,
+    files: Vec<Listed>,
 }
 /// Prefix of temporary folders inside an output folder.
 pub const TEMP_PREFIX: &str = ".inimtrace-tmp-";
 /// Extensions of the files runs write: an entry of the output folder with a plain name and one
 /// of these that is not a regular file is refused when the folder is opened.
 const OUTPUT_EXTENSIONS: &[&str] = &["exr", "png", "svg", "md", "csv", "json", "sbatch"];
-
-/// One complete file of a run, as the manifest lists it.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub struct OutputFile {
-    /// Name relative to the output folder.
-    pub name: String,
-    /// Size, bytes.
-    pub bytes: u64,
-    /// CRC-32 (IEEE) of the file's bytes, 8 lowercase hex digits.
-    pub crc32: String,
-}
 
 /// An output folder owned by this run (see the module documentation).
 #[derive(Debug)]
@@ -115,7 +108,7 @@ pub struct OutputDir {
     _lock: File,
     written: Mutex<Vec<OutputFile>>,
     /// Every name put in the journal so far (guarded with the journal file's writes).
-    journal: Mutex<Vec<String>>,
+    journal: Mutex<Vec<Listed>>,
 }
 
 impl Drop for OutputDir {
@@ -193,11 +186,13 @@ impl OutputDir {
     /// leave a complete file there; it is then renamed to `name` and recorded in the manifest.
     /// On error the temporary file is removed and nothing appears under `name`.
     pub fn write_with(&self, name: &str, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
-        self.journal(name)?;
         let mut entry = None;
         write_atomic(&self.root.join(name), |temp| {
             write(temp)?;
-            entry = Some(describe(temp, name)?);
+            let described = describe(temp, name)?;
+            // Journaled with its size and CRC-32 before it takes its name.
+            self.journal(&described)?;
+            entry = Some(described);
             Ok(())
         })?;
         let entry = entry.expect("described before the rename");
@@ -239,13 +234,11 @@ impl OutputDir {
         }
     }
 
-    /// Adds `name` to the journal (written atomically) before the file is put in place.
-    fn journal(&self, name: &str) -> Result<()> {
+    /// Adds `file` to the journal (written atomically) before it is put in place.
+    fn journal(&self, file: &OutputFile) -> Result<()> {
         let mut names = self.journal.lock().unwrap_or_else(|p| p.into_inner());
-        if names.iter().any(|n| n == name) {
-            return Ok(());
-        }
-        names.push(name.to_string());
+        names.retain(|n| n.name() != file.name);
+        names.push(Listed::File(file.clone()));
         let journal = Journal { command: self.kind.command().to_string(), files: names.clone() };
         let bytes =
             serde_json::to_vec(&journal).map_err(|e| Error::parse(self.root.join(JOURNAL_FILE), e.to_string()))?;
@@ -255,7 +248,7 @@ impl OutputDir {
     /// What earlier runs left in the folder: each command's report with the files its manifest
     /// lists, and an interrupted run's journal. Refuses reports inimtrace did not write, and
     /// (unless `force`) another command's results.
-    fn previous_runs(&self, force: bool) -> Result<Vec<(PathBuf, Vec<String>)>> {
+    fn previous_runs(&self, force: bool) -> Result<Vec<(PathBuf, Vec<Listed>)>> {
         let mut found = Vec::new();
         let other = |path: &Path, kind: RunKind, what: &str| {
             Error::io(
@@ -288,7 +281,7 @@ impl OutputDir {
             if kind != self.kind && !force {
                 return Err(other(&report, kind, "the results"));
             }
-            found.push((report, files.into_iter().map(|f| f.name).collect()));
+            found.push((report, files.into_iter().map(Listed::File).collect()));
         }
         let journal_path = self.root.join(JOURNAL_FILE);
         if let Some(bytes) = read_regular(&journal_path)? {
@@ -310,22 +303,44 @@ impl OutputDir {
     }
 
     /// Removes each previous run's report (or journal) first, so that nothing looks complete,
-    /// then every file it listed, and left-over temporary files.
+    /// then every file it listed, and left-over temporary files. Every listed file is checked
+    /// first: one whose size or CRC-32 no longer matches its listing was changed since inimtrace
+    /// wrote it, and the run is refused (naming it) before anything is removed.
     fn remove_previous_run(&self, force: bool) -> Result<()> {
-        for (record, listed) in self.previous_runs(force)? {
+        let previous = self.previous_runs(force)?;
+        // Only plain names inside the folder: a crafted manifest must not reach outside it.
+        let plain = |l: &&Listed| is_plain_name(l.name());
+        let changed: Vec<(String, String, &PathBuf)> = previous
+            .iter()
+            .flat_map(|(record, listed)| listed.iter().filter(plain).map(move |l| (l, record)))
+            .filter_map(|(l, record)| match l.state(&self.root) {
+                ListedState::Changed(why) => Some((l.name().to_string(), why, record)),
+                _ => None,
+            })
+            .collect();
+        if let Some((name, why, record)) = changed.first() {
+            return Err(Error::io(
+                self.root.join(name),
+                std::io::Error::other(format!(
+                    "{} listed by {} changed since inimtrace wrote {} ({why}); inimtrace deletes only the files \
+                     it wrote, unchanged, so {} kept: move {} away or choose another --out",
+                    crate::count::count(changed.len(), "file"),
+                    record.file_name().unwrap_or_default().to_string_lossy(),
+                    if changed.len() == 1 { "it" } else { "them" },
+                    if changed.len() == 1 { "it is" } else { "they are all" },
+                    if changed.len() == 1 { "it".to_string() } else { format!("them (the first: {name})") },
+                )),
+            ));
+        }
+        for (record, listed) in previous {
             match fs::remove_file(&record) {
                 Ok(()) => {}
                 Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
                 Err(e) => return Err(Error::io(&record, e)),
             }
-            for name in listed {
-                // Only plain names inside the folder: a crafted manifest must not reach outside it.
-                if is_plain_name(&name) {
-                    let path = self.root.join(name);
-                    // Never through a link or at a special file (refused when the folder was opened).
-                    if fs::symlink_metadata(&path).is_ok_and(|m| m.is_file()) {
-                        let _ = fs::remove_file(path);
-                    }
+            for l in listed.iter().filter(plain) {
+                if l.state(&self.root) == ListedState::Unchanged {
+                    let _ = fs::remove_file(self.root.join(l.name()));
                 }
             }
         }
@@ -489,39 +504,6 @@ pub fn is_plain_name(name: &str) -> bool {
     !name.is_empty()
         && !name.starts_with('.')
         && name.chars().all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.'))
-}
-
-/// Size and CRC-32 of the file at `path`, listed as `name`.
-fn describe(path: &Path, name: &str) -> Result<OutputFile> {
-    let mut file = open_regular(path)?;
-    let mut hasher = crc32fast::Hasher::new();
-    let mut buf = vec![0u8; 1 << 20];
-    let mut bytes = 0u64;
-    loop {
-        let n = file.read(&mut buf).map_err(|e| Error::io(path, e))?;
-        if n == 0 {
-            break;
-        }
-        hasher.update(&buf[..n]);
-        bytes += n as u64;
-    }
-    Ok(OutputFile { name: name.to_string(), bytes, crc32: format!("{:08x}", hasher.finalize()) })
-}
-
-/// Checks a finished folder against the manifest of its report: every listed file exists with
-/// its size and CRC-32. Returns the first mismatch as an error.
-pub fn verify(root: &Path, files: &[OutputFile]) -> Result<()> {
-    for f in files {
-        let path = root.join(&f.name);
-        let actual = describe(&path, &f.name)?;
-        if actual != *f {
-            return Err(Error::parse(
-                &path,
-                format!("does not match the manifest (expected {} bytes, crc32 {})", f.bytes, f.crc32),
-            ));
-        }
-    }
-    Ok(())
 }
 
 #[cfg(test)]

@@ -89,7 +89,7 @@ impl MeasurementSpec {
     pub fn validate(&self, source: &str) -> Result<()> {
         let field = |f: &str| format!("measurement.{f}");
         if self.estimator == EstimatorKind::Grid {
-            return Ok(());
+            return self.check_converged_only(source);
         }
         if !(self.psnr_ci95_db.is_finite() && self.psnr_ci95_db > 0.0) {
             return Err(Error::invalid(
@@ -155,6 +155,35 @@ impl Serialize for MeasurementSpec {
 }
 
 impl MeasurementSpec {
+    /// Refuses the converged estimator's settings under the grid estimator, other than their
+    /// defaults (which it ignores): an inapplicable field is an error, as an unknown one is.
+    fn check_converged_only(&self, source: &str) -> Result<()> {
+        let d = Self::default();
+        let given = [
+            ("psnr_ci95_db", self.psnr_ci95_db.to_bits() != d.psnr_ci95_db.to_bits(), self.psnr_ci95_db.to_string()),
+            ("ssim_ci95", self.ssim_ci95.to_bits() != d.ssim_ci95.to_bits(), self.ssim_ci95.to_string()),
+            (
+                "max_samples_per_pixel",
+                self.max_samples_per_pixel != d.max_samples_per_pixel,
+                self.max_samples_per_pixel.to_string(),
+            ),
+            ("max_seconds", self.max_seconds.to_bits() != d.max_seconds.to_bits(), self.max_seconds.to_string()),
+            ("seed", self.seed != d.seed, self.seed.to_string()),
+            ("replicates", self.replicates != d.replicates, self.replicates.to_string()),
+        ];
+        match given.iter().find(|(_, differs, _)| *differs) {
+            Some((key, _, value)) => Err(Error::invalid(
+                source,
+                format!("measurement.{key}"),
+                format!(
+                    "{value} is a setting of the converged estimator; the grid estimator has no samples, seed or \
+                     targets to set (remove it, or set measurement.estimator = \"converged\")"
+                ),
+            )),
+            None => Ok(()),
+        }
+    }
+
     /// Refuses grid-only settings under the converged estimator: `eye.pupil_grid` and
     /// `eye.retina_samples` other than their defaults (which the converged estimator ignores).
     /// `settings` are `(key, value, default)` of the eye's grid-only settings.

@@ -310,33 +310,34 @@ impl ThickLenslet {
                 return bad("material", format!("the index at {nm} nm is {n}: a lenslet needs 1 < n < 4"));
             }
         }
+        // The rules the user eye shares (`optics::clearance`): both surfaces defined over the
+        // cell, and not crossing inside it.
         let r = cell_radius(lattice);
-        let steps = 64;
-        for i in 0..=steps {
-            let r2 = (r * i as f64 / steps as f64).powi(2);
-            let (Some(f), Some(b)) = (self.front.conic_at(0.0).sag(r2), self.back.conic_at(0.0).sag(r2)) else {
-                let which = if self.front.conic_at(0.0).sag(r2).is_none() { "front" } else { "back" };
+        let (front, back) = (self.front.conic_at(0.0), self.back.conic_at(0.0));
+        match crate::optics::clearance::narrowest_gap(&front, &back, self.thickness, r) {
+            Err(at) => {
+                let which = if front.sag(at * at).is_none() { "front" } else { "back" };
                 return bad(
                     which,
                     format!(
-                        "the conic has no point {:.4} mm from the lenslet's axis, inside its cell (whose corners are \
-                         {r:.4} mm from the centre): a larger radius or conic constant is needed",
-                        r2.sqrt()
-                    ),
-                );
-            };
-            let edge = self.thickness + b - f;
-            if edge < 0.0 {
-                return bad(
-                    "thickness",
-                    format!(
-                        "the surfaces cross {:.4} mm from the axis, inside the cell (edge thickness {edge:.4} mm): \
-                         a thickness of at least {:.4} mm is needed",
-                        r2.sqrt(),
-                        self.thickness - edge
+                        "the conic has no point {at:.4} mm from the lenslet's axis, inside its cell (whose corners are \
+                         {r:.4} mm from the centre): a larger radius or conic constant is needed"
                     ),
                 );
             }
+            Ok(g) if g.gap < 0.0 => {
+                return bad(
+                    "thickness",
+                    format!(
+                        "the surfaces cross {:.4} mm from the axis, inside the cell (edge thickness {:.4} mm): \
+                         a thickness of at least {:.4} mm is needed",
+                        g.r,
+                        g.gap,
+                        self.thickness - g.gap
+                    ),
+                );
+            }
+            Ok(_) => {}
         }
         if self.paraxial(D_LINE_NM).efl.is_nan() {
             return bad("front", "the lenslet's focal length is undefined".into());

@@ -1,5 +1,6 @@
 //! Optics: the display, the eye and the paraxial ray transfer between them (paper Sec. 2.3).
 
+pub mod clearance;
 pub mod diffraction;
 pub mod display;
 pub mod eye;

@@ -10,7 +10,11 @@
 //! (FWHM 40 nm) and red 610 nm (FWHM 40 nm), the colour filters' pass bands over the phosphor;
 //! these are representative values, not a measured panel: give a panel's own spectra in the
 //! display file (`[primaries]`) for its numbers. Wavelengths are drawn by the inverse of each
-//! spectrum's cumulative distribution, tabulated on a 0.25 nm grid.
+//! spectrum's cumulative distribution: a Gaussian's tabulated on a 0.25 nm grid, a table's
+//! exactly (its pieces are linear, so its distribution is piecewise quadratic and inverted in
+//! closed form), so a line narrower than any grid keeps its power and its wavelength. A table's
+//! powers are scaled by their maximum before anything is summed (no overflow near 1e308);
+//! powers that are all zero or sub-normal are refused.
 //!
 //! Each primary's share of the display's luminance is its spectrum weighted by the photopic
 //! luminous efficiency function V(lambda) of the CIE 1924 standard observer (equal to the
@@ -148,8 +152,20 @@ impl PrimarySpec {
                         ));
                     }
                 }
-                if table.iter().all(|[_, p]| *p == 0.0) {
+                let max = table.iter().fold(0.0f64, |m, [_, p]| m.max(*p));
+                if max == 0.0 {
                     return Err(Error::invalid(source, format!("{field}.table"), "all powers are zero"));
+                }
+                if max < f64::MIN_POSITIVE {
+                    return Err(Error::invalid(
+                        source,
+                        format!("{field}.table"),
+                        format!(
+                            "every power is sub-normal (the largest is {max:e}, below {:e}): too small to carry a \
+                             spectrum; scale the table (only the powers' ratios matter)",
+                            f64::MIN_POSITIVE
+                        ),
+                    ));
                 }
             }
         }
@@ -210,6 +226,8 @@ pub fn photopic_efficiency(nm: f64) -> f64 {
 /// Draws wavelengths from one spectrum: the inverse of its cumulative distribution.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SpectrumSampler {
+    /// A table's exact distribution (`None`: a Gaussian's, tabulated on the grid below).
+    exact: Option<ExactTable>,
     /// Cumulative distribution at `VISIBLE_NM.0 + i * STEP`, normalised to end at 1.
     cdf: Vec<f64>,
     /// `guide[j]`: the number of `cdf` entries below `j / GUIDE` (a guide table, L. Devroye,
@@ -234,9 +252,78 @@ const GUIDE: usize = 1024;
 
 const STEP: f64 = 0.25;
 
+/// A table spectrum's exact distribution: its powers scaled by their maximum, and the
+/// cumulative power at each of its wavelengths (the trapezoids of its linear pieces).
+#[derive(Clone, Debug, PartialEq)]
+struct ExactTable {
+    /// Wavelengths, nm, increasing.
+    nm: Vec<f64>,
+    /// Powers over their maximum.
+    power: Vec<f64>,
+    /// `cumulative[i]`: the power from the first wavelength to `nm[i]`.
+    cumulative: Vec<f64>,
+}
+
+impl ExactTable {
+    fn new(table: &[[f64; 2]]) -> Self {
+        let max = table.iter().fold(0.0f64, |m, [_, p]| m.max(*p));
+        let scale = if max > 0.0 { 1.0 / max } else { 0.0 };
+        let nm: Vec<f64> = table.iter().map(|[l, _]| *l).collect();
+        // p / max, computed as a division when 1 / max overflows (max sub-normal is refused).
+        let power: Vec<f64> = table.iter().map(|[_, p]| if scale.is_finite() { p * scale } else { p / max }).collect();
+        let mut cumulative = Vec::with_capacity(nm.len());
+        let mut acc = 0.0;
+        cumulative.push(0.0);
+        for i in 1..nm.len() {
+            acc += 0.5 * (power[i - 1] + power[i]) * (nm[i] - nm[i - 1]);
+            cumulative.push(acc);
+        }
+        Self { nm, power, cumulative }
+    }
+
+    fn total(&self) -> f64 {
+        self.cumulative.last().copied().unwrap_or(0.0)
+    }
+
+    /// The power-weighted mean wavelength: each linear piece's first moment, exactly.
+    fn mean_nm(&self) -> f64 {
+        let mut moment = 0.0;
+        for i in 1..self.nm.len() {
+            let (l0, len) = (self.nm[i - 1], self.nm[i] - self.nm[i - 1]);
+            let (p0, d) = (self.power[i - 1], self.power[i] - self.power[i - 1]);
+            // The integral of (l0 + len t) (p0 + d t) len dt over t in [0, 1].
+            moment += len * (l0 * (p0 + 0.5 * d) + len * (0.5 * p0 + d / 3.0));
+        }
+        moment / self.total()
+    }
+
+    /// The wavelength below which a fraction `u` of the power lies: the piece holding it, then
+    /// the root of its quadratic distribution, in the form without cancellation.
+    fn wavelength(&self, u: f64) -> f64 {
+        let target = u.clamp(0.0, 1.0) * self.total();
+        let last = self.nm.len() - 1;
+        // The first piece whose end reaches the target, skipping pieces without power.
+        let i = self.cumulative.partition_point(|&c| c < target).clamp(1, last);
+        let (l0, len) = (self.nm[i - 1], self.nm[i] - self.nm[i - 1]);
+        let (p0, p1) = (self.power[i - 1], self.power[i]);
+        let area = (target - self.cumulative[i - 1]).max(0.0) / len;
+        // (p1 - p0) / 2 t^2 + p0 t = area, for t in [0, 1].
+        let (a, b) = (0.5 * (p1 - p0), p0);
+        let disc = (b * b + 4.0 * a * area).max(0.0);
+        let denom = b + disc.sqrt();
+        let t = if denom > 0.0 { 2.0 * area / denom } else { 0.0 };
+        l0 + len * t.clamp(0.0, 1.0)
+    }
+}
+
 impl SpectrumSampler {
     /// The sampler of `spectrum` (validated by the caller).
     pub fn new(spectrum: &PrimarySpec) -> Self {
+        if let PrimarySpec::Table { table } = spectrum {
+            let exact = ExactTable::new(table);
+            let mean_nm = exact.mean_nm();
+            return Self { exact: Some(exact), cdf: Vec::new(), guide: Vec::new(), step: Vec::new(), mean_nm };
+        }
         let n = ((VISIBLE_NM.1 - VISIBLE_NM.0) / STEP).round() as usize;
         let mut cdf = Vec::with_capacity(n + 1);
         let (mut acc, mut moment) = (0.0, 0.0);
@@ -267,13 +354,16 @@ impl SpectrumSampler {
                 }
             })
             .collect();
-        Self { cdf, guide, step, mean_nm: moment / total }
+        Self { exact: None, cdf, guide, step, mean_nm: moment / total }
     }
 
     /// The wavelength (nm) of the uniform number `u` in [0, 1): the inverse distribution,
     /// linear within each step.
     #[inline(always)]
     pub fn wavelength(&self, u: f64) -> f64 {
+        if let Some(table) = &self.exact {
+            return table.wavelength(u);
+        }
         let u = u.clamp(0.0, 1.0);
         let cell = self.step[((u * CELLS as f64) as usize).min(CELLS - 1)];
         let i = if cell != u32::MAX {
@@ -351,11 +441,17 @@ mod tests {
         assert_eq!(t.power(499.0), 0.0);
         assert_eq!(t.power(520.0), 1.0);
         let s = SpectrumSampler::new(&t);
-        // Uniform over the box, to within the 0.25 nm grid of the distribution (the box's edges
-        // fall between grid points and become ramps one step wide).
-        for u in [0.1, 0.25, 0.5, 0.9] {
-            assert!((s.wavelength(u) - (500.0 + 20.0 * u)).abs() < STEP, "{u}: {}", s.wavelength(u));
+        // Uniform over the box, exactly (a table's distribution is inverted in closed form).
+        for u in [0.0, 0.1, 0.25, 0.5, 0.9, 1.0] {
+            assert!((s.wavelength(u) - (500.0 + 20.0 * u)).abs() < 1e-9, "{u}: {}", s.wavelength(u));
         }
+        assert!((s.mean_nm() - 510.0).abs() < 1e-12);
+        // A ramp: power rising linearly from 0 at 400 nm to 1 at 500 nm, F(w) = ((w - 400) / 100)^2.
+        let ramp = SpectrumSampler::new(&PrimarySpec::Table { table: vec![[400.0, 0.0], [500.0, 1.0]] });
+        for u in [0.01, 0.25, 0.64, 1.0] {
+            assert!((ramp.wavelength(u) - (400.0 + 100.0 * f64::sqrt(u))).abs() < 1e-9, "{u}");
+        }
+        assert!((ramp.mean_nm() - (400.0 + 200.0 / 3.0)).abs() < 1e-9);
         assert!((s.wavelength(0.5) - 510.0).abs() < 1e-9);
         assert_eq!(s.quantiles(2).len(), 2);
     }

@@ -194,6 +194,7 @@ impl OptimizeSpec {
         if states.is_empty() {
             return Err(Error::invalid(source, f("train_cases"), "train on at least one eye state"));
         }
+        refuse_duplicate_states(&states, names.len(), source)?;
         for (i, s) in states.iter().enumerate() {
             if !(s.weight.is_finite() && s.weight > 0.0) {
                 return Err(Error::invalid(
@@ -216,7 +217,92 @@ impl OptimizeSpec {
     }
 }
 
+/// The field of training state `i`: `optimize.train_cases[i]` for the first `cases` states,
+/// then `optimize.states[i - cases]`.
+fn state_field(i: usize, cases: usize) -> String {
+    if i < cases {
+        format!("optimize.train_cases[{i}]")
+    } else {
+        format!("optimize.states[{}]", i - cases)
+    }
+}
+
+/// Whether two training states are the same eye state (so that training on both would only
+/// double its weight): the same aperture (focus compared as vergence), pupil centre, retina
+/// distance, optics and training retina.
+fn same_state(a: &TrainingState, b: &TrainingState) -> bool {
+    let aperture = |s: &TrainingState| match s.eye.aperture {
+        Aperture::Pinhole => None,
+        Aperture::ThinLens { pupil_diameter, focus } => Some((pupil_diameter, focus.vergence())),
+    };
+    aperture(a) == aperture(b)
+        && a.eye.position == b.eye.position
+        && a.eye.retina_distance == b.eye.retina_distance
+        && a.eye.optics == b.eye.optics
+        && a.retina == b.retina
+}
+
+/// Refuses a training state listed twice, by name or as the same eye state: it would silently
+/// count twice in the objective. A weight says how much a state counts.
+fn refuse_duplicate_states(states: &[TrainingState], cases: usize, source: &str) -> Result<()> {
+    for (i, s) in states.iter().enumerate() {
+        if let Some(j) = states[..i].iter().position(|t| t.name == s.name) {
+            return Err(Error::invalid(
+                source,
+                state_field(i, cases),
+                format!(
+                    "`{}` is already a training state ({}); each state is trained on once: give it a weight \
+                     (optimize.case_weights or the state's `weight`) to count it more",
+                    s.name,
+                    state_field(j, cases)
+                ),
+            ));
+        }
+        if let Some(j) = states[..i].iter().position(|t| same_state(t, s)) {
+            return Err(Error::invalid(
+                source,
+                state_field(i, cases),
+                format!(
+                    "`{}` is the same eye state as `{}` ({}): training on both would only double its weight; give \
+                     one of them a weight instead",
+                    s.name,
+                    states[j].name,
+                    state_field(j, cases)
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 impl Optimization {
+    /// Adds OPT's memory to `e`, for a display of `lcd_pixels` LCD pixels: per training state
+    /// its target, residual and forward image (f64 RGB) and its ground truth (f32 RGB) on the
+    /// training retina; the operator's sample lists of one wave of bands (2 per thread, 8 rows
+    /// each, 24 bytes per sample); the solver's display-sized images (f64 RGB, at most 6).
+    pub fn add_to_estimate(&self, e: &mut crate::budget::Estimate, lcd_pixels: u64) {
+        let setting = |s: &TrainingState| format!("optimize.retina_resolution = {}", s.retina.resolution);
+        let pixels: u64 = self.states.iter().map(|s| (s.retina.resolution as u64).pow(2)).sum();
+        if let Some(big) = self.states.iter().max_by_key(|s| s.retina.resolution) {
+            e.add("OPT's training targets, residuals and ground truths", setting(big), pixels, 3 * 24 + 12);
+        }
+        let threads = rayon::current_num_threads().max(1) as u64;
+        let samples = |s: &TrainingState| {
+            let spectral = s.eye.optics.as_ref().map_or(1, |o| o.grid_spectral().len()) as u64;
+            (s.retina.subpixel_offsets().len() * s.eye.pupil_samples().len()) as u64 * spectral
+        };
+        if let Some(s) = self.states.iter().max_by_key(|s| s.retina.resolution as u64 * samples(s)) {
+            let rows = (2 * threads).max(4) * 8 * s.retina.resolution as u64;
+            e.add(
+                "OPT's operator sample lists",
+                format!("{} with optimize.pupil_grid and optimize.retina_samples", setting(s)),
+                rows.saturating_mul(samples(s)),
+                24,
+            );
+        }
+        e.add("OPT's solver images", "the display's lcd.resolution", lcd_pixels.saturating_mul(6), 24);
+    }
+
     /// OPT where no `[optimize]` table is given (`render-display`, Python's `render_display`):
     /// the paper's four eye states (pinhole; thin lens with a 5 mm pupil focused at 300, 400 and
     /// 600 mm; 8 x 8 pupil grid) around `eye_position`, the paper's 512 x 512 retina over

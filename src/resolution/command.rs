@@ -121,6 +121,20 @@ pub fn plausibility_warnings(study: &Study) -> Vec<String> {
     w
 }
 
+/// `resolution --check`: the study's optics built (every focus's eye, the LCD crop) and its
+/// memory estimate checked, in one line; nothing is traced or written.
+pub fn check_text(study: &Study) -> Result<String> {
+    let setup = super::run::StudySetup::new(study)?;
+    let memory = setup.memory(study);
+    memory.check_memory(&crate::budget::memory_budget(), &study.source)?;
+    Ok(format!(
+        "{}: valid; about {} of memory and {:.2e} rays (nothing run)",
+        study.source,
+        crate::budget::Bytes(memory.bytes()),
+        setup.rays(study) as f64
+    ))
+}
+
 /// Runs the study and writes its files.
 pub fn execute(cmd: &ResolutionCommand) -> Result<ResolutionRun> {
     let t = Instant::now();

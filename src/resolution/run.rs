@@ -209,73 +209,145 @@ fn turned_rays(study: &Study, display: &Display, chart: &Chart, focuses: usize) 
     all.saturating_sub(per_focus.saturating_mul(nf.saturating_sub(focuses as u64)))
 }
 
-/// Runs `study`; progress bars on stderr unless `quiet`.
+/// The memory a depth of the study holds at once, on `display` (the LCD crop) with `chart`'s
+/// windows: every method's display image (f32 RGB) and the simulation's stack of them (at most
+/// as large), and the windows' samples (f32 per replicate, image and pixel; the bands and their
+/// concatenation). The other orientations run one after another: the largest counts.
+pub fn study_memory(study: &Study, display: &Display, chart: &Chart) -> crate::budget::Estimate {
+    let mut e = crate::budget::Estimate::default();
+    let methods = study.methods.len() as u64;
+    let lcd = display.lcd.pixel_count() as u64;
+    e.add(
+        "the display images of one depth and their stack",
+        format!("the display's lcd.resolution = {:?} (the crop the chart reaches)", display.lcd.resolution),
+        lcd.saturating_mul(methods),
+        24,
+    );
+    let pixels: u64 = chart.patches.iter().map(|p| (p.cols as u64).saturating_mul(p.rows as u64)).sum();
+    let per_pixel = (study.measurement.replicates as u64).saturating_mul(1 + methods).saturating_mul(2 * 4);
+    e.add(
+        "the windows' samples",
+        format!(
+            "retina.pixels_per_degree = {} with retina.window_deg and measurement.replicates",
+            study.retina.pixels_per_degree
+        ),
+        pixels,
+        per_pixel,
+    );
+    e
+}
+
+/// What a study runs on, before any ray is traced: the chart, the eye of every focus (its
+/// accommodation solved once), the LCD crop the chart's rays reach, and each other orientation's
+/// turned chart on its own crop. Building it validates the study's optics.
+pub struct StudySetup {
+    /// The gratings and edges at orientation 0.
+    pub chart: Chart,
+    /// The eye of each focus.
+    pub eyes: Vec<Eye>,
+    /// The display cropped to what the chart's rays reach.
+    pub display: Display,
+    /// The other orientations' charts, each with its crop.
+    pub turned: Vec<(Chart, Display)>,
+}
+
+impl StudySetup {
+    /// The setup of `study` (see the type).
+    pub fn new(study: &Study) -> Result<Self> {
+        let chart = Chart::of_study(study);
+        let half = chart.half_extent_tangent();
+        let max_vergence = study.focus_diopters.iter().map(|d| d / 1000.0).fold(0.0, f64::max);
+        let radius = 0.5 * study.pupil_diameter_mm;
+        let primaries = study.display.primaries.clone().unwrap_or_default();
+        let eyes: Vec<Eye> = study
+            .focus_diopters
+            .iter()
+            .enumerate()
+            .map(|(i, &focus)| {
+                let mut eye = Eye::thin_lens(study.pupil_diameter_mm, Focus::Diopters(focus), 8);
+                eye.retina_distance = study.retina_distance_mm;
+                eye.optics = EyeOptics::build(
+                    &study.eye_optics,
+                    &eye.aperture,
+                    eye.retina_distance,
+                    &primaries,
+                    half.length() * 1.02,
+                    &study.source,
+                    &format!("focus_diopters[{i}]"),
+                )?;
+                Ok(eye)
+            })
+            .collect::<Result<_>>()?;
+        // A schematic eye's rays leave the thin lens's bound by its aberrations: a wide margin
+        // (the crop only saves display-image pixels). Diffraction bends rays by angles of a few
+        // lambda / aperture, with a thin tail: the crop keeps 200 lambda / aperture at the
+        // reddest visible wavelength (the Airy and sinc^2 tails beyond hold under 0.1% of the
+        // light).
+        let diffraction = if study.eye_optics.diffraction.is_on() {
+            let cell = crate::optics::diffraction::ApertureShape::of_lattice(&study.display.lenslets);
+            let pupil = if radius > 0.0 { 780e-6 / (2.0 * radius) } else { 0.0 };
+            let lenslet = if study.eye_optics.diffraction.lenslets() { cell.angle(780.0) } else { 0.0 };
+            DVec2::splat(200.0 * pupil.max(lenslet))
+        } else {
+            DVec2::ZERO
+        };
+        let schematic = eyes.iter().any(|e| e.optics.as_ref().is_some_and(|o| o.schematic().is_some()));
+        let crop = |half: DVec2| {
+            if schematic {
+                crop_display(&study.display, half * 1.25 + 0.02 + diffraction, radius * 1.3, max_vergence + 0.003)
+            } else {
+                crop_display(&study.display, half + diffraction, radius, max_vergence)
+            }
+        };
+        let display = crop(half);
+        // The other orientations: the gratings turned about the axis, each on its own display
+        // images.
+        let turned: Vec<(Chart, Display)> = study.orientations_deg[1..]
+            .iter()
+            .map(|&o| {
+                let c = chart.turned(o);
+                let d = crop(c.reach_tangent());
+                (c, d)
+            })
+            .collect();
+        Ok(Self { chart, eyes, display, turned })
+    }
+
+    /// The study's peak memory: its largest orientation's ([`study_memory`]).
+    pub fn memory(&self, study: &Study) -> crate::budget::Estimate {
+        let mut estimate = study_memory(study, &self.display, &self.chart);
+        for (c, d) in &self.turned {
+            let e = study_memory(study, d, c);
+            if e.bytes() > estimate.bytes() {
+                estimate = e;
+            }
+        }
+        estimate
+    }
+
+    /// The rays the whole study traces.
+    pub fn rays(&self, study: &Study) -> u64 {
+        let turned_focuses = if study.orientations_through_focus { study.focus_diopters.len() } else { 1 };
+        self.turned.iter().fold(study_rays(study, &self.display, &self.chart), |a, (c, d)| {
+            a.saturating_add(turned_rays(study, d, c, turned_focuses))
+        })
+    }
+}
+
+/// Runs `study`; progress bars on stderr unless `quiet`. Its memory is estimated from the
+/// settings ([`study_memory`]) and refused over the budget before anything large is allocated.
 pub fn run_study(study: &Study, quiet: bool) -> Result<StudyResults> {
     let t = Instant::now();
-    let chart = Chart::of_study(study);
-    let half = chart.half_extent_tangent();
-    let max_vergence = study.focus_diopters.iter().map(|d| d / 1000.0).fold(0.0, f64::max);
+    let setup = StudySetup::new(study)?;
+    setup.memory(study).check_memory(&crate::budget::memory_budget(), &study.source)?;
+    crate::long_run::announce(setup.rays(study));
+    let StudySetup { chart, eyes, display, turned } = setup;
     let radius = 0.5 * study.pupil_diameter_mm;
-    // The eye of every focus, its accommodation solved once (schematic eyes).
-    let primaries = study.display.primaries.clone().unwrap_or_default();
-    let eyes: Vec<Eye> = study
-        .focus_diopters
-        .iter()
-        .enumerate()
-        .map(|(i, &focus)| {
-            let mut eye = Eye::thin_lens(study.pupil_diameter_mm, Focus::Diopters(focus), 8);
-            eye.retina_distance = study.retina_distance_mm;
-            eye.optics = EyeOptics::build(
-                &study.eye_optics,
-                &eye.aperture,
-                eye.retina_distance,
-                &primaries,
-                half.length() * 1.02,
-                &study.source,
-                &format!("focus_diopters[{i}]"),
-            )?;
-            Ok(eye)
-        })
-        .collect::<Result<_>>()?;
-    // A schematic eye's rays leave the thin lens's bound by its aberrations: a wide margin (the
-    // crop only saves display-image pixels).
-    // Diffraction bends rays by angles of a few lambda / aperture, with a thin tail: the crop
-    // keeps 200 lambda / aperture at the reddest visible wavelength (the Airy and sinc^2 tails
-    // beyond hold under 0.1% of the light).
-    let diffraction = if study.eye_optics.diffraction.is_on() {
-        let cell = crate::optics::diffraction::ApertureShape::of_lattice(&study.display.lenslets);
-        let pupil = if radius > 0.0 { 780e-6 / (2.0 * radius) } else { 0.0 };
-        let lenslet = if study.eye_optics.diffraction.lenslets() { cell.angle(780.0) } else { 0.0 };
-        DVec2::splat(200.0 * pupil.max(lenslet))
-    } else {
-        DVec2::ZERO
-    };
-    let schematic = eyes.iter().any(|e| e.optics.as_ref().is_some_and(|o| o.schematic().is_some()));
-    let crop = |half: DVec2| {
-        if schematic {
-            crop_display(&study.display, half * 1.25 + 0.02 + diffraction, radius * 1.3, max_vergence + 0.003)
-        } else {
-            crop_display(&study.display, half + diffraction, radius, max_vergence)
-        }
-    };
-    let display = crop(half);
-    // The other orientations: the gratings turned about the axis, each on its own display images.
-    let turned: Vec<(Chart, Display)> = study.orientations_deg[1..]
-        .iter()
-        .map(|&o| {
-            let c = chart.turned(o);
-            let d = crop(c.reach_tangent());
-            (c, d)
-        })
-        .collect();
     let sources = source_names(study);
     let (nd, nf, nq) = (study.depths.len(), study.focus_diopters.len(), study.frequencies_cpd.len());
     let ns = sources.len();
     // Turned gratings are measured with the eye on the content, or at every focus.
     let turned_focuses = if study.orientations_through_focus { nf } else { 1 };
-    crate::long_run::announce(turned.iter().fold(study_rays(study, &display, &chart), |a, (c, d)| {
-        a.saturating_add(turned_rays(study, d, c, turned_focuses))
-    }));
     let mut timings = vec![Timing { stage: "chart and LCD crop".into(), seconds: t.elapsed().as_secs_f64() }];
 
     let settings = DisplayRenderSettings::default();

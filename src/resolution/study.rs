@@ -362,8 +362,16 @@ fn study_orientations(spec: &StudySpec, source: &str) -> Result<Vec<f64>> {
                 format!("must be in [0, 180) degrees (a grating at 180 + a is the one at a), got {o}"),
             ));
         }
-        if v[..i].iter().any(|p| (p - o).abs() < 1e-9) {
-            return Err(bad(&field, format!("{o} degrees is listed twice")));
+        // Orientations are angles modulo 180 degrees: 179.9999999999 is the grating at 0.
+        let same = |p: &f64| {
+            let d = (p - o).rem_euclid(180.0);
+            d.min(180.0 - d) < 1e-9
+        };
+        if let Some(p) = v[..i].iter().find(|p| same(p)) {
+            return Err(bad(
+                &field,
+                format!("{o} degrees is the grating at {p} degrees (orientations are equal modulo 180); list it once"),
+            ));
         }
     }
     if !v.contains(&0.0) {

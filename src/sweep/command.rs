@@ -2,7 +2,7 @@
 //! (`--points` for a subset), submitted as a Slurm job array (`--slurm`, `--wait`), or only
 //! collected (`--collect`). The library does not print: messages go to the caller's `log`.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use super::collect::{collect, Collected};
 use super::run::{point_costs, run_points, LocalOptions, SweepInputs};
@@ -86,6 +86,24 @@ fn missed_note(sweep: &Sweep, c: &Collected) -> Option<String> {
 /// A collection's output: its summary and, if rows missed their target, the note.
 fn collected(sweep: &Sweep, c: &Collected) -> SweepOutput {
     SweepOutput { stdout: summary(sweep, c), missed_rows: c.missed_rows, missed_note: missed_note(sweep, c) }
+}
+
+/// `sweep --check`: the sweep file loaded, every point built and validated with its memory
+/// estimate, and one line saying what would run (what building noticed goes to `log`). Nothing
+/// is run or written, not even the output folder.
+pub fn check(path: &Path, overrides: &[Override], log: &mut dyn FnMut(String)) -> Result<String> {
+    let sweep = Sweep::load(path, overrides, None)?;
+    let resolved = sweep.resolve()?;
+    let (rays, warnings) = super::run::check_points(&resolved)?;
+    for w in warnings {
+        log(format!("warning: {w}"));
+    }
+    Ok(format!(
+        "{}: valid; {}, about {:.2e} rays (nothing run)",
+        path.display(),
+        count(resolved.len(), "point"),
+        rays as f64
+    ))
 }
 
 /// Runs the command; returns what goes to stdout (the script of `--dry-run`, else the
@@ -176,6 +194,13 @@ pub fn execute(cmd: &SweepCommand, log: &mut dyn FnMut(String)) -> Result<SweepO
         set: sweep.spec.set.iter().chain(&sweep.overrides).map(|o| o.to_arg()).collect(),
     };
     let run = run_points(&resolved, &values, &selection, &store, opts, &inputs, &mut *log)?;
+    if let Some(first) = run.redone.first() {
+        log(format!(
+            "{name}: {} run again: {} could not be verified (the first, {first})",
+            count(run.redone.len(), "point"),
+            if run.redone.len() == 1 { "its record" } else { "their records" }
+        ));
+    }
     log(format!(
         "{name}: {} asked for, {} already complete, {} run in {:.2} s ({} rendered, shared); {}",
         count(run.selected, "point"),

@@ -16,7 +16,7 @@ mod store;
 pub mod units;
 
 pub use collect::{collect, Collected};
-pub use command::{execute, SweepCommand, SweepOutput};
+pub use command::{check, execute, SweepCommand, SweepOutput};
 pub use run::{point_costs, run_points, validate, LocalOptions, RunSummary, SweepInputs};
 pub use slurm::{submit, wait_for, SlurmOptions, Submission};
 pub use spec::{format_selection, parse_selection, Axis, AxisKey, Point, SweepSpec};

@@ -61,6 +61,8 @@ pub struct RunSummary {
     pub seconds: f64,
     /// What loading the scenes noticed.
     pub warnings: Vec<String>,
+    /// The points run again because their record could not be verified: `point I: why`.
+    pub redone: Vec<String>,
 }
 
 /// A point ready to run.
@@ -139,6 +141,19 @@ pub fn validate(resolved: &[Resolved]) -> Result<()> {
     point_costs(resolved).map(|_| ())
 }
 
+/// `sweep --check`: builds (and so validates) every point's experiment and checks its memory
+/// estimate ([`experiment::check`]); returns the rays of all points and what building them
+/// noticed (a scene's warnings). Nothing runs.
+pub fn check_points(resolved: &[Resolved]) -> Result<(u64, Vec<String>)> {
+    let all: Vec<usize> = (0..resolved.len()).collect();
+    let (scenes, warnings) = build(resolved, &[], &all, &SweepInputs::default())?;
+    let mut rays = 0u64;
+    for job in scenes.iter().flat_map(|(_, _, jobs)| jobs) {
+        rays = rays.saturating_add(experiment::check(&job.exp)?.rays);
+    }
+    Ok((rays, warnings))
+}
+
 /// Builds (and so validates) every point's experiment and returns its estimated cost: the rays
 /// its display images and its retinal images trace ([`experiment::estimate`]), by index.
 pub fn point_costs(resolved: &[Resolved]) -> Result<Vec<u64>> {
@@ -169,11 +184,21 @@ pub fn run_points(
     let mut seen = HashSet::new();
     // Points already recorded are skipped; two points with the same settings (a repeated axis
     // value) run once.
+    let mut redone = Vec::new();
     let todo: Vec<usize> = selection
         .iter()
         .copied()
-        .filter(|&i| seen.insert(resolved[i].id.clone()) && store.record_of(&resolved[i]).is_none())
+        .filter(|&i| seen.insert(resolved[i].id.clone()))
+        .filter(|&i| match store.state(&resolved[i]) {
+            super::store::RecordState::Complete(_) => false,
+            super::store::RecordState::Missing => true,
+            super::store::RecordState::Invalid(why) => {
+                redone.push(format!("point {i}: {why}"));
+                true
+            }
+        })
         .collect();
+    summary.redone = redone;
     summary.already_complete = selection.len() - todo.len();
     let (scenes, warnings) = build(resolved, values, &todo, inputs)?;
     for w in &warnings {

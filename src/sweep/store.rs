@@ -23,6 +23,7 @@ use crate::settings::Resolved;
 /// Scores are stored as decimal text in their shortest round-trip form, so that they read back
 /// bit for bit (and `inf`, which JSON has no number for).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct ScoreRow {
     /// The method's short name.
     pub method: String,
@@ -84,8 +85,11 @@ fn format_one() -> u32 {
     1
 }
 
-/// What one point produced.
+/// What one point produced. A record is trusted on resume only when it reads back exactly as
+/// this inimtrace writes one: no unknown field, every score in its written form (the shortest
+/// round-trip text), the same record format and inimtrace version ([`PointRecord::problem`]).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct PointRecord {
     /// The record's format, [`RECORD_FORMAT`].
     #[serde(default = "format_one")]
@@ -125,6 +129,13 @@ impl PointRecord {
     pub fn problem(&self, r: &Resolved) -> Option<String> {
         if self.format != RECORD_FORMAT {
             return Some(format!("record format {} (this inimtrace reads format {RECORD_FORMAT})", self.format));
+        }
+        if self.version != env!("CARGO_PKG_VERSION") {
+            return Some(format!(
+                "written by inimtrace {}, not this version {}",
+                self.version.escape_debug(),
+                env!("CARGO_PKG_VERSION")
+            ));
         }
         if self.id != r.id {
             return Some(format!("it records the settings hash {}, not this point's {}", self.id, r.id));
@@ -298,7 +309,17 @@ mod exact {
 
     pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
         let text = String::deserialize(d)?;
-        text.parse().map_err(|_| D::Error::custom(format!("`{text}` is not a number")))
+        parse(&text).map_err(D::Error::custom)
+    }
+
+    /// A score's text, accepted only in the form [`serialize`] writes (`16.50` or `1.65e1`
+    /// for 16.5 is an edited record, not one inimtrace wrote).
+    pub fn parse(text: &str) -> Result<f64, String> {
+        let v: f64 = text.parse().map_err(|_| format!("`{text}` is not a number"))?;
+        if v.to_string() != text {
+            return Err(format!("`{text}` is not a score as inimtrace writes it (`{v}`)"));
+        }
+        Ok(v)
     }
 }
 
@@ -315,7 +336,7 @@ mod exact_option {
 
     pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
         match Option::<String>::deserialize(d)? {
-            Some(text) => text.parse().map(Some).map_err(|_| D::Error::custom(format!("`{text}` is not a number"))),
+            Some(text) => super::exact::parse(&text).map(Some).map_err(D::Error::custom),
             None => Ok(None),
         }
     }
@@ -347,7 +368,7 @@ mod tests {
             threads: 2,
             host: host_name(),
             finished_unix: unix_now(),
-            version: "0".into(),
+            version: env!("CARGO_PKG_VERSION").into(),
             provenance: None,
         }
     }

@@ -17,6 +17,15 @@
 //! - [`Dispersion::Table`]: measured indices at tabulated wavelengths, linearly interpolated
 //!   (clamped to the end values outside the table).
 //! - [`Dispersion::Constant`]: one index at every wavelength.
+//!
+//! A user's formula is checked by analysis, not by sampling ([`Dispersion::validate`]): its
+//! poles are found exactly (Sellmeier's at λ² = Ci) and refused inside 350-1100 nm; elsewhere
+//! every formula is a sum of terms each monotone in λ over any interval without a pole (Cauchy's
+//! quadratic in 1/λ² is bounded exactly through its vertex, a table through its nodes), so the sum
+//! of each term's smaller and larger end value bounds the index over the interval. The range is
+//! split until those bounds lie within 1-3 or a wavelength outside them is found (interval
+//! arithmetic by monotone decomposition: R. E. Moore, R. B. Kearfott & M. J. Cloud, "Introduction
+//! to Interval Analysis", SIAM 2009, Ch. 6).
 
 use serde::{Deserialize, Serialize};
 
@@ -166,15 +175,133 @@ impl Dispersion {
             }
             _ => {}
         }
-        for w in (350..=1100).step_by(25) {
-            let n = self.index(w as f64);
-            if !(n.is_finite() && (1.0..=3.0).contains(&n)) {
-                return bad(format!("index at {w} nm is {n}; it must be between 1 and 3 over 350-1100 nm"));
+        if let Some((pole, term)) = self.pole_in(CHECKED_NM) {
+            return bad(format!(
+                "has a pole at {pole:.3} nm (sellmeier term {term}: c = {} um^2), where the index is infinite; \
+                 it must be between 1 and 3 over 350-1100 nm",
+                match self {
+                    Dispersion::Sellmeier { c, .. } => c[term],
+                    _ => f64::NAN,
+                }
+            ));
+        }
+        let mut budget = MAX_INTERVALS;
+        match self.outside_range(CHECKED_NM.0, CHECKED_NM.1, 0, &mut budget) {
+            Some((w, n)) => bad(format!("index at {w:.3} nm is {n}; it must be between 1 and 3 over 350-1100 nm")),
+            None if budget == 0 => bad(format!(
+                "its index could not be shown to stay between 1 and 3 over 350-1100 nm in {MAX_INTERVALS} \
+                 intervals (its terms cancel too finely); simplify the formula"
+            )),
+            None => Ok(()),
+        }
+    }
+
+    /// A pole of the formula inside `range` (nm): its wavelength and the Sellmeier term's index.
+    /// Only Sellmeier's terms have poles at positive wavelengths (`λ² = Ci`, `Bi ≠ 0`);
+    /// Cauchy's and Navarro's lie at 0 and at Herzberger's 167.3 nm, outside every range checked.
+    fn pole_in(&self, range: (f64, f64)) -> Option<(f64, usize)> {
+        let Dispersion::Sellmeier { b, c } = self else { return None };
+        b.iter().zip(c).enumerate().find_map(|(i, (bi, ci))| {
+            let nm = 1e3 * ci.sqrt();
+            (*bi != 0.0 && *ci > 0.0 && nm >= range.0 && nm <= range.1).then_some((nm, i))
+        })
+    }
+
+    /// A wavelength in `[lo, hi]` (nm, no pole inside) where the index is not between 1 and 3,
+    /// with the index there; `None` when there is none. Bounds by monotone terms; halves the
+    /// interval while they straddle the limits.
+    /// `budget` counts the intervals left to look at; at 0 the search stops (the caller refuses).
+    fn outside_range(&self, lo: f64, hi: f64, depth: u32, budget: &mut usize) -> Option<(f64, f64)> {
+        if *budget == 0 {
+            return None;
+        }
+        *budget -= 1;
+        let ok = |n: f64| n.is_finite() && (1.0..=3.0).contains(&n);
+        for w in [lo, hi] {
+            if !ok(self.index(w)) {
+                return Some((w, self.index(w)));
             }
         }
-        Ok(())
+        let (min, max) = self.bounds(lo, hi);
+        if (min >= 1.0 && max <= 3.0) || depth >= MAX_SPLITS {
+            return None;
+        }
+        let mid = 0.5 * (lo + hi);
+        self.outside_range(lo, mid, depth + 1, budget).or_else(|| self.outside_range(mid, hi, depth + 1, budget))
+    }
+
+    /// Bounds on the index over `[lo, hi]` nm, an interval without a pole: each term of the
+    /// formula is monotone in λ there, so its values at the ends bound it (Cauchy's quadratic in
+    /// 1/λ² and a table are bounded exactly). A squared index that may be negative gives a lower
+    /// bound of -1 (no real index).
+    fn bounds(&self, lo: f64, hi: f64) -> (f64, f64) {
+        let ends = |f: &dyn Fn(f64) -> f64| {
+            let (a, b) = (f(lo), f(hi));
+            (a.min(b), a.max(b))
+        };
+        match self {
+            Dispersion::Constant(n) => (*n, *n),
+            Dispersion::Abbe { .. } => ends(&|w| self.index(w)),
+            Dispersion::Cauchy { a, b, c } => {
+                // n = a + b y + c y^2 with y = 1/λ^2 (λ in µm): its extremes are at the ends of
+                // y's interval and at the vertex y = -b / 2c when inside.
+                let (y0, y1) = (1.0 / (hi * 1e-3).powi(2), 1.0 / (lo * 1e-3).powi(2));
+                let n = |y: f64| a + b * y + c * y * y;
+                let mut v = vec![n(y0), n(y1)];
+                if *c != 0.0 {
+                    let vertex = -b / (2.0 * c);
+                    if vertex > y0 && vertex < y1 {
+                        v.push(n(vertex));
+                    }
+                }
+                (v.iter().copied().fold(f64::INFINITY, f64::min), v.iter().copied().fold(f64::NEG_INFINITY, f64::max))
+            }
+            Dispersion::Sellmeier { b, c } => {
+                let (x0, x1) = ((lo * 1e-3).powi(2), (hi * 1e-3).powi(2));
+                let (mut min, mut max) = (1.0, 1.0);
+                for (bi, ci) in b.iter().zip(c) {
+                    let term = |x: f64| bi * x / (x - ci);
+                    let (t0, t1) = (term(x0), term(x1));
+                    min += t0.min(t1);
+                    max += t0.max(t1);
+                }
+                let root = |v: f64| if v >= 0.0 { v.sqrt() } else { -1.0 };
+                (root(min), root(max))
+            }
+            Dispersion::Table { wavelength_nm, .. } => {
+                let mut v = vec![self.index(lo), self.index(hi)];
+                v.extend(wavelength_nm.iter().filter(|w| **w > lo && **w < hi).map(|w| self.index(*w)));
+                (v.iter().copied().fold(f64::INFINITY, f64::min), v.iter().copied().fold(f64::NEG_INFINITY, f64::max))
+            }
+            Dispersion::Navarro { n, offset } => {
+                // Σ rows (A + B x + C u + D u²) n_i with x = λ², u = 1 / (x - λ0²) > 0: four
+                // terms, each monotone in λ above λ0.
+                let (x0, x1) = ((lo * 1e-3).powi(2), (hi * 1e-3).powi(2));
+                let u = |x: f64| 1.0 / (x - HERZBERGER_L0 * HERZBERGER_L0);
+                let coef = |k: usize| NAVARRO_COEFFS.iter().zip(n).map(|(row, ni)| row[k] * ni).sum::<f64>();
+                let terms: [&dyn Fn(f64) -> f64; 3] =
+                    [&|x| coef(1) * x, &|x| coef(2) * u(x), &|x| coef(3) * u(x) * u(x)];
+                let (mut min, mut max) = (coef(0) + offset, coef(0) + offset);
+                for t in terms {
+                    let (a, b) = (t(x0), t(x1));
+                    min += a.min(b);
+                    max += a.max(b);
+                }
+                (min, max)
+            }
+        }
     }
 }
+
+/// The wavelengths over which a user's formula must give an index between 1 and 3, nm.
+pub const CHECKED_NM: (f64, f64) = (350.0, 1100.0);
+
+/// The most intervals [`Dispersion::validate`] bounds (a few hundred for real media).
+const MAX_INTERVALS: usize = 20_000;
+
+/// How many times [`Dispersion::validate`] halves the range at most (750 nm / 2^48 is below
+/// a femtometre): where the bounds still straddle a limit, the index touches it.
+const MAX_SPLITS: u32 = 48;
 
 fn navarro(n: &[f64; 4], um: f64) -> f64 {
     let l2 = um * um;

@@ -27,6 +27,7 @@ pub mod ray_map;
 pub mod refract;
 pub mod schematic;
 pub mod settings;
+pub mod stiles_crawford;
 pub mod trace;
 pub mod user;
 pub mod user_accommodation;

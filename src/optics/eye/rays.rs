@@ -12,12 +12,10 @@
 //!   ([`SchematicEye::retina_point`]), and the ray from that retina point through the iris point
 //!   (the entrance-pupil point scaled by the paraxial pupil magnification) is traced out of the
 //!   eye ([`SchematicEye::ray_out`]).
-//! - The Stiles-Crawford effect of the first kind (Stiles & Crawford, Proc. R. Soc. B 112:428,
-//!   1933), in the Gaussian form of Applegate & Lakshminarayanan (JOSA A 10:1611, 1993): an
-//!   intensity weight `10^(-rho |p - p0|^2)` over entrance-pupil points p. The pupil points are
-//!   drawn from that density by a radial warp of the uniform disk point (exact when the peak p0
-//!   is the pupil centre, so a uniform scene stays exactly uniform); an off-centre peak adds the
-//!   remaining factor as a weight normalised by its exact mean over the disk.
+//! - The Stiles-Crawford effect of the first kind ([`super::stiles_crawford`]): a centred peak
+//!   warps the uniform pupil point to the effect's density (a uniform scene stays exactly
+//!   uniform); an off-centre peak keeps the point uniform and weights it by the effect over its
+//!   exact mean over the disk, bounded wherever the peak lies.
 //! - A thin-lens eye with the Stiles-Crawford weight also comes here (`Lens::ThinLens`, the
 //!   paper's eq. (1b) with d1); without it, the thin lens keeps its fast paths and this module is
 //!   not used, so the paper's numbers stay bit for bit.
@@ -27,6 +25,7 @@ use std::sync::Arc;
 use glam::DVec2;
 
 use super::ray_map::RayMap;
+pub use super::stiles_crawford::StilesCrawford;
 use super::{Aperture, EyeModel, FocusCriterion, SchematicEye};
 use crate::error::{Error, Result};
 use crate::optics::diffraction::{disk_deviation, disk_draw, Diffraction};
@@ -44,75 +43,6 @@ pub enum Spectrum {
     Single(f64),
     /// Each channel at wavelengths drawn from its display primary.
     Primaries(Box<[SpectrumSampler; 3]>),
-}
-
-/// The Stiles-Crawford apodization over the entrance pupil.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct StilesCrawford {
-    /// rho, 1/mm^2 (0.05 by default).
-    pub rho: f64,
-    /// The peak's position in the entrance pupil, mm from its centre.
-    pub peak: DVec2,
-    /// 1 / the mean over the disk of the off-centre factor (1 for a centred peak).
-    norm: f64,
-}
-
-impl StilesCrawford {
-    /// The apodization with `rho` (1/mm^2) peaked at `peak` (mm) over a pupil of `radius` mm.
-    pub fn new(rho: f64, peak: DVec2, radius: f64) -> Self {
-        let mut s = Self { rho, peak, norm: 1.0 };
-        if peak != DVec2::ZERO && radius > 0.0 {
-            // The mean over the disk of the off-centre factor under the centred density, by a
-            // product Gauss-Legendre rule in (s = r^2 / a^2, angle): smooth integrand, 1e-13.
-            let (nodes, weights) = super::accommodation::gauss_legendre(64);
-            let mut total = 0.0;
-            for (&u, &wu) in nodes.iter().zip(&weights) {
-                for (&v, &wv) in nodes.iter().zip(&weights) {
-                    let p = s.warp(polar(0.5 * (u + 1.0), std::f64::consts::PI * (v + 1.0), radius), radius);
-                    total += 0.25 * wu * wv * s.offset_factor(p);
-                }
-            }
-            s.norm = 1.0 / total;
-        }
-        s
-    }
-
-    /// The uniform disk point `p` (radius `radius`) moved radially so that uniform points become
-    /// points of density proportional to `10^(-rho r^2)`.
-    #[inline]
-    pub fn warp(&self, p: DVec2, radius: f64) -> DVec2 {
-        let r2 = p.length_squared();
-        if r2 == 0.0 || radius == 0.0 || self.rho == 0.0 {
-            return p;
-        }
-        let s = r2 / (radius * radius);
-        let k = self.rho * std::f64::consts::LN_10;
-        // F(r) = (1 - e^{-k r^2}) / (1 - e^{-k a^2}) = s  =>  r^2 = -ln(1 - s (1 - e^{-k a^2})) / k.
-        let new_r2 = -(-s * (-(-k * radius * radius).exp_m1())).ln_1p() / k;
-        p * (new_r2 / r2).sqrt()
-    }
-
-    /// The factor the centred density leaves out when the peak is off centre:
-    /// `10^(-rho (|p - p0|^2 - |p|^2))`.
-    #[inline]
-    fn offset_factor(&self, p: DVec2) -> f64 {
-        10f64.powf(-self.rho * (self.peak.length_squared() - 2.0 * p.dot(self.peak)))
-    }
-
-    /// The weight of warped pupil point `p`: 1 for a centred peak, else the normalised factor.
-    #[inline]
-    pub fn weight(&self, p: DVec2) -> f64 {
-        if self.peak == DVec2::ZERO {
-            1.0
-        } else {
-            self.offset_factor(p) * self.norm
-        }
-    }
-}
-
-fn polar(s: f64, angle: f64, radius: f64) -> DVec2 {
-    let r = radius * s.sqrt();
-    DVec2::new(r * angle.cos(), r * angle.sin())
 }
 
 /// The thin lens's ray of eq. (1a), (1b) (as `transfer::eye_ray`): the one arithmetic of
@@ -296,6 +226,7 @@ impl EyeOptics {
                     ),
                 ));
             }
+            eye.check_field(max_tangent, source)?;
             (Lens::Schematic(Box::new(eye)), Some(a), iris)
         };
         let spectrum = if spec.primaries && (!thin || spec.diffraction.is_on()) {
@@ -563,48 +494,11 @@ pub fn criterion_name(c: FocusCriterion) -> &'static str {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-
     #[test]
     fn gauss_legendre_integrates_polynomials_exactly() {
         let (x, w) = super::super::accommodation::gauss_legendre(64);
         assert!((w.iter().sum::<f64>() - 2.0).abs() < 1e-13);
         let i: f64 = x.iter().zip(&w).map(|(x, w)| w * x.powi(10)).sum();
         assert!((i - 2.0 / 11.0).abs() < 1e-13, "{i}");
-    }
-
-    #[test]
-    fn the_warp_draws_the_stiles_crawford_density() {
-        // Uniform disk points (by area fraction s) warped: the fraction of points within radius
-        // r must be the density's CDF (1 - 10^(-rho r^2)) / (1 - 10^(-rho a^2)).
-        let (rho, a) = (0.05, 3.0);
-        let sc = StilesCrawford::new(rho, DVec2::ZERO, a);
-        for s in [0.1, 0.3, 0.5, 0.8, 0.99] {
-            let p = sc.warp(DVec2::new(a * f64::sqrt(s), 0.0), a);
-            let r2 = p.length_squared();
-            let cdf = (1.0 - 10f64.powf(-rho * r2)) / (1.0 - 10f64.powf(-rho * a * a));
-            assert!((cdf - s).abs() < 1e-12, "{s}: {cdf}");
-        }
-        assert_eq!(sc.weight(DVec2::new(1.0, 1.0)), 1.0);
-        // The edge stays the edge, the centre the centre.
-        assert!((sc.warp(DVec2::new(0.0, a), a).y - a).abs() < 1e-12);
-    }
-
-    #[test]
-    fn an_off_centre_peak_weights_average_to_one_over_the_disk() {
-        // Monte Carlo check of the normalisation, independent of the quadrature: the mean weight
-        // of warped uniform points is 1.
-        let a = 2.5;
-        let sc = StilesCrawford::new(0.05, DVec2::new(0.5, -0.3), a);
-        let n = 400;
-        let mut total = 0.0;
-        for i in 0..n {
-            for j in 0..n {
-                let p = polar((i as f64 + 0.5) / n as f64, std::f64::consts::TAU * (j as f64 + 0.5) / n as f64, a);
-                total += sc.weight(sc.warp(p, a));
-            }
-        }
-        let mean = total / (n * n) as f64;
-        assert!((mean - 1.0).abs() < 1e-5, "{mean}");
     }
 }

@@ -144,6 +144,19 @@ impl SchematicEye {
             table: RetinaTable::default(),
         };
         let n = eye.indices(eye.reference_wavelength);
+        // A medium without a real index at the reference wavelength is named here, before the
+        // frame's paraxial solve (which would fail at the iris).
+        if let Some(i) = n[1..].iter().position(|v| !(v.is_finite() && *v >= 1.0)) {
+            return Err(Error::invalid(
+                source,
+                format!("eye.surfaces[{i}].medium"),
+                format!(
+                    "its index at the reference wavelength {} nm is {}: a medium needs a finite index >= 1",
+                    eye.reference_wavelength,
+                    n[i + 1]
+                ),
+            ));
+        }
         let (ep_t, iris_over_ep) = eye.paraxial_input(&n, &mut Vec::new(), &mut Vec::new(), |p| p.entrance_pupil());
         if !(ep_t.is_finite() && iris_over_ep.is_finite() && iris_over_ep.abs() > 1e-9) {
             return Err(Error::invalid(
@@ -266,6 +279,43 @@ impl SchematicEye {
         let r2 = xy.length_squared().min(self.retina.semi_diameter * self.retina.semi_diameter);
         let sag = self.retina.sag(r2).unwrap_or(-self.retina.curvature.recip().abs());
         DVec3::new(xy.x, xy.y, self.origin_t - (self.retina.vertex + sag))
+    }
+
+    /// Refuses a field the retina cannot hold: the chief ray of the field's corner (object
+    /// tangent `max_tangent`, at the reference wavelength) must land on the retina. A user eye
+    /// whose chief rays run off its retina's rim before then names `eye.retina_radius`; otherwise
+    /// the field, `eye.retina_half_tangent`.
+    pub fn check_field(&self, max_tangent: f64, source: &str) -> Result<()> {
+        if !(max_tangent > 0.0 && max_tangent.is_finite())
+            || self.retina_point_exact(DVec2::new(max_tangent, 0.0)).is_some()
+        {
+            return Ok(());
+        }
+        // The largest tangent that lands, by bisection (the axis lands: checked by the caller).
+        let (mut lo, mut hi) = (0.0, max_tangent);
+        for _ in 0..40 {
+            let mid = 0.5 * (lo + hi);
+            if self.retina_point_exact(DVec2::new(mid, 0.0)).is_some() {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        let rim = self.retina.curvature.abs().recip();
+        let landed = self.retina_point_exact(DVec2::new(lo, 0.0)).map_or(0.0, |p| p.truncate().length());
+        let (field, why) = if self.name == "user" && rim.is_finite() && landed >= 0.9 * rim {
+            ("eye.retina_radius", format!("the retina's radius of {rim} mm is too small to hold"))
+        } else {
+            ("eye.retina_half_tangent", format!("the {} eye's retina cannot hold", self.name))
+        };
+        Err(Error::invalid(
+            source,
+            field,
+            format!(
+                "{why} the field: the chief ray of the field's corner (tangent {max_tangent:.4}) misses it; chief \
+                 rays land only up to tangent {lo:.4} ({landed:.3} mm from the axis)"
+            ),
+        ))
     }
 
     /// The exact chief-ray solve behind [`SchematicEye::retina_point`]; None where the chief ray

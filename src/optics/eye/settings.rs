@@ -288,6 +288,79 @@ impl EyeModelSettings {
     }
 }
 
+/// Refuses `[eye]` settings the run would not use, as an unknown field is refused: a focus
+/// criterion for the thin lens (it focuses exactly), a wavelength or the primaries' spectrum for
+/// a thin lens without diffraction (it is achromatic), wavelength samples where no wavelengths
+/// are sampled on a grid (the converged estimator samples them; one wavelength has none).
+/// `optics` is the resolved optics (`with_diffraction` applied); `converged`, the estimator.
+pub fn check_applicable(e: &EyeSpec, optics: &EyeOpticsSpec, converged: bool, source: &str) -> Result<()> {
+    let bad = |f: &str, why: String| Err(Error::invalid(source, format!("eye.{f}"), why));
+    let thin = optics.model == EyeModel::ThinLens;
+    let diffraction = optics.diffraction.is_on();
+    if thin && e.focus_criterion.is_some() {
+        return bad(
+            "focus_criterion",
+            "applies to a schematic eye's accommodation (eye.model); the thin-lens eye focuses exactly".into(),
+        );
+    }
+    if thin && !diffraction {
+        let achromatic = "the thin-lens eye is achromatic: it changes nothing unless eye.model is a schematic eye or \
+                          optics.diffraction is on";
+        if let Some(w) = e.wavelength_nm {
+            return bad("wavelength_nm", format!("{w} nm: {achromatic}"));
+        }
+        if e.spectrum.as_deref() == Some("primaries") {
+            return bad("spectrum", format!("\"primaries\": {achromatic}"));
+        }
+    }
+    if let Some(k) = e.wavelength_samples {
+        let sampled = optics.primaries && (!thin || diffraction);
+        if converged {
+            return bad(
+                "wavelength_samples",
+                format!("{k} is a setting of the grid estimator; the converged estimator samples the wavelengths"),
+            );
+        }
+        if !sampled {
+            return bad(
+                "wavelength_samples",
+                format!("{k}: every channel is traced at one wavelength here (eye.spectrum, eye.model)"),
+            );
+        }
+    }
+    Ok(())
+}
+
+/// The grid estimator's pupil grid against an off-centre Stiles-Crawford peak: its fixed
+/// points must average the effect's weights to 1 (within 2%, its quadrature of the weighted
+/// mean), else a peak narrower than the grid's spacing would brighten or darken every image.
+/// Refused naming `eye.pupil_grid`; `case` names the eye case.
+pub fn check_grid_stiles_crawford(eye: &Eye, case: &str, source: &str) -> Result<()> {
+    let Some(sc) = eye.optics.as_ref().and_then(|o| o.stiles_crawford) else { return Ok(()) };
+    let Aperture::ThinLens { pupil_diameter, .. } = eye.aperture else { return Ok(()) };
+    let points = eye.pupil_samples();
+    let radius = 0.5 * pupil_diameter;
+    let mean = points.iter().map(|p| sc.weight(sc.warp(*p, radius))).sum::<f64>() / points.len().max(1) as f64;
+    if (mean - 1.0).abs() <= 0.02 {
+        return Ok(());
+    }
+    Err(Error::invalid(
+        source,
+        "eye.pupil_grid",
+        format!(
+            "the {n} x {n} pupil grid ({} points, {:.3} mm apart) averages the Stiles-Crawford weights of eye case \
+             `{case}` (rho {} /mm^2, peak at ({}, {}) mm) to {mean:.4} instead of 1: the peak is too narrow for it; \
+             raise eye.pupil_grid or use the converged estimator",
+            points.len(),
+            pupil_diameter / eye.pupil_grid.max(1) as f64,
+            sc.rho,
+            sc.peak.x,
+            sc.peak.y,
+            n = eye.pupil_grid
+        ),
+    ))
+}
+
 /// An error of the model's own fields (`eye.model`, `eye.user...`) renamed under `prefix`.
 fn prefix_model_field(e: Error, prefix: &str) -> Error {
     match e {

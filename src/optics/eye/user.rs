@@ -17,9 +17,16 @@
 //!
 //! An optional `[eye.user.accommodation]` ([`super::user_accommodation`]) lets surface
 //! parameters change with the accommodation; without it the eye has one fixed focus.
+//!
+//! The table is checked by the rules it shares with the thick lenslet
+//! ([`crate::optics::clearance`]): consecutive surfaces, and the last one and the retina, may not
+//! cross inside their common semi-diameter; the iris plane lies between the surface it follows
+//! and the next one there; names are unique; the reference wavelength is visible (380-780 nm, the
+//! range of `eye.wavelength_nm`).
 
 use serde::{Deserialize, Serialize};
 
+use super::conic::Conic;
 use super::medium::Dispersion;
 use super::model::{EyeDefinition, SurfaceDef, REFERENCE_WAVELENGTH};
 use super::user_accommodation::{surface_index, LawParameter, UserAccommodation};
@@ -170,6 +177,15 @@ impl UserEye {
             }
             s.medium.validate(source, &f("medium"))?;
         }
+        for (i, s) in self.surfaces.iter().enumerate() {
+            let Some(name) = &s.name else { continue };
+            if let Some(j) = self.surfaces[..i].iter().position(|t| t.name.as_ref() == Some(name)) {
+                return err(
+                    format!("eye.surfaces[{i}].name"),
+                    format!("`{name}` is also the name of eye.surfaces[{j}]; surface names must be unique"),
+                );
+            }
+        }
         let Some(k) = self.iris_surface() else {
             return err("eye.iris.after".into(), format!("names no surface: `{}`", self.iris.after));
         };
@@ -185,9 +201,89 @@ impl UserEye {
             return err("eye.retina_radius".into(), format!("must be 0 (flat) or at least 1 mm in size, got {r}"));
         }
         if let Some(w) = self.reference_wavelength {
-            if !(w.is_finite() && (350.0..=1100.0).contains(&w)) {
-                return err("eye.reference_wavelength".into(), format!("must be between 350 and 1100 nm, got {w}"));
+            let (lo, hi) = crate::optics::spectrum::VISIBLE_NM;
+            if !(w.is_finite() && (lo..=hi).contains(&w)) {
+                return err(
+                    "eye.reference_wavelength".into(),
+                    format!("must be a visible wavelength in nm ({lo} to {hi}, as eye.wavelength_nm), got {w}"),
+                );
             }
+        }
+        self.validate_clearances(source)
+    }
+
+    /// The surface `i` as a conic about its own vertex.
+    fn conic(&self, i: usize) -> Conic {
+        let s = &self.surfaces[i];
+        Conic::from_radius(0.0, s.radius, s.conic, s.semi_diameter)
+    }
+
+    /// `eye.surfaces[i]` with its name, for messages.
+    fn label(&self, i: usize) -> String {
+        match &self.surfaces[i].name {
+            Some(n) => format!("eye.surfaces[{i}] (`{n}`)"),
+            None => format!("eye.surfaces[{i}]"),
+        }
+    }
+
+    /// The shared geometric rules ([`crate::optics::clearance`]): no two consecutive surfaces
+    /// (nor the last one and the retina) cross inside their common semi-diameter, and the iris
+    /// plane lies between its neighbours there. The surfaces themselves are checked first.
+    fn validate_clearances(&self, source: &str) -> Result<()> {
+        use crate::optics::clearance::{narrowest_gap, plane_between};
+        let n = self.surfaces.len();
+        let cross = |i: usize, next: String, r: f64, gap: f64| {
+            let t = self.surfaces[i].thickness;
+            Err(Error::invalid(
+                source,
+                format!("eye.surfaces[{i}].thickness"),
+                format!(
+                    "{} and {next} cross {r:.4} mm from the axis, inside their semi-diameters (the gap there is \
+                     {gap:.4} mm): a thickness of at least {:.4} mm is needed",
+                    self.label(i),
+                    t - gap
+                ),
+            ))
+        };
+        for i in 0..n.saturating_sub(1) {
+            let reach = self.surfaces[i].semi_diameter.min(self.surfaces[i + 1].semi_diameter);
+            if let Ok(g) = narrowest_gap(&self.conic(i), &self.conic(i + 1), self.surfaces[i].thickness, reach) {
+                if g.gap < 0.0 {
+                    return cross(i, self.label(i + 1), g.r, g.gap);
+                }
+            }
+        }
+        let retina = Conic::from_radius(0.0, self.retina_radius, 0.0, f64::INFINITY);
+        let last = n - 1;
+        let reach = match self.retina_radius {
+            r if r == 0.0 || r.is_infinite() => self.surfaces[last].semi_diameter,
+            r => self.surfaces[last].semi_diameter.min(r.abs()),
+        };
+        if let Ok(g) = narrowest_gap(&self.conic(last), &retina, self.surfaces[last].thickness, reach) {
+            if g.gap < 0.0 {
+                return cross(last, "the retina".into(), g.r, g.gap);
+            }
+        }
+        let k = self.iris_surface().unwrap_or(0);
+        let next = (k + 1 < n).then(|| self.conic(k + 1));
+        let reach = match &next {
+            Some(_) => self.surfaces[k].semi_diameter.min(self.surfaces[k + 1].semi_diameter),
+            None => self.surfaces[k].semi_diameter,
+        };
+        let thickness = self.surfaces[k].thickness;
+        if let Some((behind, g)) = plane_between(&self.conic(k), next.as_ref(), thickness, self.iris.distance, reach) {
+            let which = if behind { self.label(k + 1) } else { self.label(k) };
+            return Err(Error::invalid(
+                source,
+                "eye.iris.distance",
+                format!(
+                    "the iris plane, {} mm behind the vertex of {}, crosses {which} {:.4} mm from the axis, \
+                     inside the surfaces' semi-diameters: the iris would lie inside a surface",
+                    self.iris.distance,
+                    self.label(k),
+                    g.r
+                ),
+            ));
         }
         Ok(())
     }
