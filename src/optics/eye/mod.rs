@@ -16,6 +16,7 @@ pub mod accommodation;
 pub mod arizona;
 pub mod conic;
 pub mod describe;
+pub mod gaze;
 pub mod le_grand;
 pub mod medium;
 pub mod model;
@@ -30,6 +31,7 @@ pub mod trace;
 pub mod user;
 
 use crate::error::{Error, Result};
+pub use gaze::{CentreOfRotation, EyePose, Gaze};
 pub use medium::Dispersion;
 pub use model::{EyeModel, FocusCriterion};
 pub use paraxial::Paraxial;
