@@ -212,7 +212,7 @@ fn turned_rays(study: &Study, display: &Display, chart: &Chart, focuses: usize) 
 pub fn run_study(study: &Study, quiet: bool) -> Result<StudyResults> {
     let t = Instant::now();
     let chart = Chart::of_study(study);
-    let half = chart.half_extent_tangent();
+    let half = chart.eye_reach_tangent();
     let max_vergence = study.focus_diopters.iter().map(|d| d / 1000.0).fold(0.0, f64::max);
     let radius = 0.5 * study.pupil_diameter_mm;
     // The eye of every focus, its accommodation solved once (schematic eyes).
@@ -263,7 +263,7 @@ pub fn run_study(study: &Study, quiet: bool) -> Result<StudyResults> {
         .iter()
         .map(|&o| {
             let c = chart.turned(o);
-            let d = crop(c.reach_tangent());
+            let d = crop(c.eye_reach_tangent());
             (c, d)
         })
         .collect();
