@@ -219,3 +219,87 @@ fn le_grand_foci_agree_with_independent_real_ray_fans() {
         assert!((f.tangential_d - tangential).abs() < 0.05, "{field}: {f:?} vs {tangential}");
     }
 }
+
+/// Navarro 1999 as a user eye (Table 1's indices at 589.3 nm, constant), in an experiment's
+/// `[eye.user]` table.
+const USER_NAVARRO_1999: &str = r#"
+[eye]
+model = "user"
+[eye.user]
+retina_radius = -12.0
+iris = { after = "cornea-back", distance = 3.05 }
+[[eye.user.surfaces]]
+name = "cornea-front"
+radius = 7.72
+conic = -0.26
+thickness = 0.55
+semi_diameter = 5.5
+medium = { constant = 1.376 }
+[[eye.user.surfaces]]
+name = "cornea-back"
+radius = 6.5
+thickness = 3.05
+semi_diameter = 5.5
+medium = { constant = 1.3374 }
+[[eye.user.surfaces]]
+radius = 10.2
+conic = -3.1316
+thickness = 4.0
+semi_diameter = 4.5
+medium = { constant = 1.42 }
+[[eye.user.surfaces]]
+radius = -6.0
+conic = -1.0
+thickness = 16.3203
+semi_diameter = 4.5
+medium = { constant = 1.336 }
+"#;
+
+#[test]
+fn info_prints_the_foci_of_a_built_in_and_of_a_user_eye_read_from_a_file() {
+    let run = |args: &[&str]| {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_inimtrace")).args(args).output().unwrap();
+        (
+            out.status.success(),
+            String::from_utf8_lossy(&out.stdout).into_owned(),
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+        )
+    };
+    let fields = |json: &str| -> Vec<serde_json::Value> {
+        let v: serde_json::Value = serde_json::from_str(json).unwrap();
+        v["fields"].as_array().unwrap().clone()
+    };
+    // The built-in model: the library's numbers at the relaxed eye's focus.
+    let (ok, json, err) = run(&["info", "--eye", "navarro-1999", "--field-deg", "10,30", "--json"]);
+    assert!(ok, "{err}");
+    let eye = SchematicEye::new(&EyeModel::Navarro1999, 0.0, "t").unwrap();
+    for (f, deg) in fields(&json).iter().zip([10.0, 30.0]) {
+        let want = oblique_foci(&eye, deg, eye.paraxial(555.0).conjugate_vergence_d, 555.0).unwrap();
+        assert!((f["astigmatism_d"].as_f64().unwrap() - want.astigmatism_d).abs() < 1e-6, "{f} vs {want:?}");
+    }
+    // The same optics as a user eye from a file, against this file's independent fans.
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("eye.toml");
+    std::fs::write(&path, USER_NAVARRO_1999).unwrap();
+    let (ok, json, err) =
+        run(&["info", "--eye", "user", "--eye-file", path.to_str().unwrap(), "--field-deg", "20", "--json"]);
+    assert!(ok, "{err}");
+    let (sagittal, tangential) = PaperEye::navarro_1999().retina_conjugates(20.0, 1e-4);
+    let f = &fields(&json)[0];
+    assert!((f["sagittal_d"].as_f64().unwrap() - sagittal).abs() < 0.05, "{f} vs {sagittal}");
+    assert!((f["tangential_d"].as_f64().unwrap() - tangential).abs() < 0.05, "{f} vs {tangential}");
+    // Bad input: one clear error each.
+    for (args, needle) in [
+        (vec!["info", "--eye", "user"], "--eye-file"),
+        (vec!["info", "--eye", "navarro-1999", "--field-deg", "85"], "--field-deg"),
+        (vec!["info", "--eye", "le-grand", "--field-deg", "75"], "blocked"),
+        (vec!["info", "--eye", "navarro-1999", "--field-deg", "nan"], "--field-deg"),
+        (vec!["info", "--eye", "user", "--eye-file", "/nonexistent/eye.toml"], "/nonexistent/eye.toml"),
+    ] {
+        let (ok, _, err) = run(&args);
+        assert!(!ok && err.contains(needle) && !err.contains("panicked"), "{args:?}: {err}");
+    }
+    std::fs::write(&path, "[eye]\nmodel = \"user\"\n").unwrap();
+    let (ok, _, err) = run(&["info", "--eye", "user", "--eye-file", path.to_str().unwrap()]);
+    assert!(!ok && err.contains("eye.user") && err.contains("eye.toml"), "{err}");
+}
