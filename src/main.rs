@@ -30,7 +30,7 @@ macro_rules! outln {
 }
 
 mod cli;
-use cli::{assess::assess, bench::bench, compare::compare, info::info};
+use cli::{assess::assess, bench::bench, compare::compare, info::eye_info, info::info};
 use cli::{error_line, exr_path, parse_vec3, EyeArgs, Setup};
 use cli::{render::ground_truth_command, render::render_display, render::simulate_command};
 
@@ -297,6 +297,14 @@ enum Command {
         /// The focus of --eye, D (default: the relaxed eye's).
         #[arg(long, requires = "eye")]
         focus_diopters: Option<f64>,
+        /// Field angles for --eye, degrees off the axis (e.g. 10,20,30): the sagittal and
+        /// tangential foci there and the astigmatism.
+        #[arg(long, requires = "eye", value_delimiter = ',', allow_negative_numbers = true)]
+        field_deg: Vec<f64>,
+        /// The surface table of `--eye user`: a TOML file with an [eye.user] table (such as an
+        /// experiment or a study that holds one).
+        #[arg(long, requires = "eye")]
+        eye_file: Option<PathBuf>,
         /// Write the display as an explicit display TOML (v2, pitch matrices) to this file,
         /// atomically; e.g. a display stated by intent, a framework YAML, or one with --set.
         #[arg(long, value_name = "FILE", conflicts_with_all = ["scene", "eye", "print"])]
@@ -520,25 +528,8 @@ fn run() -> Result<()> {
             out!("{text}");
             printed_total = true;
         }
-        Command::Info { eye: Some(model), focus_diopters, pupil, json, .. } => {
-            let model = inimtrace::optics::eye::EyeModel::parse(&model, None, "--eye")?;
-            let focus = match focus_diopters {
-                Some(f) => f,
-                None => {
-                    inimtrace::optics::eye::SchematicEye::new(&model, model.accommodation_range().0, "--eye")?
-                        .paraxial(555.0)
-                        .conjugate_vergence_d
-                }
-            };
-            let criterion = inimtrace::optics::eye::FocusCriterion::Paraxial;
-            let Ok(pupil) = pupil.parse::<f64>() else {
-                anyhow::bail!("--pupil must be a diameter in mm with --eye, got `{pupil}`");
-            };
-            let d = inimtrace::optics::eye::describe::describe(&model, focus, pupil, criterion, 555.0)?;
-            match json {
-                true => outln!("{}", serde_json::to_string_pretty(&d)?),
-                false => out!("{}", d.text()),
-            }
+        Command::Info { eye: Some(model), focus_diopters, field_deg, eye_file, pupil, json, .. } => {
+            eye_info(&model, eye_file.as_deref(), focus_diopters, &field_deg, &pupil, json)?;
             printed_total = true;
         }
         Command::Info { display, scene, pupil, json, print, write_display, force, diffraction, .. } => {

@@ -268,5 +268,9 @@ fn a_case_whose_eye_aims_every_ray_exactly_is_warned_with_the_reason() {
     assert!(o.status.success(), "{e}");
     let lines: Vec<&str> = e.lines().filter(|l| l.starts_with("warning:") && l.contains("aimed exactly")).collect();
     assert_eq!(lines.len(), 1, "{e}");
-    assert!(lines[0].contains("eye case `Near`") && lines[0].contains("arizona") && lines[0].contains("ray map"), "{}", lines[0]);
+    assert!(
+        lines[0].contains("eye case `Near`") && lines[0].contains("arizona") && lines[0].contains("ray map"),
+        "{}",
+        lines[0]
+    );
 }

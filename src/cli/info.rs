@@ -1,4 +1,5 @@
-//! `inimtrace info`: a display's design figures, a scene's summary, or the built-in files.
+//! `inimtrace info`: a display's design figures, a scene's summary, a schematic eye's data (on
+//! axis and at field angles), or the built-in files.
 
 use std::path::{Path, PathBuf};
 
@@ -131,4 +132,38 @@ fn auto_pupil(scene: Option<&Path>, d: &Display) -> Result<inimtrace::optics::ey
     };
     let observer = inimtrace::optics::eye::pupil::Observer::default();
     Ok(inimtrace::render::adapting::auto_pupil(&scene, d, glam::DVec3::ZERO, observer)?)
+}
+
+/// `inimtrace info --eye MODEL`: the schematic eye's data at `focus_diopters` (default the
+/// relaxed eye's paraxial focus) and its off-axis foci at `fields_deg`, as text or JSON; `--eye
+/// user` reads its surface table from `eye_file`.
+pub(crate) fn eye_info(
+    model: &str,
+    eye_file: Option<&Path>,
+    focus_diopters: Option<f64>,
+    fields_deg: &[f64],
+    pupil: &str,
+    json: bool,
+) -> Result<()> {
+    use inimtrace::optics::eye::{describe::describe, EyeModel, FocusCriterion, SchematicEye};
+    let model = match (model, eye_file) {
+        ("user", Some(path)) => inimtrace::io::eye_file::load_user_eye(path)?,
+        ("user", None) => bail!("--eye user needs --eye-file FILE (a TOML file with an [eye.user] table)"),
+        (name, Some(_)) => bail!("--eye-file is read only with --eye user, not --eye {name}"),
+        (name, None) => EyeModel::parse(name, None, "--eye")?,
+    };
+    let pupil = match pupil.parse::<f64>() {
+        Ok(p) if p.is_finite() && p > 0.0 => p,
+        _ => bail!("--pupil must be a diameter in mm with --eye, got `{pupil}`"),
+    };
+    let focus = match focus_diopters {
+        Some(f) => f,
+        None => SchematicEye::new(&model, model.accommodation_range().0, "--eye")?.paraxial(555.0).conjugate_vergence_d,
+    };
+    let d = describe(&model, focus, pupil, FocusCriterion::Paraxial, 555.0, (fields_deg, "--field-deg"))?;
+    match json {
+        true => outln!("{}", serde_json::to_string_pretty(&d)?),
+        false => out!("{}", d.text()),
+    }
+    Ok(())
 }

@@ -13,6 +13,7 @@ mod exr_file;
 mod exr_read;
 pub mod exr_replicates;
 mod exr_zip;
+pub mod eye_file;
 pub mod figure;
 mod gltf;
 mod gltf_accessor;

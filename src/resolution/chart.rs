@@ -20,14 +20,24 @@
 //! eye that is not rotationally symmetric) differ. On a display that is symmetric under a quarter
 //! turn (the paper's square one) 90 degrees shows the same as 0.
 //!
+//! **Field.** A study may measure off axis ([`Chart::at_field`]): the whole chart, turned or not,
+//! faces the direction of a field `[horizontal, vertical]` in Fick's angles (the eye's gaze
+//! convention, [`crate::optics::eye::gaze`]), carried there by that direction's Listing rotation
+//! about the pupil centre. Its tangent coordinates are then the gnomonic ones about the field
+//! direction, so a degree still means a degree of visual angle at the chart's centre, and its
+//! plane stays the content plane `z = depth`: each point of that plane shows the chart's value
+//! in the direction from the pupil centre. Retina pixels of its windows are cut in the chart's
+//! own frame and carried to the eye's tangents the same way.
+//!
 //! [`ChartField`] is the chart as a [`RadianceField`] (the plane's radiance along any ray), the
 //! one field that renders the display images and the ground truth alike.
 
 use std::f64::consts::{PI, TAU};
 
-use glam::{DVec2, DVec3};
+use glam::{DMat3, DVec2, DVec3};
 
 use super::study::Study;
+use crate::optics::eye::Gaze;
 use crate::ray::Ray;
 use crate::render::RadianceField;
 
@@ -90,10 +100,15 @@ pub struct Chart {
     pub orientation_deg: f64,
     /// `(cos a, sin a)` of the turn (exact at multiples of 90 degrees); `None` at 0.
     turn: Option<DVec2>,
+    /// The field the chart faces (straight ahead by default).
+    pub field: Gaze,
+    /// The rotation from the chart's own frame to the eye's; `None` on the axis.
+    facing: Option<DMat3>,
 }
 
 impl Chart {
-    /// The study's chart: one grating per frequency, then the edge, in columns about the axis.
+    /// The study's chart: one grating per frequency, then the edge, in columns about the axis,
+    /// facing the study's field.
     pub fn of_study(study: &Study) -> Self {
         let r = &study.retina;
         let ppd = r.pixels_per_degree;
@@ -104,7 +119,7 @@ impl Chart {
             .map(|&f| (Pattern::Grating { frequency_cpd: f }, DVec2::from(r.window_deg)))
             .collect();
         items.push((Pattern::Edge { angle_deg: r.edge_angle_deg }, DVec2::from(r.edge_window_deg)));
-        Self::layout(&items, g, ppd, study.target.mean, study.target.contrast)
+        Self::layout(&items, g, ppd, study.target.mean, study.target.contrast).at_field(study.field_deg)
     }
 
     /// Lays `items` (pattern, window size in degrees) out in columns, choosing the column
@@ -163,7 +178,53 @@ impl Chart {
             columns,
             orientation_deg: 0.0,
             turn: None,
+            field: Gaze::AHEAD,
+            facing: None,
         }
+    }
+
+    /// This chart facing `field` (module documentation); straight ahead leaves it on the axis.
+    pub fn at_field(self, field: Gaze) -> Chart {
+        Chart { field, facing: (!field.is_ahead()).then(|| field.matrix()), ..self }
+    }
+
+    /// The eye's tangent of the chart-frame tangent `t` (after any turn).
+    #[inline]
+    pub fn eye_tangent(&self, t: DVec2) -> DVec2 {
+        match self.facing {
+            None => t,
+            Some(m) => {
+                let d = m * DVec3::new(t.x, t.y, 1.0);
+                DVec2::new(d.x, d.y) / d.z
+            }
+        }
+    }
+
+    /// The chart-frame tangent of the eye's tangent `t`; `None` for a direction at or beyond 90
+    /// degrees from the chart's centre.
+    #[inline]
+    pub fn chart_tangent(&self, t: DVec2) -> Option<DVec2> {
+        match self.facing {
+            None => Some(t),
+            Some(m) => {
+                let d = m.transpose() * DVec3::new(t.x, t.y, 1.0);
+                (d.z > 0.0).then(|| DVec2::new(d.x, d.y) / d.z)
+            }
+        }
+    }
+
+    /// Half-extent per axis of the eye's tangents the chart covers: [`Chart::reach_tangent`] on
+    /// the axis; off axis, of the images of the reach's corners (the gnomonic map keeps straight
+    /// lines straight, so they bound the image).
+    pub fn eye_reach_tangent(&self) -> DVec2 {
+        let r = self.reach_tangent();
+        if self.facing.is_none() {
+            return r;
+        }
+        [r, DVec2::new(r.x, -r.y), -r, DVec2::new(-r.x, r.y)]
+            .iter()
+            .map(|&c| self.eye_tangent(c).abs())
+            .fold(DVec2::ZERO, DVec2::max)
     }
 
     /// This chart's gratings (the edge left out) turned by `deg` about the axis (module
@@ -283,7 +344,14 @@ impl RadianceField for ChartField<'_> {
             let t = (self.depth - ray.origin.z) / ray.dir.z;
             if t > 0.0 {
                 let p = ray.origin + t * ray.dir;
-                self.chart.luminance(DVec2::new(p.x, p.y) * (180.0 / PI / self.depth))
+                if self.chart.facing.is_none() {
+                    self.chart.luminance(DVec2::new(p.x, p.y) * (180.0 / PI / self.depth))
+                } else {
+                    match self.chart.chart_tangent(DVec2::new(p.x, p.y) / self.depth) {
+                        Some(c) => self.chart.luminance(c * (180.0 / PI)),
+                        None => self.chart.mean,
+                    }
+                }
             } else {
                 self.chart.mean
             }
@@ -350,6 +418,42 @@ mod tests {
         // Unturned, the gratings are where they were (the edge is not part of a turned chart).
         let q = c.patches[2].center_deg + DVec2::new(0.1, 0.05);
         assert_eq!(c.turned(0.0).luminance(q), c.luminance(q));
+    }
+
+    #[test]
+    fn a_chart_off_axis_faces_its_field_and_keeps_its_degrees() {
+        let g = Gaze::new(20.0, -10.0);
+        let c = chart().at_field(g);
+        // Its centre is the field's line of sight; the two maps are each other's inverse.
+        let los = g.line_of_sight();
+        assert!((c.eye_tangent(DVec2::ZERO) - DVec2::new(los.x, los.y) / los.z).length() < 1e-15);
+        for t in [DVec2::new(0.01, -0.02), DVec2::new(-0.05, 0.03)] {
+            assert!((c.chart_tangent(c.eye_tangent(t)).unwrap() - t).length() < 1e-14);
+        }
+        // A small step in the chart's frame at its centre is the same angle of view, any way.
+        let dir = |t: DVec2| {
+            let e = c.eye_tangent(t);
+            DVec3::new(e.x, e.y, 1.0).normalize()
+        };
+        for u in [DVec2::X, DVec2::Y, DVec2::new(0.6, 0.8)] {
+            let angle = dir(DVec2::ZERO).angle_between(dir(1e-4 * u));
+            assert!((angle - 1e-4).abs() < 1e-12, "{u}: {angle}");
+        }
+        // The field: the 2 cpd grating's peak and trough along the eye's rays from the pupil.
+        let p = c.patches[2];
+        let f = ChartField { chart: &c, depth: 500.0 };
+        for (offset, want) in [(0.0, 0.9), (0.25, 0.1), (0.5, 0.9)] {
+            let e = c.eye_tangent((p.center_deg + DVec2::new(offset, 0.05)) * (PI / 180.0));
+            let l = f.radiance(&Ray { origin: DVec3::ZERO, dir: DVec3::new(e.x, e.y, 1.0) }).x;
+            assert!((l - want).abs() < 1e-9, "{offset}: {l}");
+        }
+        // Its reach holds every corner's image; straight ahead leaves the chart as it was.
+        let r = c.eye_reach_tangent();
+        let h = c.half_extent_tangent();
+        for corner in [h, -h, DVec2::new(h.x, -h.y), DVec2::new(-h.x, h.y)] {
+            assert!(c.eye_tangent(corner).abs().cmple(r + 1e-15).all());
+        }
+        assert_eq!(chart().at_field(Gaze::AHEAD), chart());
     }
 
     #[test]

@@ -113,11 +113,13 @@ fn provenance(cmd: &ResolutionCommand, study: &Study, files: Vec<InputFile>) -> 
 }
 
 /// The plausibility warnings of `study`: its display's fields and its pupil (likely unit
-/// mistakes, `crate::optics::plausibility`). The CLI and Python give them before the run starts.
+/// mistakes, `crate::optics::plausibility`), and a chart off axis beyond the display. The CLI
+/// and Python give them before the run starts.
 pub fn plausibility_warnings(study: &Study) -> Vec<String> {
     use crate::optics::plausibility::{check, display_warnings, PUPIL_DIAMETER};
     let mut w = display_warnings(&study.display, &study.display_source);
     w.extend(check(&study.source, "pupil_diameter_mm", study.pupil_diameter_mm, PUPIL_DIAMETER));
+    w.extend(super::field::display_warning(study));
     w
 }
 

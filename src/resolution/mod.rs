@@ -16,12 +16,13 @@ pub mod edge;
 pub mod grating;
 pub mod measure;
 
-// The study (`inimtrace resolution`): its file, chart, measurement over the chart's windows,
-// accommodation, display limits, files and plots. Its windows are measured by `grating` and
-// `edge` above.
+// The study (`inimtrace resolution`): its file, chart (on the axis or off it, `field`),
+// measurement over the chart's windows, accommodation, display limits, files and plots. Its
+// windows are measured by `grating` and `edge` above.
 pub(crate) mod accommodation;
 pub mod chart;
 pub mod command;
+pub mod field;
 pub mod limits;
 pub(crate) mod plots;
 pub mod report;

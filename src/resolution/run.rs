@@ -255,7 +255,7 @@ impl StudySetup {
     /// The setup of `study` (see the type).
     pub fn new(study: &Study) -> Result<Self> {
         let chart = Chart::of_study(study);
-        let half = chart.half_extent_tangent();
+        let half = chart.eye_reach_tangent();
         let max_vergence = study.focus_diopters.iter().map(|d| d / 1000.0).fold(0.0, f64::max);
         let radius = 0.5 * study.pupil_diameter_mm;
         let primaries = study.display.primaries.clone().unwrap_or_default();
@@ -306,7 +306,7 @@ impl StudySetup {
             .iter()
             .map(|&o| {
                 let c = chart.turned(o);
-                let d = crop(c.reach_tangent());
+                let d = crop(c.eye_reach_tangent());
                 (c, d)
             })
             .collect();

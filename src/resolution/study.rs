@@ -14,6 +14,7 @@
 //! frequencies_cpd = [0.5, 1, 1.5, 2, 3, 4, 5, 6, 7, 8]
 //! orientations_deg = [0, 45, 90, 135]  # the gratings' orientations (0 always; this is the default)
 //! orientations_through_focus = false   # other orientations only with the eye on the content
+//! field_deg = [0, 0]                   # the charts' centre off axis: [horizontal, vertical]
 //! [target]                             # gratings and the slanted edge: mean and contrast
 //! [retina]                             # pixels per degree, measured windows, guard bands
 //! [measurement]                        # samples per pixel, replicates, seed
@@ -141,6 +142,9 @@ pub struct StudySpec {
     /// Measure the other orientations at every focus too (default: with the eye on the content).
     #[serde(default)]
     pub orientations_through_focus: bool,
+    /// The direction the charts face, `[horizontal, vertical]` degrees (default on the axis).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub field_deg: Option<crate::optics::eye::Gaze>,
     /// `[target]`: the patterns' mean and contrast.
     pub target: TargetSpec,
     /// `[retina]`: pixels per degree, windows and guards.
@@ -214,6 +218,9 @@ pub struct Study {
     pub orientations_deg: Vec<f64>,
     /// Orientations other than 0 measured at every focus, not only with the eye on the content.
     pub orientations_through_focus: bool,
+    /// The direction the charts face ([`super::field`]; absent from `study.json` on the axis).
+    #[serde(skip_serializing_if = "crate::optics::eye::Gaze::is_ahead")]
+    pub field_deg: crate::optics::eye::Gaze,
     /// The patterns' mean and contrast.
     pub target: TargetSpec,
     /// The retina's sampling.
@@ -299,7 +306,7 @@ impl Study {
         let (pupil, auto_pupil) = eye.study_pupil(spec.pupil_diameter_mm, spec.target.mean, &display, source)?;
         check_listed_frequencies(spec, source, &frequencies)?;
         let orientations = study_orientations(spec, source)?;
-        Ok(Study {
+        let study = Study {
             name: spec.name.clone(),
             description: spec.description.clone(),
             source: source.to_string(),
@@ -315,6 +322,7 @@ impl Study {
             frequencies_cpd: frequencies,
             orientations_deg: orientations,
             orientations_through_focus: spec.orientations_through_focus,
+            field_deg: spec.field_deg.unwrap_or_default(),
             target: spec.target,
             retina: r,
             retina_pixel_deg: 1.0 / r.pixels_per_degree,
@@ -327,7 +335,9 @@ impl Study {
             ),
             accommodation: spec.accommodation,
             limits: spec.limits.clone(),
-        })
+        };
+        super::field::check_field(&study, source)?;
+        Ok(study)
     }
 
     /// The index of frequency `f` (one of the study's).

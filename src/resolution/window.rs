@@ -9,7 +9,8 @@
 //! centred on the axis, so this is a rectangle-of-pixels twin of
 //! [`crate::measure::estimator::Replicates::extend`], with the same sums in `f64` per pixel in
 //! sample order (results do not depend on the thread count). The windows of a turned chart
-//! ([`Chart::turned`]) are its layout's windows turned with it: every sample's tangent is turned.
+//! ([`Chart::turned`]) are its layout's windows turned with it: every sample's tangent is turned;
+//! those of a chart off axis ([`Chart::at_field`]) are carried to the eye's tangents.
 //!
 //! **Channels.** A window's value per pixel is one grey, combined from the three colour channels
 //! as the eye combines them for accommodation and visibility ([`Grey`]): by default the
@@ -169,6 +170,7 @@ pub fn measure_windows_as<S: PairedSource + ?Sized>(
     let k = source.images();
     let step = chart.pixel_tangent();
     let turned = chart.orientation_deg != 0.0;
+    let off_axis = !chart.field.is_ahead();
     let deg = std::f64::consts::PI / 180.0;
     // Tasks: (window, first row).
     let mut offsets = Vec::with_capacity(chart.patches.len());
@@ -229,6 +231,7 @@ pub fn measure_windows_as<S: PairedSource + ?Sized>(
                                 corner.y - (row as f64 + frac.y) * step,
                             );
                             let tangent = if turned { chart.turn(tangent) } else { tangent };
+                            let tangent = if off_axis { chart.eye_tangent(tangent) } else { tangent };
                             let spectral = if spectral { points.spectral_of_last() } else { 0.0 };
                             let diffraction = if diffraction { points.diffraction_of_last() } else { [0.0; 4] };
                             batch.push(EyeSample { tangent, pupil, spectral, diffraction });

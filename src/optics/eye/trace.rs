@@ -29,6 +29,17 @@ const AIM_ITERATIONS: usize = 40;
 /// The object-space start plane of inward rays, mm in front of the cornea vertex.
 const START_T: f64 = -60.0;
 
+/// One refraction along a recorded trace ([`EyeAtWavelength::recorded_in`]), lens-design frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Refraction {
+    /// Where the ray meets the surface.
+    pub point: DVec3,
+    /// The unit direction before the surface.
+    pub before: DVec3,
+    /// The unit direction after it.
+    pub after: DVec3,
+}
+
 /// A schematic eye with its indices evaluated at one wavelength (build once per wavelength,
 /// then trace many rays).
 #[derive(Clone, Debug)]
@@ -220,6 +231,32 @@ impl EyeAtWavelength<'_> {
         }
         let slope = DVec2::new(d.x, d.y) / dz;
         Some(PlaneRay { position: DVec2::new(pf.x, pf.y) - slope * pf.z, slope })
+    }
+
+    /// The index `n[i]` at this wavelength: 0 the air, `i + 1` the medium after surface i.
+    pub(crate) fn index(&self, i: usize) -> f64 {
+        self.n[i]
+    }
+
+    /// [`EyeAtWavelength::ray_in`] with every refraction recorded (the iris opening is not
+    /// checked): the refractions, cornea first, and the retina hit, in the lens-design frame.
+    pub(crate) fn recorded_in(&self, ray: PlaneRay) -> Option<(Vec<Refraction>, DVec3)> {
+        let eye = self.eye;
+        let mut d = DVec3::new(-ray.slope.x, -ray.slope.y, 1.0).normalize();
+        let p0 = DVec3::new(ray.position.x, ray.position.y, eye.origin_t);
+        let mut p = p0 + (START_T - p0.z) / d.z * d;
+        if !p.is_finite() {
+            return None;
+        }
+        let mut path = Vec::with_capacity(eye.surfaces.len());
+        for (i, s) in eye.surfaces.iter().enumerate() {
+            p = s.intersect(p, d)?.point;
+            let after = refract(d, s.normal(p), self.n[i], self.n[i + 1])?;
+            path.push(Refraction { point: p, before: d, after });
+            d = after;
+        }
+        let hit = eye.retina.intersect(p, d)?;
+        Some((path, hit.point))
     }
 
     /// The chief ray of object tangent `tangent` (through the iris centre): its retina point and
