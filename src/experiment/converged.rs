@@ -120,7 +120,18 @@ pub fn table1_each<F: RadianceField + ?Sized>(
         let measured = measure_case(&source, &sampler, &exp.retina, exp.ssim, &precision, &progress, storage.take());
         progress.finish();
         progress.check()?;
-        let (gt, case_sims, case_scores) = case_outputs(exp, case, &measured);
+        let (gt, case_sims, mut case_scores) = case_outputs(exp, case, &measured);
+        if !exp.extra_scores.is_empty() {
+            let t = Instant::now();
+            super::perceptual::score_replicates(exp, index, &measured.replicates, &mut case_scores)?;
+            let seconds = t.elapsed().as_secs_f64();
+            stages.push(StageTime {
+                stage: "perceptual_scores".into(),
+                method: None,
+                eye_case: Some(case.name.clone()),
+                seconds,
+            });
+        }
         for (stage, seconds) in [
             ("converged_sampling", measured.rounds.iter().map(|r| r.sample_seconds).sum::<f64>()),
             ("converged_statistics", measured.rounds.iter().map(|r| r.stats_seconds).sum::<f64>()),
@@ -155,6 +166,7 @@ fn case_outputs(exp: &Experiment, case: &EyeCase, measured: &CaseMeasurement) ->
             samples_per_pixel: Some(reps.samples_per_pixel()),
             replicates: Some(reps.replicates()),
             target_met: Some(cell.target_met),
+            perceptual: Default::default(),
         })
         .collect();
     (gt, sims, scores)

@@ -12,6 +12,7 @@ pub mod converged;
 pub(crate) mod converged_report;
 mod eye_spec;
 pub mod metadata;
+mod perceptual;
 mod report;
 mod stages;
 
@@ -201,6 +202,10 @@ pub struct Experiment {
     pub ssim: SsimConstants,
     /// How Table 1 is measured (`[measurement]`; the grid estimator when absent).
     pub measurement: MeasurementSpec,
+    /// The scores reported beyond PSNR and SSIM (`[measurement] scores`).
+    pub extra_scores: crate::perception::ExtraScores,
+    /// The display's luminance as the perceptual scores see it.
+    pub luminance: crate::perception::DisplayLuminance,
     /// How OPT is trained (`[optimize]`), when `methods` lists it.
     pub optimize: Option<crate::optimize::Optimization>,
     /// How `eye.pupil_diameter = "auto"` chose the pupil (absent for a stated diameter).
@@ -409,6 +414,8 @@ impl Experiment {
         };
         let measurement = spec.measurement.clone().unwrap_or_else(MeasurementSpec::grid);
         measurement.validate(source)?;
+        let extra_scores = measurement.extra_scores(source)?;
+        let luminance = crate::perception::DisplayLuminance::default();
         if diffraction.is_on() && measurement.estimator != crate::measure::spec::EstimatorKind::Converged {
             return Err(Error::invalid(
                 source,
@@ -437,6 +444,8 @@ impl Experiment {
             cases,
             ssim: spec.ssim,
             measurement,
+            extra_scores,
+            luminance,
             optimize,
             auto_pupil,
             spec,

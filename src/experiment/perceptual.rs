@@ -1,0 +1,84 @@
+//! The perceptual scores of an experiment's eye cases (`[measurement] scores`, see
+//! `crate::perception` and docs/PERCEPTION.md): how each case's images are seen (the retina's
+//! pixels per degree, the display's luminance, the eye's optics counted once), the scores of the
+//! grid estimator's images and of the converged estimator's replicates, and their distortion
+//! maps.
+
+use crate::error::Result;
+use crate::experiment::{Experiment, Score};
+use crate::measure::estimator::Replicates;
+use crate::optics::eye::model::EyeModel;
+use crate::optics::Aperture;
+use crate::perception::{Perception, ScoreName, Viewing, BT709_LUMINANCE};
+
+/// Whether eye case `c`'s retinal images hold a real eye's aberrations (a schematic eye focused
+/// through a pupil), which the perceptual metrics' sensitivity holds already.
+pub fn has_aberrations(exp: &Experiment, c: usize) -> bool {
+    let eye = &exp.cases[c].eye;
+    matches!(eye.aperture, Aperture::ThinLens { .. })
+        && eye.optics.as_ref().is_some_and(|o| !matches!(o.model, EyeModel::ThinLens))
+}
+
+/// The entrance pupil's diameter of eye case `c`, mm (0 for a pinhole).
+fn pupil_mm(exp: &Experiment, c: usize) -> f64 {
+    match exp.cases[c].eye.aperture {
+        Aperture::Pinhole => 0.0,
+        Aperture::ThinLens { pupil_diameter, .. } => pupil_diameter,
+    }
+}
+
+/// How eye case `c`'s images are seen: the retina's pixels per degree, the display's luminance.
+pub fn viewing(exp: &Experiment) -> Viewing {
+    Viewing::of_retina(&exp.retina, exp.luminance)
+}
+
+/// The scorer of eye case `c`'s extra scores (`None` when the experiment names none).
+pub fn for_case(exp: &Experiment, c: usize) -> Result<Option<Perception>> {
+    if exp.extra_scores.is_empty() {
+        return Ok(None);
+    }
+    let n = exp.retina.resolution;
+    let compensate = exp.measurement.optics.compensates(has_aberrations(exp, c)).then(|| pupil_mm(exp, c));
+    let compensate = compensate.filter(|d| *d > 0.0);
+    Perception::new(&exp.extra_scores, &viewing(exp), BT709_LUMINANCE, (n, n), compensate).map(Some)
+}
+
+/// Adds eye case `c`'s extra scores from its replicates to `scores` (one per method, in order),
+/// and marks a cell whose perceptual score misses its target, or whose noise bias exceeds its
+/// interval, as not met.
+pub fn score_replicates(exp: &Experiment, c: usize, reps: &Replicates, scores: &mut [Score]) -> Result<()> {
+    let Some(p) = for_case(exp, c)? else { return Ok(()) };
+    for (k, score) in scores.iter_mut().enumerate() {
+        score.perceptual = p.score_replicates(reps, k + 1)?;
+        if !targets_met(exp, score) {
+            score.target_met = Some(false);
+        }
+    }
+    Ok(())
+}
+
+/// Whether a cell's extra scores meet `[measurement]`'s targets, and every perceptual score's
+/// noise bias is within its 95% half-width.
+pub fn targets_met(exp: &Experiment, score: &Score) -> bool {
+    exp.measurement.score_targets().iter().all(|(name, target, _)| {
+        score.perceptual.get(*name).is_none_or(|e| {
+            let width = e.ci95.unwrap_or(f64::INFINITY);
+            let within = target.is_none_or(|t| width <= t);
+            within && (!name.is_perceptual() || e.noise_bias.is_none_or(|b| b.abs() <= width))
+        })
+    })
+}
+
+/// The extra scores of a figure caption (`, JOD 9.12, FLIP 0.031`; empty when none are named).
+pub fn caption(score: &Score) -> String {
+    score
+        .perceptual
+        .0
+        .iter()
+        .map(|(n, e)| match n {
+            ScoreName::Cvvdp => format!(", JOD {:.2}", e.value),
+            ScoreName::Flip => format!(", FLIP {:.3}", e.value),
+            _ => format!(", PSNR-Y {} dB", crate::metrics::format_db(e.value, 2)),
+        })
+        .collect()
+}
