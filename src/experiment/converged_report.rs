@@ -145,7 +145,8 @@ pub fn perceptual_table(report: &AssessReport, exp: &Experiment) -> String {
     let _ = write!(
         s,
         "\nJOD: ColorVideoVDP 0.5.7 (Mantiuk et al. 2024; 10 = no visible difference). FLIP: HDR-FLIP mean \
-         (Andersson et al. 2020, 2021; 0 = none). PSNR-Y: PSNR of the luminance (BT.709 weights, peak 1). The display: \
+         (Andersson et al. 2020, 2021; 0 = none). PSNR-Y: PSNR of the luminance (the primaries' V(lambda) shares, \
+         peak 1). The display: \
          white {} cd/m^2, black {} cd/m^2, ambient {} lux; the retina image: {:.2} pixels per degree. The eye's \
          optics: `{}`",
         l.peak_white,
@@ -173,8 +174,9 @@ pub fn perceptual_table(report: &AssessReport, exp: &Experiment) -> String {
     if let Some((n, r)) = worst {
         let _ = writeln!(
             s,
-            "\nThe estimator's noise biases JOD down and FLIP up; its measured bias (the score's change from half the \
-             replicates to all of them) is at most {:.2} of the 95% half-width ({n}).",
+            "\nThe images' noise biases JOD and FLIP (their values are of the replicates' mean images); the bias \
+             measured from the score's change from half the replicates to all of them is up to {:.1} times the 95% \
+             half-width ({n}): compare such scores within their bias, not their interval.",
             r
         );
     }

@@ -415,7 +415,7 @@ impl Experiment {
         let measurement = spec.measurement.clone().unwrap_or_else(MeasurementSpec::grid);
         measurement.validate(source)?;
         let extra_scores = measurement.extra_scores(source)?;
-        let luminance = crate::perception::DisplayLuminance::default();
+        let luminance = crate::perception::DisplayLuminance::from(&display.photometry());
         if diffraction.is_on() && measurement.estimator != crate::measure::spec::EstimatorKind::Converged {
             return Err(Error::invalid(
                 source,

@@ -9,7 +9,7 @@ use crate::experiment::{Experiment, Score};
 use crate::measure::estimator::Replicates;
 use crate::optics::eye::model::EyeModel;
 use crate::optics::Aperture;
-use crate::perception::{Perception, ScoreName, Viewing, BT709_LUMINANCE};
+use crate::perception::{Perception, ScoreName, Viewing};
 
 /// Whether eye case `c`'s retinal images hold a real eye's aberrations (a schematic eye focused
 /// through a pupil), which the perceptual metrics' sensitivity holds already.
@@ -40,12 +40,12 @@ pub fn for_case(exp: &Experiment, c: usize) -> Result<Option<Perception>> {
     let n = exp.retina.resolution;
     let compensate = exp.measurement.optics.compensates(has_aberrations(exp, c)).then(|| pupil_mm(exp, c));
     let compensate = compensate.filter(|d| *d > 0.0);
-    Perception::new(&exp.extra_scores, &viewing(exp), BT709_LUMINANCE, (n, n), compensate).map(Some)
+    let weights = exp.display.luminance_weights();
+    Perception::new(&exp.extra_scores, &viewing(exp), weights, (n, n), compensate).map(Some)
 }
 
 /// Adds eye case `c`'s extra scores from its replicates to `scores` (one per method, in order),
-/// and marks a cell whose perceptual score misses its target, or whose noise bias exceeds its
-/// interval, as not met.
+/// and marks a cell whose extra score misses its `[measurement]` target as not met.
 pub fn score_replicates(exp: &Experiment, c: usize, reps: &Replicates, scores: &mut [Score]) -> Result<()> {
     let Some(p) = for_case(exp, c)? else { return Ok(()) };
     for (k, score) in scores.iter_mut().enumerate() {
@@ -57,15 +57,12 @@ pub fn score_replicates(exp: &Experiment, c: usize, reps: &Replicates, scores: &
     Ok(())
 }
 
-/// Whether a cell's extra scores meet `[measurement]`'s targets, and every perceptual score's
-/// noise bias is within its 95% half-width.
+/// Whether a cell's extra scores meet `[measurement]`'s targets: the 95% half-width, and for
+/// the perceptual scores the noise bias too, within the target.
 pub fn targets_met(exp: &Experiment, score: &Score) -> bool {
     exp.measurement.score_targets().iter().all(|(name, target, _)| {
-        score.perceptual.get(*name).is_none_or(|e| {
-            let width = e.ci95.unwrap_or(f64::INFINITY);
-            let within = target.is_none_or(|t| width <= t);
-            within && (!name.is_perceptual() || e.noise_bias.is_none_or(|b| b.abs() <= width))
-        })
+        let (Some(e), Some(t)) = (score.perceptual.get(*name), target) else { return true };
+        e.ci95.unwrap_or(f64::INFINITY) <= *t && e.noise_bias.is_none_or(|b| b.abs() <= *t)
     })
 }
 

@@ -78,9 +78,11 @@ pub struct MeasurementSpec {
     pub optics: OpticsCount,
     /// Target: half-width of the luminance PSNR's 95% interval, dB (when named in `scores`).
     pub psnr_luminance_ci95_db: Option<f64>,
-    /// Target: half-width of ColorVideoVDP's 95% interval, JOD (when named in `scores`).
+    /// Target: half-width of ColorVideoVDP's 95% interval, and bound on its noise bias, JOD
+    /// (when named in `scores`).
     pub cvvdp_ci95: Option<f64>,
-    /// Target: half-width of the mean FLIP's 95% interval (when named in `scores`).
+    /// Target: half-width of the mean FLIP's 95% interval, and bound on its noise bias (when
+    /// named in `scores`).
     pub flip_ci95: Option<f64>,
 }
 

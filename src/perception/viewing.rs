@@ -35,6 +35,18 @@ impl Default for DisplayLuminance {
     }
 }
 
+impl From<&crate::optics::photometry::Photometry> for DisplayLuminance {
+    /// The display's photometry (`[photometry]` of its file, `optics/photometry.rs`).
+    fn from(p: &crate::optics::photometry::Photometry) -> Self {
+        Self {
+            peak_white: p.peak_luminance,
+            black: p.black_level,
+            ambient_lux: p.ambient_illuminance,
+            reflectance: p.reflectance,
+        }
+    }
+}
+
 impl DisplayLuminance {
     /// The reflected ambient light's luminance, cd/m^2: `reflectance * ambient / pi`.
     pub fn reflected(&self) -> f64 {
