@@ -89,6 +89,9 @@ pub fn table_note(report: &AssessReport, exp: &Experiment) -> String {
     s
 }
 
+/// Marks a score whose removed noise bias exceeds its half-width.
+const BIAS_ABOVE: &str = " †";
+
 /// A cell of the extra scores: `value` (plain images) or `value ± half-width` (converged), with
 /// `decimals` places.
 fn extra_cell(score: &Score, name: ScoreName) -> String {
@@ -99,8 +102,9 @@ fn extra_cell(score: &Score, name: ScoreName) -> String {
         _ => 2,
     };
     let v = format_db(e.value, d);
+    let bias = if e.bias_above_ci95() { BIAS_ABOVE } else { "" };
     match e.ci95 {
-        Some(h) if e.value.is_finite() => format!("{v} ± {}{}", format_db(h, d), mark(score)),
+        Some(h) if e.value.is_finite() => format!("{v} ± {}{bias}{}", format_db(h, d), mark(score)),
         _ => format!("{v}{}", mark(score)),
     }
 }
@@ -174,10 +178,15 @@ pub fn perceptual_table(report: &AssessReport, exp: &Experiment) -> String {
     if let Some((n, r)) = worst {
         let _ = writeln!(
             s,
-            "\nThe images' noise biases JOD and FLIP (their values are of the replicates' mean images); the bias \
-             measured from the score's change from half the replicates to all of them is up to {:.1} times the 95% \
-             half-width ({n}): compare such scores within their bias, not their interval.",
-            r
+            "\nJOD and FLIP are of the replicates' mean images, whose noise biases them; each value is corrected \
+             for that bias (a generalised jackknife over groups of replicates) and its 95% half-width holds the \
+             correction's uncertainty. The largest bias removed is {r:.1} times its half-width ({n}){}",
+            if r > 1.0 {
+                "; † marks a value whose removed bias exceeds its half-width: it rests on the bias model more \
+                 than on the samples (a `[measurement]` target on the score samples until the half-width meets it)."
+            } else {
+                "."
+            }
         );
     }
     s

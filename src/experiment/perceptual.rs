@@ -9,7 +9,7 @@ use crate::experiment::{Experiment, Score};
 use crate::measure::estimator::Replicates;
 use crate::optics::eye::model::EyeModel;
 use crate::optics::Aperture;
-use crate::perception::{Perception, ScoreName, Viewing};
+use crate::perception::{Perception, PerceptualScores, ScoreName, Viewing};
 
 /// Whether eye case `c`'s retinal images hold a real eye's aberrations (a schematic eye focused
 /// through a pupil), which the perceptual metrics' sensitivity holds already.
@@ -44,26 +44,42 @@ pub fn for_case(exp: &Experiment, c: usize) -> Result<Option<Perception>> {
     Perception::new(&exp.extra_scores, &viewing(exp), weights, (n, n), compensate).map(Some)
 }
 
-/// Adds eye case `c`'s extra scores from its replicates to `scores` (one per method, in order),
-/// and marks a cell whose extra score misses its `[measurement]` target as not met.
-pub fn score_replicates(exp: &Experiment, c: usize, reps: &Replicates, scores: &mut [Score]) -> Result<()> {
-    let Some(p) = for_case(exp, c)? else { return Ok(()) };
-    for (k, score) in scores.iter_mut().enumerate() {
-        score.perceptual = p.score_replicates(reps, k + 1)?;
-        if !targets_met(exp, score) {
+/// The extra scores of every scored image of `reps` against image 0 (one per method, in order).
+pub fn replicate_scores(p: &Perception, reps: &Replicates) -> Result<Vec<PerceptualScores>> {
+    (1..reps.images()).map(|k| p.score_replicates(reps, k)).collect()
+}
+
+/// Every cell's half-width over its `[measurement]` target, of every extra score that has one
+/// (empty when none has).
+pub fn target_ratios(exp: &Experiment, cells: &[PerceptualScores]) -> Vec<f64> {
+    let targets = exp.measurement.score_targets();
+    let mut out = Vec::new();
+    for cell in cells {
+        for (name, target, _) in &targets {
+            if let (Some(e), Some(t)) = (cell.get(*name), target) {
+                out.push(e.ci95.unwrap_or(f64::INFINITY) / t);
+            }
+        }
+    }
+    out
+}
+
+/// Sets each cell's extra scores (one per method, in order), and marks a cell whose extra score
+/// misses its `[measurement]` target as not met.
+pub fn set_scores(exp: &Experiment, cells: Vec<PerceptualScores>, scores: &mut [Score]) {
+    for (score, cell) in scores.iter_mut().zip(cells) {
+        let met = target_ratios(exp, std::slice::from_ref(&cell)).iter().all(|r| *r <= 1.0);
+        score.perceptual = cell;
+        if !met {
             score.target_met = Some(false);
         }
     }
-    Ok(())
 }
 
-/// Whether a cell's extra scores meet `[measurement]`'s targets: the 95% half-width, and for
-/// the perceptual scores the noise bias too, within the target.
-pub fn targets_met(exp: &Experiment, score: &Score) -> bool {
-    exp.measurement.score_targets().iter().all(|(name, target, _)| {
-        let (Some(e), Some(t)) = (score.perceptual.get(*name), target) else { return true };
-        e.ci95.unwrap_or(f64::INFINITY) <= *t && e.noise_bias.is_none_or(|b| b.abs() <= *t)
-    })
+/// Whether any extra score of `exp` has a `[measurement]` target (which then drives the
+/// converged estimator's sampling).
+pub fn has_targets(exp: &Experiment) -> bool {
+    exp.measurement.score_targets().iter().any(|(n, t, _)| t.is_some() && exp.extra_scores.contains(*n))
 }
 
 /// The extra scores of a figure caption (`, JOD 9.12, FLIP 0.031`; empty when none are named).

@@ -203,7 +203,12 @@ pub(super) fn write_reports(report: &AssessReport, exp: &Experiment, dir: &Outpu
     let mut csv = CsvTable::new();
     let extra = exp.extra_scores.names();
     let extra_header: Vec<String> =
-        extra.iter().flat_map(|n| [n.name().to_string(), format!("{n}_ci95"), format!("{n}_noise_bias")]).collect();
+        extra
+        .iter()
+        .flat_map(|n| {
+            [n.name().to_string(), format!("{n}_ci95"), format!("{n}_noise_bias"), format!("{n}_bias_above_ci95")]
+        })
+        .collect();
     let blank = vec![String::new(); extra_header.len()];
     row(
         &mut csv,
@@ -258,7 +263,13 @@ pub(super) fn write_reports(report: &AssessReport, exp: &Experiment, dir: &Outpu
             .flat_map(|n| {
                 let e = s.perceptual.get(*n);
                 let opt = |v: Option<f64>| v.map(csv_db).unwrap_or_default();
-                [opt(e.map(|e| e.value)), opt(e.and_then(|e| e.ci95)), opt(e.and_then(|e| e.noise_bias))]
+                let flag = e.filter(|e| e.noise_bias.is_some()).map(|e| e.bias_above_ci95().to_string());
+                [
+                    opt(e.map(|e| e.value)),
+                    opt(e.and_then(|e| e.ci95)),
+                    opt(e.and_then(|e| e.noise_bias)),
+                    flag.unwrap_or_default(),
+                ]
             })
             .collect();
         row(

@@ -8,8 +8,8 @@
 //! - [`cvvdp`]: ColorVideoVDP (Mantiuk et al. 2024) in JOD, with its distortion map;
 //! - [`flip`]: HDR-FLIP (Andersson et al. 2020, 2021), its mean and its map;
 //! - [`optics_once`]: the eye's optics counted once (Barten's typical optics divided out);
-//! - [`replicated`]: the nonlinear scores of the replicates, with jackknife intervals and the
-//!   noise's bias.
+//! - [`replicated`]: the nonlinear scores of the replicates, corrected for the noise's bias, with
+//!   intervals that hold the correction's uncertainty.
 
 pub mod cvvdp;
 pub mod flip;
@@ -26,7 +26,7 @@ use crate::error::Result;
 use crate::measure::estimator::Replicates;
 use crate::raster::RgbImage;
 pub use optics_once::{Compensation, OpticsCount};
-pub use replicated::ScalarEstimate;
+pub use replicated::{BiasExponent, ScalarEstimate};
 pub use scores::{ExtraScores, ScoreName};
 pub use viewing::{DisplayLuminance, Viewing, BT709_LUMINANCE};
 
@@ -144,8 +144,8 @@ impl Perception {
         Ok(PerceptualScores(out))
     }
 
-    /// The extra scores of image `k` of `reps` against image 0, with 95% intervals and the
-    /// perceptual scores' noise bias ([`replicated`]).
+    /// The extra scores of image `k` of `reps` against image 0, with 95% intervals; the
+    /// perceptual scores corrected for the noise's bias ([`replicated`]).
     pub fn score_replicates(&self, reps: &Replicates, k: usize) -> Result<PerceptualScores> {
         let mut out = Vec::new();
         for &name in self.scores.names() {
@@ -155,7 +155,10 @@ impl Perception {
                     ScalarEstimate { value: e.mean, ci95: e.ci95, noise_bias: None }
                 }
                 _ => {
-                    let a = if name == ScoreName::Flip { 0.5 } else { 1.0 };
+                    let a = match name {
+                        ScoreName::Flip => BiasExponent::KINKED,
+                        _ => BiasExponent::SMOOTH,
+                    };
                     replicated::replicated_estimate(reps, k, a, &|t, r| self.perceptual(name, t, r))?
                 }
             };
