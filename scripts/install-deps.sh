@@ -27,6 +27,11 @@
 #                                venvs the Python package installs into (`pip install .` builds
 #                                it with maturin from PyPI and this Rust toolchain; no headers
 #                                needed: the module uses CPython's stable ABI, abi3)
+#   (pip, no package)            target/venv-perception: the perceptual metrics' reference
+#                                implementations for tests/perception_reference.rs, NVIDIA's FLIP
+#                                (flip-evaluator) and the authors' ColorVideoVDP (cvvdp, with PyTorch:
+#                                about 6 GB and two minutes); skipped with a warning when pip cannot
+#                                reach PyPI (the test then skips too, unless CI requires it)
 set -eu
 SUDO=""
 if [ "$(id -u)" != 0 ]; then SUDO=sudo; fi
@@ -41,6 +46,13 @@ if [ ! -x target/venv-exr/bin/python ] || ! target/venv-exr/bin/python -c "impor
     mkdir -p target
     { python3 -m venv target/venv-exr && target/venv-exr/bin/pip install --quiet OpenEXR numpy; } \
         || echo "warning: could not install OpenEXR's Python bindings; tests/exr_output.rs will skip its OpenEXR check" >&2
+fi
+if [ ! -x target/venv-perception/bin/python ] \
+    || ! target/venv-perception/bin/python -c "import flip_evaluator, pycvvdp, numpy" 2>/dev/null; then
+    mkdir -p target
+    { python3 -m venv target/venv-perception \
+        && target/venv-perception/bin/pip install --quiet numpy flip-evaluator cvvdp; } \
+        || echo "warning: could not install flip-evaluator and cvvdp; tests/perception_reference.rs will skip" >&2
 fi
 if ! ldconfig -p 2>/dev/null | grep -q 'libembree4\.so '; then
     scripts/embree4-from-wheel.sh \

@@ -96,6 +96,7 @@ pub mod metrics;
 pub mod optics;
 pub mod optimize;
 pub mod overrides;
+pub mod perception;
 pub mod progress;
 pub mod provenance;
 pub mod raster;

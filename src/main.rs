@@ -160,6 +160,20 @@ enum Command {
         /// Print JSON (PSNR and SSIM per channel; an infinite PSNR, identical channels, is null).
         #[arg(long)]
         json: bool,
+        /// Scores beyond PSNR and SSIM, comma-separated: psnr-luminance, cvvdp (JOD), flip
+        /// (HDR-FLIP mean); the first image is the reference (the ground truth), the second the test.
+        #[arg(long, value_delimiter = ',', value_name = "NAMES")]
+        scores: Vec<String>,
+        /// The display's white luminance for cvvdp and flip, cd/m^2.
+        #[arg(long, value_name = "CD_M2", default_value_t = 100.0)]
+        peak_white: f64,
+        /// The display's black luminance for cvvdp and flip, cd/m^2.
+        #[arg(long, value_name = "CD_M2", default_value_t = 0.1)]
+        black: f64,
+        /// Pixels per degree of the images for cvvdp and flip (default: from the retina attributes
+        /// inimtrace writes into its retinal images).
+        #[arg(long, value_name = "PPD")]
+        ppd: Option<f64>,
     },
     /// Speed against error for every method and backend, the convergence of every sampling
     /// parameter, and the seconds each Table 1 estimator needs to come within 0.1 to 0.01 dB of the
@@ -424,8 +438,10 @@ fn run() -> Result<()> {
         Command::GroundTruth { setup, eye, out, backend } => {
             printed_total = ground_truth_command(&g, setup, eye, out, backend)?;
         }
-        Command::Compare { a, b, part, ssim: constants, json } => {
-            printed_total = compare(&g, a, b, part.as_deref(), constants, json)?;
+        Command::Compare { a, b, part, ssim: constants, json, scores, peak_white, black, ppd } => {
+            let luminance = inimtrace::perception::DisplayLuminance { peak_white, black, ..Default::default() };
+            let perceptual = cli::compare::Perceptual { scores, luminance, ppd };
+            printed_total = compare(&g, a, b, part.as_deref(), constants, json, &perceptual)?;
         }
         Command::Bench { quick, scene, out, backends: true, also, embree_only } => {
             let scenes = match scene.is_empty() {

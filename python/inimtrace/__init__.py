@@ -86,7 +86,9 @@ class Assessment:
         it is): `experiment`, `method`, `eye_case`, `psnr_db`, `psnr_ci95_db`, `ssim`, `ssim_ci95`
         (the mean over R, G, B and the 95% half-width, None for the grid estimator), the same per
         channel (`psnr_db_R`, `ssim_ci95_G`, ...), and for the converged estimator
-        `samples_per_pixel`, `replicates`, `target_met`. The numbers of `results.json`.
+        `samples_per_pixel`, `replicates`, `target_met`; the scores `[measurement] scores` names
+        beyond PSNR and SSIM as `cvvdp` (JOD), `flip`, `psnr_luminance_db`, each with `_ci95` and
+        `_noise_bias` (docs/PERCEPTION.md). The numbers of `results.json`.
     images: the images by the stem of the file `inimtrace assess` writes: `display_LA`,
         `gt_Pin`, `sim_LA_Pin`, ... as (rows, columns, 3) float32 arrays.
     depths: the display images' `Z` channel by stem (`display_LA`), (rows, columns) float32,

@@ -181,7 +181,16 @@ def ground_truth(
     threads: Optional[int] = None,
     progress: _Progress = None,
 ) -> _Image: ...
-def compare(a: _Image, b: _Image, ssim: str = "wang2004") -> Dict[str, Any]: ...
+def compare(
+    a: _Image,
+    b: _Image,
+    ssim: str = "wang2004",
+    *,
+    scores: Optional[List[str]] = None,
+    peak_white: float = 100.0,
+    black: float = 0.1,
+    ppd: Optional[float] = None,
+) -> Dict[str, Any]: ...
 def read_replicates(path: _Path) -> npt.NDArray[np.float32]: ...
 def read_exr(path: _Path) -> Tuple[_Image, Optional[npt.NDArray[np.float32]]]: ...
 @dataclass

@@ -316,7 +316,54 @@ fn score_record<'py>(py: Python<'py>, experiment: &str, s: &Score) -> PyResult<B
     d.set_item("samples_per_pixel", s.samples_per_pixel)?;
     d.set_item("replicates", s.replicates)?;
     d.set_item("target_met", s.target_met)?;
+    // The scores `[measurement] scores` names beyond PSNR and SSIM: `cvvdp`, `cvvdp_ci95`,
+    // `cvvdp_noise_bias`, `flip`, ..., `psnr_luminance_db`, ... (absent when not named).
+    perceptual_items(&d, &s.perceptual)?;
     Ok(d)
+}
+
+/// The extra scores as record items: `<name>` (`psnr_luminance_db` for the luminance PSNR),
+/// `<name>_ci95` and `<name>_noise_bias` (None where unknown).
+fn perceptual_items(d: &Bound<'_, PyDict>, p: &inimtrace::perception::PerceptualScores) -> PyResult<()> {
+    for (n, e) in &p.0 {
+        let key = match n {
+            inimtrace::perception::ScoreName::PsnrLuminance => "psnr_luminance_db".to_string(),
+            other => other.name().replace('-', "_"),
+        };
+        d.set_item(&key, e.value)?;
+        d.set_item(format!("{key}_ci95"), e.ci95)?;
+        d.set_item(format!("{key}_noise_bias"), e.noise_bias)?;
+    }
+    Ok(())
+}
+
+/// The scorer of `compare(scores=...)` for `size` images (`None` when no extra score is named).
+fn compare_perception(
+    scores: Option<Vec<String>>,
+    peak_white: f64,
+    black: f64,
+    ppd: Option<f64>,
+    size: (usize, usize),
+) -> PyResult<Option<inimtrace::perception::Perception>> {
+    use inimtrace::perception::{DisplayLuminance, ExtraScores, Perception, ScoreName, Viewing};
+    let names: Vec<ScoreName> = scores
+        .unwrap_or_default()
+        .iter()
+        .map(|n| n.parse::<ScoreName>().map_err(|e| value_error(format!("compare(): scores: {e}"))))
+        .collect::<PyResult<_>>()?;
+    let extra = ExtraScores::from_names(&names, "compare()", "scores").map_err(|e| value_error(e.to_string()))?;
+    if extra.is_empty() {
+        return Ok(None);
+    }
+    let ppd = match (ppd, extra.any_perceptual()) {
+        (Some(p), _) => p,
+        (None, false) => 1.0,
+        (None, true) => return Err(value_error("compare(): ppd: cvvdp and flip need the images' pixels per degree")),
+    };
+    let viewing =
+        Viewing { luminance: DisplayLuminance { peak_white, black, ..Default::default() }, pixels_per_degree: ppd };
+    viewing.validate("compare()", "").map_err(|e| value_error(e.to_string()))?;
+    Perception::new(&extra, &viewing, inimtrace::perception::BT709_LUMINANCE, size, None).map(Some).py_err()
 }
 
 /// Runs `experiment` as `inimtrace assess` does (the same code path), and with `out` writes the
@@ -389,18 +436,26 @@ static NOISE_NOTED: AtomicBool = AtomicBool::new(false);
 /// `inimtrace compare --json` (an infinite PSNR, identical channels, stays `inf`); of two
 /// replicate sets `(replicates, rows, columns, 3)` (`read_replicates` of the files `assess
 /// --keep-replicates` writes), the table's de-biased scores with their 95% intervals.
+/// With `scores` (`psnr-luminance`, `cvvdp`, `flip`) also those, `a` the reference and `b`
+/// the test, seen on a display of `peak_white` and `black` cd/m^2 at `ppd` pixels per degree.
 #[pyfunction]
-#[pyo3(signature = (a, b, ssim="wang2004"))]
+#[pyo3(signature = (a, b, ssim="wang2004", *, scores=None, peak_white=100.0, black=0.1, ppd=None))]
+#[allow(clippy::too_many_arguments)]
 pub fn compare<'py>(
     py: Python<'py>,
     a: &Bound<'py, PyAny>,
     b: &Bound<'py, PyAny>,
     ssim: &str,
+    scores: Option<Vec<String>>,
+    peak_white: f64,
+    black: f64,
+    ppd: Option<f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let constants: SsimConstants = ssim.parse().map_err(|e: inimtrace::Error| value_error(e.to_string()))?;
     let ndim = |o: &Bound<'py, PyAny>| o.getattr("ndim").ok().and_then(|n| n.extract::<usize>().ok());
+    let scorer = |size| compare_perception(scores.clone(), peak_white, black, ppd, size);
     if ndim(a) == Some(4) || ndim(b) == Some(4) {
-        return compare_sets(py, a, b, constants);
+        return compare_sets(py, a, b, constants, &scorer);
     }
     let ia = numpy_to_image(a, "a", None, "compare()")?;
     let ib = numpy_to_image(b, "b", Some((ia.height, ia.width)), "compare()")?;
@@ -416,7 +471,14 @@ pub fn compare<'py>(
             1,
         )?;
     }
-    let (p, s) = detached(py, None, None, || Ok((metrics::psnr(&ia, &ib)?, metrics::ssim(&ia, &ib, constants)?)))?;
+    let perception = scorer((ia.width, ia.height))?;
+    let (p, s, extra) = detached(py, None, None, || {
+        let extra = match &perception {
+            Some(q) => q.score_images(&ib, &ia)?,
+            None => Default::default(),
+        };
+        Ok((metrics::psnr(&ia, &ib)?, metrics::ssim(&ia, &ib, constants)?, extra))
+    })?;
     let channels = |v: [f64; 3], mean: f64| -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
         for (name, x) in ["R", "G", "B"].iter().zip(v) {
@@ -436,6 +498,7 @@ pub fn compare<'py>(
     out.set_item("psnr_db", channels(p.channels, p.mean)?)?;
     out.set_item("ssim", channels(s.channels, s.mean)?)?;
     out.set_item("ssim_constants", constants.name())?;
+    perceptual_items(&out, &extra)?;
     Ok(out)
 }
 
@@ -445,6 +508,7 @@ fn compare_sets<'py>(
     a: &Bound<'py, PyAny>,
     b: &Bound<'py, PyAny>,
     constants: SsimConstants,
+    scorer: &dyn Fn((usize, usize)) -> PyResult<Option<inimtrace::perception::Perception>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let set = |o: &Bound<'py, PyAny>, name: &str, other: &str| -> PyResult<Vec<inimtrace::raster::RgbImage>> {
         if o.getattr("ndim").ok().and_then(|n| n.extract::<usize>().ok()) != Some(4) {
@@ -473,9 +537,15 @@ fn compare_sets<'py>(
     };
     let sa = set(a, "a", "b")?;
     let sb = set(b, "b", "a")?;
-    let (p, s) = detached(py, None, None, || {
+    let perception = scorer((sa[0].width, sa[0].height))?;
+    let (p, s, extra) = detached(py, None, None, || {
         let reps = inimtrace::io::exr_replicates::pair(("a", &sa), ("b", &sb), 1)?;
-        Ok(inimtrace::measure::adaptive::estimates(&reps, constants).pop().expect("one scored image"))
+        let extra = match &perception {
+            Some(q) => q.score_replicates(&reps, 1)?,
+            None => Default::default(),
+        };
+        let (p, s) = inimtrace::measure::adaptive::estimates(&reps, constants).pop().expect("one scored image");
+        Ok((p, s, extra))
     })?;
     let estimate = |e: &inimtrace::measure::stats::Estimate| -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
@@ -504,6 +574,7 @@ fn compare_sets<'py>(
     out.set_item("psnr_db", estimate(&p)?)?;
     out.set_item("ssim", estimate(&s)?)?;
     out.set_item("ssim_constants", constants.name())?;
+    perceptual_items(&out, &extra)?;
     Ok(out)
 }
 

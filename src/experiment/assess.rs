@@ -332,7 +332,40 @@ fn write_case(
             }
             dir.write_with(&format!("{}.png", j.stem), |p| crate::io::png::write_preview(p, j.image))
         })
-    })
+    })?;
+    write_maps(exp, dir, opts, c, result)
+}
+
+/// The distortion maps of eye case `c`'s perceptual scores, one per score and method
+/// (`map_<score>_<method>_<case>.exr` with the values, `.png` a heatmap); none unless
+/// `[measurement] scores` names `cvvdp` or `flip`.
+fn write_maps(exp: &Experiment, dir: &OutputDir, opts: RunOptions, c: usize, result: &super::CaseResult) -> Result<()> {
+    if !exp.extra_scores.any_perceptual() {
+        return Ok(());
+    }
+    let Some(p) = super::perceptual::for_case(exp, c)? else { return Ok(()) };
+    let case = &exp.cases[c];
+    for (m, sim) in exp.methods.iter().zip(&result.perceived) {
+        for map in p.maps(sim, &result.ground_truth)? {
+            let stem = format!("map_{}_{}_{}", map.score, m.name(), case.name);
+            let mut a = metadata::common("distortion map", Some(exp.name.as_str()));
+            a.0.retain(|(k, _)| k != "inimtrace:units");
+            let what = match map.score {
+                crate::perception::ScoreName::Cvvdp => "ColorVideoVDP: 1 - JOD_pixel / 10 (0: no visible difference)",
+                _ => "HDR-FLIP error per pixel (0: none, 1: largest)",
+            };
+            a.set("inimtrace:units", what)
+                .set("inimtrace:method", m.name())
+                .set("inimtrace:eye_case", case.name.as_str());
+            a.extend(metadata::provenance(&exp.provenance));
+            let (w, h) = map.size;
+            dir.write_with(&format!("{stem}.exr"), |path| {
+                crate::io::exr_map::write_map_exr(path, w, h, &map.values, &a, opts.exr_compression)
+            })?;
+            dir.write_with(&format!("{stem}.png"), |path| crate::io::exr_map::write_map_png(path, w, h, &map.values))?;
+        }
+    }
+    Ok(())
 }
 
 /// Fig. 3 as `assess` draws it: a title, one row per eye case labelled with its focus, and each
@@ -342,31 +375,34 @@ fn write_case(
 fn figure<'a>(exp: &Experiment, cells: &'a [Vec<RgbImage>], scores: &[super::Score]) -> crate::io::figure::Figure<'a> {
     let mut column_labels = vec!["GT".to_string()];
     column_labels.extend(exp.methods.iter().map(|m| m.name()));
-    let rows =
-        exp.cases
-            .iter()
-            .enumerate()
-            .map(|(c, case)| {
-                let label = match case.eye.aperture {
-                    Aperture::Pinhole => format!("{}: pinhole", case.name),
-                    Aperture::ThinLens { focus, .. } => {
-                        format!("{}: focus {:.0} mm ({:.2} D)", case.name, focus.distance_mm(), focus.diopters())
-                    }
-                };
-                let label = match case.eye.optics.as_ref().and_then(|o| Some((o.model.name(), o.accommodation?))) {
-                    Some((model, a)) => format!("{label}, {model} A {a:.2} D"),
-                    None => label,
-                };
-                let mut row = vec![(&cells[c][0], None)];
-                for (k, m) in exp.methods.iter().enumerate() {
-                    let caption = scores.iter().find(|s| s.method == m.name() && s.eye_case == case.name).map(|s| {
-                        format!("PSNR {} dB, SSIM {:.3}", crate::metrics::format_db(s.psnr.mean, 2), s.ssim.mean)
-                    });
-                    row.push((&cells[c][k + 1], caption));
+    let rows = exp
+        .cases
+        .iter()
+        .enumerate()
+        .map(|(c, case)| {
+            let label = match case.eye.aperture {
+                Aperture::Pinhole => format!("{}: pinhole", case.name),
+                Aperture::ThinLens { focus, .. } => {
+                    format!("{}: focus {:.0} mm ({:.2} D)", case.name, focus.distance_mm(), focus.diopters())
                 }
-                (label, row)
-            })
-            .collect();
+            };
+            let label = match case.eye.optics.as_ref().and_then(|o| Some((o.model.name(), o.accommodation?))) {
+                Some((model, a)) => format!("{label}, {model} A {a:.2} D"),
+                None => label,
+            };
+            let mut row = vec![(&cells[c][0], None)];
+            for (k, m) in exp.methods.iter().enumerate() {
+                let caption = scores.iter().find(|s| s.method == m.name() && s.eye_case == case.name).map(|s| {
+                    let mut c =
+                        format!("PSNR {} dB, SSIM {:.3}", crate::metrics::format_db(s.psnr.mean, 2), s.ssim.mean);
+                    c.push_str(&super::perceptual::caption(s));
+                    c
+                });
+                row.push((&cells[c][k + 1], caption));
+            }
+            (label, row)
+        })
+        .collect();
     crate::io::figure::Figure {
         title: Some(format!(
             "{}: perceived retinal images; PSNR and SSIM ({}) against the ground truth (GT)",

@@ -7,12 +7,14 @@ use std::time::{Duration, Instant};
 
 use crate::error::Result;
 use crate::experiment::{CaseResult, Experiment, EyeCase, Score, StageTime};
-use crate::measure::adaptive::{measure_case, CaseMeasurement, Precision};
-use crate::measure::estimator::{DisplaySource, PairedSource};
+use super::perceptual;
+use crate::measure::adaptive::{measure_case, measure_case_with, CaseMeasurement, Precision};
+use crate::measure::estimator::{DisplaySource, PairedSource, Replicates};
 use crate::measure::sampler::Sampler;
 use crate::measure::spec::EstimatorKind;
 use crate::metrics::{self, Psnr, Ssim, SsimConstants};
 use crate::optics::{Aperture, Eye, Retina};
+use crate::perception::PerceptualScores;
 use crate::progress::Progress;
 use crate::raster::RgbImage;
 use crate::render::retina::DisplayStack;
@@ -117,10 +119,37 @@ pub fn table1_each<F: RadianceField + ?Sized>(
         let sampler = case_sampler(m.seed, index, &case.eye);
         let label = format!("measure {}", case.name);
         let progress = Progress::new(exp.retina.resolution as u64, &label, quiet);
-        let measured = measure_case(&source, &sampler, &exp.retina, exp.ssim, &precision, &progress, storage.take());
+        let perception = perceptual::for_case(exp, index)?;
+        // The perceptual scores of the last replicates asked, by samples per pixel.
+        let mut asked: Option<(u64, Result<Vec<PerceptualScores>>)> = None;
+        let mut further = |reps: &Replicates| {
+            let p = perception.as_ref().filter(|_| perceptual::has_targets(exp))?;
+            let cells = perceptual::replicate_scores(p, reps);
+            let ratios = cells.as_ref().ok().map(|c| perceptual::target_ratios(exp, c));
+            asked = Some((reps.samples_per_pixel(), cells));
+            ratios
+        };
+        let old = storage.take();
+        let measured =
+            measure_case_with(&source, &sampler, &exp.retina, exp.ssim, &precision, &progress, old, &mut further);
         progress.finish();
         progress.check()?;
-        let (gt, case_sims, case_scores) = case_outputs(exp, case, &measured);
+        let (gt, case_sims, mut case_scores) = case_outputs(exp, case, &measured);
+        if let Some(p) = &perception {
+            let t = Instant::now();
+            let cells = match asked {
+                Some((spp, cells)) if spp == measured.samples_per_pixel() => cells?,
+                _ => perceptual::replicate_scores(p, &measured.replicates)?,
+            };
+            perceptual::set_scores(exp, cells, &mut case_scores);
+            let seconds = t.elapsed().as_secs_f64();
+            stages.push(StageTime {
+                stage: "perceptual_scores".into(),
+                method: None,
+                eye_case: Some(case.name.clone()),
+                seconds,
+            });
+        }
         for (stage, seconds) in [
             ("converged_sampling", measured.rounds.iter().map(|r| r.sample_seconds).sum::<f64>()),
             ("converged_statistics", measured.rounds.iter().map(|r| r.stats_seconds).sum::<f64>()),
@@ -155,6 +184,7 @@ fn case_outputs(exp: &Experiment, case: &EyeCase, measured: &CaseMeasurement) ->
             samples_per_pixel: Some(reps.samples_per_pixel()),
             replicates: Some(reps.replicates()),
             target_met: Some(cell.target_met),
+            perceptual: Default::default(),
         })
         .collect();
     (gt, sims, scores)

@@ -11,6 +11,7 @@ mod assess;
 pub mod converged;
 pub(crate) mod converged_report;
 pub mod metadata;
+mod perceptual;
 mod report;
 mod stages;
 
@@ -203,6 +204,10 @@ pub struct Experiment {
     pub ssim: SsimConstants,
     /// How Table 1 is measured (`[measurement]`; the grid estimator when absent).
     pub measurement: MeasurementSpec,
+    /// The scores reported beyond PSNR and SSIM (`[measurement] scores`).
+    pub extra_scores: crate::perception::ExtraScores,
+    /// The display's luminance as the perceptual scores see it.
+    pub luminance: crate::perception::DisplayLuminance,
     /// How OPT is trained (`[optimize]`), when `methods` lists it.
     pub optimize: Option<crate::optimize::Optimization>,
     /// How `eye.pupil_diameter = "auto"` chose the pupil (absent for a stated diameter).
@@ -378,6 +383,8 @@ impl Experiment {
         };
         let measurement = spec.measurement.clone().unwrap_or_else(MeasurementSpec::grid);
         measurement.validate(source)?;
+        let extra_scores = measurement.extra_scores(source)?;
+        let luminance = crate::perception::DisplayLuminance::from(&display.photometry());
         if diffraction.is_on() && measurement.estimator != crate::measure::spec::EstimatorKind::Converged {
             return Err(Error::invalid(
                 source,
@@ -413,6 +420,8 @@ impl Experiment {
             cases,
             ssim: spec.ssim,
             measurement,
+            extra_scores,
+            luminance,
             optimize,
             auto_pupil,
             spec,

@@ -11,6 +11,7 @@ use crate::io::output::OutputDir;
 use crate::measure::spec::EstimatorKind;
 use crate::measure::stats::Estimate;
 use crate::metrics::SsimConstants;
+use crate::perception::PerceptualScores;
 use crate::version::Tool;
 
 /// One score: a method under an eye case. The converged estimator adds the 95% half-widths
@@ -34,6 +35,10 @@ pub struct Score {
     /// Both 95% half-widths within the experiment's targets.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub target_met: Option<bool>,
+    /// The scores `[measurement] scores` names beyond PSNR and SSIM (luminance PSNR,
+    /// ColorVideoVDP, FLIP), with their intervals and noise bias under the converged estimator.
+    #[serde(skip_serializing_if = "PerceptualScores::is_empty")]
+    pub perceptual: PerceptualScores,
 }
 
 /// The eye of one eye case beyond the thin lens (`results.json`'s `eyes`).
@@ -187,6 +192,9 @@ pub fn table_markdown(report: &AssessReport, exp: &Experiment) -> String {
     if exp.measurement.estimator == EstimatorKind::Converged {
         s.push_str(&crate::experiment::converged_report::table_note(report, exp));
     }
+    if !exp.extra_scores.is_empty() {
+        s.push_str(&crate::experiment::converged_report::perceptual_table(report, exp));
+    }
     if let Some(opt) = &exp.optimize {
         s.push_str(&crate::optimize::report::table_note(opt, report.optimization.as_ref()));
     }
@@ -243,8 +251,18 @@ pub(super) fn write_reports(report: &AssessReport, exp: &Experiment, dir: &Outpu
     // are within the targets (empty for the grid estimator and for stage rows). Names
     // (experiment, eye case) are quoted where they hold a comma, a quote or a line break.
     let mut csv = CsvTable::new();
+    let extra = exp.extra_scores.names();
+    let extra_header: Vec<String> =
+        extra
+        .iter()
+        .flat_map(|n| {
+            [n.name().to_string(), format!("{n}_ci95"), format!("{n}_noise_bias"), format!("{n}_bias_above_ci95")]
+        })
+        .collect();
+    let blank = vec![String::new(); extra_header.len()];
     row(
         &mut csv,
+        &extra_header,
         [
             "record",
             "experiment",
@@ -271,6 +289,7 @@ pub(super) fn write_reports(report: &AssessReport, exp: &Experiment, dir: &Outpu
         for (c, name) in ["R", "G", "B"].iter().enumerate() {
             row(
                 &mut csv,
+                &blank,
                 [
                     "score",
                     e,
@@ -289,8 +308,23 @@ pub(super) fn write_reports(report: &AssessReport, exp: &Experiment, dir: &Outpu
                 ],
             );
         }
+        let values: Vec<String> = extra
+            .iter()
+            .flat_map(|n| {
+                let e = s.perceptual.get(*n);
+                let opt = |v: Option<f64>| v.map(csv_db).unwrap_or_default();
+                let flag = e.filter(|e| e.noise_bias.is_some()).map(|e| e.bias_above_ci95().to_string());
+                [
+                    opt(e.map(|e| e.value)),
+                    opt(e.and_then(|e| e.ci95)),
+                    opt(e.and_then(|e| e.noise_bias)),
+                    flag.unwrap_or_default(),
+                ]
+            })
+            .collect();
         row(
             &mut csv,
+            &values,
             [
                 "score",
                 e,
@@ -312,6 +346,7 @@ pub(super) fn write_reports(report: &AssessReport, exp: &Experiment, dir: &Outpu
     for st in &report.stages {
         row(
             &mut csv,
+            &blank,
             [
                 "stage",
                 e,
@@ -330,7 +365,11 @@ pub(super) fn write_reports(report: &AssessReport, exp: &Experiment, dir: &Outpu
             ],
         );
     }
-    row(&mut csv, ["stage", e, "", "", "", "", "", "total", &report.total_seconds.to_string(), "", "", "", "", ""]);
+    row(
+        &mut csv,
+        &blank,
+        ["stage", e, "", "", "", "", "", "total", &report.total_seconds.to_string(), "", "", "", "", ""],
+    );
     let csv = csv.finish();
     write("results.csv", csv)?;
     // Last: its presence marks a complete run, and it lists every other file of the run with
@@ -342,9 +381,10 @@ pub(super) fn write_reports(report: &AssessReport, exp: &Experiment, dir: &Outpu
     })
 }
 
-/// One row of `results.csv` (its 14 columns).
-fn row(csv: &mut CsvTable, fields: [&str; 14]) {
-    csv.row(fields);
+/// One row of `results.csv`: its 14 columns, then the extra scores' columns (none unless
+/// `[measurement] scores` names some).
+fn row(csv: &mut CsvTable, extra: &[String], fields: [&str; 14]) {
+    csv.row(fields.iter().copied().chain(extra.iter().map(String::as_str)));
 }
 
 /// PSNR for CSV: identical images give "inf".

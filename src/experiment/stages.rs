@@ -239,9 +239,14 @@ pub fn table1_each<S: RadianceField + ?Sized>(
 
 /// The Table 1 scores of eye case `c`: PSNR and SSIM of every perceived image against `gt`.
 fn case_scores(exp: &Experiment, c: usize, gt: &RgbImage, sims: &[RgbImage]) -> Result<Vec<Score>> {
+    let perception = super::perceptual::for_case(exp, c)?;
     sims.par_iter()
         .zip(&exp.methods)
         .map(|(sim, m)| -> Result<Score> {
+            let perceptual = match &perception {
+                Some(p) => p.score_images(sim, gt)?,
+                None => Default::default(),
+            };
             Ok(Score {
                 method: m.name(),
                 eye_case: exp.cases[c].name.clone(),
@@ -250,6 +255,7 @@ fn case_scores(exp: &Experiment, c: usize, gt: &RgbImage, sims: &[RgbImage]) -> 
                 samples_per_pixel: None,
                 replicates: None,
                 target_met: None,
+                perceptual,
             })
         })
         .collect()

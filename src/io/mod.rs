@@ -9,6 +9,7 @@ pub mod display_intent;
 pub mod display_lenslet;
 pub mod exr;
 mod exr_attributes;
+pub mod exr_map;
 mod exr_file;
 mod exr_read;
 pub mod exr_replicates;

@@ -119,6 +119,27 @@ pub fn measure_case<S: PairedSource + ?Sized>(
     progress: &Progress,
     storage: Option<Replicates>,
 ) -> CaseMeasurement {
+    measure_case_with(source, sampler, retina, constants, precision, progress, storage, &mut |_| None)
+}
+
+/// Further targets of a measurement: given the replicates, every cell's half-width over its
+/// target (at most 1: met) of each further score, or `None` when there is nothing more to ask
+/// (no further target, or the scores cannot be computed: the caller reports why).
+pub type FurtherTargets<'a> = dyn FnMut(&Replicates) -> Option<Vec<f64>> + 'a;
+
+/// [`measure_case`] with `further` targets (the perceptual scores'), asked once PSNR and SSIM
+/// meet theirs: sampling goes on, as the slowest cell's ratio predicts, until they are met too.
+#[allow(clippy::too_many_arguments)]
+pub fn measure_case_with<S: PairedSource + ?Sized>(
+    source: &S,
+    sampler: &Sampler,
+    retina: &Retina,
+    constants: SsimConstants,
+    precision: &Precision,
+    progress: &Progress,
+    storage: Option<Replicates>,
+    further: &mut FurtherTargets<'_>,
+) -> CaseMeasurement {
     let nr = precision.replicates;
     let max_n = (precision.max_samples_per_pixel / nr as u64).clamp(1, MAX_SAMPLES_PER_REPLICATE) as u32;
     let mut reps = match storage {
@@ -130,6 +151,8 @@ pub fn measure_case<S: PairedSource + ?Sized>(
     // Half-widths of every cell's PSNR mean at each round, and of its SSIM mean when computed.
     let mut psnr_history: Vec<(u32, Vec<f64>)> = Vec::new();
     let mut ssim_history: Vec<(u32, Vec<f64>)> = Vec::new();
+    // Half-widths over targets of the further scores, when asked (target 1).
+    let mut further_history: Vec<(u32, Vec<f64>)> = Vec::new();
     let widths = |e: &[Estimate]| e.iter().map(|x| x.ci95.unwrap_or(f64::INFINITY)).collect::<Vec<_>>();
     loop {
         let t = Instant::now();
@@ -170,14 +193,26 @@ pub fn measure_case<S: PairedSource + ?Sized>(
             rounds.push(Round { samples_per_pixel: reps.samples_per_pixel(), sample_seconds, stats_seconds });
             let ssim_met = ssim.iter().all(|s| s.ci95.is_some_and(|h| h <= precision.ssim_ci95));
             ssim_history.push((n, widths(&ssim)));
+            let further_met = match (stopped_by, ssim_met) {
+                (None, true) => {
+                    let t = Instant::now();
+                    let ratios = further(&reps);
+                    rounds.last_mut().expect("this round").stats_seconds += t.elapsed().as_secs_f64();
+                    let met = ratios.as_ref().is_none_or(|r| r.iter().all(|x| *x <= 1.0));
+                    further_history.extend(ratios.map(|r| (n, r)));
+                    met
+                }
+                _ => true,
+            };
             let cells = cells(psnr, ssim, precision);
             match stopped_by {
                 Some(why) => return CaseMeasurement { replicates: reps, cells, rounds, stopped_by: why },
-                None if ssim_met => {
+                None if ssim_met && further_met => {
                     return CaseMeasurement { replicates: reps, cells, rounds, stopped_by: "target met" }
                 }
                 None => {
-                    n = plan(&psnr_history, &ssim_history);
+                    let more = next_samples(&further_history, 1.0);
+                    n = plan(&psnr_history, &ssim_history).max(more.min(max_n));
                     continue;
                 }
             }

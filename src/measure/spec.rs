@@ -9,6 +9,9 @@
 //! max_seconds = 600.0            # budget: wall seconds of the whole measurement
 //! seed = 1
 //! replicates = 8                 # independent scrambles, at least 3
+//! scores = ["psnr", "ssim", "cvvdp", "flip"]   # also "psnr-luminance"; default PSNR and SSIM
+//! cvvdp_ci95 = 0.05              # optional targets of the scores named (JOD; FLIP; dB)
+//! optics = "auto"                # the eye's optics counted once: "auto", "retinal", "neural"
 //! ```
 //!
 //! A file without the table uses the grid estimator (the published framework's way, and this
@@ -21,6 +24,11 @@ use serde::{Deserialize, Serialize};
 
 use super::sampler::MAX_SAMPLES_PER_REPLICATE;
 use crate::error::{Error, Result};
+use crate::perception::{ExtraScores, OpticsCount, ScoreName};
+
+fn default_scores() -> Vec<ScoreName> {
+    vec![ScoreName::Psnr, ScoreName::Ssim]
+}
 
 /// How the retinal images and their scores are computed.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -63,6 +71,19 @@ pub struct MeasurementSpec {
     pub seed: u64,
     /// Independent replicates (at least 3): the intervals' degrees of freedom are one fewer.
     pub replicates: usize,
+    /// The scores reported: PSNR and SSIM (always measured) and any of `psnr-luminance`,
+    /// `cvvdp`, `flip` (`crate::perception`).
+    pub scores: Vec<ScoreName>,
+    /// How the perceptual scores count the eye's optics (`crate::perception::optics_once`).
+    pub optics: OpticsCount,
+    /// Target: half-width of the luminance PSNR's 95% interval, dB (when named in `scores`).
+    pub psnr_luminance_ci95_db: Option<f64>,
+    /// Target: half-width of ColorVideoVDP's 95% interval, and bound on its noise bias, JOD
+    /// (when named in `scores`).
+    pub cvvdp_ci95: Option<f64>,
+    /// Target: half-width of the mean FLIP's 95% interval, and bound on its noise bias (when
+    /// named in `scores`).
+    pub flip_ci95: Option<f64>,
 }
 
 impl Default for MeasurementSpec {
@@ -75,6 +96,11 @@ impl Default for MeasurementSpec {
             max_seconds: 600.0,
             seed: 1,
             replicates: 8,
+            scores: default_scores(),
+            optics: OpticsCount::Auto,
+            psnr_luminance_ci95_db: None,
+            cvvdp_ci95: None,
+            flip_ci95: None,
         }
     }
 }
@@ -88,6 +114,27 @@ impl MeasurementSpec {
     /// Checks the values; `source` names the file, fields are named `measurement.<field>`.
     pub fn validate(&self, source: &str) -> Result<()> {
         let field = |f: &str| format!("measurement.{f}");
+        let extra = self.extra_scores(source)?;
+        for (name, target, key) in self.score_targets() {
+            let Some(t) = target else { continue };
+            if !extra.contains(name) {
+                return Err(Error::invalid(
+                    source,
+                    field(key),
+                    format!("is a target of `{name}`, which `measurement.scores` does not name"),
+                ));
+            }
+            if !(t.is_finite() && t > 0.0) {
+                return Err(Error::invalid(source, field(key), format!("must be positive, got {t}")));
+            }
+            if self.estimator == EstimatorKind::Grid {
+                return Err(Error::invalid(
+                    source,
+                    field(key),
+                    "is a target of the converged estimator; the grid estimator has no intervals",
+                ));
+            }
+        }
         if self.estimator == EstimatorKind::Grid {
             return self.check_converged_only(source);
         }
@@ -134,15 +181,55 @@ impl MeasurementSpec {
     }
 }
 
-/// Written back as a file would give it: the grid estimator has nothing but its name.
+impl MeasurementSpec {
+    /// The scores beyond PSNR and SSIM (a name given twice is an error naming the field).
+    pub fn extra_scores(&self, source: &str) -> Result<ExtraScores> {
+        ExtraScores::from_names(&self.scores, source, "measurement.scores")
+    }
+
+    /// `(score, its target, the target's key)` of every score that may have one.
+    pub fn score_targets(&self) -> [(ScoreName, Option<f64>, &'static str); 3] {
+        [
+            (ScoreName::PsnrLuminance, self.psnr_luminance_ci95_db, "psnr_luminance_ci95_db"),
+            (ScoreName::Cvvdp, self.cvvdp_ci95, "cvvdp_ci95"),
+            (ScoreName::Flip, self.flip_ci95, "flip_ci95"),
+        ]
+    }
+
+    /// The settings of the scores beyond the defaults, as `(key, value)` for [`Serialize`]:
+    /// none for a file that does not name them (its echo stays as it was).
+    fn score_settings(&self) -> Vec<(&'static str, toml::Value)> {
+        let mut out = Vec::new();
+        if self.scores != default_scores() {
+            let names = self.scores.iter().map(|n| toml::Value::String(n.name().into())).collect();
+            out.push(("scores", toml::Value::Array(names)));
+        }
+        if self.optics != OpticsCount::Auto {
+            out.push(("optics", toml::Value::String(self.optics.name().into())));
+        }
+        for (_, target, key) in self.score_targets() {
+            if let Some(t) = target {
+                out.push((key, toml::Value::Float(t)));
+            }
+        }
+        out
+    }
+}
+
+/// Written back as a file would give it: the grid estimator has nothing but its name (and the
+/// scores, when the file names any beyond PSNR and SSIM).
 impl Serialize for MeasurementSpec {
     fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        let extra = self.score_settings();
         if self.estimator == EstimatorKind::Grid {
-            let mut st = s.serialize_struct("MeasurementSpec", 1)?;
+            let mut st = s.serialize_struct("MeasurementSpec", 1 + extra.len())?;
             st.serialize_field("estimator", &self.estimator)?;
+            for (key, value) in &extra {
+                st.serialize_field(key, value)?;
+            }
             return st.end();
         }
-        let mut st = s.serialize_struct("MeasurementSpec", 7)?;
+        let mut st = s.serialize_struct("MeasurementSpec", 7 + extra.len())?;
         st.serialize_field("estimator", &self.estimator)?;
         st.serialize_field("psnr_ci95_db", &self.psnr_ci95_db)?;
         st.serialize_field("ssim_ci95", &self.ssim_ci95)?;
@@ -150,6 +237,9 @@ impl Serialize for MeasurementSpec {
         st.serialize_field("max_seconds", &self.max_seconds)?;
         st.serialize_field("seed", &self.seed)?;
         st.serialize_field("replicates", &self.replicates)?;
+        for (key, value) in &extra {
+            st.serialize_field(key, value)?;
+        }
         st.end()
     }
 }
@@ -222,6 +312,29 @@ mod tests {
         assert_eq!(toml::to_string(&g).unwrap().trim(), "estimator = \"grid\"");
         assert!(toml::from_str::<MeasurementSpec>("estimator = \"exact\"").is_err());
         assert!(toml::from_str::<MeasurementSpec>("replicate = 3").is_err());
+    }
+
+    #[test]
+    fn scores_default_to_psnr_and_ssim_and_round_trip() {
+        let m: MeasurementSpec =
+            toml::from_str("scores = [\"psnr\", \"ssim\", \"cvvdp\", \"flip\"]\ncvvdp_ci95 = 0.05").unwrap();
+        assert_eq!(m.extra_scores("x").unwrap().names(), &[ScoreName::Cvvdp, ScoreName::Flip]);
+        let back: MeasurementSpec = toml::from_str(&toml::to_string(&m).unwrap()).unwrap();
+        assert_eq!(back, m);
+        // The default writes nothing new (results.json's settings stay as they were).
+        assert!(!toml::to_string(&MeasurementSpec::default()).unwrap().contains("scores"));
+        let e = toml::from_str::<MeasurementSpec>("scores = [\"psnr\", \"jod\"]").unwrap_err().to_string();
+        assert!(e.contains("unknown score `jod`") && e.contains("scores"), "{e}");
+        for (text, field) in [
+            ("cvvdp_ci95 = 0.1", "measurement.cvvdp_ci95"),
+            ("scores = [\"flip\"]\nflip_ci95 = -1.0", "measurement.flip_ci95"),
+            ("scores = [\"flip\", \"flip\"]", "measurement.scores"),
+            ("estimator = \"grid\"\nscores = [\"flip\"]\nflip_ci95 = 0.01", "measurement.flip_ci95"),
+        ] {
+            let m: MeasurementSpec = toml::from_str(text).unwrap();
+            let e = m.validate("x.toml").unwrap_err().to_string();
+            assert!(e.contains(field) && e.contains("x.toml"), "{text}: {e}");
+        }
     }
 
     #[test]
