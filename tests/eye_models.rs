@@ -252,16 +252,18 @@ fn ray_aiming_finds_every_ray_inside_the_iris_over_the_field_and_the_visible() {
 }
 
 #[test]
-fn an_eye_that_blocks_its_axial_rays_is_refused_naming_the_model() {
-    // The iris behind the vertex of a surface convex toward the air: every ray off the axis
-    // meets the surface before the iris plane, so no ray reaches the air through the iris.
+fn an_eye_whose_iris_lies_inside_a_surface_is_refused_naming_the_iris() {
+    // The iris in the vertex plane of the surface it follows, a surface convex toward the air:
+    // off the axis the surface lies behind that plane, so the iris would be inside the cornea
+    // and no ray reaches the air through it. Refused by the geometric rules (optics/clearance.rs)
+    // before any ray is traced.
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/paper.toml");
     let user = "eye.user={ retina_radius = 0.0, iris = { after = \"0\", distance = 0.0 }, surfaces = [\
                 { radius = 5.55, conic = -0.56, thickness = 22.07, semi_diameter = 5.0, medium = { constant = 1.336 } }] }";
     let set =
         overrides(&["eye.model=\"user\"".into(), user.into(), r#"eye_cases=[{ name = "P", pinhole = true }]"#.into()]);
     let err = load_experiment(Some(&path), None, &set).unwrap_err().to_string();
-    assert!(err.contains("eye.model") && err.contains("blocks its own axial rays"), "{err}");
+    assert!(err.contains("eye.iris.distance") && err.contains("inside a surface"), "{err}");
 }
 
 #[test]

@@ -51,7 +51,7 @@ fn the_opt_table_marks_trained_and_held_out_rows_and_states_the_training_grid() 
             "--set",
             "display.lcd.resolution=[54, 54]",
             "--set",
-            "eye.retina_resolution=8",
+            "eye.retina_resolution=12",
             "--set",
             "eye.pupil_grid=2",
         ])

@@ -22,9 +22,11 @@ fn close(a: &serde_json::Value, b: &serde_json::Value, what: &str) {
 fn same_estimate(from_compare: &serde_json::Value, from_table: &serde_json::Value, what: &str) {
     close(&from_compare["mean"], &from_table["mean"], &format!("{what} mean"));
     close(&from_compare["ci95"], &from_table["ci95"], &format!("{what} ci95"));
-    for c in 0..3 {
-        close(&from_compare["channels"][c], &from_table["channels"][c], &format!("{what} channel {c}"));
-        close(&from_compare["channels_ci95"][c], &from_table["channels_ci95"][c], &format!("{what} channel {c} ci95"));
+    // compare --json names the channels (`R`, `G`, `B`, and `channels_ci95: {R, G, B}`); the
+    // table lists them in that order.
+    for (c, name) in ["R", "G", "B"].into_iter().enumerate() {
+        close(&from_compare[name], &from_table["channels"][c], &format!("{what} channel {name}"));
+        close(&from_compare["channels_ci95"][name], &from_table["channels_ci95"][c], &format!("{what} channel {name} ci95"));
     }
 }
 

@@ -20,7 +20,8 @@
 //! luminous efficiency function V(lambda) of the CIE 1924 standard observer (equal to the
 //! y-bar colour-matching function of the CIE 1931 2-degree observer; CIE 015:2018 *Colorimetry*,
 //! Sec. 3), read from the 1 nm table of the `colorimetry` crate and linear between its entries:
-//! `w_c = int S_c V dl / sum_k int S_k V dl`. The spectra are in one relative power scale common to
+//! `w_c = int S_c V dl / sum_k int S_k V dl` (a Gaussian's on a 0.25 nm grid, a table's exactly,
+//! piece by piece). The spectra are in one relative power scale common to
 //! the three primaries (a Gaussian's peak is 1, a table's powers as written): the emission of
 //! each channel at full drive.
 
@@ -89,8 +90,13 @@ impl Primaries {
 
     /// Each channel's share of the display's luminance (module comment): `[red, green, blue]`,
     /// summing to 1. The spectra must be valid (they are, once the display is loaded).
+    /// The three spectra share one power scale, so each is scaled by the largest power of the
+    /// three (a Gaussian's peak is 1) before it is integrated: tables of powers near 1e308 give
+    /// finite shares.
     pub fn luminance_weights(&self) -> [f64; 3] {
-        let y = self.channels().map(|(_, p)| p.luminous_power());
+        let max = self.channels().iter().fold(0.0f64, |m, (_, p)| m.max(p.max_power()));
+        let scale = if max.is_finite() && max > 0.0 && (1.0 / max).is_normal() { 1.0 / max } else { 1.0 };
+        let y = self.channels().map(|(_, p)| p.luminous_power_scaled(scale));
         let total: f64 = y.iter().sum();
         y.map(|v| v / total)
     }
@@ -170,6 +176,43 @@ impl PrimarySpec {
             }
         }
         Ok(())
+    }
+
+    /// The largest power of the spectrum (a Gaussian's peak: 1).
+    fn max_power(&self) -> f64 {
+        match self {
+            PrimarySpec::Gaussian { .. } => 1.0,
+            PrimarySpec::Table { table } => table.iter().fold(0.0f64, |m, [_, p]| m.max(*p)),
+        }
+    }
+
+    /// [`PrimarySpec::luminous_power`] of the spectrum's powers times `scale`: a Gaussian's on
+    /// the 0.25 nm grid (times `scale`), a table's exactly. A table is linear between its
+    /// entries and V(lambda) between whole nanometres, so on each piece between consecutive
+    /// breakpoints of the two the product is a quadratic, integrated in closed form: a line
+    /// narrower than any grid keeps its luminous power.
+    fn luminous_power_scaled(&self, scale: f64) -> f64 {
+        let PrimarySpec::Table { table } = self else {
+            return self.luminous_power() * scale;
+        };
+        let mut sum = 0.0;
+        for w in table.windows(2) {
+            let ([l0, p0], [l1, p1]) = (w[0], w[1]);
+            let (a, b) = (l0.max(VISIBLE_NM.0), l1.min(VISIBLE_NM.1));
+            if b <= a {
+                continue;
+            }
+            let power = |nm: f64| scale * p0 + (scale * p1 - scale * p0) * (nm - l0) / (l1 - l0);
+            let mut x0 = a;
+            while x0 < b {
+                let x1 = (x0.floor() + 1.0).min(b);
+                let (q0, q1) = (power(x0), power(x1));
+                let (v0, v1) = (photopic_efficiency(x0), photopic_efficiency(x1));
+                sum += (x1 - x0) * (q0 * v0 / 3.0 + (q0 * v1 + q1 * v0) / 6.0 + q1 * v1 / 3.0);
+                x0 = x1;
+            }
+        }
+        sum
     }
 
     /// The spectrum's power weighted by V(lambda), `int S V dl` on the sampler's 0.25 nm grid

@@ -204,7 +204,7 @@ mod tests {
             table: None,
         };
         assert_eq!(poly.value(0.0), 12.0);
-        assert!((poly.value(2.0) - (12.0 - 0.8 + 0.04)).abs() < 1e-15);
+        assert!((poly.value(2.0) - (12.0 - 0.8 + 0.04)).abs() < 1e-14);
         let table = AccommodationLaw {
             surface: "0".into(),
             parameter: LawParameter::Thickness,
