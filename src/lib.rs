@@ -7,11 +7,12 @@
 //! the eye toward the display and the scene, +x right, +y up; images are stored with row 0 at
 //! the top. Optics is computed in `f64`.
 //!
-//! Layers, bottom up (a module imports only from layers below it): `error`, `raster`, `progress`
-//! and `ray` (rays, hits, the intersector interface); `optics` (eq. (1)) and `scene`; `accel`
-//! (intersection backends over the scene's data), `metrics` and `io` (file formats); `render`;
-//! `experiment`, `resolution` (MTF measurements) and `bench`; `overrides` and `settings` (`--set` and the resolved settings of a
-//! run); `sweep`.
+//! Layers, bottom up (a module imports only from layers below it; `tests/layers.rs` holds the
+//! table): `error`, `count`, `ray` and the other leaves; `budget`, `progress`; `optics` (eq. (1))
+//! and `raster`; `metrics` and `scene`; `accel` (intersection backends), `info`; `render`;
+//! `measure` (the converged estimator); `perception` and `io` (file formats); `optimize` and
+//! `provenance`; `methods` (a method's display image, routed once); `experiment`; `resolution`,
+//! `bench` and `settings`; `sweep`.
 //!
 //! `unsafe` code is denied everywhere except in the Embree wrapper (`accel::embree`).
 //!

@@ -22,7 +22,7 @@ impl RgbImage {
 
     /// A black image allocated fallibly: a refused allocation is an error naming `what` and its
     /// size (one line), not an abort.
-    pub fn try_new(width: usize, height: usize, what: &str) -> crate::Result<Self> {
+    pub fn try_new(width: usize, height: usize, what: &str) -> crate::error::Result<Self> {
         let pixels = crate::budget::try_vec(width.saturating_mul(height), [0.0; 3], what)?;
         Ok(Self { width, height, pixels })
     }

@@ -46,7 +46,10 @@ impl Perceptual {
         let ppd = match self.ppd {
             Some(p) => p,
             None if extra.any_perceptual() => retina_ppd(a).with_context(|| {
-                format!("{} has no retina attributes: give the images' pixels per degree with --ppd", a.path().display())
+                format!(
+                    "{} has no retina attributes: give the images' pixels per degree with --ppd",
+                    a.path().display()
+                )
             })?,
             None => 1.0,
         };

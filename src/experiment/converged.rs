@@ -5,9 +5,9 @@
 use crate::io::exr::{AttrValue, Attributes};
 use std::time::{Duration, Instant};
 
+use super::perceptual;
 use crate::error::Result;
 use crate::experiment::{CaseResult, Experiment, EyeCase, Score, StageTime};
-use super::perceptual;
 use crate::measure::adaptive::{measure_case, measure_case_with, CaseMeasurement, Precision};
 use crate::measure::estimator::{DisplaySource, PairedSource, Replicates};
 use crate::measure::sampler::Sampler;

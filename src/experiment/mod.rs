@@ -234,69 +234,10 @@ impl Experiment {
     /// `spec.display` only label them): the same checks as [`Experiment::from_spec`].
     pub fn from_parts(spec: ExperimentSpec, scene: Scene, display: Display, source: &str) -> Result<Self> {
         check_name(&spec, source)?;
+        let methods = parse_methods(&spec, source)?;
         let dr = &spec.display_render;
-        let mut methods = Vec::new();
-        let mut method_names = std::collections::HashSet::new();
-        for (i, m) in spec.methods.iter().enumerate() {
-            let method: Method = m.parse().map_err(|e: String| Error::invalid(source, format!("methods[{i}]"), e))?;
-            let method = match (method, m.trim().eq_ignore_ascii_case("LA")) {
-                (Method::LensletAverage { .. }, true) => Method::LensletAverage { grid: dr.la_grid },
-                (other, _) => other,
-            };
-            if !method_names.insert(method.name()) {
-                return Err(Error::invalid(
-                    source,
-                    format!("methods[{i}]"),
-                    format!("{} appears twice (output file names would collide)", method.name()),
-                ));
-            }
-            methods.push(method);
-        }
-        if methods.is_empty() {
-            return Err(Error::invalid(source, "methods", "list at least one of LC, PC, LA, OPT"));
-        }
-        if dr.la_grid == 0 || dr.la_grid > 64 {
-            return Err(Error::invalid(
-                source,
-                "display_render.la_grid",
-                format!("must be between 1 and 64, got {}", dr.la_grid),
-            ));
-        }
-        if dr.samples_per_pixel == 0 || dr.samples_per_pixel > 64 {
-            return Err(Error::invalid(
-                source,
-                "display_render.samples_per_pixel",
-                format!("must be between 1 and 64, got {}", dr.samples_per_pixel),
-            ));
-        }
-        if !dr.reference_plane_z.is_finite() {
-            return Err(Error::invalid(source, "display_render.reference_plane_z", "must be finite"));
-        }
-        crate::optics::limits::REFERENCE_PLANE_Z.check(
-            source,
-            "display_render.reference_plane_z",
-            dr.reference_plane_z,
-        )?;
         let e = &spec.eye;
-        let position = DVec3::from_array(e.position);
-        let render = DisplayRenderSettings {
-            samples_per_pixel: dr.samples_per_pixel,
-            reference_plane_z: dr.reference_plane_z,
-            eye_position: dr.eye_position.map(DVec3::from_array).unwrap_or(position),
-        };
-        if !render.eye_position.is_finite() {
-            return Err(Error::invalid(source, "display_render.eye_position", "must be finite"));
-        }
-        // An eye at or beyond the lenslets sees nothing of the display, for every method.
-        crate::optics::transfer::check_eye_in_front(&display, position.z, source, "eye.position")?;
-        if dr.eye_position.is_some() {
-            crate::optics::transfer::check_eye_in_front(
-                &display,
-                render.eye_position.z,
-                source,
-                "display_render.eye_position",
-            )?;
-        }
+        let (position, render) = render_settings(&spec, &display, source)?;
         let retina = Retina {
             resolution: e.retina_resolution,
             half_tangent: e.retina_half_tangent,
@@ -329,34 +270,7 @@ impl Experiment {
             optics: e.optics_spec(pupil_diameter, source)?.with_diffraction(diffraction, e.spectrum.is_some()),
             primaries: display.primaries.clone().unwrap_or_default(),
         };
-        let mut cases = Vec::new();
-        let mut names = std::collections::HashSet::new();
-        for (i, c) in spec.eye_cases.iter().enumerate() {
-            let field = format!("eye_cases[{i}]");
-            if c.name.is_empty() || !c.name.chars().all(|ch| ch.is_ascii_alphanumeric() || ch == '-' || ch == '_') {
-                return Err(Error::invalid(
-                    source,
-                    format!("{field}.name"),
-                    format!("`{}` must be non-empty and use only letters, digits, - and _ (it names files)", c.name),
-                ));
-            }
-            if !names.insert(c.name.as_str()) {
-                return Err(Error::invalid(source, format!("{field}.name"), format!("`{}` appears twice", c.name)));
-            }
-            if c.weight.is_some() {
-                return Err(Error::invalid(
-                    source,
-                    format!("{field}.weight"),
-                    "is read only in [[optimize.states]] (OPT's training weights of the eye cases are \
-                     optimize.case_weights)",
-                ));
-            }
-            if let Some(p) = c.position.filter(|p| DVec3::from_array(*p).is_finite()) {
-                crate::optics::transfer::check_eye_in_front(&display, p[2], source, &format!("{field}.position"))?;
-            }
-            let eye = c.resolve(&base, source, &field)?;
-            cases.push(EyeCase { name: c.name.clone(), eye });
-        }
+        let cases = resolve_cases(&spec, &base, &display, source)?;
         if methods.contains(&Method::PupilCenter) {
             crate::optics::transfer::check_pupil_center(&display, render.eye_position).map_err(|e| {
                 let i = methods.iter().position(|m| *m == Method::PupilCenter).unwrap_or(0);
@@ -385,30 +299,7 @@ impl Experiment {
         measurement.validate(source)?;
         let extra_scores = measurement.extra_scores(source)?;
         let luminance = crate::perception::DisplayLuminance::from(&display.photometry());
-        if diffraction.is_on() && measurement.estimator != crate::measure::spec::EstimatorKind::Converged {
-            return Err(Error::invalid(
-                source,
-                "optics.diffraction",
-                format!(
-                    "\"{}\" needs the converged estimator: a diffraction angle is a sampled dimension of its \
-                     integral, which the grid estimator's fixed pupil and retina grids do not have (add a \
-                     [measurement] table with estimator = \"converged\", or set optics.diffraction = \"none\")",
-                    diffraction.name()
-                ),
-            ));
-        }
-        let d = EyeSpec::default();
-        measurement.check_grid_only(
-            source,
-            [("pupil_grid", e.pupil_grid, d.pupil_grid), ("retina_samples", e.retina_samples, d.retina_samples)],
-        )?;
-        let converged = measurement.estimator == crate::measure::spec::EstimatorKind::Converged;
-        crate::optics::eye::settings::check_applicable(e, &base.optics, converged, source)?;
-        if !converged {
-            for c in &cases {
-                crate::optics::eye::settings::check_grid_stiles_crawford(&c.eye, &c.name, source)?;
-            }
-        }
+        check_measurement(&spec, &base, &measurement, &cases, source)?;
         Ok(Self {
             name: spec.name.clone(),
             source: source.into(),
@@ -545,4 +436,146 @@ pub fn exact_aim_note(case: &EyeCase, cases: &[EyeCase]) -> Option<String> {
         optics.model.name(),
         optics.accommodation.unwrap_or(f64::NAN)
     ))
+}
+
+/// The experiment's methods (`methods`, LA at `display_render.la_grid`), each named once, and the
+/// display-render settings' bounds.
+fn parse_methods(spec: &ExperimentSpec, source: &str) -> Result<Vec<Method>> {
+    let dr = &spec.display_render;
+    let mut methods = Vec::new();
+    let mut method_names = std::collections::HashSet::new();
+    for (i, m) in spec.methods.iter().enumerate() {
+        let method: Method = m.parse().map_err(|e: String| Error::invalid(source, format!("methods[{i}]"), e))?;
+        let method = match (method, m.trim().eq_ignore_ascii_case("LA")) {
+            (Method::LensletAverage { .. }, true) => Method::LensletAverage { grid: dr.la_grid },
+            (other, _) => other,
+        };
+        if !method_names.insert(method.name()) {
+            return Err(Error::invalid(
+                source,
+                format!("methods[{i}]"),
+                format!("{} appears twice (output file names would collide)", method.name()),
+            ));
+        }
+        methods.push(method);
+    }
+    if methods.is_empty() {
+        return Err(Error::invalid(source, "methods", "list at least one of LC, PC, LA, OPT"));
+    }
+    if dr.la_grid == 0 || dr.la_grid > 64 {
+        return Err(Error::invalid(
+            source,
+            "display_render.la_grid",
+            format!("must be between 1 and 64, got {}", dr.la_grid),
+        ));
+    }
+    if dr.samples_per_pixel == 0 || dr.samples_per_pixel > 64 {
+        return Err(Error::invalid(
+            source,
+            "display_render.samples_per_pixel",
+            format!("must be between 1 and 64, got {}", dr.samples_per_pixel),
+        ));
+    }
+    if !dr.reference_plane_z.is_finite() {
+        return Err(Error::invalid(source, "display_render.reference_plane_z", "must be finite"));
+    }
+    crate::optics::limits::REFERENCE_PLANE_Z.check(source, "display_render.reference_plane_z", dr.reference_plane_z)?;
+    Ok(methods)
+}
+
+/// The eye's position and the display-render settings (the eye position the methods render for),
+/// each checked in front of the lenslets.
+fn render_settings(spec: &ExperimentSpec, display: &Display, source: &str) -> Result<(DVec3, DisplayRenderSettings)> {
+    let (dr, e) = (&spec.display_render, &spec.eye);
+    let position = DVec3::from_array(e.position);
+    let render = DisplayRenderSettings {
+        samples_per_pixel: dr.samples_per_pixel,
+        reference_plane_z: dr.reference_plane_z,
+        eye_position: dr.eye_position.map(DVec3::from_array).unwrap_or(position),
+    };
+    if !render.eye_position.is_finite() {
+        return Err(Error::invalid(source, "display_render.eye_position", "must be finite"));
+    }
+    // An eye at or beyond the lenslets sees nothing of the display, for every method.
+    crate::optics::transfer::check_eye_in_front(display, position.z, source, "eye.position")?;
+    if dr.eye_position.is_some() {
+        crate::optics::transfer::check_eye_in_front(
+            display,
+            render.eye_position.z,
+            source,
+            "display_render.eye_position",
+        )?;
+    }
+    Ok((position, render))
+}
+
+/// The `[[eye_cases]]` rows, each named once and resolved against the base eye.
+fn resolve_cases(spec: &ExperimentSpec, base: &BaseEye, display: &Display, source: &str) -> Result<Vec<EyeCase>> {
+    let mut cases = Vec::new();
+    let mut names = std::collections::HashSet::new();
+    for (i, c) in spec.eye_cases.iter().enumerate() {
+        let field = format!("eye_cases[{i}]");
+        if c.name.is_empty() || !c.name.chars().all(|ch| ch.is_ascii_alphanumeric() || ch == '-' || ch == '_') {
+            return Err(Error::invalid(
+                source,
+                format!("{field}.name"),
+                format!("`{}` must be non-empty and use only letters, digits, - and _ (it names files)", c.name),
+            ));
+        }
+        if !names.insert(c.name.as_str()) {
+            return Err(Error::invalid(source, format!("{field}.name"), format!("`{}` appears twice", c.name)));
+        }
+        if c.weight.is_some() {
+            return Err(Error::invalid(
+                source,
+                format!("{field}.weight"),
+                "is read only in [[optimize.states]] (OPT's training weights of the eye cases are \
+                 optimize.case_weights)",
+            ));
+        }
+        if let Some(p) = c.position.filter(|p| DVec3::from_array(*p).is_finite()) {
+            crate::optics::transfer::check_eye_in_front(display, p[2], source, &format!("{field}.position"))?;
+        }
+        let eye = c.resolve(base, source, &field)?;
+        cases.push(EyeCase { name: c.name.clone(), eye });
+    }
+    Ok(cases)
+}
+
+/// The measurement's consistency with the optics and the eye: diffraction needs the converged
+/// estimator, grid-only eye fields and inapplicable `[eye]` settings are refused.
+fn check_measurement(
+    spec: &ExperimentSpec,
+    base: &BaseEye,
+    measurement: &MeasurementSpec,
+    cases: &[EyeCase],
+    source: &str,
+) -> Result<()> {
+    let e = &spec.eye;
+    let diffraction = spec.optics.as_ref().map(|o| o.diffraction).unwrap_or_default();
+    if diffraction.is_on() && measurement.estimator != crate::measure::spec::EstimatorKind::Converged {
+        return Err(Error::invalid(
+            source,
+            "optics.diffraction",
+            format!(
+                "\"{}\" needs the converged estimator: a diffraction angle is a sampled dimension of its \
+                 integral, which the grid estimator's fixed pupil and retina grids do not have (add a \
+                 [measurement] table with estimator = \"converged\", or set optics.diffraction = \"none\")",
+                diffraction.name()
+            ),
+        ));
+    }
+    let d = EyeSpec::default();
+    measurement.check_grid_only(
+        source,
+        [("pupil_grid", e.pupil_grid, d.pupil_grid), ("retina_samples", e.retina_samples, d.retina_samples)],
+    )?;
+    let converged = measurement.estimator == crate::measure::spec::EstimatorKind::Converged;
+    crate::optics::eye::settings::check_applicable(e, &base.optics, converged, source)?;
+    if !converged {
+        for c in cases {
+            crate::optics::eye::settings::check_grid_stiles_crawford(&c.eye, &c.name, source)?;
+        }
+    }
+    Ok(())
 }

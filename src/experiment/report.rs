@@ -252,8 +252,7 @@ pub(super) fn write_reports(report: &AssessReport, exp: &Experiment, dir: &Outpu
     // (experiment, eye case) are quoted where they hold a comma, a quote or a line break.
     let mut csv = CsvTable::new();
     let extra = exp.extra_scores.names();
-    let extra_header: Vec<String> =
-        extra
+    let extra_header: Vec<String> = extra
         .iter()
         .flat_map(|n| {
             [n.name().to_string(), format!("{n}_ci95"), format!("{n}_noise_bias"), format!("{n}_bias_above_ci95")]

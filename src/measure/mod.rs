@@ -7,11 +7,14 @@
 //! - [`stats`], `ssim`: PSNR and SSIM from cross-replicate products (no noise bias), with
 //!   jackknife intervals;
 //! - [`adaptive`]: doubling the samples until every cell meets its target or the budget is spent;
+//! - [`scores`]: the names of `[measurement] scores` (Table 1's pair, the luminance PSNR, the
+//!   perceptual scores `crate::perception` computes) and how those count the eye's optics;
 //! - [`spec`]: the experiment file's `[measurement]` table; `experiment::converged`: `assess`'s converged Table 1.
 
 pub mod adaptive;
 pub mod estimator;
 pub mod sampler;
+pub mod scores;
 pub mod spec;
 pub(crate) mod ssim;
 pub mod stats;

@@ -23,8 +23,8 @@ use serde::ser::SerializeStruct;
 use serde::{Deserialize, Serialize};
 
 use super::sampler::MAX_SAMPLES_PER_REPLICATE;
+use super::scores::{ExtraScores, OpticsCount, ScoreName};
 use crate::error::{Error, Result};
-use crate::perception::{ExtraScores, OpticsCount, ScoreName};
 
 fn default_scores() -> Vec<ScoreName> {
     vec![ScoreName::Psnr, ScoreName::Ssim]

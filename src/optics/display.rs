@@ -223,6 +223,20 @@ impl Display {
         self.channel_samplers().map(|s| s.wavelength(0.5))
     }
 
+    /// The half angles (radians) of the display's field of view along x and y, seen from the
+    /// pupil centre: `atan(W / 2 (v1 + v2))` and `atan(H / 2 (v1 + v2))`.
+    pub fn field_half_angles(&self) -> [f64; 2] {
+        let distance = self.eye_to_lenslets + self.lenslets_to_lcd;
+        [(0.5 * self.lcd.size.x / distance).atan(), (0.5 * self.lcd.size.y / distance).atan()]
+    }
+
+    /// The area of the display's field of view, deg^2 (its angular width times its angular
+    /// height): the adapting field of the light-adapted pupil ([`super::eye::pupil`]).
+    pub fn field_area_deg2(&self) -> f64 {
+        let half = self.field_half_angles();
+        4.0 * half[0].to_degrees() * half[1].to_degrees()
+    }
+
     /// The panel's photometry (`photometry`, or the typical near-eye LCD's).
     pub fn photometry(&self) -> super::photometry::Photometry {
         self.photometry.unwrap_or_default()

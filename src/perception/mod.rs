@@ -2,7 +2,8 @@
 //! truth at the display's real luminance, beside the paper's PSNR and SSIM (Sec. 4.2, Table 1).
 //! See `docs/PERCEPTION.md`.
 //!
-//! - [`scores`]: the score names of `[measurement] scores`;
+//! - the score names of `[measurement] scores` and how they count the eye's optics are the
+//!   measurement's settings ([`crate::measure::scores`]);
 //! - [`viewing`]: the display's absolute luminance and the retina image's pixels per degree;
 //! - [`luminance`]: the luminance PSNR, plain and from the converged estimator's replicates;
 //! - [`cvvdp`]: ColorVideoVDP (Mantiuk et al. 2024) in JOD, with its distortion map;
@@ -16,7 +17,6 @@ pub mod flip;
 pub mod luminance;
 pub mod optics_once;
 pub mod replicated;
-pub mod scores;
 pub mod viewing;
 
 use serde::ser::SerializeMap;
@@ -24,10 +24,10 @@ use serde::Serialize;
 
 use crate::error::Result;
 use crate::measure::estimator::Replicates;
+pub use crate::measure::scores::{ExtraScores, ScoreName};
 use crate::raster::RgbImage;
 pub use optics_once::{Compensation, OpticsCount};
 pub use replicated::{BiasExponent, ScalarEstimate};
-pub use scores::{ExtraScores, ScoreName};
 pub use viewing::{DisplayLuminance, Viewing, BT709_LUMINANCE};
 
 /// The extra scores of one perceived image, in report order.

@@ -17,10 +17,9 @@
 //! and one along columns, mirrored at the edges. The gain is capped at [`MAX_GAIN`] (noise and
 //! frequencies far beyond the typical eye's cutoff are not amplified without bound).
 
-use rayon::prelude::*;
-use serde::{Deserialize, Serialize};
-
+pub use crate::measure::scores::OpticsCount;
 use crate::raster::RgbImage;
+use rayon::prelude::*;
 
 /// Barten's sigma_0, arcmin.
 pub const SIGMA_0_ARCMIN: f64 = 0.5;
@@ -30,41 +29,6 @@ pub const C_AB_ARCMIN_PER_MM: f64 = 0.08;
 pub const MAX_GAIN: f64 = 10.0;
 /// Half the taps of the FIR.
 const K: usize = 6;
-
-/// How the metric's sensitivity meets the images' optics (`[measurement] optics`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum OpticsCount {
-    /// `retinal` for an eye without aberrations (the thin lens: its images hold defocus and
-    /// pixels, not a real eye's in-focus blur, which the metric's CSF supplies), `neural` for a
-    /// schematic eye (its images hold its aberrations; the CSF's are divided out).
-    #[default]
-    Auto,
-    /// The metric's sensitivity as published (it includes a typical eye's optics).
-    Retinal,
-    /// The sensitivity less Barten's typical optics: both images filtered by `1 / M_opt`.
-    Neural,
-}
-
-impl OpticsCount {
-    /// The name in experiment files.
-    pub fn name(self) -> &'static str {
-        match self {
-            OpticsCount::Auto => "auto",
-            OpticsCount::Retinal => "retinal",
-            OpticsCount::Neural => "neural",
-        }
-    }
-
-    /// Whether the compensation applies to an eye case (`schematic`: its eye has aberrations).
-    pub fn compensates(self, schematic: bool) -> bool {
-        match self {
-            OpticsCount::Auto => schematic,
-            OpticsCount::Retinal => false,
-            OpticsCount::Neural => true,
-        }
-    }
-}
 
 /// Barten's optical spread of a typical eye with a `pupil_mm` pupil, degrees.
 pub fn barten_sigma_deg(pupil_mm: f64) -> f64 {

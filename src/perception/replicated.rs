@@ -240,8 +240,7 @@ mod tests {
         let truth = (0..N * N).map(|p| diff(p).powi(2)).sum::<f64>() / (N * N) as f64;
         let mse = |t: &RgbImage, r: &RgbImage| Ok(each_value(t, r).map(|d| d * d).sum::<f64>() / (N * N * 3) as f64);
         let trials = 400;
-        let (rate, removed) =
-            coverage(trials, 8, BiasExponent::SMOOTH, truth, |s, nr| noisy(s, nr, 0.1, diff), &mse);
+        let (rate, removed) = coverage(trials, 8, BiasExponent::SMOOTH, truth, |s, nr| noisy(s, nr, 0.1, diff), &mse);
         assert!(covers(rate, trials), "coverage {rate}");
         assert!((removed - 1.0).abs() < 0.05, "removed {removed} of the bias");
         // The uncorrected score with the plain jackknife interval would not cover it.

@@ -22,24 +22,6 @@ use crate::scene::Scene;
 /// Chief rays per axis of the adapting field's grid.
 pub const GRID: usize = 64;
 
-/// The half angles (radians) of `display`'s field of view along x and y, from the pupil centre.
-fn half_field(display: &Display) -> [f64; 2] {
-    let distance = display.eye_to_lenslets + display.lenslets_to_lcd;
-    [(0.5 * display.lcd.size.x / distance).atan(), (0.5 * display.lcd.size.y / distance).atan()]
-}
-
-/// The area of `display`'s field of view, deg^2 (its angular width times its angular height).
-pub fn field_area_deg2(display: &Display) -> f64 {
-    let half = half_field(display);
-    4.0 * half[0].to_degrees() * half[1].to_degrees()
-}
-
-/// The adapting field of a uniform grey of linear value `v` filling `display`'s field (a
-/// resolution study's chart, whose gratings and edge average to its grey): `(luminance, area)`.
-pub fn grey_field(display: &Display, v: f64) -> (f64, f64) {
-    (display.photometry().absolute(v), field_area_deg2(display))
-}
-
 /// The light-adapted pupil of `observer` for `scene` shown by `display` to an eye at `eye`
 /// (module comment), traced with the backend `auto` chooses.
 pub fn auto_pupil(scene: &Scene, display: &Display, eye: DVec3, observer: Observer) -> Result<AutoPupil> {
@@ -52,8 +34,8 @@ pub fn auto_pupil(scene: &Scene, display: &Display, eye: DVec3, observer: Observ
 /// The adapting field of `display` seen from `eye` (the pupil centre) over the scene `field`:
 /// `(mean luminance cd/m^2, area deg^2)` (module comment).
 pub fn adapting_field(field: &dyn RadianceField, display: &Display, eye: DVec3) -> (f64, f64) {
-    let half = half_field(display);
-    let area = field_area_deg2(display);
+    let half = display.field_half_angles();
+    let area = display.field_area_deg2();
     let (photometry, weights) = (display.photometry(), display.luminance_weights());
     let mut sum = 0.0;
     for r in 0..GRID {

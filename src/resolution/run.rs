@@ -379,15 +379,7 @@ pub fn run_study(study: &Study, quiet: bool) -> Result<StudyResults> {
     for (di, depth) in study.depths.iter().enumerate() {
         let field = ChartField { chart: &chart, depth: depth.mm };
         let t = Instant::now();
-        let images: Vec<RgbImage> = study
-            .methods
-            .iter()
-            .map(|&m| {
-                crate::methods::render(&display, m, &settings, training.as_ref(), &field, &display_bar).map(|r| r.0)
-            })
-            .collect::<Result<_>>()?;
-        let refs: Vec<&RgbImage> = images.iter().collect();
-        let stack = DisplayStack::new(&display, &refs)?;
+        let stack = render_stack(study, &display, (&settings, training.as_ref()), &field, &display_bar)?;
         t_display += t.elapsed().as_secs_f64();
         for (fi, eye) in eyes.iter().enumerate() {
             let t = Instant::now();
@@ -398,24 +390,7 @@ pub fn run_study(study: &Study, quiet: bool) -> Result<StudyResults> {
             eye_rays += rays_of(&windows);
             t_measure += t.elapsed().as_secs_f64();
             let t = Instant::now();
-            let per_source: Vec<(Vec<Value>, Vec<Value>, Value)> = (0..ns)
-                .into_par_iter()
-                .map(|k| {
-                    let mut g = vec![Value::NAN; nq];
-                    let mut e = (g.clone(), Value::NAN);
-                    for (p, w) in chart.patches.iter().zip(&windows) {
-                        match p.pattern {
-                            Pattern::Grating { frequency_cpd } => {
-                                let qi =
-                                    study.frequency_index(frequency_cpd).expect("chart frequencies are the study's");
-                                g[qi] = grating_value(w, k, frequency_cpd, ppd, chart.contrast);
-                            }
-                            Pattern::Edge { .. } => e = edge_values(w, k, &study.frequencies_cpd, ppd),
-                        }
-                    }
-                    (g, e.0, e.1)
-                })
-                .collect();
+            let per_source = analyse_windows(study, &chart, &windows, ns);
             for (k, (g, e, m50)) in per_source.into_iter().enumerate() {
                 grating[k][di][fi] = g;
                 edge[k][di][fi] = e;
@@ -424,22 +399,13 @@ pub fn run_study(study: &Study, quiet: bool) -> Result<StudyResults> {
             t_analysis += t.elapsed().as_secs_f64();
         }
         drop(stack);
-        drop(images);
         // The turned charts at this depth: their own display images, the eye on the content (or
         // at every focus); sample streams after every 0-degree one.
         let content_focus = study.focus_index(depth.diopters).expect("content depths are measured focuses");
         for (ti, (tchart, tdisplay)) in turned.iter().enumerate() {
             let field = ChartField { chart: tchart, depth: depth.mm };
             let t = Instant::now();
-            let images: Vec<RgbImage> = study
-                .methods
-                .iter()
-                .map(|&m| {
-                    crate::methods::render(tdisplay, m, &settings, training.as_ref(), &field, &display_bar).map(|r| r.0)
-                })
-                .collect::<Result<_>>()?;
-            let refs: Vec<&RgbImage> = images.iter().collect();
-            let stack = DisplayStack::new(tdisplay, &refs)?;
+            let stack = render_stack(study, tdisplay, (&settings, training.as_ref()), &field, &display_bar)?;
             t_turned_display += t.elapsed().as_secs_f64();
             for (fi, eye) in eyes.iter().enumerate() {
                 if !study.orientations_through_focus && fi != content_focus {
@@ -454,22 +420,7 @@ pub fn run_study(study: &Study, quiet: bool) -> Result<StudyResults> {
                 turned_eye_rays += rays_of(&windows);
                 t_turned_measure += t.elapsed().as_secs_f64();
                 let t = Instant::now();
-                let per_source: Vec<Vec<Value>> = (0..ns)
-                    .into_par_iter()
-                    .map(|k| {
-                        let mut g = vec![Value::NAN; nq];
-                        for (p, w) in tchart.patches.iter().zip(&windows) {
-                            if let Pattern::Grating { frequency_cpd } = p.pattern {
-                                let qi =
-                                    study.frequency_index(frequency_cpd).expect("chart frequencies are the study's");
-                                // In its own frame every grating is vertical bars.
-                                g[qi] = grating_value(w, k, frequency_cpd, ppd, tchart.contrast);
-                            }
-                        }
-                        g
-                    })
-                    .collect();
-                for (k, g) in per_source.into_iter().enumerate() {
+                for (k, (g, _, _)) in analyse_windows(study, tchart, &windows, ns).into_iter().enumerate() {
                     oriented[ti].grating[k][di][fi] = g;
                 }
                 t_analysis += t.elapsed().as_secs_f64();
@@ -478,6 +429,97 @@ pub fn run_study(study: &Study, quiet: bool) -> Result<StudyResults> {
     }
     display_bar.finish();
     measure_bar.finish();
+    let seconds = StageSeconds {
+        display: t_display,
+        measure: t_measure,
+        turned_display: t_turned_display,
+        turned_measure: t_turned_measure,
+        analysis: t_analysis,
+    };
+    stage_timings(study, &display, &turned, (eye_rays, turned_eye_rays), &seconds, &mut timings);
+    let eye_rays = eye_rays + turned_eye_rays;
+    Ok(StudyResults {
+        study: study.clone(),
+        sources,
+        chart,
+        lcd_crop: display.lcd.resolution,
+        grating,
+        oriented,
+        edge,
+        mtf50,
+        timings,
+        eye_rays,
+    })
+}
+
+/// Every method's display image of `field` on `display`, packed for the simulation (the images
+/// themselves are dropped once packed). `opt` is the render settings and OPT's training states.
+fn render_stack(
+    study: &Study,
+    display: &Display,
+    opt: (&DisplayRenderSettings, Option<&Optimization>),
+    field: &ChartField,
+    bar: &Progress,
+) -> Result<DisplayStack> {
+    let images: Vec<RgbImage> = study
+        .methods
+        .iter()
+        .map(|&m| crate::methods::render(display, m, opt.0, opt.1, field, bar).map(|r| r.0))
+        .collect::<Result<_>>()?;
+    let refs: Vec<&RgbImage> = images.iter().collect();
+    DisplayStack::new(display, &refs)
+}
+
+/// Each source's measurements in `chart`'s windows: the grating modulations (per study
+/// frequency; in its own frame every grating is vertical bars), the edge's MTF at those
+/// frequencies and its MTF50 (NaN where the chart has no edge).
+fn analyse_windows(
+    study: &Study,
+    chart: &Chart,
+    windows: &[WindowSamples],
+    sources: usize,
+) -> Vec<(Vec<Value>, Vec<Value>, Value)> {
+    let (nq, ppd) = (study.frequencies_cpd.len(), study.retina.pixels_per_degree);
+    (0..sources)
+        .into_par_iter()
+        .map(|k| {
+            let mut g = vec![Value::NAN; nq];
+            let mut e = (g.clone(), Value::NAN);
+            for (p, w) in chart.patches.iter().zip(windows) {
+                match p.pattern {
+                    Pattern::Grating { frequency_cpd } => {
+                        let qi = study.frequency_index(frequency_cpd).expect("chart frequencies are the study's");
+                        g[qi] = grating_value(w, k, frequency_cpd, ppd, chart.contrast);
+                    }
+                    Pattern::Edge { .. } => e = edge_values(w, k, &study.frequencies_cpd, ppd),
+                }
+            }
+            (g, e.0, e.1)
+        })
+        .collect()
+}
+
+/// The seconds of each stage of a study.
+struct StageSeconds {
+    display: f64,
+    measure: f64,
+    turned_display: f64,
+    turned_measure: f64,
+    analysis: f64,
+}
+
+/// The study's stage timings after the chart's: display images, eye rays (their count in
+/// millions), the turned charts' if any, and the analysis.
+fn stage_timings(
+    study: &Study,
+    display: &Display,
+    turned: &[(Chart, Display)],
+    (eye_rays, turned_eye_rays): (u64, u64),
+    seconds: &StageSeconds,
+    timings: &mut Vec<Timing>,
+) {
+    let (t_display, t_measure, t_turned_display, t_turned_measure, t_analysis) =
+        (seconds.display, seconds.measure, seconds.turned_display, seconds.turned_measure, seconds.analysis);
     timings.push(Timing {
         stage: format!(
             "display images ({} x {} LCD pixels, {} per depth)",
@@ -503,20 +545,7 @@ pub fn run_study(study: &Study, quiet: bool) -> Result<StudyResults> {
             seconds: t_turned_measure,
         });
     }
-    let eye_rays = eye_rays + turned_eye_rays;
     timings.push(Timing { stage: "grating and edge analysis".into(), seconds: t_analysis });
-    Ok(StudyResults {
-        study: study.clone(),
-        sources,
-        chart,
-        lcd_crop: display.lcd.resolution,
-        grating,
-        oriented,
-        edge,
-        mtf50,
-        timings,
-        eye_rays,
-    })
 }
 
 #[cfg(test)]

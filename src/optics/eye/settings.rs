@@ -23,7 +23,7 @@ pub struct EyeSpec {
     pub retina_distance: f64,
     /// Pupil diameter, mm, or `"auto"`: the light-adapted pupil of Watson & Yellott (2012) for
     /// the display's photometry and the scene ([`crate::optics::eye::pupil`],
-    /// [`crate::render::adapting`]).
+    /// `render::adapting`).
     pub pupil_diameter: PupilSetting,
     /// n: n x n grid over the pupil's bounding square, kept inside the circle.
     pub pupil_grid: usize,
@@ -269,7 +269,8 @@ impl EyeModelSettings {
 impl EyeModelSettings {
     /// A resolution study's pupil (`pupil_diameter_mm`), mm, and how `"auto"` chose it: the light-
     /// adapted pupil of the chart's grey `grey` (`target.mean`) at `display`'s photometry over its
-    /// field ([`crate::render::adapting::grey_field`]), for the observer of these settings' `age`
+    /// field (the grey's luminance at the display's photometry over its field of view,
+    /// [`crate::optics::Display::field_area_deg2`]), for the observer of these settings' `age`
     /// and `adapted_eyes`. Errors name `source` and the field.
     pub fn study_pupil(
         &self,
@@ -280,7 +281,7 @@ impl EyeModelSettings {
     ) -> Result<(f64, Option<AutoPupil>)> {
         let key = "pupil_diameter_mm";
         let observer = observer_of(setting, self.age, self.adapted_eyes, source, "eye.", key)?;
-        let (l, a) = crate::render::adapting::grey_field(display, grey);
+        let (l, a) = (display.photometry().absolute(grey), display.field_area_deg2());
         let auto = observer.map(|o| AutoPupil::new(o, l, a));
         let pupil = auto.map_or(setting.stated().unwrap_or(f64::NAN), |p| p.diameter_mm);
         crate::optics::limits::PUPIL_DIAMETER.check(source, key, pupil)?;

@@ -133,6 +133,41 @@ impl ExtraScores {
     }
 }
 
+/// How the metric's sensitivity meets the images' optics (`[measurement] optics`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum OpticsCount {
+    /// `retinal` for an eye without aberrations (the thin lens: its images hold defocus and
+    /// pixels, not a real eye's in-focus blur, which the metric's CSF supplies), `neural` for a
+    /// schematic eye (its images hold its aberrations; the CSF's are divided out).
+    #[default]
+    Auto,
+    /// The metric's sensitivity as published (it includes a typical eye's optics).
+    Retinal,
+    /// The sensitivity less Barten's typical optics: both images filtered by `1 / M_opt`.
+    Neural,
+}
+
+impl OpticsCount {
+    /// The name in experiment files.
+    pub fn name(self) -> &'static str {
+        match self {
+            OpticsCount::Auto => "auto",
+            OpticsCount::Retinal => "retinal",
+            OpticsCount::Neural => "neural",
+        }
+    }
+
+    /// Whether the compensation applies to an eye case (`schematic`: its eye has aberrations).
+    pub fn compensates(self, schematic: bool) -> bool {
+        match self {
+            OpticsCount::Auto => schematic,
+            OpticsCount::Retinal => false,
+            OpticsCount::Neural => true,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
