@@ -26,7 +26,11 @@ fn same_estimate(from_compare: &serde_json::Value, from_table: &serde_json::Valu
     // table lists them in that order.
     for (c, name) in ["R", "G", "B"].into_iter().enumerate() {
         close(&from_compare[name], &from_table["channels"][c], &format!("{what} channel {name}"));
-        close(&from_compare["channels_ci95"][name], &from_table["channels_ci95"][c], &format!("{what} channel {name} ci95"));
+        close(
+            &from_compare["channels_ci95"][name],
+            &from_table["channels_ci95"][c],
+            &format!("{what} channel {name} ci95"),
+        );
     }
 }
 

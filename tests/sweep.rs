@@ -153,7 +153,10 @@ fn set_changes_numbers_arrays_nested_and_indexed_keys_on_every_command() {
 #[test]
 fn set_errors_name_the_key() {
     expect_error(&["assess", "--set", "eye.pupil_diam=3"], &["eye.pupil_diam", "unknown field"]);
-    expect_error(&["assess", "--set", "eye.pupil_diameter=\"wide\""], &["eye.pupil_diameter", "`wide` is not a pupil diameter"]);
+    expect_error(
+        &["assess", "--set", "eye.pupil_diameter=\"wide\""],
+        &["eye.pupil_diameter", "`wide` is not a pupil diameter"],
+    );
     expect_error(&["assess", "--set", "eye.pupil_grid=[8]"], &["eye.pupil_grid", "invalid type"]);
     expect_error(&["assess", "--set", "eye_cases[7].focus_mm=300"], &["eye_cases[7]", "out of range"]);
     expect_error(&["assess", "--set", "eye.pupil_diameter.x=1"], &["eye.pupil_diameter", "not a table"]);

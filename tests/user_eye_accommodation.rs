@@ -60,10 +60,11 @@ fn bad_accommodation_laws_name_the_field() {
         "eye.accommodation.laws[5].table.accommodation",
     );
     bad(&|u| u.accommodation.as_mut().unwrap().laws[1].polynomial = Some(vec![f64::NAN]), "laws[1].polynomial");
-    // A law that makes an impossible surface somewhere in the range says at which A.
+    // A law that makes an impossible eye somewhere in the range says at which A: this lens front
+    // steepens until it crosses the lens back inside their semi-diameters (the clearance rules).
     bad(
         &|u| u.accommodation.as_mut().unwrap().laws[1].polynomial = Some(vec![12.0, -1.19]),
-        "eye.surfaces[2].semi_diameter (eye.accommodation at A = ",
+        "eye.surfaces[2].thickness (eye.accommodation at A = ",
     );
     // An index law needs a medium whose index it can set.
     bad(

@@ -49,7 +49,8 @@ impl ThickLenslet {
         let z1 = front_z + h1;
         let (l, s) = (z1 - eye.z, lcd_z - (front_z + self.thickness + h2));
         let denom = 1.0 / l + 1.0 / s - phi;
-        if !(denom.abs() > 1e-9 * (1.0 / l + 1.0 / s + phi.abs())) || !(l > 0.0 && s > 0.0) {
+        let regular = denom.abs() > 1e-9 * (1.0 / l + 1.0 / s + phi.abs());
+        if !regular || l <= 0.0 || s <= 0.0 || l.is_nan() || s.is_nan() {
             return None;
         }
         let point = (eye.truncate() / l + lcd / s - center * phi) / denom;

@@ -95,8 +95,8 @@ impl Primaries {
     /// finite shares.
     pub fn luminance_weights(&self) -> [f64; 3] {
         let max = self.channels().iter().fold(0.0f64, |m, (_, p)| m.max(p.max_power()));
-        let scale = if max.is_finite() && max > 0.0 && (1.0 / max).is_normal() { 1.0 / max } else { 1.0 };
-        let y = self.channels().map(|(_, p)| p.luminous_power_scaled(scale));
+        let max = if max.is_finite() && max > 0.0 { max } else { 1.0 };
+        let y = self.channels().map(|(_, p)| p.luminous_power_over(max));
         let total: f64 = y.iter().sum();
         y.map(|v| v / total)
     }
@@ -186,14 +186,14 @@ impl PrimarySpec {
         }
     }
 
-    /// [`PrimarySpec::luminous_power`] of the spectrum's powers times `scale`: a Gaussian's on
-    /// the 0.25 nm grid (times `scale`), a table's exactly. A table is linear between its
+    /// [`PrimarySpec::luminous_power`] of the spectrum's powers over `max`: a Gaussian's on the
+    /// 0.25 nm grid (over `max`), a table's exactly. A table is linear between its
     /// entries and V(lambda) between whole nanometres, so on each piece between consecutive
     /// breakpoints of the two the product is a quadratic, integrated in closed form: a line
     /// narrower than any grid keeps its luminous power.
-    fn luminous_power_scaled(&self, scale: f64) -> f64 {
+    fn luminous_power_over(&self, max: f64) -> f64 {
         let PrimarySpec::Table { table } = self else {
-            return self.luminous_power() * scale;
+            return self.luminous_power() / max;
         };
         let mut sum = 0.0;
         for w in table.windows(2) {
@@ -202,7 +202,8 @@ impl PrimarySpec {
             if b <= a {
                 continue;
             }
-            let power = |nm: f64| scale * p0 + (scale * p1 - scale * p0) * (nm - l0) / (l1 - l0);
+            let (p0, p1) = (p0 / max, p1 / max);
+            let power = |nm: f64| p0 + (p1 - p0) * (nm - l0) / (l1 - l0);
             let mut x0 = a;
             while x0 < b {
                 let x1 = (x0.floor() + 1.0).min(b);

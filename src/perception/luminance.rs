@@ -48,11 +48,11 @@ fn luminance_gram(reps: &Replicates, k: usize, weights: [f64; 3]) -> Vec<f64> {
             let mut g = vec![0.0; nr * nr];
             let mut d = vec![0.0; n * nr];
             for r in 0..nr {
-                for c in 0..3 {
+                for (c, w) in weights.iter().enumerate() {
                     let x = &reps.plane(r, 0, c)[row * n..(row + 1) * n];
                     let y = &reps.plane(r, k, c)[row * n..(row + 1) * n];
                     for (p, (a, b)) in x.iter().zip(y).enumerate() {
-                        d[p * nr + r] += weights[c] * (f64::from(*b) - f64::from(*a));
+                        d[p * nr + r] += w * (f64::from(*b) - f64::from(*a));
                     }
                 }
             }

@@ -253,7 +253,7 @@ mod tests {
     fn the_interval_of_a_kinked_score_covers_the_truth_at_95_percent() {
         // The mean absolute difference, zero on half the values (bias as N^-1/2 there) and
         // well above the noise on the rest (bias as 1/N): the exponent lies in the bracket.
-        let diff = |p: usize| if p % 2 == 0 { 0.0f64 } else { 0.3 };
+        let diff = |p: usize| if p.is_multiple_of(2) { 0.0f64 } else { 0.3 };
         let truth = (0..N * N).map(|p| diff(p).abs()).sum::<f64>() / (N * N) as f64;
         let mad = |t: &RgbImage, r: &RgbImage| Ok(each_value(t, r).map(f64::abs).sum::<f64>() / (N * N * 3) as f64);
         let trials = 400;

@@ -370,7 +370,6 @@ pub fn run_study(study: &Study, quiet: bool) -> Result<StudyResults> {
     let mut mtf50 = vec![vec![vec![Value::NAN; nf]; nd]; ns];
     let reps = study.measurement.replicates;
     let spp = study.measurement.samples_per_pixel;
-    let ppd = study.retina.pixels_per_degree;
     let (mut eye_rays, mut turned_eye_rays) = (0u64, 0u64);
     let rays_of = |windows: &[WindowSamples]| -> u64 {
         windows.iter().map(|w| (w.cols * w.rows * reps) as u64 * u64::from(spp)).sum::<u64>()

@@ -5,7 +5,7 @@
 //! ```toml
 //! [eye.user]
 //! retina_radius = -12.0
-//! iris = { after = "cornea-back", distance = 3.05 }
+//! iris = { after = "cornea-back", distance = 3.05 }   # or { before = "lens-front", distance = 0.0 }
 //! [[eye.user.surfaces]]
 //! name = "cornea-front"
 //! radius = 7.72
@@ -54,14 +54,23 @@ pub struct UserSurface {
     pub semi_diameter: f64,
 }
 
-/// Where the iris stop sits: `distance` mm behind the vertex of surface `after` (by name, or by
-/// index as a string such as "1"), before the next surface. Its diameter is set by the run.
+/// Where the iris stop sits: `distance` mm behind the vertex of surface `after`, or `distance`
+/// mm in front of the vertex of surface `before` (by name, or by index as a string such as "1"),
+/// exactly one of the two. With `before`, the iris keeps its place relative to that surface when
+/// an accommodation law changes the thickness in front of it (the schematic eyes' iris in the
+/// lens front's vertex plane: `before = "lens-front", distance = 0`). Its diameter is set by the
+/// run.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct UserIris {
     /// The surface the iris follows: its `name`, or its index.
-    pub after: String,
-    /// Distance behind that surface's vertex, mm (>= 0, at most its thickness).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub after: Option<String>,
+    /// The surface the iris precedes: its `name`, or its index (not the first).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub before: Option<String>,
+    /// Distance from that surface's vertex, mm (>= 0, at most the thickness between the two
+    /// surfaces the iris lies between).
     pub distance: f64,
 }
 
@@ -85,12 +94,29 @@ pub struct UserEye {
 }
 
 impl UserEye {
-    /// Index of the surface the iris follows.
-    fn iris_surface(&self) -> Option<usize> {
+    /// Index of the surface named `name` (its name, or its index as a string).
+    fn surface_named(&self, name: &str) -> Option<usize> {
         self.surfaces
             .iter()
-            .position(|s| s.name.as_deref() == Some(self.iris.after.as_str()))
-            .or_else(|| self.iris.after.parse::<usize>().ok().filter(|&i| i < self.surfaces.len()))
+            .position(|s| s.name.as_deref() == Some(name))
+            .or_else(|| name.parse::<usize>().ok().filter(|&i| i < self.surfaces.len()))
+    }
+
+    /// Index of the surface the iris follows.
+    fn iris_surface(&self) -> Option<usize> {
+        match (&self.iris.after, &self.iris.before) {
+            (Some(a), None) => self.surface_named(a),
+            (None, Some(b)) => self.surface_named(b).filter(|&j| j > 0).map(|j| j - 1),
+            _ => None,
+        }
+    }
+
+    /// The iris plane's distance behind the vertex of the surface it follows, mm.
+    fn iris_distance(&self) -> f64 {
+        match (&self.iris.before, self.iris_surface()) {
+            (Some(_), Some(k)) => self.surfaces[k].thickness - self.iris.distance,
+            _ => self.iris.distance,
+        }
     }
 
     /// The accommodation range, D: the law's, or `(0, 0)` for a fixed eye.
@@ -187,7 +213,14 @@ impl UserEye {
             }
         }
         let Some(k) = self.iris_surface() else {
-            return err("eye.iris.after".into(), format!("names no surface: `{}`", self.iris.after));
+            return match (&self.iris.after, &self.iris.before) {
+                (Some(a), None) => err("eye.iris.after".into(), format!("names no surface: `{a}`")),
+                (None, Some(b)) => err(
+                    "eye.iris.before".into(),
+                    format!("names no surface after the first: `{b}` (the iris lies between two surfaces)"),
+                ),
+                _ => err("eye.iris".into(), "give exactly one of `after` and `before`".into()),
+            };
         };
         let d = self.iris.distance;
         if !(d.is_finite() && d >= 0.0 && d <= self.surfaces[k].thickness) {
@@ -271,7 +304,8 @@ impl UserEye {
             None => self.surfaces[k].semi_diameter,
         };
         let thickness = self.surfaces[k].thickness;
-        if let Some((behind, g)) = plane_between(&self.conic(k), next.as_ref(), thickness, self.iris.distance, reach) {
+        if let Some((behind, g)) = plane_between(&self.conic(k), next.as_ref(), thickness, self.iris_distance(), reach)
+        {
             let which = if behind { self.label(k + 1) } else { self.label(k) };
             return Err(Error::invalid(
                 source,
@@ -279,7 +313,7 @@ impl UserEye {
                 format!(
                     "the iris plane, {} mm behind the vertex of {}, crosses {which} {:.4} mm from the axis, \
                      inside the surfaces' semi-diameters: the iris would lie inside a surface",
-                    self.iris.distance,
+                    self.iris_distance(),
                     self.label(k),
                     g.r
                 ),
@@ -307,7 +341,7 @@ impl UserEye {
                 })
                 .collect(),
             iris_after: self.iris_surface().unwrap_or(0),
-            iris_distance: self.iris.distance,
+            iris_distance: self.iris_distance(),
             retina_radius: self.retina_radius,
             reference_wavelength: self.reference_wavelength.unwrap_or(REFERENCE_WAVELENGTH),
         }
@@ -326,6 +360,14 @@ mod tests {
         let u: UserEye = toml::from_str(NAVARRO_LIKE).unwrap();
         u.validate("e.toml").unwrap();
         assert_eq!(u.definition(0.0).iris_after, 1);
+        // The same plane stated from the surface the iris precedes.
+        let mut before = u.clone();
+        let gap = u.surfaces[1].thickness - u.iris.distance;
+        before.iris = UserIris { after: None, before: Some("2".into()), distance: gap };
+        before.validate("e.toml").unwrap();
+        let (a, b) = (u.definition(0.0), before.definition(0.0));
+        assert_eq!((a.iris_after, b.iris_after), (1, 1));
+        assert!((a.iris_distance - b.iris_distance).abs() < 1e-12);
         assert_eq!(u.surfaces[1].medium, Dispersion::Cauchy { a: 1.3247, b: 0.0044, c: 0.0 });
     }
 
@@ -336,8 +378,14 @@ mod tests {
         let e = u.validate("e.toml").unwrap_err().to_string();
         assert!(e.contains("eye.surfaces[2].radius"), "{e}");
         let mut u: UserEye = toml::from_str(NAVARRO_LIKE).unwrap();
-        u.iris.after = "lens".into();
+        u.iris.after = Some("lens".into());
         assert!(u.validate("e").unwrap_err().to_string().contains("eye.iris.after"));
+        let mut u: UserEye = toml::from_str(NAVARRO_LIKE).unwrap();
+        u.iris.before = Some("2".into());
+        assert!(u.validate("e").unwrap_err().to_string().contains("exactly one of `after` and `before`"));
+        u.iris.after = None;
+        u.iris.before = Some("0".into());
+        assert!(u.validate("e").unwrap_err().to_string().contains("eye.iris.before"));
         let mut u: UserEye = toml::from_str(NAVARRO_LIKE).unwrap();
         u.surfaces[0].semi_diameter = 9.0;
         assert!(u.validate("e").unwrap_err().to_string().contains("eye.surfaces[0].semi_diameter"));
