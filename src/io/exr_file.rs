@@ -4,7 +4,7 @@
 //! the path again, so a file swapped after the check is not read and the provenance of a run
 //! (the gate's log, [`super::input_log`]) records the SHA-256 of exactly the image it used.
 //!
-//! [`ExrFile::input`] applies the strict reader ([`super::exr_read`]) and the input policy of
+//! [`ExrFile::input`] applies the strict reader (`super::exr_read`) and the input policy of
 //! [`super::exr`] (finite, non-negative radiance; depth non-negative or `+inf`) after refusing
 //! headers that claim more pixels than the memory limit or than the file holds.
 
@@ -45,7 +45,7 @@ impl ExrFile {
         MetaData::read_from_buffered(Cursor::new(&self.bytes[..]), false).map_err(|e| exr_error(&self.path, e))
     }
 
-    /// Part `part` (by name), or the only part with R, G and B (see [`super::exr_read`]), with
+    /// Part `part` (by name), or the only part with R, G and B (see `super::exr_read`), with
     /// the input policy applied.
     pub fn input(&self, part: Option<&str>) -> Result<ExrInput> {
         let path = &self.path;

@@ -1,4 +1,4 @@
-//! The record of what the input gate ([`super::input`]) read: while a [`recording`] is active on
+//! The record of what the input gate (`super::input`) read: while a [`recording`] is active on
 //! the thread, the gate notes each file's path (as it was opened) and the SHA-256 (FIPS 180-4)
 //! of exactly the bytes it read. The gate writes this log and [`crate::provenance`] reads it, so
 //! the input layer knows nothing of provenance records.

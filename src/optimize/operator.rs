@@ -6,7 +6,7 @@
 //! same rays: `(A^T r)_l = sum_{e : l_e = l} w_e r_{p_e}`.
 //!
 //! Matrix-free: the samples of a band of retina rows are traced afresh on every application
-//! (the same eye-to-LCD trace as [`crate::render::simulate_stack`]: [`FastTransfer`] for the thin
+//! (the same eye-to-LCD trace as `crate::render::simulate_stack`: [`FastTransfer`] for the thin
 //! lens, the eye's own rays ([`crate::optics::eye::EyeOptics::rays`]) otherwise, through real
 //! lenslets each channel's own exact trace) and dropped; only a bounded wave of bands is held at
 //! once. With diffraction (which only the converged estimator models) each sample carries a fixed
@@ -124,7 +124,7 @@ impl<'a> EyeOperator<'a> {
     }
 
     /// The eye the optics path traces through: the eye's own optics, or for real lenslets seen by
-    /// the thin lens its `EyeOptics` (as [`crate::render::simulate_stack`]); `None`: the thin
+    /// the thin lens its `EyeOptics` (as `crate::render::simulate_stack`); `None`: the thin
     /// lens's fast path.
     fn optics(&self) -> Option<&EyeOptics> {
         self.eye.optics.as_deref().or(self.thin.as_ref())
@@ -132,7 +132,7 @@ impl<'a> EyeOperator<'a> {
 
     /// The fixed samples of retina pixel (row, col) through `optics`, in trace order (sub-pixel
     /// point, then pupil point, then wavelength): those of the grid simulation
-    /// ([`through_optics::pixel_samples`]), and with diffraction their four diffraction numbers,
+    /// (`through_optics::pixel_samples`), and with diffraction their four diffraction numbers,
     /// a fixed pseudo-random pattern ([`diffraction_numbers`]). Without diffraction they are 0,
     /// and unused.
     pub fn pixel_samples(&self, row: usize, col: usize) -> Vec<EyeSample> {
@@ -189,7 +189,7 @@ impl<'a> EyeOperator<'a> {
     /// Every sample of the retina rows of band `band`, in trace order (per pixel: sub-pixel
     /// point, then pupil point, then wavelength), into `out` (cleared first). Through `optics`
     /// each sample's LCD pixels are those of the perceived-image simulation: the grid
-    /// simulation's ([`crate::render::simulate_stack`]) without diffraction, the converged
+    /// simulation's (`crate::render::simulate_stack`) without diffraction, the converged
     /// estimator's (`measure::estimator::through_optics`) for the same samples with it.
     fn band_entries(&self, band: usize, out: &mut Entries, scratch: &mut (Vec<DVec2>, Vec<DVec2>, Vec<u32>)) {
         out.clear();

@@ -229,7 +229,7 @@ fn reason_never_clears(reason: &str) -> bool {
 const HOPELESS_POLLS: usize = 3;
 
 /// Waits until job `job` has no task pending or running, showing the points recorded so far.
-/// A task pending for a reason that cannot clear ([`reason_never_clears`]) stops the wait with
+/// A task pending for a reason that cannot clear (`reason_never_clears`) stops the wait with
 /// an error naming the reason (the job stays queued; `scancel` removes it).
 pub fn wait_for(job: &str, resolved: &[Resolved], points: &[usize], store: &Store, quiet: bool) -> Result<()> {
     let progress = Progress::new(points.len() as u64, &format!("slurm job {job}"), quiet);

@@ -226,7 +226,7 @@ impl SweepSpec {
     }
 
     /// How many points the axes make (their product; checked on load to be at most
-    /// [`MAX_POINTS`]).
+    /// `MAX_POINTS`).
     pub fn point_count(&self) -> usize {
         self.axes.iter().map(Axis::len).product()
     }

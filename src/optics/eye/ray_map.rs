@@ -10,7 +10,7 @@
 //! a compact Lie group", Topology 14:63, 1975; for optics, the aberration expansion of H. H.
 //! Hopkins, "Wave Theory of Aberrations", 1950, and W. T. Welford, "Aberrations of Optical
 //! Systems", 1986, Ch. 7, is the same statement). Both the ray's position at z = 0 and its slope
-//! take that form; `f` and `g` are polynomials of total degree 4 (or 5, [`DEGREES`]) in the scaled
+//! take that form; `f` and `g` are polynomials of total degree 4 (or 5, `DEGREES`) in the scaled
 //! invariants, so the map is an odd polynomial of degree 9 (or 11) in the ray coordinates
 //! (paraxial optics and the third, fifth, ... ninth or eleventh orders of aberration). This is the idea of
 //! polynomial optics in rendering (M. B. Hullin, J. Hanika, W. Heidrich, "Polynomial Optics",
@@ -41,7 +41,7 @@ use super::SchematicEye;
 use crate::optics::PlaneRay;
 
 /// The highest degree of `f` and `g` in the invariants; a map takes the lowest of
-/// [`DEGREES`] that meets the tolerances.
+/// `DEGREES` that meets the tolerances.
 pub(super) const DEGREE: usize = 5;
 /// The degrees a fit tries, lowest first.
 const DEGREES: [usize; 2] = [4, DEGREE];
@@ -73,7 +73,7 @@ type Node = [[f64; TERMS]; 4];
 /// The fitted map (see the module documentation).
 #[derive(Clone, Debug)]
 pub struct RayMap {
-    /// The degree of `f` and `g` ([`DEGREES`]): monomials of higher degree keep no terms.
+    /// The degree of `f` and `g` (`DEGREES`): monomials of higher degree keep no terms.
     degree: usize,
     tau_max: f64,
     /// The wavelengths the map covers, nm (a wavelength outside is aimed exactly).
@@ -165,7 +165,7 @@ impl RayMap {
     /// The map of `eye` for tangents up to `max_tangent`, entrance-pupil points within `radius`
     /// mm (iris points `scale` times them) and wavelengths in `nm_range`, checked against the
     /// exact aim; None when the optics cut the domain or the fit misses the tolerances. The
-    /// lowest degree of [`DEGREES`] that meets them is taken (fewer coefficients per ray).
+    /// lowest degree of `DEGREES` that meets them is taken (fewer coefficients per ray).
     pub fn fit(eye: &SchematicEye, max_tangent: f64, radius: f64, scale: f64, nm_range: (f64, f64)) -> Option<Self> {
         DEGREES.iter().find_map(|&degree| Self::fit_degree(eye, max_tangent, radius, scale, nm_range, degree))
     }
@@ -376,7 +376,7 @@ impl RayMap {
         }
     }
 
-    /// Columns `col .. col + C` of rows `w` wide, for `L` points (see [`Self::accumulate_lanes`]).
+    /// Columns `col .. col + C` of rows `w` wide, for `L` points (see `Self::accumulate_lanes`).
     #[inline(always)]
     fn pass<const C: usize, const L: usize>(
         y: &mut [[f64; 4 * NODES]; L],
@@ -432,7 +432,7 @@ impl RayMap {
     }
 
     /// [`Self::ray`] for `L` samples at once, bit for bit the same rays (the coefficients are
-    /// shared in lockstep, [`Self::accumulate_lanes`]); None for a sample outside the map's
+    /// shared in lockstep, `Self::accumulate_lanes`); None for a sample outside the map's
     /// field.
     #[inline]
     pub fn rays<const L: usize, const N: usize>(
