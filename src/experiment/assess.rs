@@ -270,7 +270,11 @@ fn assess_with<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
         ssim_constants: exp.ssim.name().into(),
         backend: backend_name.into(),
         threads: rayon::current_num_threads(),
-        display: display.into(),
+        display: super::simulated::DisplayReport::of(
+            display,
+            exp.spec.optics.as_ref().map(|o| o.diffraction).unwrap_or_default(),
+        ),
+        simulated: super::simulated::Simulated::of(exp),
         central_depth_plane_mm: display.central_depth_plane(),
         eyes: super::report::EyeReport::of(exp),
         pupil: exp.auto_pupil,
@@ -405,8 +409,9 @@ fn figure<'a>(exp: &Experiment, cells: &'a [Vec<RgbImage>], scores: &[super::Sco
         .collect();
     crate::io::figure::Figure {
         title: Some(format!(
-            "{}: perceived retinal images; PSNR and SSIM ({}) against the ground truth (GT)",
+            "{} ({}): perceived retinal images; PSNR and SSIM ({}) against the ground truth (GT)",
             exp.name,
+            super::simulated::Simulated::of(exp).title_part(),
             exp.ssim.name()
         )),
         column_labels,

@@ -9,6 +9,8 @@
 
 use super::assess::Z_CHANNEL_NOTE;
 use crate::io::exr::{AttrValue, Attributes};
+use crate::optics::eye::model::EyeModel;
+use crate::optics::lenslet::LensletOptics;
 use crate::optics::{Aperture, Display, Eye, Lattice, Retina};
 use crate::render::{DisplayRenderSettings, Method};
 
@@ -51,6 +53,17 @@ pub fn display(d: &Display) -> Attributes {
         a.set("inimtrace:central_depth_plane_mm", z);
         a.set("inimtrace:central_depth_plane_diopters", 1000.0 / z);
     }
+    // A real lenslet is named with its surfaces (the thin lens of the paper is the default and
+    // adds nothing, so its files keep their headers).
+    if let LensletOptics::Thick(t) = &d.lenslet {
+        a.set("inimtrace:lenslet", "thick lenslet");
+        a.set("inimtrace:lenslet_material", t.material.name.as_str());
+        a.set("inimtrace:lenslet_front_radius_mm", t.front.radius);
+        a.set("inimtrace:lenslet_front_conic", t.front.conic);
+        a.set("inimtrace:lenslet_back_radius_mm", t.back.radius);
+        a.set("inimtrace:lenslet_back_conic", t.back.conic);
+        a.set("inimtrace:lenslet_thickness_mm", t.thickness);
+    }
     a
 }
 
@@ -90,12 +103,15 @@ pub fn eye(case: Option<&str>, eye: &Eye, retina: &Retina) -> Attributes {
     if let Some(name) = case {
         a.set("inimtrace:eye_case", name);
     }
+    // A schematic eye is no thin lens: its kind says so, and the thin lens's own field (its
+    // pupil-to-retina distance) is left out.
+    let schematic = eye.optics.as_ref().is_some_and(|o| o.model != EyeModel::ThinLens);
     match eye.aperture {
         Aperture::Pinhole => {
             a.set("inimtrace:eye", "pinhole");
         }
         Aperture::ThinLens { pupil_diameter, focus } => {
-            a.set("inimtrace:eye", "thin lens");
+            a.set("inimtrace:eye", if schematic { "schematic eye" } else { "thin lens" });
             a.set("inimtrace:focus_mm", focus.distance_mm());
             a.set("inimtrace:focus_diopters", focus.diopters());
             a.set("inimtrace:pupil_diameter_mm", pupil_diameter);
@@ -112,6 +128,7 @@ pub fn eye(case: Option<&str>, eye: &Eye, retina: &Retina) -> Attributes {
         a.set("inimtrace:reference_wavelength_nm", o.reference_nm);
         a.set("inimtrace:iris_diameter_mm", o.iris_diameter);
         a.set("inimtrace:spectrum", if o.is_single_wavelength() { "single" } else { "primaries" });
+        a.set("inimtrace:diffraction", o.diffraction.name());
         if let Some(sc) = &o.stiles_crawford {
             a.set("inimtrace:stiles_crawford_rho", sc.rho);
             a.set("inimtrace:stiles_crawford_peak_x_mm", sc.peak.x);
@@ -119,7 +136,9 @@ pub fn eye(case: Option<&str>, eye: &Eye, retina: &Retina) -> Attributes {
         }
     }
     a.set("inimtrace:pupil_samples", AttrValue::count(eye.pupil_samples().len()));
-    a.set("inimtrace:retina_distance_mm", eye.retina_distance);
+    if !schematic {
+        a.set("inimtrace:retina_distance_mm", eye.retina_distance);
+    }
     a.set("inimtrace:eye_x_mm", eye.position.x);
     a.set("inimtrace:eye_y_mm", eye.position.y);
     a.set("inimtrace:eye_z_mm", eye.position.z);

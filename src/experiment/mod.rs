@@ -13,6 +13,7 @@ pub(crate) mod converged_report;
 pub mod metadata;
 mod perceptual;
 mod report;
+pub mod simulated;
 mod stages;
 
 pub use crate::optics::eye::settings::{BaseEye, EyeCaseSpec, EyeModelSettings, EyeSpec};

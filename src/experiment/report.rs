@@ -5,7 +5,6 @@ use serde::Serialize;
 
 use super::{Experiment, ExperimentSpec};
 use crate::error::{Error, Result};
-use crate::info::DisplayParameters;
 use crate::io::csv_table::CsvTable;
 use crate::io::output::OutputDir;
 use crate::measure::spec::EstimatorKind;
@@ -120,8 +119,9 @@ pub struct AssessReport {
     pub backend: String,
     /// Rayon worker threads.
     pub threads: usize,
-    /// The display's parameters as fields (lengths in mm).
-    pub display: DisplayParameters,
+    /// The display's parameters as fields (lengths in mm), its lenslets, the diffraction at its
+    /// apertures and its photometry.
+    pub display: super::simulated::DisplayReport,
     /// The display's central depth plane, mm from the pupil (`None`: at infinity or real).
     pub central_depth_plane_mm: Option<f64>,
     /// The eye of every case that is not the paper's thin lens (a schematic eye, the primaries'
@@ -132,6 +132,9 @@ pub struct AssessReport {
     /// observer and the diameter. Absent for a stated diameter.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub pupil: Option<crate::optics::eye::pupil::AutoPupil>,
+    /// What was simulated, in words: eye model, spectrum, diffraction, lenslets (the table's
+    /// title and caption and the figure's title say the same).
+    pub simulated: super::simulated::Simulated,
     /// Table 1: every method under every eye case.
     pub scores: Vec<Score>,
     /// Wall time of every stage.
@@ -152,8 +155,11 @@ pub struct AssessReport {
 pub fn table_markdown(report: &AssessReport, exp: &Experiment) -> String {
     let methods: Vec<String> = exp.methods.iter().map(|m| m.name()).collect();
     let mut s = format!(
-        "# {}: PSNR (dB) and SSIM ({}) of the perceived retinal image against the ground truth\n\n",
-        report.experiment, report.ssim_constants
+        "# {} ({}): PSNR (dB) and SSIM ({}) of the perceived retinal image against the ground truth\n\n{}\n\n",
+        report.experiment,
+        report.simulated.title_part(),
+        report.ssim_constants,
+        report.simulated.sentence()
     );
     s.push_str("| Eye |");
     for m in &methods {
