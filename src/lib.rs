@@ -103,6 +103,7 @@ pub mod provenance;
 pub mod raster;
 pub mod ray;
 pub mod render;
+pub mod report;
 pub mod resolution;
 pub mod scene;
 pub mod settings;

@@ -280,6 +280,13 @@ enum Command {
         #[arg(long)]
         check: bool,
     },
+    /// Rebuild report.html of a finished run folder (assess, resolution or sweep) from its own
+    /// files: what was simulated, the scores, the images, the plots, the provenance. The same
+    /// folder gives the same page, byte for byte.
+    Report {
+        /// The run folder (holding results.json, study.json or sweep.json).
+        dir: PathBuf,
+    },
     /// Describe a display design (central depth plane, eye box, field of view, pixels per
     /// degree, views through the pupil, pixel beams in it) or a scene (objects, sizes, depth range), and write the
     /// built-in files.
@@ -538,6 +545,12 @@ fn run() -> Result<()> {
                 eprintln!("wrote {}", run.out.display());
             }
             printed_total = true;
+        }
+        Command::Report { dir } => {
+            let path = inimtrace::report::write(&dir)?;
+            if !quiet {
+                eprintln!("wrote {}", path.display());
+            }
         }
         Command::Info { provenance: Some(dir), .. } => {
             let (text, _) = inimtrace::provenance::report(&dir)?;

@@ -287,6 +287,8 @@ fn assess_with<S: RadianceField + ?Sized, D: RadianceField + ?Sized>(
     };
     if let Some(dir) = dir {
         write_reports(&report, exp, dir)?;
+        // The page, from the files just written (results.json included), outside its manifest.
+        crate::report::write(dir.path())?;
     }
     Ok(Assessment { report, displays, depths, ground_truths, perceived })
 }

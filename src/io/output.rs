@@ -97,7 +97,7 @@ struct Journal {
 pub const TEMP_PREFIX: &str = ".inimtrace-tmp-";
 /// Extensions of the files runs write: an entry of the output folder with a plain name and one
 /// of these that is not a regular file is refused when the folder is opened.
-const OUTPUT_EXTENSIONS: &[&str] = &["exr", "png", "svg", "md", "csv", "json", "sbatch"];
+const OUTPUT_EXTENSIONS: &[&str] = &["exr", "png", "svg", "md", "csv", "json", "sbatch", "html"];
 
 /// An output folder owned by this run (see the module documentation).
 #[derive(Debug)]
@@ -338,6 +338,7 @@ impl OutputDir {
                 Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
                 Err(e) => return Err(Error::io(&record, e)),
             }
+            remove_page(&self.root);
             for l in listed.iter().filter(plain) {
                 if l.state(&self.root) == ListedState::Unchanged {
                     let _ = fs::remove_file(self.root.join(l.name()));
@@ -358,6 +359,21 @@ impl OutputDir {
         Ok(())
     }
 }
+
+/// The page of the run (`report.html`, built from its report after it), removed with the report
+/// it was built from: only a regular file that inimtrace wrote (it names inimtrace as its
+/// generator), so no page describes results that are gone.
+fn remove_page(root: &Path) {
+    let page = root.join("report.html");
+    if let Ok(Some(bytes)) = read_regular(&page) {
+        if bytes.windows(PAGE_MARK.len()).take(2048).any(|w| w == PAGE_MARK.as_bytes()) {
+            let _ = fs::remove_file(&page);
+        }
+    }
+}
+
+/// What every `report.html` of inimtrace holds near its start.
+pub const PAGE_MARK: &str = "<meta name=\"generator\" content=\"inimtrace\">";
 
 /// Writes the single file `path` atomically: `write` gets a path of the same name in a new
 /// private hidden folder beside it (a file created there new, never through a link) and must

@@ -168,7 +168,10 @@ pub fn execute(cmd: &ResolutionCommand) -> Result<ResolutionRun> {
     super::plots::write_plots(&results, &accommodation, &dir)?;
     timings.push(Timing { stage: "plots (PNG, SVG)".into(), seconds: t.elapsed().as_secs_f64() });
     // study.json last: its presence marks a complete run.
-    dir.finish("study.json", |files| Ok(study_json(&results, &timings, files, &provenance).into_bytes()))?;
+    dir.finish_report("study.json", |files| Ok(study_json(&results, &timings, files, &provenance).into_bytes()))?;
+    // The page, from the files just written (study.json included), outside its manifest.
+    crate::report::write(dir.path())?;
+    drop(dir);
     results.timings = timings.clone();
     Ok(ResolutionRun { out, results, timings })
 }

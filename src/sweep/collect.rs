@@ -195,6 +195,8 @@ pub fn collect(sweep: &Sweep, resolved: &[Resolved], store: &Store) -> Result<Co
     let axes: Vec<usize> =
         sweep.spec.axes.iter().enumerate().flat_map(|(a, axis)| axis.keys.iter().map(move |_| a)).collect();
     out.plots = write_plots(&store.root().join("plots"), &keys, &axes, &plot_rows)?;
+    // The page, from the files just written.
+    crate::report::write(store.root())?;
     Ok(out)
 }
 
