@@ -27,6 +27,10 @@
 #                                venvs the Python package installs into (`pip install .` builds
 #                                it with maturin from PyPI and this Rust toolchain; no headers
 #                                needed: the module uses CPython's stable ABI, abi3)
+#   chromium                     tests/report_html.rs: a real browser (headless, driven over the
+#                                DevTools protocol by scripts/browse-report.py with Python's standard
+#                                library alone) opens the report.html of an assess, a resolution and a
+#                                sweep run
 #   (pip, no package)            target/venv-perception: the perceptual metrics' reference
 #                                implementations for tests/perception_reference.rs, NVIDIA's FLIP
 #                                (flip-evaluator) and the authors' ColorVideoVDP (cvvdp, with PyTorch:
@@ -40,7 +44,7 @@ $SUDO apt-get update
 $SUDO apt-get install -y --no-install-recommends \
     build-essential pkg-config libembree-dev libclang-dev glmark2-data assimp-testmodels \
     libfontconfig1-dev libfreetype-dev fontconfig fonts-dejavu-core python3-venv slurm-wlm munge qemu-user \
-    time util-linux openexr
+    time util-linux openexr chromium
 cd "$(dirname "$0")/.."
 if [ ! -x target/venv-exr/bin/python ] || ! target/venv-exr/bin/python -c "import OpenEXR, numpy" 2>/dev/null; then
     mkdir -p target

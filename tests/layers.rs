@@ -18,7 +18,7 @@ const LAYERS: &[&[&str]] = &[
     &["measure"],
     &["perception", "io"],
     &["optimize", "provenance"],
-    &["methods"],
+    &["methods", "report"],
     &["experiment"],
     &["bench", "resolution", "settings"],
     &["sweep"],
