@@ -73,9 +73,10 @@ fn assert_rebuilds(out: &Path) {
     inimtrace(&["--quiet", "report", out.to_str().unwrap()]);
     assert!(std::fs::read(out.join("report.html")).unwrap() == page, "{}: rebuilt page differs", out.display());
     let parent = out.parent().unwrap();
-    let relative = format!("{}/../{}", parent.display(), out.strip_prefix(parent).unwrap().display());
+    let relative = format!("./{}/", out.strip_prefix(parent).unwrap().display());
     let o = Command::new(env!("CARGO_BIN_EXE_inimtrace")).current_dir(parent).args(["report", &relative]).output();
-    assert!(o.unwrap().status.success());
+    let o = o.unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(std::fs::read(out.join("report.html")).unwrap() == page, "{}: rebuilt page differs", out.display());
 }
 
