@@ -34,7 +34,7 @@ pre{background:#f5f5f5;padding:.5em;white-space:pre-wrap;word-break:break-all}\
 .note{color:#444;font-size:.9em}\
 @media print{body{max-width:none;padding:0;font-size:10pt}h2{break-after:avoid}\
 tr,figure,img{break-inside:avoid}.scroll{overflow:visible}pre{background:none;border:1px solid #ccc}\
-tr.missed td{background:none}a{color:inherit;text-decoration:none}}";
+tr.missed td{background:none}a{color:inherit;text-decoration:none}table{font-size:7pt}td.n{white-space:normal}}";
 
 /// The whole document: `title` as its heading, then `body`.
 pub fn document(title: &str, body: Markup) -> String {
