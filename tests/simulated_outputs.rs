@@ -95,3 +95,16 @@ fn the_papers_thin_lens_keeps_its_fields_and_real_lenslets_and_diffraction_are_n
     let display = attributes(&pmma.join("display_LC.exr"));
     assert!(display.contains_key("inimtrace:lenslet_thickness_mm"));
 }
+
+#[test]
+fn the_figures_title_names_eye_lenslets_spectrum_and_diffraction() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/paper-pmma.toml");
+    let set: Vec<inimtrace::overrides::Override> =
+        ["eye.model=\"navarro\"", "optics.diffraction=\"pupil\""].iter().map(|s| s.parse().unwrap()).collect();
+    let exp = inimtrace::settings::load_experiment(Some(&path), None, &set).unwrap();
+    let s = inimtrace::experiment::simulated::Simulated::of(&exp);
+    assert_eq!(s.figure_part(), "navarro-1985 eye, thick PMMA lenslets, primaries' spectra, diffraction pupil");
+    let paper = inimtrace::settings::load_experiment(None, None, &[]).unwrap();
+    let s = inimtrace::experiment::simulated::Simulated::of(&paper);
+    assert_eq!(s.figure_part(), "thin-lens eye, thin lenslets, no dispersion, diffraction none");
+}

@@ -413,7 +413,7 @@ fn figure<'a>(exp: &Experiment, cells: &'a [Vec<RgbImage>], scores: &[super::Sco
         title: Some(format!(
             "{} ({}): perceived retinal images; PSNR and SSIM ({}) against the ground truth (GT)",
             exp.name,
-            super::simulated::Simulated::of(exp).title_part(),
+            super::simulated::Simulated::of(exp).figure_part(),
             exp.ssim.name()
         )),
         column_labels,

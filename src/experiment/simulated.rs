@@ -23,6 +23,9 @@ pub struct Simulated {
     pub diffraction: String,
     /// The lenslets' kind and parameters.
     pub lenslets: String,
+    /// The spectrum and diffraction in a few words, for the figure's title.
+    #[serde(skip)]
+    short: [String; 2],
 }
 
 impl Simulated {
@@ -36,12 +39,15 @@ impl Simulated {
             }
         }
         let optics: Vec<_> = exp.cases.iter().filter_map(|c| c.eye.optics.as_ref()).collect();
-        let spectrum = if optics.iter().any(|o| !o.is_single_wavelength()) {
-            "each colour channel at its display primary's wavelengths".to_string()
+        let (spectrum, short) = if optics.iter().any(|o| !o.is_single_wavelength()) {
+            ("each colour channel at its display primary's wavelengths".to_string(), "primaries' spectra".to_string())
         } else if let Some(o) = optics.first() {
-            format!("one wavelength, {} nm", o.reference_nm)
+            (format!("one wavelength, {} nm", o.reference_nm), format!("{} nm", o.reference_nm))
         } else {
-            "one ray per sample for all three channels (the thin lens has no dispersion)".to_string()
+            (
+                "one ray per sample for all three channels (the thin lens has no dispersion)".to_string(),
+                "no dispersion".to_string(),
+            )
         };
         let diffraction = exp.spec.optics.as_ref().map(|o| o.diffraction).unwrap_or_default();
         Self {
@@ -49,6 +55,7 @@ impl Simulated {
             spectrum,
             diffraction: diffraction_words(diffraction).to_string(),
             lenslets: lenslet_words(&exp.display),
+            short: [short, format!("diffraction {}", diffraction.name())],
         }
     }
 
@@ -57,6 +64,13 @@ impl Simulated {
         let kind = self.lenslets.split(" (").next().unwrap_or(&self.lenslets);
         let diffraction = if self.diffraction.starts_with("none") { "" } else { ", diffraction" };
         format!("{} eye, {kind}{diffraction}", self.eye)
+    }
+
+    /// All four in a few words, for the figure's title: "navarro-1985 eye, thin lenslets,
+    /// primaries' spectra, diffraction none".
+    pub fn figure_part(&self) -> String {
+        let kind = self.lenslets.split(" (").next().unwrap_or(&self.lenslets);
+        format!("{} eye, {kind}, {}, {}", self.eye, self.short[0], self.short[1])
     }
 
     /// One sentence naming all four: "Eye: ...; spectrum: ...; diffraction: ...; lenslets: ...".

@@ -72,10 +72,11 @@ pub fn facts(rows: &[(&str, String)]) -> Markup {
 }
 
 /// A PNG of the folder as an `<img>` with a `data:` URI, captioned; nothing when the file is
-/// absent (a run that did not write it).
+/// absent (a run that did not write it) or `name` is not a plain name inside the folder (a
+/// report's names never reach outside it).
 pub fn image(dir: &Path, name: &str, caption: &str) -> Result<Markup> {
     let path = dir.join(name);
-    if !path.is_file() {
+    if !crate::io::output::is_plain_name(name) || !path.is_file() {
         return Ok(html! {});
     }
     let bytes = crate::io::input::read_regular(&path)?;
