@@ -46,6 +46,8 @@ fn assess_run(dir: &Path) -> PathBuf {
         "eye_cases=[{ name = \"Near\", focus_mm = 300.0 }, { name = \"Pin\", pinhole = true }]",
         "--set",
         "description=\"<script>alert('description')</script>\"",
+        "--set",
+        "measurement.scores=[\"psnr\", \"ssim\", \"psnr-luminance\"]",
     ]);
     out
 }
@@ -221,7 +223,7 @@ fn a_real_browser_opens_every_kind_of_page_offline_with_the_runs_numbers() {
         }
         checked += 1;
     }
-    assert_eq!(checked, 2 * scores.len(), "every score's PSNR and SSIM cell");
+    assert_eq!(checked, 3 * scores.len(), "every score's PSNR, SSIM and luminance PSNR cell");
     // The precision target 0.0001 dB cannot be met in 48 samples: every row is marked missed.
     let missed = cells.iter().filter(|c| c["missed"] == true).count();
     assert!(missed > 0 && scores.iter().all(|s| s["target_met"] == false), "{missed}");
