@@ -20,9 +20,11 @@ fn inimtrace(args: &[&str]) {
 /// A small converged assess whose scene is named with markup and whose description holds some:
 /// the page must show it as text.
 fn assess_run(dir: &Path) -> PathBuf {
-    let scene = std::fs::read_to_string(root().join("scenes/paper.toml"))
-        .unwrap()
-        .replacen("name = \"paper\"", "name = \"<script>alert('scene')</script> & <b>\"", 1);
+    let scene = std::fs::read_to_string(root().join("scenes/paper.toml")).unwrap().replacen(
+        "name = \"paper\"",
+        "name = \"<script>alert('scene')</script> & <b>\"",
+        1,
+    );
     let scene_path = dir.join("hostile-scene.toml");
     std::fs::write(&scene_path, scene).unwrap();
     let out = dir.join("assess");
@@ -89,7 +91,11 @@ fn every_run_writes_a_page_that_report_rebuilds_byte_for_byte_with_user_text_esc
     for out in &runs {
         let page = std::fs::read_to_string(out.join("report.html")).unwrap();
         assert!(page.starts_with("<!DOCTYPE html>"), "{}", out.display());
-        assert!(!page.to_ascii_lowercase().contains("<script"), "{}: markup from the inputs or a script", out.display());
+        assert!(
+            !page.to_ascii_lowercase().contains("<script"),
+            "{}: markup from the inputs or a script",
+            out.display()
+        );
         assert!(!page.contains("http://") && !page.contains("https://"), "{}: a network address", out.display());
         assert_rebuilds(out);
     }
@@ -158,7 +164,10 @@ fn check_in_browser(out: &Path) -> Option<serde_json::Value> {
     let seen = match browse(&out.join("report.html"), &shot) {
         Ok(s) => s,
         Err(why) => {
-            assert!(std::env::var_os("INIMTRACE_REQUIRE_CHROMIUM").is_none(), "INIMTRACE_REQUIRE_CHROMIUM is set: {why}");
+            assert!(
+                std::env::var_os("INIMTRACE_REQUIRE_CHROMIUM").is_none(),
+                "INIMTRACE_REQUIRE_CHROMIUM is set: {why}"
+            );
             eprintln!("SKIPPED the browser checks of {}: {why}", out.display());
             return None;
         }
@@ -168,11 +177,18 @@ fn check_in_browser(out: &Path) -> Option<serde_json::Value> {
     assert_eq!(seen["requests"], serde_json::json!([]), "{name}: a request left the page");
     assert_eq!(seen["blocked_requests"], serde_json::json!([]), "{name}: a request left the page");
     assert_eq!(seen["scriptCount"], 0, "{name}");
-    assert!(seen["scrollWidth"].as_u64().unwrap() <= 1366, "{name}: wider than a laptop screen: {}", seen["scrollWidth"]);
+    assert!(
+        seen["scrollWidth"].as_u64().unwrap() <= 1366,
+        "{name}: wider than a laptop screen: {}",
+        seen["scrollWidth"]
+    );
     let images = seen["images"].as_array().unwrap();
     assert!(!images.is_empty(), "{name}: no image");
     for i in images {
-        assert!(i["complete"] == true && i["naturalWidth"].as_u64().unwrap() > 0 && i["scheme"] == "data", "{name}: {i}");
+        assert!(
+            i["complete"] == true && i["naturalWidth"].as_u64().unwrap() > 0 && i["scheme"] == "data",
+            "{name}: {i}"
+        );
     }
     // The screenshot shows content: taller than the viewport, and far from one colour.
     let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&shot).unwrap()));
@@ -192,7 +208,8 @@ fn assert_csv_cells(seen: &serde_json::Value, out: &Path, file: &str) {
     let cells: Vec<&serde_json::Value> =
         seen["cells"].as_array().unwrap().iter().filter(|c| c["table"] == file).collect();
     let mut reader = csv::Reader::from_path(out.join(file)).unwrap();
-    let fields: Vec<String> = reader.records().flat_map(|r| r.unwrap().iter().map(str::to_string).collect::<Vec<_>>()).collect();
+    let fields: Vec<String> =
+        reader.records().flat_map(|r| r.unwrap().iter().map(str::to_string).collect::<Vec<_>>()).collect();
     assert_eq!(cells.len(), fields.len(), "{file}: cells");
     for (c, f) in cells.iter().zip(&fields) {
         assert_eq!(c["text"].as_str().unwrap().trim(), f, "{file}");

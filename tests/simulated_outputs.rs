@@ -48,7 +48,9 @@ fn a_schematic_eye_is_named_in_the_table_results_and_exr_headers_without_thin_le
     let title = table.lines().next().unwrap();
     assert!(title.starts_with("# paper-converged (arizona eye, thin lenslets)"), "{title}");
     assert!(
-        table.contains("Eye: arizona; spectrum: each colour channel at its display primary's wavelengths; diffraction: none"),
+        table.contains(
+            "Eye: arizona; spectrum: each colour channel at its display primary's wavelengths; diffraction: none"
+        ),
         "{table}"
     );
     let r = json(&out.join("results.json"));

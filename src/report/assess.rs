@@ -16,11 +16,8 @@ use crate::error::Result;
 pub fn page(dir: &Path, r: &Value) -> Result<String> {
     let s = &r["simulated"];
     let name = text(&r["experiment"]);
-    let title = if s.is_object() {
-        format!("{name}: {} eye, {}", text(&s["eye"]), text(&s["lenslets"]))
-    } else {
-        name.clone()
-    };
+    let title =
+        if s.is_object() { format!("{name}: {} eye, {}", text(&s["eye"]), text(&s["lenslets"])) } else { name.clone() };
     let body = html! {
         @if let Some(d) = r["settings"]["description"].as_str() { p { (d) } }
         (simulated(r))
@@ -191,7 +188,8 @@ fn cell(score: &str, value: &Value, ci95: &Value, digits: usize) -> Markup {
 fn images(dir: &Path, r: &Value) -> Result<Markup> {
     let methods: Vec<String> =
         r["settings"]["methods"].as_array().into_iter().flatten().map(text).map(|m| method_name(&m, r)).collect();
-    let cases: Vec<String> = r["settings"]["eye_cases"].as_array().into_iter().flatten().map(|c| text(&c["name"])).collect();
+    let cases: Vec<String> =
+        r["settings"]["eye_cases"].as_array().into_iter().flatten().map(|c| text(&c["name"])).collect();
     let score = |m: &str, c: &str| {
         r["scores"].as_array().into_iter().flatten().find(|s| text(&s["method"]) == m && text(&s["eye_case"]) == c).map(
             |s| format!("{}: PSNR {} dB, SSIM {}", m, number(&s["psnr"]["mean"], 2), number(&s["ssim"]["mean"], 3)),
