@@ -25,6 +25,7 @@ macro_rules! draw_plot {
         for ext in ["png", "svg"] {
             let path = $out.join(format!("{}.{ext}", $name));
             crate::io::output::write_atomic(&path, |tmp| {
+                crate::io::plot::register_font().map_err(|e| Error::draw(path.display(), "plot", e))?;
                 let res: PlotResult = if ext == "png" {
                     let $area = BitMapBackend::new(tmp, $size).into_drawing_area();
                     $body

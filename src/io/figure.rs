@@ -287,6 +287,7 @@ fn draw_labels(
     layout: Layout,
 ) -> std::result::Result<(), String> {
     let (rows, column_labels) = (&figure.rows, &figure.column_labels);
+    super::plot::register_font()?;
     let root = BitMapBackend::with_buffer(canvas, (width as u32, height as u32)).into_drawing_area();
     let column_style =
         TextStyle::from((FONT, COLUMN_FONT_SIZE).into_font()).color(&BLACK).pos(Pos::new(HPos::Center, VPos::Center));

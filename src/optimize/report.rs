@@ -62,6 +62,7 @@ impl OptimizationReport {
     /// Writes the convergence plot to `path` (PNG).
     pub fn write_plot(&self, path: &Path) -> Result<()> {
         crate::io::output::write_atomic(path, |tmp| {
+            crate::io::plot::register_font().map_err(|e| Error::draw(path.display(), "plot", e))?;
             let area = BitMapBackend::new(tmp, (900, 560)).into_drawing_area();
             self.draw(area).map_err(|e| Error::draw(path.display(), "plot", e))
         })

@@ -40,6 +40,7 @@ macro_rules! draw_plot {
         for ext in ["png", "svg"] {
             let file = format!("{}.{ext}", $name);
             $dir.write_with(&file, |path| {
+                crate::io::plot::register_font().map_err(|e| Error::draw(&file, "plot", e))?;
                 let res: PlotResult = if ext == "png" {
                     let $area = BitMapBackend::new(path, $size).into_drawing_area();
                     $body

@@ -83,6 +83,7 @@ macro_rules! plot_file {
         for ext in ["png", "svg"] {
             let path = $dir.join(format!("{}.{ext}", $name));
             crate::io::output::write_atomic(&path, |tmp| {
+                crate::io::plot::register_font().map_err(|e| Error::draw(path.display(), "plot", e))?;
                 let drawn = if ext == "png" {
                     let $area = BitMapBackend::new(tmp, $size).into_drawing_area();
                     $body
