@@ -203,6 +203,10 @@ enum Command {
         /// With --backends: Embree only (what --also asks of the other binary).
         #[arg(long, requires = "backends", hide = true)]
         embree_only: bool,
+        /// With --backends: also write each scene's Embree input (triangles, rays) into this
+        /// folder for the bare C loop of scripts/embree-bare.sh.
+        #[arg(long, requires = "backends", value_name = "DIR")]
+        embree_input: Option<PathBuf>,
     },
     /// Run an experiment over the points of a sweep file (axes of --set values) on all cores, or
     /// as a Slurm job array; resumable. Writes sweep.csv, sweep.json, plots and points/.
@@ -450,13 +454,13 @@ fn run() -> Result<()> {
             let perceptual = cli::compare::Perceptual { scores, luminance, ppd };
             printed_total = compare(&g, a, b, part.as_deref(), constants, json, &perceptual)?;
         }
-        Command::Bench { quick, scene, out, backends: true, also, embree_only } => {
+        Command::Bench { quick, scene, out, backends: true, also, embree_only, embree_input } => {
             let scenes = match scene.is_empty() {
                 true => vec![PathBuf::from("scenes/bunny.toml"), PathBuf::from("scenes/spheres-2m.toml")],
                 false => scene,
             };
             let out = out.unwrap_or_else(|| PathBuf::from("out/bench-backends"));
-            let opts = inimtrace::bench::BackendsOptions { scenes, quick, also, embree_only, out: out.clone() };
+            let opts = inimtrace::bench::BackendsOptions { scenes, quick, also, embree_only, out: out.clone(), embree_input };
             let rows = inimtrace::bench::backends::run(&opts)?;
             out!("{}", inimtrace::bench::backends::markdown(&rows));
             if !g.quiet {

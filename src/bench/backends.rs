@@ -37,6 +37,9 @@ pub struct BackendsOptions {
     pub embree_only: bool,
     /// Output folder.
     pub out: PathBuf,
+    /// Also write each scene's Embree input (single-precision triangles, rays and packet plan)
+    /// here, as `<scene>.embree-input`, for `scripts/embree-bare.c`.
+    pub embree_input: Option<PathBuf>,
 }
 
 impl BackendsOptions {
@@ -182,6 +185,9 @@ fn measure_scene(opts: &BackendsOptions, path: &Path, me: &Path) -> Result<Vec<B
         let start = Instant::now();
         let embree = crate::accel::embree::EmbreeIntersector::new(&meshes, Default::default())?;
         let build = start.elapsed().as_secs_f64();
+        if let Some(dir) = &opts.embree_input {
+            write_embree_input(&dir.join(format!("{stem}.embree-input")), &meshes, &rays, &embree.packet_plan(&rays))?;
+        }
         let t = throughput(&embree, &rays);
         push("embree", embree_library(), embree.triangle_count(), build, &rays, t)?;
     }
@@ -205,10 +211,50 @@ fn measure_scene(opts: &BackendsOptions, path: &Path, me: &Path) -> Result<Vec<B
     Ok(rows)
 }
 
+/// Writes what Embree is given for one scene, so that a bare C loop (`scripts/embree-bare.c`)
+/// can make the same calls: the bytes `INIMEMB1`, then little-endian: the geometry count (u32);
+/// per geometry its vertex and triangle counts (u32 each), vertices (3 f32 each) and triangles
+/// (3 u32 each); the ray count (u32) and per ray origin, direction, tnear, tfar (8 f32); then one
+/// byte per run of 16 rays, 1 when `intersect_many` traces it as a packet.
+#[cfg(feature = "embree")]
+fn write_embree_input(path: &Path, meshes: &[(u32, &crate::scene::mesh::Mesh)], rays: &[Ray], plan: &[bool]) -> Result<()> {
+    let count = |n: usize, what: &str| {
+        u32::try_from(n).map_err(|_| Error::invalid(path.display().to_string(), what, "more than 2^32 - 1"))
+    };
+    let mut bytes: Vec<u8> = b"INIMEMB1".to_vec();
+    let put_u32 = |bytes: &mut Vec<u8>, x: u32| bytes.extend_from_slice(&x.to_le_bytes());
+    put_u32(&mut bytes, count(meshes.len(), "meshes")?);
+    for (_, mesh) in meshes {
+        put_u32(&mut bytes, count(mesh.positions.len(), "positions")?);
+        put_u32(&mut bytes, count(mesh.triangles.len(), "triangles")?);
+        for p in &mesh.positions {
+            // The same f64 -> f32 rounding as `EmbreeIntersector`.
+            for c in p.as_vec3().to_array() {
+                bytes.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+        for t in &mesh.triangles {
+            t.iter().for_each(|&k| put_u32(&mut bytes, k));
+        }
+    }
+    put_u32(&mut bytes, count(rays.len(), "rays")?);
+    for ray in rays {
+        let r = crate::accel::embree::raw_ray(ray, f64::INFINITY);
+        for c in r.org.iter().chain(&r.dir).chain(&[r.tnear, r.tfar]) {
+            bytes.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    bytes.extend(plan.iter().map(|&p| u8::from(p)));
+    crate::io::output::write_atomic(path, |temp| std::fs::write(temp, &bytes).map_err(|e| Error::io(temp, e)))
+}
+
 /// Runs the comparison; writes `backends.csv`, `backends.json` and `backends.md` into
 /// `opts.out` and returns the rows.
 pub fn run(opts: &BackendsOptions) -> Result<Vec<BackendRow>> {
     std::fs::create_dir_all(&opts.out).map_err(|e| Error::io(&opts.out, e))?;
+    if let Some(dir) = &opts.embree_input {
+        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    }
     let me = std::env::current_exe().map_err(|e| Error::io(Path::new("current_exe"), e))?;
     let mut rows = Vec::new();
     for scene in &opts.scenes {

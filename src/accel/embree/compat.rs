@@ -13,7 +13,8 @@
 //!
 //! Embree 4.3 and later write more of the hit record than the 4.2 headers of the `embree4-sys`
 //! crate declare (`instPrimID`: 4 bytes past `RTCRayHit`, 64 past `RTCRayHit16`), so under
-//! Embree 4 every hit record handed to a query sits in a [`Padded`] copy with spare bytes.
+//! Embree 4 every hit record handed to a query is built and read in place inside a [`Padded`]
+//! record with spare bytes after it.
 //!
 //! `build.rs` sets `cfg(embree4)` when it bound against Embree 4 (system headers through
 //! `wrapper.h`, or the `embree4` feature, which takes the bindings from `embree4-sys`).
@@ -27,18 +28,21 @@ pub const EMBREE_MAJOR: u32 = if cfg!(embree4) { 4 } else { 3 };
 /// The variable that says where the library is, named by the version check's error.
 const LIBRARY_VARIABLE: &str = if cfg!(feature = "embree4") { "EMBREE4_DIR" } else { "EMBREE_DIR" };
 
-/// A C struct followed by spare bytes that a newer Embree than the headers may write into.
-#[cfg(embree4)]
+/// Spare bytes after every hit record handed to a query: a newer Embree than the headers may
+/// write into them (none under Embree 3, whose records are as the headers say).
+const SPARE: usize = if cfg!(embree4) { 128 } else { 0 };
+
+/// A C struct followed by spare bytes that a newer Embree than the headers may write into. The
+/// queries fill and read the record in place (`value`), so padding costs no copy.
 #[repr(C, align(64))]
-struct Padded<T> {
-    value: T,
-    spare: [u8; 128],
+pub(super) struct Padded<T> {
+    pub(super) value: T,
+    spare: [u8; SPARE],
 }
 
-#[cfg(embree4)]
 impl<T> Padded<T> {
-    fn new(value: T) -> Padded<T> {
-        Padded { value, spare: [0; 128] }
+    pub(super) fn new(value: T) -> Padded<T> {
+        Padded { value, spare: [0; SPARE] }
     }
 }
 
@@ -151,21 +155,17 @@ pub fn check_version(version: i64, expected_major: u32) -> Result<()> {
 /// # Safety
 /// `scene` must be a live, committed scene.
 #[inline]
-pub(super) unsafe fn intersect1(scene: sys::RTCScene, rayhit: &mut sys::RTCRayHit) {
+pub(super) unsafe fn intersect1(scene: sys::RTCScene, rayhit: &mut Padded<sys::RTCRayHit>) {
     let mut args = query_args(false);
     // SAFETY: forwarded from this function's contract; `args` and the ray-hit record are fully
-    // initialised locals, aligned as Embree requires (`RTCRayHit` is `repr(align(16))`,
-    // `Padded` 64), that outlive the call; under Embree 4 the record has spare bytes after it
-    // for a library that writes a longer hit.
+    // initialised locals, aligned as Embree requires (`Padded` is 64-byte aligned), that outlive
+    // the call; under Embree 4 the record has spare bytes after it for a library that writes a
+    // longer hit.
     unsafe {
         #[cfg(not(embree4))]
-        sys::rtcIntersect1(scene, &mut args, rayhit);
+        sys::rtcIntersect1(scene, &mut args, &mut rayhit.value);
         #[cfg(embree4)]
-        {
-            let mut padded = Padded::new(*rayhit);
-            sys::rtcIntersect1(scene, &mut padded.value, &mut args.value);
-            *rayhit = padded.value;
-        }
+        sys::rtcIntersect1(scene, &mut rayhit.value, &mut args.value);
     }
 }
 
@@ -191,9 +191,10 @@ pub(super) unsafe fn occluded1(scene: sys::RTCScene, ray: *mut sys::RTCRay) {
     }
 }
 
-/// A 16-ray packet with every field zero (rays and hits), ready to fill.
-pub(super) fn blank_packet() -> sys::RTCRayHit16 {
-    sys::RTCRayHit16 { ray: sys::RTCRay16::default(), hit: sys::RTCHit16::default() }
+/// A 16-ray packet with every field zero (rays and hits), ready to fill, with spare bytes after
+/// it under Embree 4.
+pub(super) fn blank_packet() -> Padded<sys::RTCRayHit16> {
+    Padded::new(sys::RTCRayHit16 { ray: sys::RTCRay16::default(), hit: sys::RTCHit16::default() })
 }
 
 /// `rtcIntersect16` for either version, with the coherent-ray hint when `coherent`.
@@ -205,21 +206,17 @@ pub(super) fn blank_packet() -> sys::RTCRayHit16 {
 pub(super) unsafe fn intersect16(
     valid: *const i32,
     scene: sys::RTCScene,
-    rayhit: &mut sys::RTCRayHit16,
+    rayhit: &mut Padded<sys::RTCRayHit16>,
     coherent: bool,
 ) {
     let mut args = query_args(coherent);
     // SAFETY: forwarded from this function's contract; `args` and the packet are fully
-    // initialised, 64-byte aligned locals valid for the whole call; under Embree 4 the packet
+    // initialised, 64-byte aligned records valid for the whole call; under Embree 4 the packet
     // has spare bytes after it for a library that writes a longer hit.
     unsafe {
         #[cfg(not(embree4))]
-        sys::rtcIntersect16(valid, scene, &mut args, rayhit);
+        sys::rtcIntersect16(valid, scene, &mut args, &mut rayhit.value);
         #[cfg(embree4)]
-        {
-            let mut padded = Padded::new(*rayhit);
-            sys::rtcIntersect16(valid, scene, &mut padded.value, &mut args.value);
-            *rayhit = padded.value;
-        }
+        sys::rtcIntersect16(valid, scene, &mut rayhit.value, &mut args.value);
     }
 }

@@ -121,6 +121,12 @@ impl EmbreeIntersector {
         spread < COHERENT_SPREAD
     }
 
+    /// For each run of 16 consecutive rays of `rays` (the last run may be shorter), whether
+    /// [`Intersector::intersect_many`] traces it as one packet (`true`) or one ray at a time.
+    pub fn packet_plan(&self, rays: &[Ray]) -> Vec<bool> {
+        rays.chunks(PACKET).map(|chunk| self.coherent(chunk)).collect()
+    }
+
     fn to_hit(&self, raw: RawHit) -> Option<Hit> {
         let object = *self.objects.get(raw.geom_id as usize)?;
         Some(Hit {
@@ -145,7 +151,7 @@ fn f32_at_most(x: f64) -> f32 {
 
 /// f64 -> f32 at the Embree boundary: origin and direction are rounded to single precision,
 /// `dir` keeps its length so that Embree's `t` is in the caller's units; `tnear = 0`.
-fn raw_ray(ray: &Ray, t_max: f64) -> RawRay {
+pub fn raw_ray(ray: &Ray, t_max: f64) -> RawRay {
     RawRay {
         org: ray.origin.as_vec3().to_array(),
         dir: ray.dir.as_vec3().to_array(),

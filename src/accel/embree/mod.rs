@@ -34,7 +34,7 @@ pub use compat::{check_version, version_text, EMBREE_MAJOR};
 pub use device::Device;
 pub use error::{embree_error, error_code_name};
 pub use geometry::TriangleGeometry;
-pub use intersector::EmbreeIntersector;
+pub use intersector::{raw_ray, EmbreeIntersector};
 pub use live::live_objects;
 pub use ray::{RawHit, RawRay};
 pub use scene::{BuildQuality, Scene, SceneBuilder};

@@ -147,12 +147,14 @@ impl Scene {
         if !ray.is_valid() {
             return None;
         }
-        let mut rayhit = sys::RTCRayHit { ray: ray.to_sys(), hit: sys::RTCHit::default() };
+        let mut padded = compat::Padded::new(sys::RTCRayHit { ray: ray.to_sys(), hit: sys::RTCHit::default() });
+        let rayhit = &mut padded.value;
         rayhit.hit.geomID = sys::RTC_INVALID_GEOMETRY_ID;
         rayhit.hit.instID.fill(sys::RTC_INVALID_GEOMETRY_ID);
-        // SAFETY: the scene is live and committed; `rayhit` is a properly aligned (checked at
+        // SAFETY: the scene is live and committed; `padded` is a properly aligned (checked at
         // compile time), fully initialised local that only this call accesses.
-        unsafe { compat::intersect1(self.handle.raw, &mut rayhit) };
+        unsafe { compat::intersect1(self.handle.raw, &mut padded) };
+        let rayhit = &padded.value;
         (rayhit.hit.geomID != sys::RTC_INVALID_GEOMETRY_ID).then_some(RawHit {
             t: rayhit.ray.tfar,
             u: rayhit.hit.u,
@@ -185,7 +187,8 @@ impl Scene {
         assert!(rays.len() <= 16, "intersect16: {} rays given, at most 16 fit a packet", rays.len());
         assert_eq!(rays.len(), hits.len(), "intersect16: rays and hits differ in length");
         let mut valid = Valid16([0; 16]);
-        let mut packet = compat::blank_packet();
+        let mut padded = compat::blank_packet();
+        let packet = &mut padded.value;
         for (lane, ray) in rays.iter().enumerate() {
             packet.hit.geomID[lane] = sys::RTC_INVALID_GEOMETRY_ID;
             for level in packet.hit.instID.iter_mut() {
@@ -211,8 +214,9 @@ impl Scene {
             // SAFETY: the scene is live and committed; `valid` and `packet` are 64-byte aligned
             // locals (checked at compile time), initialised for every lane (inactive lanes are
             // ignored by Embree), and only this call accesses them.
-            unsafe { compat::intersect16(valid.0.as_ptr(), self.handle.raw, &mut packet, coherent) };
+            unsafe { compat::intersect16(valid.0.as_ptr(), self.handle.raw, &mut padded, coherent) };
         }
+        let packet = &padded.value;
         for (lane, hit) in hits.iter_mut().enumerate() {
             let h = &packet.hit;
             *hit = (valid.0[lane] != 0 && h.geomID[lane] != sys::RTC_INVALID_GEOMETRY_ID).then(|| RawHit {
