@@ -13,6 +13,14 @@
  *
  * Usage: embree-bare INPUT [THREADS [DEVICE_CONFIG [MODE]]]
  *   MODE: plan (inimtrace's packet plan, the default), packets (every run a packet), single.
+ * Variations for measuring one choice at a time (environment): EMBREE_BARE_FEATURES=triangle
+ * (Embree 4's feature mask RTC_FEATURE_FLAG_TRIANGLE instead of all), EMBREE_BARE_FLAGS=none
+ * (no RTC_SCENE_FLAG_ROBUST), EMBREE_BARE_QUALITY=low|high (instead of medium),
+ * EMBREE_BARE_PAUSE_MS=N (sleep N ms between the build and the first query, to let the build's
+ * worker threads go idle), EMBREE_BARE_PASSES=N (trace the nearest hits N times, printing each
+ * pass's rate as nearest_pass_K; the reported rate is the first pass's), EMBREE_BARE_HINT=incoherent
+ * (packets without the coherent-rays hint), EMBREE_BARE_WIDTH=8 (each packet of 16 traced as two
+ * rtcIntersect8).
  * Prints one line of `key=value`: library version, seconds to create the device, to build
  * (geometries and rtcCommitScene), nearest-hit and occlusion rays per second, hit counts and a
  * checksum of the hits (equal between the two libraries when they find the same hits). */
@@ -81,6 +89,8 @@ struct Hit16 { struct RTCRayHit16 rh; char spare[128]; } __attribute__((aligned(
 static RTCScene scene;
 static struct Input in;
 static int mode; /* 0 plan, 1 packets, 2 single */
+static int triangle_features; /* Embree 4: feature mask RTC_FEATURE_FLAG_TRIANGLE */
+static int incoherent_packets, width8;
 static atomic_uint next_batch;
 struct Count { uint64_t hits, sum; };
 
@@ -88,6 +98,7 @@ static void intersect1(struct Hit1 *h) {
 #ifdef INIM_EMBREE4
     struct RTCIntersectArguments args;
     rtcInitIntersectArguments(&args);
+    if (triangle_features) args.feature_mask = RTC_FEATURE_FLAG_TRIANGLE;
     rtcIntersect1(scene, &h->rh, &args);
 #else
     struct RTCIntersectContext ctx;
@@ -96,18 +107,45 @@ static void intersect1(struct Hit1 *h) {
 #endif
 }
 
+struct Hit8 { struct RTCRayHit8 rh; char spare[128]; } __attribute__((aligned(64)));
+
+/* Lanes [first, first + 8) of a 16-ray packet as an 8-ray one and back (EMBREE_BARE_WIDTH=8). */
+#define COPY8(dst, src, a, b) for (int k = 0; k < 8; k++) dst.a[k] = src.a[k + b]
+#define BACK8(dst, src, a, b) for (int k = 0; k < 8; k++) dst.a[k + b] = src.a[k]
+#define RAY_FIELDS(X, d, s, f) X(d, s, ray.org_x, f); X(d, s, ray.org_y, f); X(d, s, ray.org_z, f); \
+    X(d, s, ray.dir_x, f); X(d, s, ray.dir_y, f); X(d, s, ray.dir_z, f); X(d, s, ray.tnear, f); \
+    X(d, s, ray.tfar, f); X(d, s, ray.mask, f); X(d, s, hit.geomID, f); X(d, s, hit.instID[0], f)
+#define HIT_FIELDS(X, d, s, f) X(d, s, ray.tfar, f); X(d, s, hit.geomID, f); X(d, s, hit.primID, f); \
+    X(d, s, hit.u, f); X(d, s, hit.v, f)
+
 static void intersect16(const int *valid, struct Hit16 *h) {
 #ifdef INIM_EMBREE4
     struct RTCIntersectArguments args;
     rtcInitIntersectArguments(&args);
-    args.flags = RTC_RAY_QUERY_FLAG_COHERENT;
-    rtcIntersect16(valid, scene, &h->rh, &args);
+    args.flags = incoherent_packets ? RTC_RAY_QUERY_FLAG_INCOHERENT : RTC_RAY_QUERY_FLAG_COHERENT;
+    if (triangle_features) args.feature_mask = RTC_FEATURE_FLAG_TRIANGLE;
+#define CALL8(valid8, h8) rtcIntersect8(valid8, scene, &h8.rh, &args)
+#define CALL16() rtcIntersect16(valid, scene, &h->rh, &args)
 #else
     struct RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
-    ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-    rtcIntersect16(valid, scene, &ctx, &h->rh);
+    ctx.flags = incoherent_packets ? RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT : RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+#define CALL8(valid8, h8) rtcIntersect8(valid8, scene, &ctx, &h8.rh)
+#define CALL16() rtcIntersect16(valid, scene, &ctx, &h->rh)
 #endif
+    if (!width8) {
+        CALL16();
+        return;
+    }
+    for (int b = 0; b < 16; b += 8) {
+        struct Hit8 h8;
+        int valid8[8] __attribute__((aligned(32)));
+        memset(&h8, 0, sizeof h8);
+        for (int k = 0; k < 8; k++) valid8[k] = valid[k + b];
+        RAY_FIELDS(COPY8, h8.rh, h->rh, b);
+        CALL8(valid8, h8);
+        HIT_FIELDS(BACK8, h->rh, h8.rh, b);
+    }
 }
 
 static void count(struct Count *c, unsigned geom, unsigned prim) {
@@ -201,6 +239,14 @@ int main(int argc, char **argv) {
     const char *config = argc > 3 ? argv[3] : "";
     mode = argc > 4 ? (!strcmp(argv[4], "packets") ? 1 : !strcmp(argv[4], "single") ? 2 : 0) : 0;
     in = load(argv[1]);
+    const char *features = getenv("EMBREE_BARE_FEATURES"), *flags = getenv("EMBREE_BARE_FLAGS");
+    const char *quality_name = getenv("EMBREE_BARE_QUALITY");
+    triangle_features = features && !strcmp(features, "triangle");
+    incoherent_packets = getenv("EMBREE_BARE_HINT") && !strcmp(getenv("EMBREE_BARE_HINT"), "incoherent");
+    width8 = getenv("EMBREE_BARE_WIDTH") && !strcmp(getenv("EMBREE_BARE_WIDTH"), "8");
+    enum RTCBuildQuality quality = !quality_name ? RTC_BUILD_QUALITY_MEDIUM
+        : !strcmp(quality_name, "low") ? RTC_BUILD_QUALITY_LOW
+        : !strcmp(quality_name, "high") ? RTC_BUILD_QUALITY_HIGH : RTC_BUILD_QUALITY_MEDIUM;
 
     double t0 = now();
     RTCDevice device = rtcNewDevice(config);
@@ -208,15 +254,15 @@ int main(int argc, char **argv) {
     double device_s = now() - t0;
     t0 = now();
     scene = rtcNewScene(device);
-    rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
-    rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_MEDIUM);
+    rtcSetSceneFlags(scene, flags && !strcmp(flags, "none") ? RTC_SCENE_FLAG_NONE : RTC_SCENE_FLAG_ROBUST);
+    rtcSetSceneBuildQuality(scene, quality);
     for (uint32_t g = 0; g < in.nmesh; g++) {
         RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
         void *v = rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 12, in.mesh[g].nv);
         void *t = rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 12, in.mesh[g].nt);
         memcpy(v, in.mesh[g].v, 12 * (size_t)in.mesh[g].nv);
         memcpy(t, in.mesh[g].t, 12 * (size_t)in.mesh[g].nt);
-        rtcSetGeometryBuildQuality(geom, RTC_BUILD_QUALITY_MEDIUM);
+        rtcSetGeometryBuildQuality(geom, quality);
         rtcCommitGeometry(geom);
         rtcAttachGeometry(scene, geom);
         rtcReleaseGeometry(geom);
@@ -225,8 +271,19 @@ int main(int argc, char **argv) {
     double build_s = now() - t0;
     if (rtcGetDeviceError(device) != RTC_ERROR_NONE) die("Embree reported an error");
 
+    const char *pause = getenv("EMBREE_BARE_PAUSE_MS");
+    if (pause) {
+        long ms = atol(pause);
+        struct timespec ts = {ms / 1000, (ms % 1000) * 1000000L};
+        nanosleep(&ts, NULL);
+    }
     struct Count near = {0, 0}, occ = {0, 0};
     double near_s = parallel(nearest_worker, threads, &near);
+    const char *passes = getenv("EMBREE_BARE_PASSES");
+    for (int k = 2; passes && k <= atoi(passes); k++) {
+        struct Count again = {0, 0};
+        fprintf(stderr, "nearest_pass_%d=%.0f ", k, in.nray / parallel(nearest_worker, threads, &again));
+    }
     double occ_s = parallel(occluded_worker, threads, &occ);
     printf("library=%ld device_s=%.4f build_s=%.4f rays=%u nearest_rays_per_s=%.0f hits=%lu checksum=%lu "
            "occluded_rays_per_s=%.0f occluded=%lu\n",

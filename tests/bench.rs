@@ -196,3 +196,65 @@ fn backends_comparison_measures_every_backend_and_the_other_binary() {
         assert!(out.join(name).is_file(), "{name}");
     }
 }
+
+/// `bench --backends --embree-input DIR` writes what Embree was given for each scene, in the
+/// layout `scripts/embree-bare.c` reads: every geometry's vertices and in-range triangles adding
+/// up to the scene's triangle count, every traced ray (finite, `tnear = 0`, `tfar = inf`), and
+/// one packet-plan byte per run of 16 rays.
+#[test]
+#[cfg(feature = "embree")]
+fn backends_embree_input_holds_the_scene_and_the_rays_traced() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("spheres.toml");
+    std::fs::write(
+        &scene,
+        "name = \"spheres\"\nbackground = [0.0, 0.0, 0.0]\n[[objects]]\nname = \"spheres\"\ntype = \"sphere-grid\"\n\
+         center = [0.0, 0.0, 420.0]\ncount = [2, 2]\nspacing = 20.0\nradius = 9.0\nsegments = 8\n\
+         material = { albedo = [0.9, 0.85, 0.7] }\n",
+    )
+    .unwrap();
+    let (out, input) = (dir.path().join("out"), dir.path().join("input"));
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_inimtrace"))
+        .args(["--quiet", "bench", "--backends", "--quick", "--embree-only", "--scene"])
+        .arg(&scene)
+        .arg("--out")
+        .arg(&out)
+        .arg("--embree-input")
+        .arg(&input)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let rows: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("backends.json")).unwrap()).unwrap();
+    let bytes = std::fs::read(input.join("spheres.embree-input")).unwrap();
+    assert_eq!(&bytes[..8], b"INIMEMB1");
+    let mut at = 8;
+    let mut word = || {
+        let w = [bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]];
+        at += 4;
+        w
+    };
+    let u32s = |w: [u8; 4]| u32::from_le_bytes(w) as usize;
+    let geometries = u32s(word());
+    let mut triangles = 0;
+    for _ in 0..geometries {
+        let (nv, nt) = (u32s(word()), u32s(word()));
+        for _ in 0..3 * nv {
+            assert!(f32::from_le_bytes(word()).is_finite());
+        }
+        for _ in 0..3 * nt {
+            assert!(u32s(word()) < nv, "a triangle index past the vertex count");
+        }
+        triangles += nt;
+    }
+    assert_eq!(triangles as u64, rows[0]["triangles"].as_u64().unwrap());
+    let rays = u32s(word());
+    assert_eq!(rays as u64, rows[0]["rays"].as_u64().unwrap());
+    for _ in 0..rays {
+        let r: Vec<f32> = (0..8).map(|_| f32::from_le_bytes(word())).collect();
+        assert!(r[..6].iter().all(|c| c.is_finite()) && r[6] == 0.0 && r[7] == f32::INFINITY, "{r:?}");
+    }
+    let plan = &bytes[at..];
+    assert_eq!(plan.len(), rays.div_ceil(16), "one plan byte per run of 16 rays, nothing after");
+    assert!(plan.iter().all(|&p| p <= 1));
+}
