@@ -460,7 +460,8 @@ fn run() -> Result<()> {
                 false => scene,
             };
             let out = out.unwrap_or_else(|| PathBuf::from("out/bench-backends"));
-            let opts = inimtrace::bench::BackendsOptions { scenes, quick, also, embree_only, out: out.clone(), embree_input };
+            let opts =
+                inimtrace::bench::BackendsOptions { scenes, quick, also, embree_only, out: out.clone(), embree_input };
             let rows = inimtrace::bench::backends::run(&opts)?;
             out!("{}", inimtrace::bench::backends::markdown(&rows));
             if !g.quiet {

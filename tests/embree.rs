@@ -357,9 +357,26 @@ fn agrees_with_brute_force_on_random_rays() {
 #[test]
 fn intersect_many_equals_intersect_per_ray() {
     let _g = shared();
+    packets_equal_single_rays(&Device::new().unwrap());
+}
+
+/// Where the device has no native 16-ray kernels (AVX2, here forced by the device's `isa`),
+/// packets go as two 8-ray ones (`rtcIntersect8`), with the same hits as single rays.
+#[test]
+fn eight_ray_packets_equal_intersect_per_ray() {
+    let _g = shared();
+    let device = Device::with_config("isa=avx2").unwrap();
+    let (bumpy, _) = random_scene(5);
+    let acc = EmbreeIntersector::with_device(&device, &[(0u32, &bumpy)], BuildQuality::Low).unwrap();
+    assert_eq!(acc.scene().packet_width(), 8, "an AVX2 device has no native 16-ray packets");
+    packets_equal_single_rays(&device);
+}
+
+/// `intersect_many` and the raw packet path agree with single rays on `device`.
+fn packets_equal_single_rays(device: &Device) {
     let (bumpy, soup) = random_scene(77);
     let meshes = [(1u32, &bumpy), (2u32, &soup)];
-    let acc = EmbreeIntersector::new(&meshes, BuildQuality::Medium).unwrap();
+    let acc = EmbreeIntersector::with_device(device, &meshes, BuildQuality::Medium).unwrap();
     // A coherent pinhole-camera bundle (packets of 16 span < 0.03 rad, so `intersect_many`
     // uses packets; 97 x 29 is not a multiple of the packet size) ...
     let mut rays = Vec::new();

@@ -217,7 +217,12 @@ fn measure_scene(opts: &BackendsOptions, path: &Path, me: &Path) -> Result<Vec<B
 /// (3 u32 each); the ray count (u32) and per ray origin, direction, tnear, tfar (8 f32); then one
 /// byte per run of 16 rays, 1 when `intersect_many` traces it as a packet.
 #[cfg(feature = "embree")]
-fn write_embree_input(path: &Path, meshes: &[(u32, &crate::scene::mesh::Mesh)], rays: &[Ray], plan: &[bool]) -> Result<()> {
+fn write_embree_input(
+    path: &Path,
+    meshes: &[(u32, &crate::scene::mesh::Mesh)],
+    rays: &[Ray],
+    plan: &[bool],
+) -> Result<()> {
     let count = |n: usize, what: &str| {
         u32::try_from(n).map_err(|_| Error::invalid(path.display().to_string(), what, "more than 2^32 - 1"))
     };

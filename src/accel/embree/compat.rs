@@ -128,6 +128,17 @@ pub(super) unsafe fn device_version(device: sys::RTCDevice) -> i64 {
     version as i64
 }
 
+/// Whether the device traces 16-ray packets natively (`RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED`:
+/// the AVX-512 kernels are in use). Where they are not (AVX2 CPUs), Embree 4.4 answers
+/// `rtcIntersect16` one ray at a time, while its 8-ray packets stay fast.
+///
+/// # Safety
+/// `device` must be a live device.
+pub(super) unsafe fn native_ray16(device: sys::RTCDevice) -> bool {
+    // SAFETY: forwarded from this function's contract; the property is valid in every release.
+    unsafe { sys::rtcGetDeviceProperty(device, sys::RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED) != 0 }
+}
+
 /// `"4.4.0"` from Embree's version number `40400`.
 pub fn version_text(version: i64) -> String {
     format!("{}.{}.{}", version / 10000, version / 100 % 100, version % 100)
@@ -194,7 +205,11 @@ pub(super) unsafe fn occluded1(scene: sys::RTCScene, ray: *mut sys::RTCRay) {
 /// A 16-ray packet with every field zero (rays and hits), ready to fill, with spare bytes after
 /// it under Embree 4.
 pub(super) fn blank_packet() -> Padded<sys::RTCRayHit16> {
-    Padded::new(sys::RTCRayHit16 { ray: sys::RTCRay16::default(), hit: sys::RTCHit16::default() })
+    // Zeroed where it lies: building the 1.3 KB packet and moving it into `Padded` cost two
+    // copies per query.
+    // SAFETY: `RTCRayHit16` is C arrays of `f32` and `u32` (and the spare bytes `u8`), for which
+    // all-zero bytes are a valid value: the same value as every field's `Default`.
+    unsafe { std::mem::zeroed() }
 }
 
 /// `rtcIntersect16` for either version, with the coherent-ray hint when `coherent`.
@@ -218,5 +233,37 @@ pub(super) unsafe fn intersect16(
         sys::rtcIntersect16(valid, scene, &mut args, &mut rayhit.value);
         #[cfg(embree4)]
         sys::rtcIntersect16(valid, scene, &mut rayhit.value, &mut args.value);
+    }
+}
+
+/// An 8-ray packet with every field zero (rays and hits), ready to fill, with spare bytes after
+/// it under Embree 4.
+pub(super) fn blank_packet8() -> Padded<sys::RTCRayHit8> {
+    // SAFETY: `RTCRayHit8` is C arrays of `f32` and `u32` (and the spare bytes `u8`), for which
+    // all-zero bytes are a valid value.
+    unsafe { std::mem::zeroed() }
+}
+
+/// `rtcIntersect8` for either version, with the coherent-ray hint when `coherent`.
+///
+/// # Safety
+/// `scene` must be a live, committed scene; `valid` must point to 8 `int`s aligned to 32 bytes
+/// (0 = inactive lane, -1 = active).
+#[inline]
+pub(super) unsafe fn intersect8(
+    valid: *const i32,
+    scene: sys::RTCScene,
+    rayhit: &mut Padded<sys::RTCRayHit8>,
+    coherent: bool,
+) {
+    let mut args = query_args(coherent);
+    // SAFETY: forwarded from this function's contract; `args` and the packet are fully
+    // initialised, 64-byte aligned records valid for the whole call; under Embree 4 the packet
+    // has spare bytes after it for a library that writes a longer hit.
+    unsafe {
+        #[cfg(not(embree4))]
+        sys::rtcIntersect8(valid, scene, &mut args, &mut rayhit.value);
+        #[cfg(embree4)]
+        sys::rtcIntersect8(valid, scene, &mut rayhit.value, &mut args.value);
     }
 }

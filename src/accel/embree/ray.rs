@@ -3,11 +3,13 @@
 
 use super::sys;
 
-// Embree requires 16-byte aligned single rays and 64-byte aligned 16-wide packets; bindgen
-// carries the C `RTC_ALIGN` over as `repr(align)`, and these checks keep it that way.
+// Embree requires 16-byte aligned single rays, 32-byte aligned 8-wide and 64-byte aligned 16-wide
+// packets; bindgen carries the C `RTC_ALIGN` over as `repr(align)`, and these checks keep it that
+// way.
 const _: () = assert!(std::mem::align_of::<sys::RTCRayHit>() >= 16);
 const _: () = assert!(std::mem::align_of::<sys::RTCRay>() >= 16);
 const _: () = assert!(std::mem::align_of::<sys::RTCRayHit16>() >= 64);
+const _: () = assert!(std::mem::align_of::<sys::RTCRayHit8>() >= 32);
 const _: () = assert!(std::mem::align_of::<Valid16>() >= 64);
 
 /// A ray in Embree's single precision: `org + t dir` for `tnear <= t <= tfar`.
@@ -69,6 +71,7 @@ pub struct RawHit {
     pub prim_id: u32,
 }
 
-/// The 16-lane activity mask of `rtcIntersect16`, which Embree wants 64-byte aligned.
+/// The 16-lane activity mask of `rtcIntersect16`, which Embree wants 64-byte aligned (its first 8
+/// lanes serve `rtcIntersect8`, which wants 32).
 #[repr(C, align(64))]
 pub(super) struct Valid16(pub(super) [i32; 16]);

@@ -107,8 +107,60 @@ impl SceneBuilder {
         // SAFETY: the scene is live and owned by `self`; all attached geometries are committed.
         unsafe { sys::rtcCommitScene(self.handle.raw) };
         self.handle.device.check("rtcCommitScene")?;
-        Ok(Scene { handle: self.handle, geometries: self.geometries, triangles: self.triangles })
+        // SAFETY: the device is live (the handle holds it).
+        let native16 = unsafe { compat::native_ray16(self.handle.device.raw()) };
+        Ok(Scene { handle: self.handle, geometries: self.geometries, triangles: self.triangles, native16 })
     }
+}
+
+/// Traces `$rays` (at most the packet's width) as one packet made by `$blank` and traced by
+/// `$trace` (`rtcIntersect16` or `rtcIntersect8`, whose records have the same fields), writing
+/// `$hits`.
+macro_rules! trace_packet {
+    ($scene:expr, $rays:expr, $hits:expr, $coherent:expr, $blank:path, $trace:path) => {{
+        let mut valid = Valid16([0; 16]);
+        let mut padded = $blank();
+        let packet = &mut padded.value;
+        for (lane, ray) in $rays.iter().enumerate() {
+            packet.hit.geomID[lane] = sys::RTC_INVALID_GEOMETRY_ID;
+            for level in packet.hit.instID.iter_mut() {
+                level[lane] = sys::RTC_INVALID_GEOMETRY_ID;
+            }
+            if !ray.is_valid() {
+                continue;
+            }
+            valid.0[lane] = -1;
+            let r = &mut packet.ray;
+            r.org_x[lane] = ray.org[0];
+            r.org_y[lane] = ray.org[1];
+            r.org_z[lane] = ray.org[2];
+            r.dir_x[lane] = ray.dir[0];
+            r.dir_y[lane] = ray.dir[1];
+            r.dir_z[lane] = ray.dir[2];
+            r.tnear[lane] = ray.tnear;
+            r.tfar[lane] = ray.tfar;
+            // Debian builds Embree with ray masks on: a zero mask would miss everything.
+            r.mask[lane] = u32::MAX;
+        }
+        if valid.0.iter().any(|&v| v != 0) {
+            // SAFETY: the scene is live and committed; `valid` and `padded` are 64-byte aligned
+            // locals (checked at compile time), initialised for every lane (inactive lanes are
+            // ignored by Embree), and only this call accesses them.
+            unsafe { $trace(valid.0.as_ptr(), $scene.handle.raw, &mut padded, $coherent) };
+        }
+        let packet = &padded.value;
+        for (lane, hit) in $hits.iter_mut().enumerate() {
+            let h = &packet.hit;
+            *hit = (valid.0[lane] != 0 && h.geomID[lane] != sys::RTC_INVALID_GEOMETRY_ID).then(|| RawHit {
+                t: packet.ray.tfar[lane],
+                u: h.u[lane],
+                v: h.v[lane],
+                ng: [h.Ng_x[lane], h.Ng_y[lane], h.Ng_z[lane]],
+                geom_id: h.geomID[lane],
+                prim_id: h.primID[lane],
+            });
+        }
+    }};
 }
 
 /// A committed Embree scene: read-only and safe to query from many threads at once.
@@ -116,6 +168,8 @@ pub struct Scene {
     handle: SceneHandle,
     geometries: u32,
     triangles: usize,
+    /// Whether the device has native 16-ray packet kernels (else packets go 8 rays at a time).
+    native16: bool,
 }
 
 // SAFETY: after `rtcCommitScene` the scene is never modified (no method takes `&mut self` or
@@ -127,7 +181,11 @@ unsafe impl Sync for Scene {}
 
 impl std::fmt::Debug for Scene {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Scene").field("geometries", &self.geometries).field("triangles", &self.triangles).finish()
+        f.debug_struct("Scene")
+            .field("geometries", &self.geometries)
+            .field("triangles", &self.triangles)
+            .field("native16", &self.native16)
+            .finish()
     }
 }
 
@@ -178,55 +236,31 @@ impl Scene {
         raw.tfar < 0.0
     }
 
-    /// Nearest hits for up to 16 rays in one packet (`rtcIntersect16`). `coherent` hints that
-    /// the rays start close together and point in similar directions. Invalid rays get `None`.
+    /// Rays per packet that Embree traces natively on this device: 16 with AVX-512, else 8.
+    pub fn packet_width(&self) -> usize {
+        if self.native16 {
+            16
+        } else {
+            8
+        }
+    }
+
+    /// Nearest hits for up to 16 rays in one packet (`rtcIntersect16`; as two 8-ray packets,
+    /// `rtcIntersect8`, where the device has no native 16-ray kernels, e.g. on AVX2 CPUs, where
+    /// Embree 4.4 would answer a 16-ray packet one ray at a time). `coherent` hints that the rays
+    /// start close together and point in similar directions. Invalid rays get `None`.
     ///
     /// # Panics
     /// If `rays.len() > 16` or `hits.len() != rays.len()` (caller bugs, not data errors).
     pub fn intersect16(&self, rays: &[RawRay], hits: &mut [Option<RawHit>], coherent: bool) {
         assert!(rays.len() <= 16, "intersect16: {} rays given, at most 16 fit a packet", rays.len());
         assert_eq!(rays.len(), hits.len(), "intersect16: rays and hits differ in length");
-        let mut valid = Valid16([0; 16]);
-        let mut padded = compat::blank_packet();
-        let packet = &mut padded.value;
-        for (lane, ray) in rays.iter().enumerate() {
-            packet.hit.geomID[lane] = sys::RTC_INVALID_GEOMETRY_ID;
-            for level in packet.hit.instID.iter_mut() {
-                level[lane] = sys::RTC_INVALID_GEOMETRY_ID;
+        if self.native16 {
+            trace_packet!(self, rays, hits, coherent, compat::blank_packet, compat::intersect16);
+        } else {
+            for (rays, hits) in rays.chunks(8).zip(hits.chunks_mut(8)) {
+                trace_packet!(self, rays, hits, coherent, compat::blank_packet8, compat::intersect8);
             }
-            if !ray.is_valid() {
-                continue;
-            }
-            valid.0[lane] = -1;
-            let r = &mut packet.ray;
-            r.org_x[lane] = ray.org[0];
-            r.org_y[lane] = ray.org[1];
-            r.org_z[lane] = ray.org[2];
-            r.dir_x[lane] = ray.dir[0];
-            r.dir_y[lane] = ray.dir[1];
-            r.dir_z[lane] = ray.dir[2];
-            r.tnear[lane] = ray.tnear;
-            r.tfar[lane] = ray.tfar;
-            // Debian builds Embree with ray masks on: a zero mask would miss everything.
-            r.mask[lane] = u32::MAX;
-        }
-        if valid.0.iter().any(|&v| v != 0) {
-            // SAFETY: the scene is live and committed; `valid` and `packet` are 64-byte aligned
-            // locals (checked at compile time), initialised for every lane (inactive lanes are
-            // ignored by Embree), and only this call accesses them.
-            unsafe { compat::intersect16(valid.0.as_ptr(), self.handle.raw, &mut padded, coherent) };
-        }
-        let packet = &padded.value;
-        for (lane, hit) in hits.iter_mut().enumerate() {
-            let h = &packet.hit;
-            *hit = (valid.0[lane] != 0 && h.geomID[lane] != sys::RTC_INVALID_GEOMETRY_ID).then(|| RawHit {
-                t: packet.ray.tfar[lane],
-                u: h.u[lane],
-                v: h.v[lane],
-                ng: [h.Ng_x[lane], h.Ng_y[lane], h.Ng_z[lane]],
-                geom_id: h.geomID[lane],
-                prim_id: h.primID[lane],
-            });
         }
     }
 

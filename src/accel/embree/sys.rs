@@ -26,11 +26,12 @@ pub const RTC_INVALID_GEOMETRY_ID: u32 = u32::MAX;
 #[cfg(feature = "embree4")]
 pub use embree4_sys::{
     rtcAttachGeometry, rtcCommitGeometry, rtcCommitScene, rtcGetDeviceError, rtcGetDeviceProperty, rtcIntersect1,
-    rtcIntersect16, rtcNewDevice, rtcNewGeometry, rtcNewScene, rtcOccluded1, rtcReleaseDevice, rtcReleaseGeometry,
-    rtcReleaseScene, rtcSetDeviceErrorFunction, rtcSetGeometryBuildQuality, rtcSetNewGeometryBuffer,
-    rtcSetSceneBuildQuality, rtcSetSceneFlags, RTCBufferType, RTCBuildQuality, RTCDevice, RTCDeviceProperty, RTCError,
-    RTCFeatureFlags, RTCFormat, RTCGeometry, RTCGeometryType, RTCHit, RTCHit16, RTCIntersectArguments, RTCRay,
-    RTCRay16, RTCRayHit, RTCRayHit16, RTCRayQueryFlags, RTCScene, RTCSceneFlags, RTC_INVALID_GEOMETRY_ID,
+    rtcIntersect16, rtcIntersect8, rtcNewDevice, rtcNewGeometry, rtcNewScene, rtcOccluded1, rtcReleaseDevice,
+    rtcReleaseGeometry, rtcReleaseScene, rtcSetDeviceErrorFunction, rtcSetGeometryBuildQuality,
+    rtcSetNewGeometryBuffer, rtcSetSceneBuildQuality, rtcSetSceneFlags, RTCBufferType, RTCBuildQuality, RTCDevice,
+    RTCDeviceProperty, RTCError, RTCFeatureFlags, RTCFormat, RTCGeometry, RTCGeometryType, RTCHit,
+    RTCIntersectArguments, RTCRay, RTCRayHit, RTCRayHit16, RTCRayHit8, RTCRayQueryFlags, RTCScene, RTCSceneFlags,
+    RTC_INVALID_GEOMETRY_ID,
 };
 
 // Error codes as plain numbers, as `error.rs` matches them (the crate's `RTCError` enum is
@@ -70,6 +71,8 @@ pub const RTC_GEOMETRY_TYPE_TRIANGLE: RTCGeometryType = RTCGeometryType::TRIANGL
 pub const RTC_SCENE_FLAG_ROBUST: RTCSceneFlags = RTCSceneFlags::ROBUST;
 #[cfg(feature = "embree4")]
 pub const RTC_DEVICE_PROPERTY_VERSION: RTCDeviceProperty = RTCDeviceProperty::VERSION;
+#[cfg(feature = "embree4")]
+pub const RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED: RTCDeviceProperty = RTCDeviceProperty::NATIVE_RAY16_SUPPORTED;
 #[cfg(feature = "embree4")]
 pub const RTC_RAY_QUERY_FLAG_COHERENT: RTCRayQueryFlags = RTCRayQueryFlags::COHERENT;
 #[cfg(feature = "embree4")]
