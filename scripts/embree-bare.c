@@ -11,7 +11,9 @@
  * as inimtrace's feature `embree4` uses them, hit records padded for Embree 4.3+'s longer ones).
  * scripts/embree-bare.sh builds both and runs them alternately.
  *
- * Usage: embree-bare INPUT [THREADS [DEVICE_CONFIG [MODE]]]
+ * Usage: embree-bare INPUT[,INPUT...] [THREADS [DEVICE_CONFIG [MODE]]]
+ *   Several inputs are measured one after the other in one process, each on a new device, as
+ *   `bench --backends` measures its scenes.
  *   MODE: plan (inimtrace's packet plan, the default), packets (every run a packet), single.
  * Variations for measuring one choice at a time (environment): EMBREE_BARE_FEATURES=triangle
  * (Embree 4's feature mask RTC_FEATURE_FLAG_TRIANGLE instead of all), EMBREE_BARE_FLAGS=none
@@ -232,13 +234,9 @@ static double parallel(void *(*worker)(void *), int threads, struct Count *total
     return t;
 }
 
-int main(int argc, char **argv) {
-    if (argc < 2) die("usage: embree-bare INPUT [THREADS [DEVICE_CONFIG [plan|packets|single]]]");
-    int threads = argc > 2 ? atoi(argv[2]) : 2;
-    if (threads < 1 || threads > 64) die("THREADS must be 1 to 64");
-    const char *config = argc > 3 ? argv[3] : "";
-    mode = argc > 4 ? (!strcmp(argv[4], "packets") ? 1 : !strcmp(argv[4], "single") ? 2 : 0) : 0;
-    in = load(argv[1]);
+/* One input, as inimtrace measures one scene: a new device, the build, the queries; one line. */
+static void measure(const char *path, int threads, const char *config) {
+    in = load(path);
     const char *features = getenv("EMBREE_BARE_FEATURES"), *flags = getenv("EMBREE_BARE_FLAGS");
     const char *quality_name = getenv("EMBREE_BARE_QUALITY");
     triangle_features = features && !strcmp(features, "triangle");
@@ -292,5 +290,17 @@ int main(int argc, char **argv) {
            (unsigned long)occ.hits);
     rtcReleaseScene(scene);
     rtcReleaseDevice(device);
+    for (uint32_t g = 0; g < in.nmesh; g++) { free(in.mesh[g].v); free(in.mesh[g].t); }
+    free(in.mesh); free(in.ray); free(in.plan);
+}
+
+int main(int argc, char **argv) {
+    if (argc < 2) die("usage: embree-bare INPUT[,INPUT...] [THREADS [DEVICE_CONFIG [plan|packets|single]]]");
+    int threads = argc > 2 ? atoi(argv[2]) : 2;
+    if (threads < 1 || threads > 64) die("THREADS must be 1 to 64");
+    const char *config = argc > 3 ? argv[3] : "";
+    mode = argc > 4 ? (!strcmp(argv[4], "packets") ? 1 : !strcmp(argv[4], "single") ? 2 : 0) : 0;
+    /* Several inputs, comma-separated, are measured one after the other in this one process. */
+    for (char *path = strtok(argv[1], ","); path; path = strtok(NULL, ",")) measure(path, threads, config);
     return 0;
 }
