@@ -16,6 +16,10 @@
 //! Embree 4 every hit record handed to a query is built and read in place inside a [`Padded`]
 //! record with spare bytes after it.
 //!
+//! Both versions report whether the device traces 16-ray packets natively (`native_ray16`):
+//! without AVX-512, Embree 4.4 answers `rtcIntersect16` one ray at a time, while its 8-ray
+//! packets (`rtcIntersect8`, also here) stay fast, so the scene then traces 8 rays at a time.
+//!
 //! `build.rs` sets `cfg(embree4)` when it bound against Embree 4 (system headers through
 //! `wrapper.h`, or the `embree4` feature, which takes the bindings from `embree4-sys`).
 
