@@ -249,9 +249,8 @@ pub fn sampling_cost_warnings(report: &AssessReport, exp: &Experiment) -> Vec<St
     out
 }
 
-pub(super) fn write_reports(report: &AssessReport, exp: &Experiment, dir: &OutputDir) -> Result<()> {
-    let write = |name: &str, text: String| -> Result<()> { dir.write_bytes(name, text.as_bytes()) };
-    write("table.md", table_markdown(report, exp))?;
+/// `results.csv`: every score row (each channel and their mean) and every stage's time.
+fn results_csv(report: &AssessReport, exp: &Experiment) -> String {
     // psnr_ci95_db and ssim_ci95 (empty for the grid estimator): 95% half-widths; then the
     // converged estimator's samples per retina pixel, replicates and whether both half-widths
     // are within the targets (empty for the grid estimator and for stage rows). Names
@@ -313,20 +312,7 @@ pub(super) fn write_reports(report: &AssessReport, exp: &Experiment, dir: &Outpu
                 ],
             );
         }
-        let values: Vec<String> = extra
-            .iter()
-            .flat_map(|n| {
-                let e = s.perceptual.get(*n);
-                let opt = |v: Option<f64>| v.map(csv_db).unwrap_or_default();
-                let flag = e.filter(|e| e.noise_bias.is_some()).map(|e| e.bias_above_ci95().to_string());
-                [
-                    opt(e.map(|e| e.value)),
-                    opt(e.and_then(|e| e.ci95)),
-                    opt(e.and_then(|e| e.noise_bias)),
-                    flag.unwrap_or_default(),
-                ]
-            })
-            .collect();
+        let values = perceptual_values(s, extra);
         row(
             &mut csv,
             &values,
@@ -375,8 +361,32 @@ pub(super) fn write_reports(report: &AssessReport, exp: &Experiment, dir: &Outpu
         &blank,
         ["stage", e, "", "", "", "", "", "total", &report.total_seconds.to_string(), "", "", "", "", ""],
     );
-    let csv = csv.finish();
-    write("results.csv", csv)?;
+    csv.finish()
+}
+
+/// The extra scores' cells of one score row: value, half-width, removed noise bias and whether
+/// it exceeds the half-width, per score `extra` names (empty where not measured).
+fn perceptual_values(s: &Score, extra: &[crate::perception::ScoreName]) -> Vec<String> {
+    extra
+        .iter()
+        .flat_map(|n| {
+            let e = s.perceptual.get(*n);
+            let opt = |v: Option<f64>| v.map(csv_db).unwrap_or_default();
+            let flag = e.filter(|e| e.noise_bias.is_some()).map(|e| e.bias_above_ci95().to_string());
+            [
+                opt(e.map(|e| e.value)),
+                opt(e.and_then(|e| e.ci95)),
+                opt(e.and_then(|e| e.noise_bias)),
+                flag.unwrap_or_default(),
+            ]
+        })
+        .collect()
+}
+
+pub(super) fn write_reports(report: &AssessReport, exp: &Experiment, dir: &OutputDir) -> Result<()> {
+    let write = |name: &str, text: String| -> Result<()> { dir.write_bytes(name, text.as_bytes()) };
+    write("table.md", table_markdown(report, exp))?;
+    write("results.csv", results_csv(report, exp))?;
     // Last: its presence marks a complete run, and it lists every other file of the run with
     // its size and CRC-32 (`files`), so a reader can verify the set.
     dir.finish_report("results.json", |files| {
