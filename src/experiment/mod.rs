@@ -16,6 +16,7 @@ mod report;
 pub mod simulated;
 mod stages;
 
+use crate::optics::eye::settings::prefix_field;
 pub use crate::optics::eye::settings::{BaseEye, EyeCaseSpec, EyeModelSettings, EyeSpec};
 pub use assess::{
     assess, assess_images, check, check_text, estimate, prepare_output_dir, Assessment, RunOptions, Z_CHANNEL_NOTE,
@@ -405,18 +406,6 @@ fn check_name(spec: &ExperimentSpec, source: &str) -> Result<()> {
         ));
     }
     Ok(())
-}
-
-fn prefix_field(err: Error, prefix: &str) -> Error {
-    match err {
-        Error::Invalid { source_name, field, message } => {
-            Error::Invalid { source_name, field: format!("{prefix}{field}"), message }
-        }
-        Error::Lattice { source_name, field, message } => {
-            Error::Lattice { source_name, field: format!("{prefix}{field}"), message }
-        }
-        other => other,
-    }
 }
 
 /// Why eye case `case` will cost several times the others to sample: its schematic eye's fitted

@@ -487,7 +487,7 @@ impl EyeCaseSpec {
 }
 
 /// `err` with its field under `prefix`.
-fn prefix_field(err: Error, prefix: &str) -> Error {
+pub(crate) fn prefix_field(err: Error, prefix: &str) -> Error {
     match err {
         Error::Invalid { source_name, field, message } => {
             Error::Invalid { source_name, field: format!("{prefix}{field}"), message }
