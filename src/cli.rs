@@ -19,6 +19,8 @@ pub(crate) mod bench;
 pub(crate) mod compare;
 pub(crate) mod info;
 pub(crate) mod render;
+pub(crate) mod resolution;
+pub(crate) mod sweep;
 pub(crate) mod values;
 
 /// Refuses an image of `pixels` pixels at `bytes_each` bytes that would not fit in the memory

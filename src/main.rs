@@ -30,9 +30,9 @@ macro_rules! outln {
 }
 
 mod cli;
-use cli::{assess::assess, bench::bench, compare::compare, info::eye_info, info::info};
+use cli::{assess::assess, bench::bench, bench::bench_backends, compare::compare, info::eye_info, info::info};
 use cli::{error_line, exr_path, parse_vec3, EyeArgs, Setup};
-use cli::{render::ground_truth_command, render::render_display, render::simulate_command};
+use cli::{render::ground_truth_command, render::render_display, render::simulate_command, resolution::resolution};
 
 #[derive(Parser)]
 #[command(
@@ -210,61 +210,7 @@ enum Command {
     },
     /// Run an experiment over the points of a sweep file (axes of --set values) on all cores, or
     /// as a Slurm job array; resumable. Writes sweep.csv, sweep.json, plots and points/.
-    Sweep {
-        /// Sweep TOML (see sweeps/tiny.toml, sweeps/pupil-focus.toml).
-        sweep: PathBuf,
-        /// Output directory (default: out/<sweep name>).
-        #[arg(long)]
-        out: Option<PathBuf>,
-        /// Run only these points, without collecting: indices and ranges I..J (J excluded), e.g.
-        /// 0..12 or 3,5,8..10. What each Slurm array task runs.
-        #[arg(long, conflicts_with = "slurm")]
-        points: Option<String>,
-        /// Write every point's images and figure too (points/<id>/), as `images = true`.
-        #[arg(long)]
-        images: bool,
-        /// Collect the complete points into sweep.csv, sweep.json and plots, list the missing
-        /// ones; run nothing.
-        #[arg(long, conflicts_with_all = ["slurm", "points"])]
-        collect: bool,
-        /// Submit the missing points to Slurm as a job array instead of running them here.
-        #[arg(long)]
-        slurm: bool,
-        /// Slurm partition.
-        #[arg(long, requires = "slurm")]
-        partition: Option<String>,
-        /// Most array tasks: the missing points are split into at most this many chunks.
-        #[arg(long, requires = "slurm", default_value_t = 100)]
-        array_max: usize,
-        /// Time limit of each array task (Slurm syntax: 30, 2:00:00, 1-0).
-        #[arg(long, requires = "slurm")]
-        time: Option<String>,
-        /// Cores of each array task (it runs that many threads).
-        #[arg(long, requires = "slurm")]
-        cpus_per_task: Option<usize>,
-        /// At most this many array tasks at once.
-        #[arg(long, requires = "slurm")]
-        max_running: Option<usize>,
-        /// Print the sbatch script instead of submitting it.
-        #[arg(long, requires = "slurm")]
-        dry_run: bool,
-        /// Wait for the job array to end, then collect (an error when points are missing).
-        #[arg(long, requires = "slurm")]
-        wait: bool,
-        /// The sweep's id at submission (array tasks refuse to run a changed sweep).
-        #[arg(long, hide = true)]
-        sweep_id: Option<String>,
-        /// Build and validate every point (files, settings, eyes, the memory estimate), print
-        /// the sweep's size, and exit without running or writing anything.
-        #[arg(long, conflicts_with_all = ["slurm", "collect", "points"])]
-        check: bool,
-        /// Exit with status 3 when a score's 95% interval missed its precision target (the
-        /// results are still written; without it a miss is reported on stderr and exits 0).
-        #[arg(long)]
-        strict: bool,
-        #[command(flatten)]
-        backend: BackendArg,
-    },
+    Sweep(cli::sweep::SweepArgs),
     /// Perceived resolution and focus cues: grating and slanted-edge MTF in cycles per degree for
     /// the ground truth and every method, through focus, the predicted accommodation and the
     /// display's limits (see docs/RESOLUTION.md). Writes mtf.csv, mtf50.csv, accommodation.csv,
@@ -408,7 +354,9 @@ struct Globals {
     exr_compression: ExrCompression,
 }
 
-fn run() -> Result<()> {
+/// The parsed command line (clap prints help, the version or a usage error and exits), with the
+/// process-wide flags applied: `--threads` sizes the thread pool, `--max-memory` sets the budget.
+fn parse_command_line() -> Result<Cli> {
     let mut command = Cli::command();
     // Only `--version` starts Embree to ask the loaded library's version (after `main`'s CPU check).
     if std::env::args_os().skip(1).any(|a| a == "--version" || a == "-V") {
@@ -422,6 +370,12 @@ fn run() -> Result<()> {
     if let Some(bytes) = cli.max_memory {
         inimtrace::budget::set_memory_limit(bytes);
     }
+    Ok(cli)
+}
+
+/// Runs the command given; with `--timings`, the total time of a command that does not print its own.
+fn run() -> Result<()> {
+    let cli = parse_command_line()?;
     let quiet = cli.quiet;
     let set = cli.set;
     let g = Globals { set: set.clone(), quiet, timings: cli.timings, exr_compression: cli.exr_compression };
@@ -455,18 +409,7 @@ fn run() -> Result<()> {
             printed_total = compare(&g, a, b, part.as_deref(), constants, json, &perceptual)?;
         }
         Command::Bench { quick, scene, out, backends: true, also, embree_only, embree_input } => {
-            let scenes = match scene.is_empty() {
-                true => vec![PathBuf::from("scenes/bunny.toml"), PathBuf::from("scenes/spheres-2m.toml")],
-                false => scene,
-            };
-            let out = out.unwrap_or_else(|| PathBuf::from("out/bench-backends"));
-            let opts =
-                inimtrace::bench::BackendsOptions { scenes, quick, also, embree_only, out: out.clone(), embree_input };
-            let rows = inimtrace::bench::backends::run(&opts)?;
-            out!("{}", inimtrace::bench::backends::markdown(&rows));
-            if !g.quiet {
-                eprintln!("wrote {}", out.display());
-            }
+            bench_backends(&g, quick, scene, out, also, embree_only, embree_input)?;
         }
         Command::Bench { quick, scene, out, .. } => {
             if scene.len() > 1 {
@@ -474,81 +417,12 @@ fn run() -> Result<()> {
             }
             printed_total = bench(&g, quick, scene.into_iter().next(), out)?;
         }
-        Command::Sweep {
-            sweep,
-            out,
-            points,
-            images,
-            collect,
-            slurm,
-            partition,
-            array_max,
-            time,
-            cpus_per_task,
-            max_running,
-            dry_run,
-            wait,
-            sweep_id,
-            strict,
-            backend,
-            check,
-        } => {
-            if check {
-                let text = inimtrace::sweep::check(&sweep, &set, &mut |m| eprintln!("{m}"))?;
-                outln!("{text}");
-                return Ok(());
-            }
-            let slurm = slurm.then(|| inimtrace::sweep::SlurmOptions {
-                partition,
-                array_max,
-                time,
-                cpus_per_task,
-                max_running,
-                dry_run,
-                threads: cli.threads,
-                max_memory: cli.max_memory,
-                ..Default::default()
-            });
-            let cmd = inimtrace::sweep::SweepCommand {
-                sweep,
-                out,
-                overrides: set.clone(),
-                backend: backend.choice()?,
-                quiet,
-                points,
-                images,
-                exr_compression: cli.exr_compression,
-                collect,
-                slurm,
-                wait,
-                sweep_id,
-            };
-            let output = inimtrace::sweep::execute(&cmd, &mut |m| eprintln!("{m}"))?;
-            out!("{}", output.stdout);
-            if let Some(note) = &output.missed_note {
-                eprintln!("warning: {note}");
-            }
-            if strict && output.missed_rows > 0 {
-                return Err(TargetsMissed(output.missed_rows).into());
-            }
+        Command::Sweep(args) => {
+            // `--check` prints no total.
+            printed_total = cli::sweep::sweep(&g, cli.threads, cli.max_memory, args)?;
         }
         Command::Resolution { study, out, force, check } => {
-            let cmd =
-                inimtrace::resolution::command::ResolutionCommand { study, out, overrides: set.clone(), quiet, force };
-            // Likely unit mistakes before the run (which may take minutes), not after it.
-            let study = inimtrace::resolution::command::load_study(&cmd)?;
-            for w in inimtrace::resolution::command::plausibility_warnings(&study) {
-                eprintln!("warning: {w}");
-            }
-            if check {
-                outln!("{}", inimtrace::resolution::command::check_text(&study)?);
-                return Ok(());
-            }
-            let run = inimtrace::resolution::command::execute(&cmd)?;
-            if !quiet {
-                eprint!("{}", run.timings_text());
-                eprintln!("wrote {}", run.out.display());
-            }
+            resolution(&g, study, out, force, check)?;
             printed_total = true;
         }
         Command::Report { dir } => {

@@ -1,5 +1,5 @@
-//! `inimtrace bench`: the speed benchmark of one scene (the backends comparison is run from
-//! `main.rs`, by the library's `bench::backends`).
+//! `inimtrace bench`: the speed benchmark of one scene, or with `--backends` the comparison of
+//! the mesh backends (the library's `bench::backends`).
 
 use std::path::{Path, PathBuf};
 
@@ -35,4 +35,29 @@ pub(crate) fn bench(g: &Globals, quick: bool, scene: Option<PathBuf>, out: Optio
         eprintln!("wrote {}", out.display());
     }
     Ok(printed_total)
+}
+
+/// `inimtrace bench --backends`: the mesh backends compared on each scene (default: the bunny and
+/// two million spheres), the table printed and written into `out`.
+pub(crate) fn bench_backends(
+    g: &Globals,
+    quick: bool,
+    scene: Vec<PathBuf>,
+    out: Option<PathBuf>,
+    also: Option<PathBuf>,
+    embree_only: bool,
+    embree_input: Option<PathBuf>,
+) -> Result<()> {
+    let scenes = match scene.is_empty() {
+        true => vec![PathBuf::from("scenes/bunny.toml"), PathBuf::from("scenes/spheres-2m.toml")],
+        false => scene,
+    };
+    let out = out.unwrap_or_else(|| PathBuf::from("out/bench-backends"));
+    let opts = inimtrace::bench::BackendsOptions { scenes, quick, also, embree_only, out: out.clone(), embree_input };
+    let rows = inimtrace::bench::backends::run(&opts)?;
+    out!("{}", inimtrace::bench::backends::markdown(&rows));
+    if !g.quiet {
+        eprintln!("wrote {}", out.display());
+    }
+    Ok(())
 }
