@@ -161,6 +161,126 @@ fn r_sequence<const D: usize>(i: usize) -> [f64; D] {
     })
 }
 
+/// A point of the check set: retina tangent, entrance-pupil point, wavelength (nm) and its exact ray.
+type CheckRay = (DVec2, DVec2, f64, PlaneRay);
+
+/// Whether errors (position, slope) are within [`POSITION_TOLERANCE`] and [`SLOPE_TOLERANCE`].
+fn within(e: (f64, f64)) -> bool {
+    e.0 <= POSITION_TOLERANCE && e.1 <= SLOPE_TOLERANCE
+}
+
+/// Chebyshev terms `n1` for every monomial up to `degree`, none above it (a map's `kept`).
+fn up_to(degree: usize, n1: usize) -> [usize; DEGREE + 1] {
+    std::array::from_fn(|g| if g <= degree { n1 } else { 0 })
+}
+
+/// The fit points `(tau, q)` in units of the domain (tangent `tau max_tangent` along x, pupil
+/// point `q radius`): tau and the pupil radius at Chebyshev points, q over the half disk (the
+/// map's mirror symmetry); the pinhole (`radius` 0) has q = 0 only.
+fn fit_points(radius: f64) -> Vec<(f64, DVec2)> {
+    let n = FIT_POINTS;
+    let mut points = Vec::new();
+    for tau in cheb01(n) {
+        for (ri, s) in cheb01(n).into_iter().enumerate() {
+            let angles = if ri == 0 || radius == 0.0 { 1 } else { n };
+            for ai in 0..angles {
+                let phi = std::f64::consts::PI * ai as f64 / (n - 1) as f64;
+                points.push((tau, if radius > 0.0 { s * DVec2::from_angle(phi) } else { DVec2::ZERO }));
+            }
+            if radius == 0.0 {
+                break;
+            }
+        }
+    }
+    points
+}
+
+/// The pseudo-inverse of the design matrix of `f t + g p` with `nt` monomials each, at the fit
+/// points (two rows a point, x and y). One matrix serves every wavelength node (the same
+/// points); the SVD also takes the pinhole's rank deficiency. None if the SVD fails.
+fn design_pseudo_inverse(points: &[(f64, DVec2)], nt: usize) -> Option<DMatrix<f64>> {
+    let rows = 2 * points.len();
+    let mut a = DMatrix::<f64>::zeros(rows, 2 * nt);
+    for (i, &(tau, q)) in points.iter().enumerate() {
+        let m = monomials(tau * tau, tau * q.x, q.length_squared());
+        for (k, mk) in m[..nt].iter().enumerate() {
+            a[(2 * i, k)] = mk * tau;
+            a[(2 * i, nt + k)] = mk * q.x;
+            a[(2 * i + 1, nt + k)] = mk * q.y;
+        }
+    }
+    a.svd(true, true).pseudo_inverse(1e-13).ok()
+}
+
+/// The least-squares fit at one wavelength `nm`: the exact rays of the fit points (tangent
+/// `tau max_tangent`, iris point `q unit scale`) times the pseudo-inverse, as the node's four
+/// outputs; None when a fit ray does not pass the eye.
+fn fit_node(
+    eye: &SchematicEye,
+    points: &[(f64, DVec2)],
+    pinv: &DMatrix<f64>,
+    nt: usize,
+    nm: f64,
+    max_tangent: f64,
+    (unit, scale): (f64, f64),
+) -> Option<Node> {
+    let at = eye.at(nm);
+    let mut b = DMatrix::<f64>::zeros(2 * points.len(), 2);
+    for (i, &(tau, q)) in points.iter().enumerate() {
+        let t = DVec2::new(tau * max_tangent, 0.0);
+        let ray = at.ray_out(eye.retina_point(t), q * unit * scale)?;
+        b[(2 * i, 0)] = ray.position.x;
+        b[(2 * i + 1, 0)] = ray.position.y;
+        b[(2 * i, 1)] = ray.slope.x;
+        b[(2 * i + 1, 1)] = ray.slope.y;
+    }
+    let x = pinv * b;
+    // The monomials above the degree keep zero coefficients.
+    let col =
+        |c: usize, off: usize| -> [f64; TERMS] { std::array::from_fn(|k| if k < nt { x[(off + k, c)] } else { 0.0 }) };
+    Some([col(0, 0), col(0, nt), col(1, 0), col(1, nt)])
+}
+
+/// Some when a ring just outside the domain (tangents and pupil points 2% beyond it) passes the
+/// eye at both ends of the wavelength range: no semi-diameter or total internal reflection cuts
+/// the domain.
+fn domain_is_uncut(
+    exact: &impl Fn(DVec2, DVec2, f64) -> Option<PlaneRay>,
+    max_tangent: f64,
+    radius: f64,
+    (lo, hi): (f64, f64),
+) -> Option<()> {
+    for k in 0..64 {
+        let e = DVec2::from_angle(std::f64::consts::TAU * k as f64 / 64.0);
+        for nm in [lo, hi] {
+            exact(e * max_tangent * 1.02, e * radius * 1.02, nm)?;
+            exact(e * max_tangent * 1.02, -e * radius * 1.02, nm)?;
+        }
+    }
+    Some(())
+}
+
+/// The check set: quasi-random points of the domain at wavelengths between the nodes, traced
+/// exactly once (None if one does not pass the eye); the series is cut at the lowest degree
+/// that meets the tolerances on it.
+fn check_set(
+    exact: &(impl Fn(DVec2, DVec2, f64) -> Option<PlaneRay> + Sync),
+    max_tangent: f64,
+    radius: f64,
+    (lo, hi): (f64, f64),
+) -> Option<Vec<CheckRay>> {
+    (0..CHECK_POINTS)
+        .into_par_iter()
+        .map(|i| {
+            let u = r_sequence::<5>(i);
+            let t = max_tangent * u[0].sqrt() * DVec2::from_angle(std::f64::consts::TAU * u[1]);
+            let p = radius * u[2].sqrt() * DVec2::from_angle(std::f64::consts::TAU * u[3]);
+            let nm = lo + (hi - lo) * u[4];
+            exact(t, p, nm).map(|e| (t, p, nm, e))
+        })
+        .collect()
+}
+
 impl RayMap {
     /// The map of `eye` for tangents up to `max_tangent`, entrance-pupil points within `radius`
     /// mm (iris points `scale` times them) and wavelengths in `nm_range`, checked against the
@@ -189,92 +309,20 @@ impl RayMap {
         let (x_mid, x_half) = if count > 1 { (0.5 * (x0 + x1), 0.5 * (x1 - x0)) } else { (x0, 1.0) };
         let unit = if radius > 0.0 { radius } else { 1.0 };
         let exact = |t: DVec2, p: DVec2, nm: f64| eye.ray_out(eye.retina_point(t), p * scale, nm);
-        // Fit points: t = (tau, 0) and p over the half disk (the map's mirror symmetry); the
-        // pinhole has p = 0 only.
-        let n = FIT_POINTS;
-        let mut points = Vec::new();
-        for tau in cheb01(n) {
-            for (ri, s) in cheb01(n).into_iter().enumerate() {
-                let angles = if ri == 0 || radius == 0.0 { 1 } else { n };
-                for ai in 0..angles {
-                    let phi = std::f64::consts::PI * ai as f64 / (n - 1) as f64;
-                    points.push((tau, if radius > 0.0 { s * DVec2::from_angle(phi) } else { DVec2::ZERO }));
-                }
-                if radius == 0.0 {
-                    break;
-                }
-            }
-        }
-        // One design matrix for every node (the same points): its pseudo-inverse once (SVD,
-        // which also takes the pinhole's rank deficiency).
-        let rows = 2 * points.len();
-        let mut a = DMatrix::<f64>::zeros(rows, 2 * nt);
-        for (i, &(tau, q)) in points.iter().enumerate() {
-            let m = monomials(tau * tau, tau * q.x, q.length_squared());
-            for (k, mk) in m[..nt].iter().enumerate() {
-                a[(2 * i, k)] = mk * tau;
-                a[(2 * i, nt + k)] = mk * q.x;
-                a[(2 * i + 1, nt + k)] = mk * q.y;
-            }
-        }
-        let pinv = a.svd(true, true).pseudo_inverse(1e-13).ok()?;
+        let points = fit_points(radius);
+        let pinv = design_pseudo_inverse(&points, nt)?;
+        // A fit at each wavelength node (Chebyshev points of `1 / lambda^2`), then their series.
         let nodes: Option<Vec<Node>> = (0..count)
             .into_par_iter()
             .map(|j| {
                 let s = (std::f64::consts::PI * (j as f64 + 0.5) / count as f64).cos();
                 let nm = if count == 1 { lo } else { 1e3 / (x_mid + x_half * s).sqrt() };
-                let at = eye.at(nm);
-                let mut b = DMatrix::<f64>::zeros(rows, 2);
-                for (i, &(tau, q)) in points.iter().enumerate() {
-                    let t = DVec2::new(tau * max_tangent, 0.0);
-                    let ray = at.ray_out(eye.retina_point(t), q * unit * scale)?;
-                    b[(2 * i, 0)] = ray.position.x;
-                    b[(2 * i + 1, 0)] = ray.position.y;
-                    b[(2 * i, 1)] = ray.slope.x;
-                    b[(2 * i + 1, 1)] = ray.slope.y;
-                }
-                let x = &pinv * b;
-                // The monomials above the degree keep zero coefficients.
-                let col = |c: usize, off: usize| -> [f64; TERMS] {
-                    std::array::from_fn(|k| if k < nt { x[(off + k, c)] } else { 0.0 })
-                };
-                Some([col(0, 0), col(0, nt), col(1, 0), col(1, nt)])
+                fit_node(eye, &points, &pinv, nt, nm, max_tangent, (unit, scale))
             })
             .collect();
         let series = chebyshev_series(&nodes?);
-        // A ring just outside the domain must pass at both ends of the range: nothing cuts it.
-        for k in 0..64 {
-            let e = DVec2::from_angle(std::f64::consts::TAU * k as f64 / 64.0);
-            for nm in [lo, hi] {
-                exact(e * max_tangent * 1.02, e * radius * 1.02, nm)?;
-                exact(e * max_tangent * 1.02, -e * radius * 1.02, nm)?;
-            }
-        }
-        // The check set: quasi-random points of the domain at wavelengths between the nodes,
-        // traced exactly once; the series is cut at the lowest degree that meets the
-        // tolerances on it.
-        let checks: Vec<(DVec2, DVec2, f64, PlaneRay)> = (0..CHECK_POINTS)
-            .into_par_iter()
-            .map(|i| {
-                let u = r_sequence::<5>(i);
-                let t = max_tangent * u[0].sqrt() * DVec2::from_angle(std::f64::consts::TAU * u[1]);
-                let p = radius * u[2].sqrt() * DVec2::from_angle(std::f64::consts::TAU * u[3]);
-                let nm = lo + (hi - lo) * u[4];
-                exact(t, p, nm).map(|e| (t, p, nm, e))
-            })
-            .collect::<Option<_>>()?;
-        let errors = |map: &RayMap| {
-            checks
-                .par_iter()
-                .map(|&(t, p, nm, e)| {
-                    let [f] = map.eval(t, p, [nm]);
-                    ((e.position - f.position).length(), (e.slope - f.slope).length())
-                })
-                .reduce(|| (0.0, 0.0), |a, b| (a.0.max(b.0), a.1.max(b.1)))
-        };
-        let within = |e: (f64, f64)| e.0 <= POSITION_TOLERANCE && e.1 <= SLOPE_TOLERANCE;
-        // Chebyshev terms `n1` for every monomial up to the degree, none above it.
-        let up_to = |n1: usize| -> [usize; DEGREE + 1] { std::array::from_fn(|g| if g <= degree { n1 } else { 0 }) };
+        domain_is_uncut(&exact, max_tangent, radius, nm_range)?;
+        let checks = check_set(&exact, max_tangent, radius, nm_range)?;
         let mut map = RayMap {
             degree,
             tau_max: max_tangent,
@@ -284,45 +332,63 @@ impl RayMap {
             x_mid,
             x_half,
             degree1: count,
-            kept: up_to(count),
+            kept: up_to(degree, count),
             coef: Vec::new(),
             check_error: (0.0, 0.0),
         };
         map.pack(&series);
-        if !within(errors(&map)) {
+        if !within(map.check_errors(&checks)) {
             return None;
         }
-        // Cut the series: the fewest Chebyshev terms for all monomials that stays within the
-        // tolerances, then, from the highest total degree down, the fewest for each degree
-        // (never more than the degree below keeps).
+        map.cut_series(&series, &checks);
+        map.pack(&series);
+        map.check_error = map.check_errors(&checks);
+        within(map.check_error).then_some(map)
+    }
+
+    /// The largest errors of the map against the exact rays of the check set: position at z = 0
+    /// (mm) and slope.
+    fn check_errors(&self, checks: &[CheckRay]) -> (f64, f64) {
+        checks
+            .par_iter()
+            .map(|&(t, p, nm, e)| {
+                let [f] = self.eval(t, p, [nm]);
+                ((e.position - f.position).length(), (e.slope - f.slope).length())
+            })
+            .reduce(|| (0.0, 0.0), |a, b| (a.0.max(b.0), a.1.max(b.1)))
+    }
+
+    /// Cuts the full series (`degree1` terms, within the tolerances): the fewest Chebyshev
+    /// terms for all monomials that stays within the tolerances on the check set, then, from
+    /// the highest total degree down, the fewest for each degree (never more than the degree
+    /// below keeps). Sets `degree1` and `kept`; `coef` is left packed for a trial.
+    fn cut_series(&mut self, series: &[Node], checks: &[CheckRay]) {
+        let (degree, count) = (self.degree, self.degree1);
         let mut best = count;
         for n1 in (1..count).rev() {
-            map.kept = up_to(n1);
-            map.pack(&series);
-            if !within(errors(&map)) {
+            self.kept = up_to(degree, n1);
+            self.pack(series);
+            if !within(self.check_errors(checks)) {
                 break;
             }
             best = n1;
         }
-        map.degree1 = best;
-        map.kept = up_to(best);
+        self.degree1 = best;
+        self.kept = up_to(degree, best);
         for g in (1..=degree).rev() {
-            let upper = if g < degree { map.kept[g + 1] } else { 0 };
-            let full = map.kept[g];
+            let upper = if g < degree { self.kept[g + 1] } else { 0 };
+            let full = self.kept[g];
             for keep in upper..full {
-                let mut trial = map.kept;
+                let mut trial = self.kept;
                 trial[g] = keep;
-                map.kept = trial;
-                map.pack(&series);
-                if within(errors(&map)) {
+                self.kept = trial;
+                self.pack(series);
+                if within(self.check_errors(checks)) {
                     break;
                 }
-                map.kept[g] = full;
+                self.kept[g] = full;
             }
         }
-        map.pack(&series);
-        map.check_error = errors(&map);
-        within(map.check_error).then_some(map)
     }
 
     /// Lays out the series' coefficients for `kept` (see `coef`).
