@@ -56,6 +56,88 @@ fn curvature<O: Operator>(terms: &[Term<O>], av: &[Vec<Rgb>], v: &[Rgb], mu: f64
     terms.iter().zip(av).map(|(t, a)| coefficient(t) * sum_sq(a, None)).sum::<f64>() + mu * sum_sq(v, None)
 }
 
+/// `z = -M^-1 g` of channel `c` of one value: `-g / l` on a free value with a positive diagonal
+/// `l`, 0 on a bound one.
+#[inline(always)]
+fn z_of(x: &[f64; 3], g: &[f64; 3], l: &[f64; 3], c: usize) -> f64 {
+    if l[c] > 0.0 && !bound(x[c], g[c]) {
+        -g[c] / l[c]
+    } else {
+        0.0
+    }
+}
+
+/// `g.z` with `z = -M^-1 g` on the free values (summed in chunks of 8192 values, in order).
+fn preconditioned_gz(g: &[Rgb], x: &[Rgb], diag: &[Rgb]) -> f64 {
+    g.par_chunks(8192)
+        .zip(x.par_chunks(8192))
+        .zip(diag.par_chunks(8192))
+        .map(|((g, x), l)| {
+            let mut s = 0.0;
+            for ((g, x), l) in g.iter().zip(x).zip(l) {
+                for c in 0..3 {
+                    s += g[c] * z_of(x, g, l, c);
+                }
+            }
+            s
+        })
+        .collect::<Vec<f64>>()
+        .iter()
+        .sum()
+}
+
+/// The search direction `p = z + beta p_prev` in place, 0 on the bound values.
+fn set_direction(p: &mut [Rgb], x: &[Rgb], g: &[Rgb], diag: &[Rgb], beta: f64) {
+    p.par_iter_mut().zip(x).zip(g).zip(diag).for_each(|(((p, x), g), l)| {
+        *p = std::array::from_fn(|c| {
+            let z = z_of(x, g, l, c);
+            if z == 0.0 && (l[c] <= 0.0 || bound(x[c], g[c])) {
+                0.0
+            } else {
+                z + beta * p[c]
+            }
+        })
+    });
+}
+
+/// Whether `x + t p` stays in [0, 1].
+fn stays_inside(p: &[Rgb], x: &[Rgb], t: f64) -> bool {
+    p.par_iter().zip(x).all(|(p, x)| (0..3).all(|c| (0.0..=1.0).contains(&(x[c] + t * p[c]))))
+}
+
+/// The conjugate-gradient step: `x += t p` and each term's residual `r_s += t A_s p`.
+fn step_along(x: &mut [Rgb], res: &mut [Vec<Rgb>], p: &[Rgb], ap: &[Vec<Rgb>], t: f64) {
+    x.par_iter_mut().zip(p).for_each(|(x, p)| *x = std::array::from_fn(|c| x[c] + t * p[c]));
+    for (r, a) in res.iter_mut().zip(ap) {
+        r.par_iter_mut().zip(a).for_each(|(r, a)| *r = std::array::from_fn(|c| r[c] + t * a[c]));
+    }
+}
+
+/// The projected arc `d = P(x + t p) - x` (feasible for steps in [0, 1]) into `d`, and `g.d`;
+/// when it bends away from descent, the preconditioned gradient's arc `P(x + t z) - x` instead.
+fn projected_arc(d: &mut [Rgb], x: &[Rgb], p: &[Rgb], g: &[Rgb], diag: &[Rgb], t: f64) -> f64 {
+    d.par_iter_mut().zip(x).zip(p).for_each(|((d, x), p)| {
+        *d = std::array::from_fn(|c| (x[c] + t * p[c]).clamp(0.0, 1.0) - x[c]);
+    });
+    let mut gd = dot(g, d);
+    if gd >= 0.0 {
+        // Bent away from descent: the preconditioned gradient's arc is one.
+        d.par_iter_mut().zip(x).zip(g).zip(diag).for_each(|(((d, x), g), l)| {
+            *d = std::array::from_fn(|c| (x[c] + t * z_of(x, g, l, c)).clamp(0.0, 1.0) - x[c]);
+        });
+        gd = dot(g, d);
+    }
+    gd
+}
+
+/// The step `s` along the projected arc: `x = P(x + s d)` and `r_s += s A_s d`.
+fn step_along_arc(x: &mut [Rgb], res: &mut [Vec<Rgb>], d: &[Rgb], ad: &[Vec<Rgb>], s: f64) {
+    x.par_iter_mut().zip(d).for_each(|(x, d)| *x = std::array::from_fn(|c| (x[c] + s * d[c]).clamp(0.0, 1.0)));
+    for (r, a) in res.iter_mut().zip(ad) {
+        r.par_iter_mut().zip(a).for_each(|(r, a)| *r = std::array::from_fn(|c| r[c] + s * a[c]));
+    }
+}
+
 /// Minimises `f` from `x0` by projected, Jacobi-preconditioned conjugate gradient.
 pub(super) fn pcg<O: Operator>(
     terms: &[Term<O>],
@@ -92,52 +174,18 @@ pub(super) fn pcg<O: Operator>(
         }
         let start = Instant::now();
         // z = -M^-1 g on the free values; gz = g.z.
-        let z_of = |x: &[f64; 3], g: &[f64; 3], l: &[f64; 3], c: usize| -> f64 {
-            if l[c] > 0.0 && !bound(x[c], g[c]) {
-                -g[c] / l[c]
-            } else {
-                0.0
-            }
-        };
-        let gz: f64 = g
-            .par_chunks(8192)
-            .zip(x.par_chunks(8192))
-            .zip(diag.par_chunks(8192))
-            .map(|((g, x), l)| {
-                let mut s = 0.0;
-                for ((g, x), l) in g.iter().zip(x).zip(l) {
-                    for c in 0..3 {
-                        s += g[c] * z_of(x, g, l, c);
-                    }
-                }
-                s
-            })
-            .collect::<Vec<f64>>()
-            .iter()
-            .sum();
+        let gz = preconditioned_gz(&g, &x, &diag);
         if gz >= 0.0 {
             // No free value has a gradient: the projected gradient is zero up to rounding.
             stop = Stop::Stalled;
             break;
         }
         let mut beta = if gz_prev.is_finite() { gz / gz_prev } else { 0.0 };
-        let set_p = |p: &mut Vec<Rgb>, beta: f64| {
-            p.par_iter_mut().zip(&x).zip(&g).zip(&diag).for_each(|(((p, x), g), l)| {
-                *p = std::array::from_fn(|c| {
-                    let z = z_of(x, g, l, c);
-                    if z == 0.0 && (l[c] <= 0.0 || bound(x[c], g[c])) {
-                        0.0
-                    } else {
-                        z + beta * p[c]
-                    }
-                })
-            });
-        };
-        set_p(&mut p, beta);
+        set_direction(&mut p, &x, &g, &diag, beta);
         let mut gp = dot(&g, &p);
         if beta != 0.0 && gp >= 0.0 {
             beta = 0.0;
-            set_p(&mut p, beta);
+            set_direction(&mut p, &x, &g, &diag, beta);
             gp = gz;
         }
         forward_all(terms, &p, &mut ap);
@@ -147,33 +195,18 @@ pub(super) fn pcg<O: Operator>(
             break;
         }
         let t = -gp / (2.0 * q);
-        let inside = p.par_iter().zip(&x).all(|(p, x)| (0..3).all(|c| (0.0..=1.0).contains(&(x[c] + t * p[c]))));
         let (predicted, step);
-        if inside {
+        if stays_inside(&p, &x, t) {
             predicted = t * gp + t * t * q;
             step = t;
             if -predicted <= 1e-15 * f {
                 stop = Stop::Stalled;
                 break;
             }
-            x.par_iter_mut().zip(&p).for_each(|(x, p)| *x = std::array::from_fn(|c| x[c] + t * p[c]));
-            for (r, a) in res.iter_mut().zip(&ap) {
-                r.par_iter_mut().zip(a).for_each(|(r, a)| *r = std::array::from_fn(|c| r[c] + t * a[c]));
-            }
+            step_along(&mut x, &mut res, &p, &ap, t);
             gz_prev = gz;
         } else {
-            // The projected arc: d = P(x + t p) - x, feasible for steps in [0, 1].
-            d.par_iter_mut().zip(&x).zip(&p).for_each(|((d, x), p)| {
-                *d = std::array::from_fn(|c| (x[c] + t * p[c]).clamp(0.0, 1.0) - x[c]);
-            });
-            let mut gd = dot(&g, &d);
-            if gd >= 0.0 {
-                // Bent away from descent: the preconditioned gradient's arc is one.
-                d.par_iter_mut().zip(&x).zip(&g).zip(&diag).for_each(|(((d, x), g), l)| {
-                    *d = std::array::from_fn(|c| (x[c] + t * z_of(x, g, l, c)).clamp(0.0, 1.0) - x[c]);
-                });
-                gd = dot(&g, &d);
-            }
+            let gd = projected_arc(&mut d, &x, &p, &g, &diag, t);
             forward_all(terms, &d, &mut ad);
             let qd = curvature(terms, &ad, &d, mu);
             let s = if qd > 0.0 { (-gd / (2.0 * qd)).min(1.0) } else { 1.0 };
@@ -183,10 +216,7 @@ pub(super) fn pcg<O: Operator>(
                 stop = Stop::Stalled;
                 break;
             }
-            x.par_iter_mut().zip(&d).for_each(|(x, d)| *x = std::array::from_fn(|c| (x[c] + s * d[c]).clamp(0.0, 1.0)));
-            for (r, a) in res.iter_mut().zip(&ad) {
-                r.par_iter_mut().zip(a).for_each(|(r, a)| *r = std::array::from_fn(|c| r[c] + s * a[c]));
-            }
+            step_along_arc(&mut x, &mut res, &d, &ad, s);
             gz_prev = f64::NAN;
         }
         f = objective(terms, &res, &x, x0, mu);
