@@ -26,7 +26,52 @@ fn tf<F: Into<f64>>(x: F) -> f64 {
 
 pub(super) fn load_obj(path: &Path, bytes: &[u8], reach: &Reach) -> Result<Loaded> {
     let mut warnings = Vec::new();
-    let text = decode_text(path, bytes, &mut warnings)?;
+    let text = obj_text(path, bytes, &mut warnings)?;
+    let refs =
+        References { reach, base_dir: path.parent().map(Path::to_path_buf).unwrap_or_default(), refused: None.into() };
+    let (models, materials) = parse_with_tobj(path, &text, &refs, &mut warnings)?;
+    let texture_path = |t: &str| refs.resolve("map_Kd", texture_file_name(t));
+
+    let mut builder = MeshBuilder::new();
+    let mut texture = None;
+    let mut parts: Vec<(Option<usize>, MeshPart)> = Vec::new();
+    for model in &models {
+        let m = &model.mesh;
+        let first = builder.mesh.triangles.len();
+        let range = first..first + m.indices.len() / 3;
+        match parts.last_mut() {
+            Some((id, part)) if *id == m.material_id => part.triangles.end = range.end,
+            _ => {
+                let material =
+                    m.material_id.and_then(|id| materials.get(id)).map(|mat| file_material(mat, texture_path));
+                parts.push((m.material_id, MeshPart { triangles: range, material: material.unwrap_or_default() }));
+            }
+        }
+        builder.append(path, m)?;
+        if texture.is_none() {
+            texture = m
+                .material_id
+                .and_then(|id| materials.get(id))
+                .and_then(|mat| mat.diffuse_texture.as_deref())
+                .map(texture_path);
+        }
+    }
+    let mesh = builder.finish();
+    let mut parts: Vec<MeshPart> = parts.into_iter().map(|(_, p)| p).filter(|p| !p.triangles.is_empty()).collect();
+    for p in &mut parts {
+        p.material.vertex_colors = mesh.colors.is_some();
+    }
+    if let Some(why) = refs.refused.into_inner() {
+        return Err(Error::parse(path, why));
+    }
+    Ok(Loaded { mesh, parts, texture, warnings })
+}
+
+/// The OBJ's text as tobj is given it: decoded ([`decode_text`]), checked line by line
+/// ([`validate_obj_text`]; vertex colours that tobj would misread dropped, with a warning), and
+/// unnamed `usemtl` lines dropped.
+fn obj_text(path: &Path, bytes: &[u8], warnings: &mut Vec<String>) -> Result<String> {
+    let text = decode_text(path, bytes, warnings)?;
     let text = match validate_obj_text(path, &text)? {
         None => text,
         Some(why) => {
@@ -34,8 +79,38 @@ pub(super) fn load_obj(path: &Path, bytes: &[u8], reach: &Reach) -> Result<Loade
             drop_vertex_colors(&text)
         }
     };
-    let text = drop_unnamed_usemtl(path, text, &mut warnings);
+    Ok(drop_unnamed_usemtl(path, text, warnings))
+}
 
+/// The files an OBJ names (`mtllib`, `map_Kd`), resolved relative to its folder within the reach.
+struct References<'a> {
+    reach: &'a Reach,
+    base_dir: std::path::PathBuf,
+    /// The first reference that leaves the reach: the load's error.
+    refused: RefCell<Option<String>>,
+}
+
+impl References<'_> {
+    /// The path of the file `name` (a reference of kind `what`); one that leaves the reach is
+    /// remembered as refused (the first only) and joined to the folder as given.
+    fn resolve(&self, what: &str, name: &str) -> std::path::PathBuf {
+        let file = super::mesh::file_name_path(Path::new(""), name);
+        self.reach.resolve(&self.base_dir, &file).unwrap_or_else(|why| {
+            self.refused.borrow_mut().get_or_insert_with(|| format!("{what}: {why}"));
+            self.base_dir.join(file)
+        })
+    }
+}
+
+/// tobj's models (polygons whole, points and lines ignored) and materials of the OBJ `text`. A
+/// missing or broken .mtl loses its materials, with a warning; an `mtllib` that leaves the
+/// reach is an error.
+fn parse_with_tobj(
+    path: &Path,
+    text: &str,
+    refs: &References,
+    warnings: &mut Vec<String>,
+) -> Result<(Vec<tobj::Model>, Vec<tobj::Material>)> {
     // tobj's optional features ("merging", "reordering") add fields that must stay false.
     #[allow(clippy::needless_update)]
     let options = tobj::LoadOptions {
@@ -45,67 +120,69 @@ pub(super) fn load_obj(path: &Path, bytes: &[u8], reach: &Reach) -> Result<Loade
         ignore_lines: true,
         ..Default::default()
     };
-    let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    // A missing or broken .mtl loses its materials, with a warning.
     let mtl_warnings = RefCell::new(Vec::new());
-    // The first reference that leaves the reach (`mtllib`, `map_Kd`): the load's error.
-    let refused: RefCell<Option<String>> = RefCell::new(None);
-    let within = |what: &str, name: &str| -> std::path::PathBuf {
-        let file = super::mesh::file_name_path(Path::new(""), name);
-        reach.resolve(&base_dir, &file).unwrap_or_else(|why| {
-            refused.borrow_mut().get_or_insert_with(|| format!("{what}: {why}"));
-            base_dir.join(file)
-        })
-    };
     let (models, materials) = tobj::load_obj_buf(&mut Cursor::new(text.as_bytes()), &options, |mtl| {
-        let file = within("mtllib", &mtl.to_string_lossy());
-        if refused.borrow().is_some() {
+        let file = refs.resolve("mtllib", &mtl.to_string_lossy());
+        if refs.refused.borrow().is_some() {
             return Err(tobj::LoadError::OpenFileFailed);
         }
         load_mtl(path, &file, &mut mtl_warnings.borrow_mut())
     })
     .map_err(|e| Error::parse(path, format!("OBJ: {e}")))?;
-    if let Some(why) = refused.borrow_mut().take() {
+    if let Some(why) = refs.refused.borrow_mut().take() {
         return Err(Error::parse(path, why));
     }
     warnings.extend(mtl_warnings.into_inner());
-    let materials = materials.unwrap_or_default();
-    let texture_path = |t: &str| within("map_Kd", texture_file_name(t));
+    Ok((models, materials.unwrap_or_default()))
+}
 
-    let mut mesh = Mesh::default();
-    let (mut normals, mut uvs, mut colors) = (Some(Vec::new()), Some(Vec::new()), Some(Vec::new()));
-    let mut texture = None;
-    let mut parts: Vec<(Option<usize>, MeshPart)> = Vec::new();
-    // Faces counted across the file's objects, from 0, for errors.
-    let mut face = 0usize;
-    for model in &models {
-        let m = &model.mesh;
-        let first = mesh.triangles.len();
-        let range = first..first + m.indices.len() / 3;
-        match parts.last_mut() {
-            Some((id, part)) if *id == m.material_id => part.triangles.end = range.end,
-            _ => {
-                let material = m.material_id.and_then(|id| materials.get(id)).map(|mat| {
-                    let kd = mat.diffuse.map(|d| DVec3::new(tf(d[0]), tf(d[1]), tf(d[2])));
-                    let texture = mat.diffuse_texture.as_deref().map(|t| FileTexture {
-                        source: TextureSource::File(texture_path(t)),
-                        filter: None,
-                        wrap: None,
-                    });
-                    FileMaterial {
-                        name: Some(mat.name.clone()),
-                        // With a texture, `map_Kd` alone gives the colour (exporters write a
-                        // placeholder `Kd` beside it, e.g. Blender's 0.8); `Kd` is the colour
-                        // when the texture cannot be read.
-                        base_color: kd.filter(|_| texture.is_none()),
-                        untextured_color: kd.filter(|_| texture.is_some()),
-                        texture,
-                        vertex_colors: false,
-                    }
-                });
-                parts.push((m.material_id, MeshPart { triangles: range, material: material.unwrap_or_default() }));
-            }
+/// A tobj material as a mesh part's material: `Kd` as a linear colour, `map_Kd` (resolved by
+/// `texture_path`) as its texture.
+fn file_material(mat: &tobj::Material, texture_path: impl Fn(&str) -> std::path::PathBuf) -> FileMaterial {
+    let kd = mat.diffuse.map(|d| DVec3::new(tf(d[0]), tf(d[1]), tf(d[2])));
+    let texture = mat.diffuse_texture.as_deref().map(|t| FileTexture {
+        source: TextureSource::File(texture_path(t)),
+        filter: None,
+        wrap: None,
+    });
+    FileMaterial {
+        name: Some(mat.name.clone()),
+        // With a texture, `map_Kd` alone gives the colour (exporters write a
+        // placeholder `Kd` beside it, e.g. Blender's 0.8); `Kd` is the colour
+        // when the texture cannot be read.
+        base_color: kd.filter(|_| texture.is_none()),
+        untextured_color: kd.filter(|_| texture.is_some()),
+        texture,
+        vertex_colors: false,
+    }
+}
+
+/// The file's objects merged into one mesh: positions and triangles, and the per-vertex
+/// normals, texture coordinates and colours, each kept only if every object has them.
+struct MeshBuilder {
+    mesh: Mesh,
+    normals: Option<Vec<DVec3>>,
+    uvs: Option<Vec<DVec2>>,
+    colors: Option<Vec<DVec3>>,
+    /// Faces counted across the file's objects, from 0, for errors.
+    face: usize,
+}
+
+impl MeshBuilder {
+    fn new() -> Self {
+        MeshBuilder {
+            mesh: Mesh::default(),
+            normals: Some(Vec::new()),
+            uvs: Some(Vec::new()),
+            colors: Some(Vec::new()),
+            face: 0,
         }
+    }
+
+    /// Appends one of tobj's meshes (an object of the file): its vertices, its faces
+    /// triangulated, and its vertex attributes.
+    fn append(&mut self, path: &Path, m: &tobj::Mesh) -> Result<()> {
+        let mesh = &mut self.mesh;
         let nv = m.positions.len() / 3;
         let offset = mesh.positions.len();
         let offset_u32 =
@@ -125,25 +202,32 @@ pub(super) fn load_obj(path: &Path, bytes: &[u8], reach: &Reach) -> Result<Loade
             corners.extend(m.indices[start..start + arity].iter().map(|&i| i + offset_u32));
             start += arity;
             crate::scene::polygon::triangulate(&mesh.positions, &corners, &mut mesh.triangles)
-                .map_err(|m| Error::parse(path, format!("face {face}: {m}")))?;
-            face += 1;
+                .map_err(|m| Error::parse(path, format!("face {}: {m}", self.face)))?;
+            self.face += 1;
         }
+        self.append_attributes(m, nv);
+        Ok(())
+    }
+
+    /// The normals, texture coordinates and colours of one of tobj's meshes of `nv` vertices;
+    /// one it lacks (or has not for every vertex) is dropped for the whole file.
+    fn append_attributes(&mut self, m: &tobj::Mesh, nv: usize) {
         if m.normals.len() == 3 * nv {
-            if let Some(n) = &mut normals {
+            if let Some(n) = &mut self.normals {
                 n.extend(m.normals.chunks_exact(3).map(|c| DVec3::new(tf(c[0]), tf(c[1]), tf(c[2]))));
             }
         } else {
-            normals = None;
+            self.normals = None;
         }
         if m.texcoords.len() == 2 * nv {
-            if let Some(t) = &mut uvs {
+            if let Some(t) = &mut self.uvs {
                 t.extend(m.texcoords.chunks_exact(2).map(|c| DVec2::new(tf(c[0]), tf(c[1]))));
             }
         } else {
-            uvs = None;
+            self.uvs = None;
         }
         if m.vertex_color.len() == 3 * nv {
-            if let Some(col) = &mut colors {
+            if let Some(col) = &mut self.colors {
                 col.extend(
                     m.vertex_color.chunks_exact(3).map(|c| {
                         DVec3::new(srgb_to_linear(tf(c[0])), srgb_to_linear(tf(c[1])), srgb_to_linear(tf(c[2])))
@@ -151,27 +235,18 @@ pub(super) fn load_obj(path: &Path, bytes: &[u8], reach: &Reach) -> Result<Loade
                 );
             }
         } else {
-            colors = None;
-        }
-        if texture.is_none() {
-            texture = m
-                .material_id
-                .and_then(|id| materials.get(id))
-                .and_then(|mat| mat.diffuse_texture.as_deref())
-                .map(texture_path);
+            self.colors = None;
         }
     }
-    mesh.normals = nonempty(normals);
-    mesh.uvs = nonempty(uvs);
-    mesh.colors = nonempty(colors);
-    let mut parts: Vec<MeshPart> = parts.into_iter().map(|(_, p)| p).filter(|p| !p.triangles.is_empty()).collect();
-    for p in &mut parts {
-        p.material.vertex_colors = mesh.colors.is_some();
+
+    /// The mesh, with the attributes every object had (none if no vertex has one).
+    fn finish(self) -> Mesh {
+        let mut mesh = self.mesh;
+        mesh.normals = nonempty(self.normals);
+        mesh.uvs = nonempty(self.uvs);
+        mesh.colors = nonempty(self.colors);
+        mesh
     }
-    if let Some(why) = refused.into_inner() {
-        return Err(Error::parse(path, why));
-    }
-    Ok(Loaded { mesh, parts, texture, warnings })
 }
 
 /// The text of an OBJ or MTL file: UTF-8 (a byte-order mark dropped), UTF-16 with a byte-order
