@@ -520,6 +520,9 @@ fn check_claimed_counts(path: &Path, header: &PlyHeader, body_bytes: usize) -> R
     Ok(())
 }
 
+/// The mesh of a PLY body: every element read in order (the vertex element's positions and
+/// attributes kept, the face element's polygons triangulated, other elements skipped), then the
+/// vertex attributes checked.
 fn read_ply_body(
     path: &Path,
     elements: &[Element],
@@ -529,9 +532,7 @@ fn read_ply_body(
     warnings: &mut Vec<String>,
 ) -> Result<Mesh> {
     let mut mesh = Mesh::default();
-    let mut normals = Vec::new();
-    let mut uvs = Vec::new();
-    let mut colors = Vec::new();
+    let mut attributes = VertexAttributes::default();
     // Faces as (face index, polygon); indices are checked once all vertices are known.
     let mut polygon: Vec<f64> = Vec::new();
     let mut faces: Vec<(usize, Vec<i64>)> = Vec::new();
@@ -561,23 +562,7 @@ fn read_ply_body(
                             polygon.push(body.read(path, &loc, item)?);
                         }
                         if is_face && pi == face_prop {
-                            if polygon.len() < 3 {
-                                return Err(Error::parse(
-                                    path,
-                                    format!("face {index}: has {} vertices, a face needs at least 3", polygon.len()),
-                                ));
-                            }
-                            let mut idx = Vec::with_capacity(polygon.len());
-                            for &v in &polygon {
-                                if v.fract() != 0.0 || !v.is_finite() {
-                                    return Err(Error::parse(
-                                        path,
-                                        format!("face {index}: vertex index {v} is not an integer"),
-                                    ));
-                                }
-                                idx.push(v as i64);
-                            }
-                            faces.push((index, idx));
+                            faces.push((index, face_indices(path, index, &polygon)?));
                         }
                     }
                 }
@@ -585,35 +570,41 @@ fn read_ply_body(
             loc.property = "";
             body.end_element(path, &loc)?;
             if is_vertex {
-                let p = DVec3::new(scalars[layout.xyz[0]], scalars[layout.xyz[1]], scalars[layout.xyz[2]]);
-                if !p.is_finite() {
-                    return Err(Error::parse(
-                        path,
-                        format!("vertex {index}: non-finite coordinate ({}, {}, {})", p.x, p.y, p.z),
-                    ));
-                }
-                mesh.positions.push(p);
-                if let Some([i, j, k]) = layout.normal {
-                    normals.push(DVec3::new(scalars[i], scalars[j], scalars[k]));
-                }
-                if let Some([i, j]) = layout.uv {
-                    uvs.push(DVec2::new(scalars[i], scalars[j]));
-                }
-                if let Some(([i, j, k], [ti, tj, tk])) = layout.color {
-                    colors.push(DVec3::new(
-                        srgb_to_linear(scalars[i] / ti.int_max()),
-                        srgb_to_linear(scalars[j] / tj.int_max()),
-                        srgb_to_linear(scalars[k] / tk.int_max()),
-                    ));
-                }
+                attributes.push_vertex(path, index, &scalars, layout, &mut mesh)?;
             }
         }
     }
+    triangulate_faces(path, &faces, &mut mesh)?;
+    attributes.attach(path, layout, &mut mesh, warnings)?;
+    Ok(mesh)
+}
+
+/// The vertex indices of face `index`: at least three, each an integer.
+fn face_indices(path: &Path, index: usize, polygon: &[f64]) -> Result<Vec<i64>> {
+    if polygon.len() < 3 {
+        return Err(Error::parse(
+            path,
+            format!("face {index}: has {} vertices, a face needs at least 3", polygon.len()),
+        ));
+    }
+    let mut idx = Vec::with_capacity(polygon.len());
+    for &v in polygon {
+        if v.fract() != 0.0 || !v.is_finite() {
+            return Err(Error::parse(path, format!("face {index}: vertex index {v} is not an integer")));
+        }
+        idx.push(v as i64);
+    }
+    Ok(idx)
+}
+
+/// The faces triangulated into `mesh` once all its vertices are known (each index checked against
+/// them): convex faces as the fan (0, i, i + 1), concave ones by ear clipping.
+fn triangulate_faces(path: &Path, faces: &[(usize, Vec<i64>)], mesh: &mut Mesh) -> Result<()> {
     let nv = mesh.positions.len();
     if u32::try_from(nv).is_err() {
         return Err(Error::parse(path, format!("{nv} vertices: more than 2^32 are not supported")));
     }
-    for (face, idx) in &faces {
+    for (face, idx) in faces {
         for (corner, &v) in idx.iter().enumerate() {
             if v < 0 || v as usize >= nv {
                 return Err(Error::parse(
@@ -622,32 +613,81 @@ fn read_ply_body(
                 ));
             }
         }
-        // Convex faces: the fan (0, i, i + 1); concave ones: ear clipping.
         let corners: Vec<u32> = idx.iter().map(|&v| v as u32).collect();
         crate::scene::polygon::triangulate(&mesh.positions, &corners, &mut mesh.triangles)
             .map_err(|m| Error::parse(path, format!("face {face}: {m}")))?;
     }
-    if layout.normal.is_some() {
-        mesh.normals = Some(normals);
+    Ok(())
+}
+
+/// The vertex attributes the layout names, one per vertex read so far.
+#[derive(Default)]
+struct VertexAttributes {
+    normals: Vec<DVec3>,
+    uvs: Vec<DVec2>,
+    colors: Vec<DVec3>,
+}
+
+impl VertexAttributes {
+    /// Vertex `index` from its element's values `v`: its position into `mesh` (an error if not
+    /// finite), its attributes here (colours of integer type scaled to [0, 1], then linear).
+    fn push_vertex(
+        &mut self,
+        path: &Path,
+        index: usize,
+        v: &[f64],
+        layout: &VertexLayout,
+        mesh: &mut Mesh,
+    ) -> Result<()> {
+        let p = DVec3::new(v[layout.xyz[0]], v[layout.xyz[1]], v[layout.xyz[2]]);
+        if !p.is_finite() {
+            return Err(Error::parse(
+                path,
+                format!("vertex {index}: non-finite coordinate ({}, {}, {})", p.x, p.y, p.z),
+            ));
+        }
+        mesh.positions.push(p);
+        if let Some([i, j, k]) = layout.normal {
+            self.normals.push(DVec3::new(v[i], v[j], v[k]));
+        }
+        if let Some([i, j]) = layout.uv {
+            self.uvs.push(DVec2::new(v[i], v[j]));
+        }
+        if let Some(([i, j, k], [ti, tj, tk])) = layout.color {
+            self.colors.push(DVec3::new(
+                srgb_to_linear(v[i] / ti.int_max()),
+                srgb_to_linear(v[j] / tj.int_max()),
+                srgb_to_linear(v[k] / tk.int_max()),
+            ));
+        }
+        Ok(())
     }
-    if layout.uv.is_some() {
-        mesh.uvs = Some(uvs);
+
+    /// The attributes the layout has, given to `mesh`: a non-finite normal or texture coordinate
+    /// is an error; a non-finite colour drops the colours, with a warning.
+    fn attach(self, path: &Path, layout: &VertexLayout, mesh: &mut Mesh, warnings: &mut Vec<String>) -> Result<()> {
+        if layout.normal.is_some() {
+            mesh.normals = Some(self.normals);
+        }
+        if layout.uv.is_some() {
+            mesh.uvs = Some(self.uvs);
+        }
+        if layout.color.is_some() {
+            mesh.colors = Some(self.colors);
+        }
+        if let Some(i) = mesh.normals.iter().flatten().position(|n| !n.is_finite()) {
+            return Err(Error::parse(path, format!("vertex {i}: non-finite normal")));
+        }
+        if let Some(i) = mesh.uvs.iter().flatten().position(|t| !t.is_finite()) {
+            return Err(Error::parse(path, format!("vertex {i}: non-finite texture coordinate")));
+        }
+        if let Some(i) = mesh.colors.iter().flatten().position(|c| !c.is_finite()) {
+            warnings.push(format!(
+                "{}: vertex {i}: non-finite colour; the mesh is shown without its vertex colours",
+                path.display()
+            ));
+            mesh.colors = None;
+        }
+        Ok(())
     }
-    if layout.color.is_some() {
-        mesh.colors = Some(colors);
-    }
-    if let Some(i) = mesh.normals.iter().flatten().position(|n| !n.is_finite()) {
-        return Err(Error::parse(path, format!("vertex {i}: non-finite normal")));
-    }
-    if let Some(i) = mesh.uvs.iter().flatten().position(|t| !t.is_finite()) {
-        return Err(Error::parse(path, format!("vertex {i}: non-finite texture coordinate")));
-    }
-    if let Some(i) = mesh.colors.iter().flatten().position(|c| !c.is_finite()) {
-        warnings.push(format!(
-            "{}: vertex {i}: non-finite colour; the mesh is shown without its vertex colours",
-            path.display()
-        ));
-        mesh.colors = None;
-    }
-    Ok(mesh)
 }
