@@ -268,11 +268,67 @@ fn yaml_nesting(text: &str) -> usize {
     deepest
 }
 
+/// The framework's display keys.
+const FRAMEWORK_KEYS: [&str; 10] = [
+    "lenslettolcd",
+    "lenslettoorigin",
+    "sizelcd",
+    "resolutionlcd",
+    "islensletvertical",
+    "lensletshift",
+    "lensletorientation",
+    "lensletfocallength",
+    "eishift",
+    "eiorientation",
+];
+
 /// Parses the paper framework's display file (OpenCV FileStorage YAML; keys `lenslettolcd`,
 /// `lenslettoorigin`, `sizelcd`, `resolutionlcd`, `islensletvertical`, `lensletshift`,
 /// `lensletorientation` (row-major 2x2), `lensletfocallength`, `eishift`, `eiorientation`).
 pub fn parse_opencv_display(text: &str, path: &Path) -> Result<Display> {
-    use serde_yaml_ng::Value;
+    let map = framework_mapping(text, path)?;
+    let keys = FrameworkFile { map: &map, src: path.display().to_string() };
+    let src = &keys.src;
+    let vertical = map.get("islensletvertical").map(|_| keys.numbers("islensletvertical", 1)).transpose()?;
+    if let Some(v) = vertical {
+        if v[0] != 0.0 {
+            return Err(Error::invalid(
+                src,
+                "islensletvertical",
+                "cylindrical (vertical lenticular) lenslets are not supported; only spherical lenslet arrays (0)",
+            ));
+        }
+    }
+    let res = keys.numbers("resolutionlcd", 2)?;
+    for (i, r) in res.iter().enumerate() {
+        if !(r.fract() == 0.0 && *r >= 0.0 && *r <= 65536.0) {
+            return Err(Error::invalid(
+                src,
+                format!("resolutionlcd[{i}]"),
+                format!("must be a whole number of pixels, got {r}"),
+            ));
+        }
+    }
+    let size = keys.numbers("sizelcd", 2)?;
+    let d = Display {
+        name: path.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default(),
+        eye_to_lenslets: keys.numbers("lenslettoorigin", 1)?[0],
+        lenslets_to_lcd: keys.numbers("lenslettolcd", 1)?[0],
+        focal_length: keys.numbers("lensletfocallength", 1)?[0],
+        lenslets: keys.lattice("lensletshift", "lensletorientation")?,
+        elemental_images: keys.lattice("eishift", "eiorientation")?,
+        lcd: Lcd { size: DVec2::new(size[0], size[1]), resolution: [res[0] as usize, res[1] as usize] },
+        primaries: None,
+        lenslet: crate::optics::lenslet::LensletOptics::Paraxial,
+        photometry: None,
+    };
+    d.validate(src).map_err(with_framework_key)?;
+    Ok(d)
+}
+
+/// The top-level mapping of a framework display file, every key one of [`FRAMEWORK_KEYS`]; a
+/// file nested deeper than [`MAX_YAML_NESTING`] is refused before it is parsed.
+fn framework_mapping(text: &str, path: &Path) -> Result<serde_yaml_ng::Mapping> {
     let depth = yaml_nesting(text);
     if depth > MAX_YAML_NESTING {
         return Err(Error::parse(
@@ -288,38 +344,41 @@ pub fn parse_opencv_display(text: &str, path: &Path) -> Result<Display> {
         .map(|(i, l)| if i == 0 && l.trim_start().starts_with("%YAML") { "" } else { l })
         .collect::<Vec<_>>()
         .join("\n");
-    let doc: Value = serde_yaml_ng::from_str(&body).map_err(|e| Error::parse(path, format!("malformed YAML: {e}")))?;
-    let Value::Mapping(map) = doc else {
+    let doc: serde_yaml_ng::Value =
+        serde_yaml_ng::from_str(&body).map_err(|e| Error::parse(path, format!("malformed YAML: {e}")))?;
+    let serde_yaml_ng::Value::Mapping(map) = doc else {
         return Err(Error::parse(path, "expected a mapping of display keys at the top level"));
     };
     let src = path.display().to_string();
     for key in map.keys() {
         let k = key.as_str().unwrap_or("?");
-        const KNOWN: [&str; 10] = [
-            "lenslettolcd",
-            "lenslettoorigin",
-            "sizelcd",
-            "resolutionlcd",
-            "islensletvertical",
-            "lensletshift",
-            "lensletorientation",
-            "lensletfocallength",
-            "eishift",
-            "eiorientation",
-        ];
-        if !KNOWN.contains(&k) {
-            return Err(Error::invalid(&src, k, format!("unknown key; expected one of {}", KNOWN.join(", "))));
+        if !FRAMEWORK_KEYS.contains(&k) {
+            return Err(Error::invalid(&src, k, format!("unknown key; expected one of {}", FRAMEWORK_KEYS.join(", "))));
         }
     }
-    let numbers = |key: &str, n: usize| -> Result<Vec<f64>> {
-        let v = map.get(key).ok_or_else(|| Error::invalid(&src, key, "missing"))?;
+    Ok(map)
+}
+
+/// The keys of a framework display file (`src` names it in errors).
+struct FrameworkFile<'a> {
+    map: &'a serde_yaml_ng::Mapping,
+    src: String,
+}
+
+impl FrameworkFile<'_> {
+    /// The `n` numbers of `key`: a number, a sequence of them, or an OpenCV matrix
+    /// (`!!opencv-matrix {rows, cols, dt, data: [...]}`).
+    fn numbers(&self, key: &str, n: usize) -> Result<Vec<f64>> {
+        use serde_yaml_ng::Value;
+        let src = &self.src;
+        let v = self.map.get(key).ok_or_else(|| Error::invalid(src, key, "missing"))?;
         // OpenCV matrices may be written as `!!opencv-matrix {rows, cols, dt, data: [...]}`.
         let v = match v {
             Value::Tagged(t) => &t.value,
             other => other,
         };
         let v = match v {
-            Value::Mapping(m) => m.get("data").ok_or_else(|| Error::invalid(&src, key, "matrix without `data`"))?,
+            Value::Mapping(m) => m.get("data").ok_or_else(|| Error::invalid(src, key, "matrix without `data`"))?,
             other => other,
         };
         let list: Vec<&Value> = match v {
@@ -328,62 +387,34 @@ pub fn parse_opencv_display(text: &str, path: &Path) -> Result<Display> {
         };
         if list.len() != n {
             return Err(Error::invalid(
-                &src,
+                src,
                 key,
                 format!("expected {}, got {}", crate::count::count(n, "number"), list.len()),
             ));
         }
         list.iter()
             .map(|x| match x {
-                Value::Number(num) => num.as_f64().ok_or_else(|| Error::invalid(&src, key, "not a number")),
-                other => Err(Error::invalid(&src, key, format!("expected a number, got {other:?}"))),
+                Value::Number(num) => num.as_f64().ok_or_else(|| Error::invalid(src, key, "not a number")),
+                other => Err(Error::invalid(src, key, format!("expected a number, got {other:?}"))),
             })
             .collect()
-    };
-    let vertical = map.get("islensletvertical").map(|_| numbers("islensletvertical", 1)).transpose()?;
-    if let Some(v) = vertical {
-        if v[0] != 0.0 {
-            return Err(Error::invalid(
-                &src,
-                "islensletvertical",
-                "cylindrical (vertical lenticular) lenslets are not supported; only spherical lenslet arrays (0)",
-            ));
-        }
     }
-    let res = numbers("resolutionlcd", 2)?;
-    for (i, r) in res.iter().enumerate() {
-        if !(r.fract() == 0.0 && *r >= 0.0 && *r <= 65536.0) {
-            return Err(Error::invalid(
-                &src,
-                format!("resolutionlcd[{i}]"),
-                format!("must be a whole number of pixels, got {r}"),
-            ));
-        }
-    }
-    let shift = |k: &str| -> Result<DVec2> { numbers(k, 2).map(|v| DVec2::new(v[0], v[1])) };
-    let lattice = |shift_key: &str, key: &str| -> Result<Lattice> {
-        let m = numbers(key, 4)?;
-        Lattice::from_row_major(shift(shift_key)?, [m[0], m[1], m[2], m[3]]).ok_or_else(|| Error::Lattice {
-            source_name: src.clone(),
+
+    /// The lattice of shift `shift_key` (2 numbers) and row-major pitch matrix `key` (4 numbers).
+    fn lattice(&self, shift_key: &str, key: &str) -> Result<Lattice> {
+        let m = self.numbers(key, 4)?;
+        let shift = self.numbers(shift_key, 2).map(|v| DVec2::new(v[0], v[1]))?;
+        Lattice::from_row_major(shift, [m[0], m[1], m[2], m[3]]).ok_or_else(|| Error::Lattice {
+            source_name: self.src.clone(),
             field: key.to_string(),
             message: format!("pitch matrix {m:?} is singular or not finite"),
         })
-    };
-    let size = numbers("sizelcd", 2)?;
-    let d = Display {
-        name: path.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default(),
-        eye_to_lenslets: numbers("lenslettoorigin", 1)?[0],
-        lenslets_to_lcd: numbers("lenslettolcd", 1)?[0],
-        focal_length: numbers("lensletfocallength", 1)?[0],
-        lenslets: lattice("lensletshift", "lensletorientation")?,
-        elemental_images: lattice("eishift", "eiorientation")?,
-        lcd: Lcd { size: DVec2::new(size[0], size[1]), resolution: [res[0] as usize, res[1] as usize] },
-        primaries: None,
-        lenslet: crate::optics::lenslet::LensletOptics::Paraxial,
-        photometry: None,
-    };
-    // Name the framework's keys in validation errors.
-    d.validate(&src).map_err(|e| match e {
+    }
+}
+
+/// A validation error of the display with the framework's key for the field it names.
+fn with_framework_key(e: Error) -> Error {
+    match e {
         Error::Invalid { source_name, field, message } => {
             let key = match field.split(' ').next().unwrap_or("") {
                 "eye_to_lenslets" => "lenslettoorigin",
@@ -396,8 +427,7 @@ pub fn parse_opencv_display(text: &str, path: &Path) -> Result<Display> {
             Error::Invalid { source_name, field: if key.is_empty() { field } else { key.to_string() }, message }
         }
         other => other,
-    })?;
-    Ok(d)
+    }
 }
 
 #[cfg(test)]
