@@ -129,6 +129,105 @@ fn bvh2_depth(bvh: &Bvh2) -> usize {
     max_depth
 }
 
+/// The non-empty meshes of a scene, validated, each with the global index of its first triangle.
+struct MeshParts<'a> {
+    /// (scene object index, mesh, first triangle), in the caller's order.
+    parts: Vec<(u32, &'a Mesh, usize)>,
+    /// Triangles over all meshes.
+    n: usize,
+    /// The bounds of every mesh's positions.
+    lo: DVec3,
+    hi: DVec3,
+}
+
+impl<'a> MeshParts<'a> {
+    fn of(meshes: &[(u32, &'a Mesh)]) -> Result<Self> {
+        let mut parts: Vec<(u32, &Mesh, usize)> = Vec::new();
+        let mut n = 0usize;
+        let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+        for &(object, mesh) in meshes {
+            if mesh.triangles.is_empty() {
+                continue;
+            }
+            mesh.validate(&format!("scene object {object}"))?;
+            let (mesh_lo, mesh_hi) = mesh.bounds();
+            lo = lo.min(mesh_lo);
+            hi = hi.max(mesh_hi);
+            parts.push((object, mesh, n));
+            n += mesh.triangles.len();
+        }
+        Ok(MeshParts { parts, n, lo, hi })
+    }
+}
+
+/// Triangle `i` over all meshes, in the caller's order.
+fn tri_of(parts: &[(u32, &Mesh, usize)], i: usize) -> Tri {
+    let k = parts.partition_point(|p| p.2 <= i) - 1;
+    let (object, mesh, first) = parts[k];
+    Tri { p: mesh.triangle_positions(i - first), object, index: (i - first) as u32 }
+}
+
+/// The scene's scale (its largest coordinate or extent, 1 for a point), which sets the boxes'
+/// padding; coordinates beyond the range of the f32 boxes are an error.
+fn coordinate_scale(lo: DVec3, hi: DVec3) -> Result<f64> {
+    let scale = {
+        let s = lo.abs().max(hi.abs()).max_element().max((hi - lo).length());
+        if s > 0.0 {
+            s
+        } else {
+            1.0
+        }
+    };
+    if scale > f64::from(f32::MAX) / 4.0 {
+        return Err(Error::invalid(
+            "scene meshes",
+            "positions",
+            format!("coordinates up to {scale:e} mm exceed the single-precision range of the BVH boxes"),
+        ));
+    }
+    Ok(scale)
+}
+
+/// A triangle's culling box in f32, padded by `pad`: f64 -> f32 for the tree's boxes only, the
+/// padding far more than the rounding of the conversion.
+fn padded_box(t: &Tri, pad: f64) -> (Vec3A, Vec3A) {
+    let mn = t.p[0].min(t.p[1]).min(t.p[2]) - pad;
+    let mx = t.p[0].max(t.p[1]).max(t.p[2]) + pad;
+    (Vec3A::from(mn.as_vec3()), Vec3A::from(mx.as_vec3()))
+}
+
+/// The obvhs tree of `layout` (CWBVH, or BVH2) over `tris`. PLOC with the smallest search
+/// distance and no reinsertion pass: on the bunny this traced as fast as obvhs's "medium"
+/// preset (search distance Medium, reinsertion 0.05) or faster, and builds faster
+/// (docs/BVH.md). The BVH2 is kept so that its depth can be checked before converting to CWBVH;
+/// one too deep for obvhs's CWBVH traversal stays a (collapsed, reinserted) BVH2.
+fn obvhs_tree(tris: &[Tri], pad: f64, layout: BvhLayout) -> Tree {
+    let aabbs: Vec<Aabb> = tris
+        .par_iter()
+        .map(|t| {
+            let (lo, hi) = padded_box(t, pad);
+            Aabb::new(lo, hi)
+        })
+        .collect();
+    let n = aabbs.len();
+    let mut bvh2 = PlocBuilder::with_capacity(n).build(
+        PlocSearchDistance::Minimum,
+        &aabbs,
+        (0..n as u32).collect(),
+        SortPrecision::U64,
+        3,
+    );
+    let depth = bvh2_depth(&bvh2);
+    if layout == BvhLayout::Cwbvh && depth <= CWBVH_MAX_DEPTH {
+        Tree::Cw(bvh2_to_cwbvh(&bvh2, 3, true, false))
+    } else {
+        obvhs::bvh2::leaf_collapser::collapse(&mut bvh2, 8, 3.0);
+        ReinsertionOptimizer::default().run(&mut bvh2, 0.1, None);
+        bvh2.max_depth = bvh2_depth(&bvh2).max(depth) + 2;
+        Tree::Bin(bvh2)
+    }
+}
+
 impl BvhIntersector {
     /// Builds the default layout ([`BvhLayout::Cwbvh`]) over `meshes`, each paired with the
     /// scene object index that hits on it report as [`Hit::object`]. Triangle indices in hits
@@ -144,27 +243,7 @@ impl BvhIntersector {
     /// As [`BvhIntersector::new`], with a chosen tree layout.
     pub fn with_layout(meshes: &[(u32, &Mesh)], layout: BvhLayout) -> Result<BvhIntersector> {
         let start = Instant::now();
-        // The non-empty meshes, each with the global index of its first triangle.
-        let mut parts: Vec<(u32, &Mesh, usize)> = Vec::new();
-        let mut n = 0usize;
-        let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-        for &(object, mesh) in meshes {
-            if mesh.triangles.is_empty() {
-                continue;
-            }
-            mesh.validate(&format!("scene object {object}"))?;
-            let (mesh_lo, mesh_hi) = mesh.bounds();
-            lo = lo.min(mesh_lo);
-            hi = hi.max(mesh_hi);
-            parts.push((object, mesh, n));
-            n += mesh.triangles.len();
-        }
-        // Triangle `i` over all meshes, in the caller's order.
-        let tri_of = |i: usize| {
-            let k = parts.partition_point(|p| p.2 <= i) - 1;
-            let (object, mesh, first) = parts[k];
-            Tri { p: mesh.triangle_positions(i - first), object, index: (i - first) as u32 }
-        };
+        let MeshParts { parts, n, lo, hi } = MeshParts::of(meshes)?;
         if n == 0 {
             return Ok(BvhIntersector {
                 tree: Tree::Empty,
@@ -175,30 +254,10 @@ impl BvhIntersector {
                 build_seconds: start.elapsed().as_secs_f64(),
             });
         }
-        let scale = {
-            let s = lo.abs().max(hi.abs()).max_element().max((hi - lo).length());
-            if s > 0.0 {
-                s
-            } else {
-                1.0
-            }
-        };
-        if scale > f64::from(f32::MAX) / 4.0 {
-            return Err(Error::invalid(
-                "scene meshes",
-                "positions",
-                format!("coordinates up to {scale:e} mm exceed the single-precision range of the BVH boxes"),
-            ));
-        }
+        let scale = coordinate_scale(lo, hi)?;
         let pad = PAD_REL * scale;
-        // f64 -> f32 for the tree's culling boxes only: each box is padded by `pad`, far more
-        // than the rounding of the conversion.
-        let padded_box = |t: &Tri| {
-            let mn = t.p[0].min(t.p[1]).min(t.p[2]) - pad;
-            let mx = t.p[0].max(t.p[1]).max(t.p[2]) + pad;
-            (Vec3A::from(mn.as_vec3()), Vec3A::from(mx.as_vec3()))
-        };
-        if layout == BvhLayout::Bvh4 {
+        let tri = |i: usize| tri_of(&parts, i);
+        let (tree, tris) = if layout == BvhLayout::Bvh4 {
             if n > bvh4::MAX_PRIMITIVES {
                 return Err(Error::invalid(
                     "scene meshes",
@@ -207,57 +266,23 @@ impl BvhIntersector {
                 ));
             }
             let tree = Bvh4::build_with(n, |i| {
-                let (lo, hi) = padded_box(&tri_of(i));
+                let (lo, hi) = padded_box(&tri(i), pad);
                 bvh4::Aabb { lo, hi }
             });
             // The f64 triangles, copied once, straight into tree order.
-            let tris = tree.slots().par_iter().map(|&i| tri_of(i as usize)).collect();
-            return Ok(BvhIntersector {
-                tree: Tree::Own(tree),
-                tris,
-                lo: lo - 2.0 * pad,
-                hi: hi + 2.0 * pad,
-                scale,
-                build_seconds: start.elapsed().as_secs_f64(),
-            });
-        }
-        let tris: Vec<Tri> = (0..n).into_par_iter().map(tri_of).collect();
-        let tree = {
-            let aabbs: Vec<Aabb> = tris
-                .par_iter()
-                .map(|t| {
-                    let (lo, hi) = padded_box(t);
-                    Aabb::new(lo, hi)
-                })
-                .collect();
-            // PLOC with the smallest search distance and no reinsertion pass: on the bunny this
-            // traced as fast as obvhs's "medium" preset (search distance Medium, reinsertion
-            // 0.05) or faster, and builds faster (docs/BVH.md). The BVH2 is kept so that its
-            // depth can be checked before converting to CWBVH.
-            let n = aabbs.len();
-            let mut bvh2 = PlocBuilder::with_capacity(n).build(
-                PlocSearchDistance::Minimum,
-                &aabbs,
-                (0..n as u32).collect(),
-                SortPrecision::U64,
-                3,
-            );
-            let depth = bvh2_depth(&bvh2);
-            if layout == BvhLayout::Cwbvh && depth <= CWBVH_MAX_DEPTH {
-                Tree::Cw(bvh2_to_cwbvh(&bvh2, 3, true, false))
-            } else {
-                obvhs::bvh2::leaf_collapser::collapse(&mut bvh2, 8, 3.0);
-                ReinsertionOptimizer::default().run(&mut bvh2, 0.1, None);
-                bvh2.max_depth = bvh2_depth(&bvh2).max(depth) + 2;
-                Tree::Bin(bvh2)
-            }
+            let tris = tree.slots().par_iter().map(|&i| tri(i as usize)).collect();
+            (Tree::Own(tree), tris)
+        } else {
+            let tris: Vec<Tri> = (0..n).into_par_iter().map(tri).collect();
+            let tree = obvhs_tree(&tris, pad, layout);
+            let order = match &tree {
+                Tree::Cw(t) => &t.primitive_indices,
+                Tree::Bin(t) => &t.primitive_indices,
+                Tree::Own(_) | Tree::Empty => unreachable!("obvhs layouts only"),
+            };
+            let tris: Vec<Tri> = order.par_iter().map(|&i| tris[i as usize]).collect();
+            (tree, tris)
         };
-        let order = match &tree {
-            Tree::Cw(t) => &t.primitive_indices,
-            Tree::Bin(t) => &t.primitive_indices,
-            Tree::Own(_) | Tree::Empty => unreachable!("obvhs layouts only"),
-        };
-        let tris: Vec<Tri> = order.par_iter().map(|&i| tris[i as usize]).collect();
         Ok(BvhIntersector {
             tree,
             tris,
