@@ -167,12 +167,15 @@ pub fn measure_windows_as<S: PairedSource + ?Sized>(
     grey: Grey,
     progress: &Progress,
 ) -> Vec<WindowSamples> {
-    let k = source.images();
-    let step = chart.pixel_tangent();
-    let turned = chart.orientation_deg != 0.0;
-    let off_axis = !chart.field.is_ahead();
-    let deg = std::f64::consts::PI / 180.0;
-    // Tasks: (window, first row).
+    let (offsets, tasks) = band_tasks(chart);
+    let measure = BandMeasure { source, sampler, chart, replicates, samples, grey, progress };
+    let bands: Vec<Vec<f32>> = tasks.par_iter().map(|&(w, row0)| measure.band(w, row0, offsets[w])).collect();
+    assemble_windows(chart, replicates, source.images(), &tasks, &bands)
+}
+
+/// The sampler's pixel index of each window's first pixel (the windows' pixels counted in
+/// order), and the tasks: (window, first row) of every band of [`BAND`] rows.
+fn band_tasks(chart: &Chart) -> (Vec<u64>, Vec<(usize, usize)>) {
     let mut offsets = Vec::with_capacity(chart.patches.len());
     let mut tasks = Vec::new();
     let mut offset = 0u64;
@@ -183,81 +186,109 @@ pub fn measure_windows_as<S: PairedSource + ?Sized>(
             tasks.push((w, row0));
         }
     }
-    let bands: Vec<Vec<f32>> = tasks
-        .par_iter()
-        .map(|&(w, row0)| {
-            let p = &chart.patches[w];
-            let rows = BAND.min(p.rows - row0);
-            let n = rows * p.cols;
-            // Top-left corner of the window, tangent.
-            let corner = DVec2::new(
-                p.center_deg.x * deg - 0.5 * p.cols as f64 * step,
-                p.center_deg.y * deg + 0.5 * p.rows as f64 * step,
-            );
-            let mut out = vec![0f32; replicates * k * n];
-            let mut batch = Vec::with_capacity(BATCH);
-            let mut owners = Vec::with_capacity(BATCH);
-            let mut values = vec![[0.0f64; 3]; BATCH * k];
-            let mut sums = vec![0.0f64; n * k];
-            let spectral = source.spectral();
-            let diffraction = source.diffraction();
-            let flush =
-                |batch: &mut Vec<EyeSample>, owners: &mut Vec<u32>, sums: &mut [f64], values: &mut [[f64; 3]]| {
-                    let vals = &mut values[..batch.len() * k];
-                    source.eval(batch, vals);
-                    for (v, &o) in vals.chunks_exact(k).zip(owners.iter()) {
-                        for (j, rgb) in v.iter().enumerate() {
-                            sums[o as usize * k + j] += grey.of(*rgb);
-                        }
-                    }
-                    batch.clear();
-                    owners.clear();
-                };
-            for r in 0..replicates {
-                sums.iter_mut().for_each(|s| *s = 0.0);
-                for dr in 0..rows {
-                    // A cancelled run (`crate::progress`) skips the rest; the caller discards it.
-                    if progress.cancelled() {
-                        break;
-                    }
-                    let row = row0 + dr;
-                    for c in 0..p.cols {
-                        let pixel = offsets[w] + (row * p.cols + c) as u64;
-                        let mut points = sampler.points(pixel, r as u32, 0);
-                        for _ in 0..samples {
-                            let (frac, pupil) = points.next_point();
-                            let tangent = DVec2::new(
-                                corner.x + (c as f64 + frac.x) * step,
-                                corner.y - (row as f64 + frac.y) * step,
-                            );
-                            let tangent = if turned { chart.turn(tangent) } else { tangent };
-                            let tangent = if off_axis { chart.eye_tangent(tangent) } else { tangent };
-                            let spectral = if spectral { points.spectral_of_last() } else { 0.0 };
-                            let diffraction = if diffraction { points.diffraction_of_last() } else { [0.0; 4] };
-                            batch.push(EyeSample { tangent, pupil, spectral, diffraction });
-                            owners.push((dr * p.cols + c) as u32);
-                            if batch.len() == BATCH {
-                                flush(&mut batch, &mut owners, &mut sums, &mut values);
-                            }
-                        }
-                    }
+    (offsets, tasks)
+}
+
+/// What [`measure_windows_as`] measures each band of a window with.
+struct BandMeasure<'a, S: ?Sized> {
+    source: &'a S,
+    sampler: &'a Sampler,
+    chart: &'a Chart,
+    replicates: usize,
+    samples: u32,
+    grey: Grey,
+    progress: &'a Progress,
+}
+
+impl<S: PairedSource + ?Sized> BandMeasure<'_, S> {
+    /// The rows `row0..row0 + BAND` of window `w` (pixel `p` of the window is the sampler's
+    /// pixel `offset + p`): for each replicate and image, the band's pixels in row order, each
+    /// the mean grey of its samples, evaluated in batches of [`BATCH`].
+    fn band(&self, w: usize, row0: usize, offset: u64) -> Vec<f32> {
+        let (source, chart, grey, progress) = (self.source, self.chart, self.grey, self.progress);
+        let (replicates, samples) = (self.replicates, self.samples);
+        let k = source.images();
+        let step = chart.pixel_tangent();
+        let turned = chart.orientation_deg != 0.0;
+        let off_axis = !chart.field.is_ahead();
+        let deg = std::f64::consts::PI / 180.0;
+        let p = &chart.patches[w];
+        let rows = BAND.min(p.rows - row0);
+        let n = rows * p.cols;
+        // Top-left corner of the window, tangent.
+        let corner = DVec2::new(
+            p.center_deg.x * deg - 0.5 * p.cols as f64 * step,
+            p.center_deg.y * deg + 0.5 * p.rows as f64 * step,
+        );
+        let mut out = vec![0f32; replicates * k * n];
+        let mut batch = Vec::with_capacity(BATCH);
+        let mut owners = Vec::with_capacity(BATCH);
+        let mut values = vec![[0.0f64; 3]; BATCH * k];
+        let mut sums = vec![0.0f64; n * k];
+        let spectral = source.spectral();
+        let diffraction = source.diffraction();
+        let flush = |batch: &mut Vec<EyeSample>, owners: &mut Vec<u32>, sums: &mut [f64], values: &mut [[f64; 3]]| {
+            let vals = &mut values[..batch.len() * k];
+            source.eval(batch, vals);
+            for (v, &o) in vals.chunks_exact(k).zip(owners.iter()) {
+                for (j, rgb) in v.iter().enumerate() {
+                    sums[o as usize * k + j] += grey.of(*rgb);
                 }
-                if !batch.is_empty() {
-                    flush(&mut batch, &mut owners, &mut sums, &mut values);
+            }
+            batch.clear();
+            owners.clear();
+        };
+        for r in 0..replicates {
+            sums.iter_mut().for_each(|s| *s = 0.0);
+            for dr in 0..rows {
+                // A cancelled run (`crate::progress`) skips the rest; the caller discards it.
+                if progress.cancelled() {
+                    break;
                 }
-                let inv = 1.0 / f64::from(samples);
-                for j in 0..k {
-                    let dst = &mut out[(r * k + j) * n..(r * k + j + 1) * n];
-                    for (i, d) in dst.iter_mut().enumerate() {
-                        *d = (sums[i * k + j] * inv) as f32;
+                let row = row0 + dr;
+                for c in 0..p.cols {
+                    let pixel = offset + (row * p.cols + c) as u64;
+                    let mut points = self.sampler.points(pixel, r as u32, 0);
+                    for _ in 0..samples {
+                        let (frac, pupil) = points.next_point();
+                        let tangent =
+                            DVec2::new(corner.x + (c as f64 + frac.x) * step, corner.y - (row as f64 + frac.y) * step);
+                        let tangent = if turned { chart.turn(tangent) } else { tangent };
+                        let tangent = if off_axis { chart.eye_tangent(tangent) } else { tangent };
+                        let spectral = if spectral { points.spectral_of_last() } else { 0.0 };
+                        let diffraction = if diffraction { points.diffraction_of_last() } else { [0.0; 4] };
+                        batch.push(EyeSample { tangent, pupil, spectral, diffraction });
+                        owners.push((dr * p.cols + c) as u32);
+                        if batch.len() == BATCH {
+                            flush(&mut batch, &mut owners, &mut sums, &mut values);
+                        }
                     }
                 }
             }
-            progress.inc(1);
-            out
-        })
-        .collect();
-    // Assemble the bands into windows.
+            if !batch.is_empty() {
+                flush(&mut batch, &mut owners, &mut sums, &mut values);
+            }
+            let inv = 1.0 / f64::from(samples);
+            for j in 0..k {
+                let dst = &mut out[(r * k + j) * n..(r * k + j + 1) * n];
+                for (i, d) in dst.iter_mut().enumerate() {
+                    *d = (sums[i * k + j] * inv) as f32;
+                }
+            }
+        }
+        progress.inc(1);
+        out
+    }
+}
+
+/// The bands of `tasks` (of [`BandMeasure::band`], `k` images) assembled into the chart's windows.
+fn assemble_windows(
+    chart: &Chart,
+    replicates: usize,
+    k: usize,
+    tasks: &[(usize, usize)],
+    bands: &[Vec<f32>],
+) -> Vec<WindowSamples> {
     let mut windows: Vec<WindowSamples> = chart
         .patches
         .iter()
@@ -269,7 +300,7 @@ pub fn measure_windows_as<S: PairedSource + ?Sized>(
             values: vec![0.0; replicates * k * p.cols * p.rows],
         })
         .collect();
-    for (&(w, row0), band) in tasks.iter().zip(&bands) {
+    for (&(w, row0), band) in tasks.iter().zip(bands) {
         let win = &mut windows[w];
         let rows = BAND.min(win.rows - row0);
         let n = rows * win.cols;
