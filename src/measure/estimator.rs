@@ -19,34 +19,15 @@ use rayon::prelude::*;
 
 use super::sampler::Sampler;
 
-mod diffracted;
-mod through_optics;
-use crate::optics::diffraction::ApertureShape;
-use crate::optics::transfer::{eye_scene_ray, FastTransfer};
-use crate::optics::{Display, Eye, PlaneRay, Retina};
+mod display_source;
+pub use display_source::DisplaySource;
+
+use crate::optics::transfer::FastTransfer;
+use crate::optics::{Display, Eye, Retina};
 use crate::progress::Progress;
 use crate::raster::RgbImage;
-use crate::render::retina::eye_rays;
-use crate::render::retina::DisplayStack;
-use crate::render::{RadianceField, Sample};
 
-/// One eye ray of the measurement: the tangent of a retina point and a pupil point (mm from
-/// the pupil centre).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct EyeSample {
-    /// Tangents (x, y) of the retina point's direction.
-    pub tangent: DVec2,
-    /// Pupil point, mm from the pupil centre.
-    pub pupil: DVec2,
-    /// The uniform number in [0, 1) that picks the sample's wavelengths from the display
-    /// primaries' spectra (a fifth sampled dimension; 0 when the source does not ask for it,
-    /// [`PairedSource::spectral`]).
-    pub spectral: f64,
-    /// Four uniform numbers in [0, 1) for the diffraction angles: the pupil's deviation (0, 1)
-    /// and the lenslet's (2, 3) (`optics::diffraction`; zeros when the source does not ask for
-    /// them, [`PairedSource::diffraction`]).
-    pub diffraction: [f64; 4],
-}
+pub use crate::optics::system::EyeSample;
 
 /// What is measured along each eye ray: the radiance of several images, image 0 being the
 /// reference (the ground truth) and the others the images scored against it.
@@ -137,182 +118,6 @@ impl<'a> EyeToLcd<'a> {
     pub fn pixel_indices(&self, samples: &[EyeSample], out: &mut [u32]) {
         let mut scratch = Vec::new();
         self.transfer.pixel_indices_through(|i| (samples[i].tangent, samples[i].pupil), &mut scratch, out);
-    }
-}
-
-/// The experiment's paired source: image 0 is the ground truth (the eye ray into the scene),
-/// image `1 + m` what the eye perceives of display image `m` of `stack`.
-pub struct DisplaySource<'a, F: RadianceField + ?Sized> {
-    eye: &'a Eye,
-
-    field: &'a F,
-    transfer: EyeToLcd<'a>,
-    stack: &'a DisplayStack,
-    /// The lenslet aperture when it diffracts (`[optics] diffraction = "apertures"`).
-    lenslet: Option<ApertureShape>,
-}
-
-impl<'a, F: RadianceField + ?Sized> DisplaySource<'a, F> {
-    /// Samples of `eye`: the ground truth from `field`, and what it perceives of every display image
-    /// of `stack` on `display`.
-    pub fn new(display: &'a Display, eye: &'a Eye, field: &'a F, stack: &'a DisplayStack) -> Self {
-        let lenslet = eye
-            .optics
-            .as_ref()
-            .filter(|o| o.diffraction.lenslets())
-            .map(|_| ApertureShape::of_lattice(&display.lenslets));
-        Self { eye, field, transfer: EyeToLcd::new(display, eye), stack, lenslet }
-    }
-}
-
-impl<F: RadianceField + ?Sized> PairedSource for DisplaySource<'_, F> {
-    fn images(&self) -> usize {
-        1 + self.stack.len()
-    }
-
-    fn eval(&self, samples: &[EyeSample], out: &mut [[f64; 3]]) {
-        self.eval_known(samples, &[], out);
-    }
-
-    fn spectral(&self) -> bool {
-        self.eye.optics.as_ref().is_some_and(|o| !o.is_single_wavelength())
-    }
-
-    fn diffraction(&self) -> bool {
-        self.eye.optics.as_ref().is_some_and(|o| o.diffraction.is_on())
-    }
-
-    fn reference_over(&self, tangents: (DVec2, DVec2), pupil_radius: f64) -> Option<[f64; 3]> {
-        if let Some(optics) = &self.eye.optics {
-            // The thin lens's ray family, widened by the pupil's diffraction core; not a
-            // schematic eye's.
-            return self.reference_over_diffracted(optics, tangents, pupil_radius);
-        }
-        let pupil = (DVec2::splat(-pupil_radius), DVec2::splat(pupil_radius));
-        self.field.uniform(&eye_rays(self.eye, tangents, pupil)).map(|(c, _)| c.to_array())
-    }
-
-    fn images_over(&self, tangents: (DVec2, DVec2), pupil_radius: f64) -> Option<u32> {
-        self.eye.optics.as_ref().and_then(|optics| self.images_over_diffracted(optics, tangents, pupil_radius))
-    }
-
-    fn eval_known_images(
-        &self,
-        samples: &[EyeSample],
-        known: &[Option<[f64; 3]>],
-        images: &[u32],
-        out: &mut [[f64; 3]],
-    ) {
-        match &self.eye.optics {
-            Some(optics) if self.is_thin_diffracted(optics) => {
-                self.eval_diffracted(optics, samples, known, images, out)
-            }
-            _ => self.eval_known(samples, known, out),
-        }
-    }
-
-    /// `known` may be empty (nothing known) or hold one entry per sample.
-    fn eval_known(&self, samples: &[EyeSample], known: &[Option<[f64; 3]>], out: &mut [[f64; 3]]) {
-        let k = self.images();
-        let m = self.stack.len();
-        debug_assert_eq!(out.len(), samples.len() * k);
-        if let Some(optics) = &self.eye.optics {
-            if self.is_thin_diffracted(optics) {
-                return self.eval_diffracted(optics, samples, known, &[], out);
-            }
-            if self.is_batched_through(optics) {
-                return self.eval_through_batched(optics, samples, out);
-            }
-            return self.eval_through(optics, samples, out);
-        }
-        if self.field.prefers_batches() {
-            let rays: Vec<_> = samples.iter().map(|s| eye_scene_ray(self.eye, s.tangent, s.pupil)).collect();
-            let mut hits = vec![Sample::default(); rays.len()];
-            self.field.sample_many(&rays, &mut hits);
-            for (o, h) in out.chunks_exact_mut(k).zip(&hits) {
-                o[0] = h.radiance.to_array();
-            }
-        } else {
-            for (i, (o, s)) in out.chunks_exact_mut(k).zip(samples).enumerate() {
-                o[0] = match known.get(i) {
-                    Some(Some(v)) => *v,
-                    _ => self.field.radiance(&eye_scene_ray(self.eye, s.tangent, s.pupil)).to_array(),
-                };
-            }
-        }
-        // Where every ray meets the LCD first (independent work the CPU overlaps), then the
-        // reads (independent loads).
-        if self.transfer.transfer.is_thick() {
-            // Real lenslets: each channel of the thin-lens eye's ray finds its own LCD pixel.
-            let eye_xy = self.eye.position.truncate();
-            for (o, s) in out.chunks_exact_mut(k).zip(samples) {
-                let r = crate::optics::transfer::eye_ray(self.eye, s.tangent, s.pupil);
-                let world = PlaneRay { position: r.position + eye_xy, slope: r.slope };
-                o[1..].fill([0.0; 3]);
-                // Not spectral: each channel at its primary's median wavelength (the front
-                // surface's hit found once for the three).
-                let pixels = self.transfer.transfer.pixel_indices_in(world, 0.5);
-                for (c, pixel) in pixels.into_iter().enumerate() {
-                    if let Some(i) = pixel {
-                        let px = self.stack.pixel(i);
-                        for (j, v) in o[1..].iter_mut().enumerate() {
-                            v[c] = f64::from(px[3 * j + c]);
-                        }
-                    }
-                }
-            }
-            return;
-        }
-        let mut lcd = vec![0u32; samples.len()];
-        self.transfer.pixel_indices(samples, &mut lcd);
-        match m {
-            1 => self.read_stack::<1>(&lcd, out),
-            2 => self.read_stack::<2>(&lcd, out),
-            3 => self.read_stack::<3>(&lcd, out),
-            _ => {
-                for (o, &idx) in out.chunks_exact_mut(k).zip(&lcd) {
-                    if idx == u32::MAX {
-                        o[1..].fill([0.0; 3]);
-                    } else {
-                        for (dst, v) in o[1..].iter_mut().zip(self.stack.pixel(idx as usize).chunks_exact(3)) {
-                            *dst = [f64::from(v[0]), f64::from(v[1]), f64::from(v[2])];
-                        }
-                    }
-                }
-            }
-        }
-    }
-}
-
-impl<F: RadianceField + ?Sized> DisplaySource<'_, F> {
-    /// Slow twin of [`PairedSource::eval`] for an eye with optics beyond the thin lens's fast
-    /// paths: every sample through the generic per-sample path (`through_optics.rs`), also
-    /// where a batched one serves the eye (the thin lens with diffraction, the schematic eye
-    /// without it). Same values.
-    pub fn eval_each_ray(&self, samples: &[EyeSample], out: &mut [[f64; 3]]) {
-        match &self.eye.optics {
-            Some(optics) => self.eval_through(optics, samples, out),
-            None => self.eval(samples, out),
-        }
-    }
-
-    /// The perceived images' samples (images 1..=M of `out`) for a stack of `M` display images,
-    /// from the LCD pixel of every sample (`u32::MAX`: the ray missed the LCD).
-    #[inline(always)]
-    fn read_stack<const M: usize>(&self, lcd: &[u32], out: &mut [[f64; 3]]) {
-        for (o, &idx) in out.chunks_exact_mut(M + 1).zip(lcd) {
-            let o: &mut [[f64; 3]] = &mut o[1..];
-            if idx == u32::MAX {
-                for v in o.iter_mut().take(M) {
-                    *v = [0.0; 3];
-                }
-            } else {
-                let px: &[f32] = self.stack.pixel(idx as usize);
-                for j in 0..M {
-                    o[j] = [f64::from(px[3 * j]), f64::from(px[3 * j + 1]), f64::from(px[3 * j + 2])];
-                }
-            }
-        }
     }
 }
 

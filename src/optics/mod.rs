@@ -13,6 +13,7 @@ pub mod limits;
 pub mod photometry;
 pub mod plausibility;
 pub mod spectrum;
+pub mod system;
 pub mod transfer;
 
 pub use display::{Display, Lcd};

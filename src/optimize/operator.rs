@@ -17,16 +17,10 @@
 //! into each LCD pixel in the global order of the samples (bands in order, samples in trace order),
 //! whichever thread owns that pixel.
 
-use glam::DVec2;
 use rayon::prelude::*;
 
-use crate::measure::estimator::EyeSample;
-use crate::optics::diffraction::ApertureShape;
-use crate::optics::eye::EyeOptics;
-use crate::optics::transfer::FastTransfer;
+use crate::optics::system::{GridBuffers, OpticalSystem, MISS};
 use crate::optics::{Display, Eye, Retina};
-use crate::ray::Ray;
-use crate::render::retina::through_optics;
 use crate::render::RadianceField;
 
 /// One value per pixel and channel (R, G, B), in `f64`.
@@ -82,40 +76,35 @@ pub trait Operator: Sync {
 }
 
 /// The perceived-image operator `A_s` of one eye state on one display: the simulation's trace on
-/// a fixed sample pattern (the eye's pupil grid, the retina's sub-pixel grid).
+/// a fixed sample pattern (the eye's pupil grid, the retina's sub-pixel grid, with diffraction a
+/// fixed draw of its numbers), through the eye state's [`OpticalSystem`].
 pub struct EyeOperator<'a> {
     display: &'a Display,
-    eye: Eye,
+    system: OpticalSystem<'a>,
     retina: Retina,
-    fast: FastTransfer<'a>,
-    pupil: Vec<DVec2>,
-    subpixels: Vec<DVec2>,
-    /// Weight of one sample of the thin lens: 1 / (sub-pixel samples x pupil samples).
+    /// Weight of one sample: 1 / (grid samples per pixel).
     inv_count: f64,
-    /// The thin-lens eye's `EyeOptics` when the display has real lenslets and the eye no optics
-    /// of its own (each colour channel then finds its own LCD pixel).
-    thin: Option<EyeOptics>,
-    /// The lenslet aperture when it diffracts (`[optics] diffraction = "apertures"`).
-    lenslet: Option<ApertureShape>,
+    /// Every sample carries weight 1 and one LCD pixel for the three channels: the entries
+    /// are pairs only.
+    compact: bool,
 }
 
 impl<'a> EyeOperator<'a> {
     /// The operator of `eye` looking at `display` with `retina`'s pixels and sub-pixel grid.
     pub fn new(display: &'a Display, eye: &Eye, retina: &Retina) -> Self {
-        let pupil = eye.pupil_samples();
-        let subpixels = retina.subpixel_offsets();
-        let inv_count = 1.0 / (pupil.len() * subpixels.len()) as f64;
-        let thin = (eye.optics.is_none() && display.thick_lenslet().is_some()).then(|| EyeOptics::thin_lens(eye));
-        let fast = match (&eye.optics, &thin) {
-            (None, None) => FastTransfer::new(display, eye, &pupil),
-            _ => FastTransfer::for_eye(display, eye),
-        };
-        let lenslet = eye
-            .optics
-            .as_ref()
-            .filter(|o| o.diffraction.lenslets())
-            .map(|_| ApertureShape::of_lattice(&display.lenslets));
-        Self { display, eye: eye.clone(), retina: *retina, fast, pupil, subpixels, inv_count, thin, lenslet }
+        let system = OpticalSystem::new(display, eye);
+        let inv_count = 1.0 / system.grid_samples_per_pixel(retina) as f64;
+        let compact = system.samples_are_plain();
+        Self { display, system, retina: *retina, inv_count, compact }
+    }
+
+    /// The fixed samples of retina pixel (row, col), in trace order (sub-pixel point, then pupil
+    /// point, then wavelength), with diffraction their four diffraction numbers, a fixed
+    /// pseudo-random pattern ([`diffraction_numbers`]).
+    pub fn pixel_samples(&self, row: usize, col: usize) -> Vec<crate::optics::system::EyeSample> {
+        let mut out = Vec::new();
+        self.system.grid_samples(&self.retina, (row, col), &diffraction_numbers, &mut out);
+        out
     }
 
     /// The number of bands of retina rows.
@@ -123,151 +112,73 @@ impl<'a> EyeOperator<'a> {
         self.retina.resolution.div_ceil(BAND)
     }
 
-    /// The eye the optics path traces through: the eye's own optics, or for real lenslets seen by
-    /// the thin lens its `EyeOptics` (as `crate::render::simulate_stack`); `None`: the thin
-    /// lens's fast path.
-    fn optics(&self) -> Option<&EyeOptics> {
-        self.eye.optics.as_deref().or(self.thin.as_ref())
-    }
-
-    /// The fixed samples of retina pixel (row, col) through `optics`, in trace order (sub-pixel
-    /// point, then pupil point, then wavelength): those of the grid simulation
-    /// (`through_optics::pixel_samples`), and with diffraction their four diffraction numbers,
-    /// a fixed pseudo-random pattern ([`diffraction_numbers`]). Without diffraction they are 0,
-    /// and unused.
-    pub fn pixel_samples(&self, row: usize, col: usize) -> Vec<EyeSample> {
-        let Some(optics) = self.optics() else {
-            return Vec::new();
-        };
-        let spectral = optics.grid_spectral();
-        let diffraction = optics.diffraction.is_on();
-        let pixel = (row * self.retina.resolution + col) as u64;
-        let mut out = Vec::with_capacity(self.subpixels.len() * self.pupil.len() * spectral.len());
-        for frac in &self.subpixels {
-            let tangent = self.retina.tangent(row, col, *frac);
-            for &pupil in &self.pupil {
-                for &u in &spectral {
-                    let k = out.len() as u64;
-                    let numbers = if diffraction { diffraction_numbers(pixel, k) } else { [0.0; 4] };
-                    out.push(EyeSample { tangent, pupil, spectral: u, diffraction: numbers });
-                }
-            }
-        }
-        out
-    }
-
     /// With diffraction, the ground truth on the operator's own samples: each pixel the mean of
     /// the scene along its samples' pupil-diffracted rays (as the converged estimator's reference
     /// is, sample by sample); `None` without diffraction (the grid's ground truth then sees the
     /// same rays).
     pub fn diffracted_target<R: RadianceField + ?Sized>(&self, field: &R) -> Option<Vec<Rgb>> {
-        let optics = self.optics().filter(|o| o.diffraction.is_on())?;
+        if !self.system.needs_diffraction() {
+            return None;
+        }
         let n = self.retina.resolution;
-        let inv = 1.0 / through_optics::per_pixel(optics, &self.eye, &self.retina);
-        let z = self.eye.position.z;
+        let inv = self.inv_count;
         let mut out = vec![[0.0; 3]; n * n];
-        out.par_chunks_mut(n).enumerate().for_each(|(row, out)| {
-            for (col, px) in out.iter_mut().enumerate() {
-                let mut sum = [0.0; 3];
-                for s in self.pixel_samples(row, col) {
-                    let sr =
-                        optics.rays_diffracted(s.tangent, s.pupil, s.spectral, [s.diffraction[0], s.diffraction[1]]);
-                    through_optics::each_ray(&sr, |channels, r| {
-                        let w = through_optics::world(&self.eye, r);
-                        let l = field.radiance(&Ray { origin: w.position.extend(z), dir: w.slope.extend(1.0) });
-                        for c in channels {
-                            sum[c] += l[c] * sr.weight;
+        out.par_chunks_mut(n).enumerate().for_each_init(GridBuffers::default, |buf, (row, out)| {
+            let mut radiance = Vec::new();
+            self.system.trace_grid(&self.retina, row..row + 1, n, true, &diffraction_numbers, buf, |pixels, t| {
+                radiance.clear();
+                radiance.extend(t.scene.iter().map(|r| field.radiance(r)));
+                for (&p, s) in pixels.iter().zip(&t.samples) {
+                    let sum = &mut out[p as usize - row * n];
+                    for (c, v) in sum.iter_mut().enumerate() {
+                        if let Some(j) = s.scene_ray(c) {
+                            *v += radiance[j][c] * s.weight;
                         }
-                    });
+                    }
                 }
-                *px = sum.map(|v| v * inv);
+            });
+            for px in out.iter_mut() {
+                *px = px.map(|v| v * inv);
             }
         });
         Some(out)
     }
 
-    /// Every sample of the retina rows of band `band`, in trace order (per pixel: sub-pixel
-    /// point, then pupil point, then wavelength), into `out` (cleared first). Through `optics`
-    /// each sample's LCD pixels are those of the perceived-image simulation: the grid
-    /// simulation's (`crate::render::simulate_stack`) without diffraction, the converged
-    /// estimator's (`measure::estimator::through_optics`) for the same samples with it.
-    fn band_entries(&self, band: usize, out: &mut Entries, scratch: &mut (Vec<DVec2>, Vec<DVec2>, Vec<u32>)) {
+    /// Every sample of the retina rows of band `band`, in the system's grid order (each pixel's
+    /// in its order: sub-pixel point, pupil point, wavelength), into `out` (cleared first): the
+    /// LCD pixels of the grid simulation (`crate::render::simulate_stack`) without diffraction,
+    /// the converged estimator's for the same samples with it.
+    fn band_entries(&self, band: usize, out: &mut Entries, buf: &mut GridBuffers) {
         out.clear();
         let n = self.retina.resolution;
         let rows = band * BAND..((band + 1) * BAND).min(n);
-        if let Some(optics) = self.optics() {
-            let inv = 1.0 / through_optics::per_pixel(optics, &self.eye, &self.retina);
-            let thick = self.fast.is_thick();
-            let diffraction = optics.diffraction.is_on();
-            let single = optics.is_single_wavelength();
-            // Each channel finds its own LCD pixel through a real lenslet, and through a
-            // diffracting lenslet when the channels' wavelengths differ.
-            let per_channel = thick || (self.lenslet.is_some() && !single);
-            let fast = &self.fast;
-            for row in rows {
-                for col in 0..n {
-                    let pixel = (row * n + col) as u32;
-                    for s in self.pixel_samples(row, col) {
-                        let sr = if diffraction {
-                            optics.rays_diffracted(s.tangent, s.pupil, s.spectral, [s.diffraction[0], s.diffraction[1]])
-                        } else {
-                            optics.rays(s.tangent, s.pupil, s.spectral)
-                        };
-                        let w = sr.weight * inv;
-                        let draw = self
-                            .lenslet
-                            .as_ref()
-                            .map(|shape| (shape, shape.draw([s.diffraction[2], s.diffraction[3]])));
-                        // Real lenslets: each channel at the sampled wavelength, else its primary's median.
-                        let u_lens = if single { 0.5 } else { s.spectral };
-                        through_optics::each_ray(&sr, |channels, r| {
-                            let r = through_optics::world(&self.eye, r);
-                            let index = |ch: usize| match (thick, draw) {
-                                (false, None) => fast.pixel_index_of(r),
-                                (false, Some((shape, draw))) => {
-                                    fast.pixel_index_deviated(r, shape.scaled(draw, optics.wavelength(ch, s.spectral)))
-                                }
-                                (true, None) => fast.pixel_index_in(r, ch, u_lens),
-                                (true, Some((shape, draw))) => {
-                                    let deviation = shape.scaled(draw, optics.wavelength(ch, s.spectral));
-                                    fast.pixel_index_in_deviated(r, ch, u_lens, deviation)
-                                }
-                            };
-                            if per_channel {
-                                for ch in channels {
-                                    if let Some(i) = index(ch) {
-                                        out.pairs.push((i as u32, pixel));
-                                        out.each.push((ch as u8, w));
-                                    }
-                                }
-                            } else if let Some(i) = index(channels.start) {
-                                let channel = if channels.len() == 3 { 3 } else { channels.start as u8 };
-                                out.pairs.push((i as u32, pixel));
-                                out.each.push((channel, w));
-                            }
-                        });
+        let inv = self.inv_count;
+        // Whole rows at a time: the order in which each LCD pixel receives its samples is part
+        // of the adjoint's bits.
+        self.system.trace_grid(&self.retina, rows, n, false, &diffraction_numbers, buf, |pixels, t| {
+            for (&p, s) in pixels.iter().zip(&t.samples) {
+                if self.compact {
+                    if s.lcd[0] != MISS {
+                        out.pairs.push((s.lcd[0], p));
+                    }
+                    continue;
+                }
+                let w = s.weight * inv;
+                if s.shared {
+                    if s.lcd[0] != MISS {
+                        out.pairs.push((s.lcd[0], p));
+                        out.each.push((3, w));
+                    }
+                    continue;
+                }
+                for (c, &l) in s.lcd.iter().enumerate() {
+                    if l != MISS {
+                        out.pairs.push((l, p));
+                        out.each.push((c as u8, w));
                     }
                 }
             }
-            return;
-        }
-        let (tangents, trace, lcd) = scratch;
-        lcd.resize(n, 0);
-        // A row per (sub-pixel point, pupil point) in one batch: each pixel's samples still come
-        // in its own order (sub-pixel point, then pupil point), interleaved with its row's.
-        for row in rows {
-            for frac in &self.subpixels {
-                tangents.clear();
-                tangents.extend((0..n).map(|col| self.retina.tangent(row, col, *frac)));
-                for k in 0..self.pupil.len() {
-                    self.fast.pixel_indices(tangents, k, trace, lcd);
-                    let base = (row * n) as u32;
-                    out.pairs.extend(
-                        lcd.iter().enumerate().filter(|(_, &i)| i != u32::MAX).map(|(col, &i)| (i, base + col as u32)),
-                    );
-                }
-            }
-        }
+        });
     }
 
     /// Bands traced at once by the adjoint (bounds its memory; the result does not depend on it).
@@ -278,7 +189,7 @@ impl<'a> EyeOperator<'a> {
     /// The matrix entries of band `band`, `(A_pl` per channel), one per distinct (LCD pixel,
     /// retina pixel) pair, sorted by (retina pixel, LCD pixel): the band's samples summed per
     /// pair (in trace order within a pair).
-    fn band_matrix(&self, band: usize, scratch: &mut (Vec<DVec2>, Vec<DVec2>, Vec<u32>)) -> Vec<(u32, Rgb)> {
+    fn band_matrix(&self, band: usize, scratch: &mut GridBuffers) -> Vec<(u32, Rgb)> {
         let mut entries = Entries::default();
         self.band_entries(band, &mut entries, scratch);
         let mut samples: Vec<(u32, u32, u8, f64)> = Vec::with_capacity(entries.pairs.len());
@@ -302,7 +213,7 @@ impl<'a> EyeOperator<'a> {
 }
 
 /// The four diffraction numbers in [0, 1) of sample `k` of retina pixel `pixel`: the pupil's
-/// deviation (0, 1) and the lenslet's (2, 3), as [`EyeSample::diffraction`]. A fixed
+/// deviation (0, 1) and the lenslet's (2, 3), as [`crate::optics::system::EyeSample::diffraction`]. A fixed
 /// pseudo-random pattern (SplitMix64 of the pixel, the sample and the dimension), so the
 /// deviations are part of the operator's fixed sample pattern: the forward operator and its
 /// adjoint see the same rays.
@@ -340,7 +251,7 @@ impl Operator for EyeOperator<'_> {
         assert!(x.len() == self.cols() && y.len() == self.rows(), "operator sizes");
         let n = self.retina.resolution;
         y.par_chunks_mut(BAND * n).enumerate().for_each_init(
-            || (Entries::default(), (Vec::new(), Vec::new(), Vec::new())),
+            || (Entries::default(), GridBuffers::default()),
             |(entries, scratch), (band, out)| {
                 self.band_entries(band, entries, scratch);
                 out.iter_mut().for_each(|v| *v = [0.0; 3]);
@@ -359,7 +270,7 @@ impl Operator for EyeOperator<'_> {
         for first in (0..self.bands()).step_by(wave) {
             let count = wave.min(self.bands() - first);
             lists[..count].par_iter_mut().enumerate().for_each_init(
-                || (Vec::new(), Vec::new(), Vec::new()),
+                GridBuffers::default,
                 |scratch, (b, list)| self.band_entries(first + b, list, scratch),
             );
             // Each part of the LCD walks every sample in order and keeps its own: every LCD
@@ -388,7 +299,7 @@ impl Operator for EyeOperator<'_> {
             let count = wave.min(self.bands() - first);
             let lists: Vec<Vec<(u32, Rgb)>> = (first..first + count)
                 .into_par_iter()
-                .map_init(|| (Vec::new(), Vec::new(), Vec::new()), |scratch, b| self.band_matrix(b, scratch))
+                .map_init(GridBuffers::default, |scratch, b| self.band_matrix(b, scratch))
                 .collect();
             // As the adjoint: every LCD pixel receives its additions in one global order.
             out.par_chunks_mut(chunk).enumerate().for_each(|(part, dst)| {

@@ -7,6 +7,7 @@
 
 use glam::{DVec2, DVec3};
 
+pub use crate::ray::AffineRays;
 use crate::ray::Ray;
 
 /// What one ray sees: its radiance and the distance to what it hit.
@@ -115,59 +116,6 @@ impl BundleSum {
         } else if s.depth.is_nan() {
             self.depth_known = false;
         }
-    }
-}
-
-/// A family of rays, all starting on the plane `z = origin.z` with unit z slope, whose start and
-/// slope move together (in exact arithmetic; the rays themselves may be computed otherwise, with
-/// rounding far below what fields allow for):
-///
-/// ```text
-/// start(q, e) = origin.xy + alpha q,   slope(q, e) = dir + beta q + e,
-/// q in [q_lo, q_hi], e in [e_lo, e_hi] (component-wise)
-/// ```
-///
-/// At `t` past the start plane the rays cover `origin.xy + t dir + (alpha + beta t) q + t e`.
-/// LensletAverage's rays of one pixel are such a family (q: the point in the lenslet cell, eq.
-/// (1b) is affine in it), and so are an eye's rays of one retina pixel (q: the pupil point, e:
-/// the point in the pixel's square; eq. (1a)).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct AffineRays {
-    /// Start point of the bundle's central ray (at q = 0, e = 0), world mm.
-    pub origin: DVec3,
-    /// Slope (dx/dz, dy/dz) of the central ray.
-    pub dir: DVec2,
-    /// Lower corner of the q box.
-    pub q_lo: DVec2,
-    /// Upper corner of the q box.
-    pub q_hi: DVec2,
-    /// How the start point moves with q.
-    pub alpha: f64,
-    /// How the slope moves with q.
-    pub beta: f64,
-    /// Lower corner of the e box (slope offsets).
-    pub e_lo: DVec2,
-    /// Upper corner of the e box.
-    pub e_hi: DVec2,
-}
-
-impl AffineRays {
-    /// The bounds (component-wise) of the family's points at `t >= 0` past its start plane.
-    #[inline(always)]
-    pub fn bounds_at(&self, t: f64) -> (DVec2, DVec2) {
-        let g = self.alpha + self.beta * t;
-        let (a, b) = (self.q_lo * g, self.q_hi * g);
-        let centre = self.origin.truncate() + self.dir * t;
-        (centre + a.min(b) + self.e_lo * t, centre + a.max(b) + self.e_hi * t)
-    }
-
-    /// A size (per axis) of the numbers from which the rays' points at `t` are computed: their
-    /// rounding errors are a few units of 1e-16 of it.
-    #[inline(always)]
-    pub fn magnitude_at(&self, t: f64) -> DVec2 {
-        let q = self.q_lo.abs().max(self.q_hi.abs());
-        let e = self.e_lo.abs().max(self.e_hi.abs());
-        self.origin.truncate().abs() + (self.dir.abs() + e) * t + q * (self.alpha.abs() + self.beta.abs() * t)
     }
 }
 

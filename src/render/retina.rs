@@ -14,8 +14,8 @@ use rayon::prelude::*;
 
 use super::field::{bounds, AffineRays, RadianceField, Sample};
 use crate::error::{Error, Result};
-use crate::optics::eye::EyeOptics;
-use crate::optics::transfer::{eye_scene_ray, FastTransfer};
+use crate::optics::system::{GridBuffers, OpticalSystem, Traced, MISS};
+use crate::optics::transfer::eye_scene_ray;
 use crate::optics::{Display, Eye, Retina};
 use crate::progress::Progress;
 use crate::raster::RgbImage;
@@ -79,75 +79,40 @@ pub fn simulate_stack(
     let m = stack.len();
     let stride = 3 * m;
     let n = retina.resolution;
-    let pupil = eye.pupil_samples();
-    let subpixels = retina.subpixel_offsets();
-    let inv_count = 1.0 / (pupil.len() * subpixels.len()) as f64;
-    let fast = FastTransfer::new(display, eye, &pupil);
-
+    let system = OpticalSystem::geometric(display, eye);
+    let inv = 1.0 / system.grid_samples_per_pixel(retina) as f64;
     let mut images: Vec<RgbImage> =
         (0..m).map(|_| RgbImage::try_new(n, n, "a retinal image")).collect::<Result<_>>()?;
-    // A display with real lenslets is seen through the thin-lens eye's `EyeOptics`, so that each
-    // colour channel finds its own LCD pixel.
-    let thin = (eye.optics.is_none() && display.thick_lenslet().is_some()).then(|| EyeOptics::thin_lens(eye));
-    if let Some(optics) = eye.optics.as_deref().or(thin.as_ref()) {
-        let images = through_optics::simulate_stack(display, eye, optics, retina, stack, images, progress);
-        // A cancelled simulation skipped pixels: its images are not returned.
-        progress.check()?;
-        return Ok(images);
-    }
     let mut rows = crate::budget::try_vec(n * n * stride, 0f32, "the retinal images' rows")?;
     if stride == 0 {
         return Ok(images);
     }
-    // Work in tiles of TILE x TILE retina pixels, pupil samples outside the tile's pixels: the
-    // rays of one pupil sample from one tile land in one small patch of the LCD, which then
-    // stays in cache. Every pixel still sums its samples in the same order (sub-pixel sample,
-    // then pupil sample), so the result does not depend on the tiling.
-    const TILE: usize = 16;
-    rows.par_chunks_mut(TILE * n * stride).enumerate().for_each(|(band, out)| {
-        let row0 = band * TILE;
-        let band_rows = out.len() / (n * stride);
-        const T2: usize = TILE * TILE;
-        let mut acc = vec![0f64; T2 * stride];
-        let mut tangents = vec![DVec2::ZERO; T2];
-        // lcd[k * T2 + p]: the LCD pixel of tile pixel p through pupil sample k.
-        let (mut lcd, mut scratch) = (vec![0u32; T2 * pupil.len()], Vec::new());
-        for col0 in (0..n).step_by(TILE) {
+    // Row by row, each row's samples in the order the system traces its grid best (for the
+    // thin lens's closed form, blocks of BLOCK columns pupil point by pupil point: the rays of
+    // one pupil point from one block land in one small patch of the LCD, which then stays in
+    // cache). Every pixel still sums its samples in one order (sub-pixel point, pupil point,
+    // spectral number), so the result does not depend on it.
+    const BLOCK: usize = 32;
+    let no_draws = |_: u64, _: u64| [0.0; 4];
+    rows.par_chunks_mut(n * stride).enumerate().for_each_init(
+        || (GridBuffers::default(), vec![0f64; n * stride]),
+        |(buf, acc), (row, out)| {
             if progress.cancelled() {
                 return;
             }
-            let tile_cols = TILE.min(n - col0);
             acc.iter_mut().for_each(|a| *a = 0.0);
-            for frac in &subpixels {
-                for r in 0..band_rows {
-                    for c in 0..tile_cols {
-                        tangents[r * TILE + c] = retina.tangent(row0 + r, col0 + c, *frac);
-                    }
+            system.trace_grid(retina, row..row + 1, BLOCK, false, &no_draws, buf, |pixels, traces| {
+                for (&p, t) in pixels.iter().zip(&traces.samples) {
+                    let col = p as usize - row * n;
+                    add_traced(&mut acc[col * stride..(col + 1) * stride], t, stack);
                 }
-                // Every pixel of the tile (rows past the band's end unused), pupil sample by
-                // pupil sample; then each pixel's samples summed in pupil order.
-                for (k, out) in lcd.chunks_exact_mut(T2).enumerate() {
-                    fast.pixel_indices(&tangents, k, &mut scratch, out);
-                }
-                for r in 0..band_rows {
-                    for c in 0..tile_cols {
-                        let p = r * TILE + c;
-                        let indices = lcd[p..].iter().step_by(T2).copied();
-                        add_samples(&mut acc[p * stride..(p + 1) * stride], indices, stack);
-                    }
-                }
+            });
+            for (o, a) in out.iter_mut().zip(acc.iter()) {
+                *o = (*a * inv) as f32;
             }
-            for r in 0..band_rows {
-                for c in 0..tile_cols {
-                    let o = &mut out[(r * n + col0 + c) * stride..(r * n + col0 + c + 1) * stride];
-                    for (o, a) in o.iter_mut().zip(&acc[(r * TILE + c) * stride..]) {
-                        *o = (*a * inv_count) as f32;
-                    }
-                }
-            }
-        }
-        progress.inc(band_rows as u64);
-    });
+            progress.inc(1);
+        },
+    );
     progress.check()?;
     for (i, px) in rows.chunks_exact(stride).enumerate() {
         for (k, img) in images.iter_mut().enumerate() {
@@ -155,6 +120,31 @@ pub fn simulate_stack(
         }
     }
     Ok(images)
+}
+
+/// `dst += weight * stack.pixel(lcd)` for every channel of a traced sample at its LCD pixel
+/// (none: off the LCD or blocked; the weight skipped where it is 1, the same bits).
+#[inline(always)]
+fn add_traced(dst: &mut [f64], t: &Traced, stack: &DisplayStack) {
+    let w = t.weight;
+    if t.shared {
+        if t.lcd[0] == MISS {
+        } else if w == 1.0 {
+            add_samples(dst, std::iter::once(t.lcd[0]), stack);
+        } else {
+            let px = stack.pixel(t.lcd[0] as usize);
+            dst.iter_mut().zip(px).for_each(|(a, v)| *a += f64::from(*v) * w);
+        }
+        return;
+    }
+    for c in 0..3 {
+        if t.lcd[c] != MISS {
+            let px = stack.pixel(t.lcd[c] as usize);
+            for (a, v) in dst.chunks_exact_mut(3).zip(px.chunks_exact(3)) {
+                a[c] += f64::from(v[c]) * w;
+            }
+        }
+    }
 }
 
 /// `dst += stack.pixel(i)` for each LCD pixel `i` of `indices` in turn (`u32::MAX`: off the LCD,
@@ -301,6 +291,7 @@ pub fn ground_truth<R: RadianceField + ?Sized>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::optics::transfer::FastTransfer;
     use crate::fixtures::Lcg;
     use crate::optics::Focus;
     use crate::raster::RgbView;

@@ -10,11 +10,9 @@
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::DisplayStack;
 use crate::optics::eye::rays::SampleRays;
 use crate::optics::eye::EyeOptics;
-use crate::optics::transfer::FastTransfer;
-use crate::optics::{Display, Eye, PlaneRay, Retina};
+use crate::optics::{Eye, PlaneRay, Retina};
 use crate::progress::Progress;
 use crate::raster::RgbImage;
 use crate::ray::Ray;
@@ -64,68 +62,6 @@ pub(crate) fn each_ray(sr: &SampleRays, mut f: impl FnMut(std::ops::Range<usize>
             }
         }
     }
-}
-
-/// The perceived images of every display image of `stack` (grid estimator).
-pub(super) fn simulate_stack(
-    display: &Display,
-    eye: &Eye,
-    optics: &EyeOptics,
-    retina: &Retina,
-    stack: &DisplayStack,
-    mut images: Vec<RgbImage>,
-    progress: &Progress,
-) -> Vec<RgbImage> {
-    let n = retina.resolution;
-    let m = stack.len();
-    let transfer = FastTransfer::for_eye(display, eye);
-    let inv = 1.0 / per_pixel(optics, eye, retina);
-    let rows: Vec<Vec<f64>> = (0..n)
-        .into_par_iter()
-        .map(|row| {
-            let mut out = vec![0.0f64; n * 3 * m];
-            for col in 0..n {
-                // Pixel by pixel (each traces many rays): a cancelled run stops within a pixel.
-                if progress.cancelled() {
-                    break;
-                }
-                let acc = &mut out[col * 3 * m..(col + 1) * 3 * m];
-                for (u, sr) in pixel_samples(optics, eye, retina, row, col) {
-                    each_ray(&sr, |channels, r| {
-                        if transfer.is_thick() {
-                            // A real lenslet: each channel refracted at its own wavelength.
-                            for c in channels {
-                                if let Some(i) = transfer.pixel_index_in(world(eye, r), c, u) {
-                                    let px = stack.pixel(i);
-                                    for j in 0..m {
-                                        acc[3 * j + c] += f64::from(px[3 * j + c]) * sr.weight;
-                                    }
-                                }
-                            }
-                        } else if let Some(i) = transfer.pixel_index_of(world(eye, r)) {
-                            let px = stack.pixel(i);
-                            for j in 0..m {
-                                for c in channels.clone() {
-                                    acc[3 * j + c] += f64::from(px[3 * j + c]) * sr.weight;
-                                }
-                            }
-                        }
-                    });
-                }
-            }
-            progress.inc(1);
-            out
-        })
-        .collect();
-    for (row, out) in rows.iter().enumerate() {
-        for col in 0..n {
-            for (j, img) in images.iter_mut().enumerate() {
-                let a = &out[(col * m + j) * 3..(col * m + j) * 3 + 3];
-                img.pixels[row * n + col] = [(a[0] * inv) as f32, (a[1] * inv) as f32, (a[2] * inv) as f32];
-            }
-        }
-    }
-    images
 }
 
 /// The ground-truth retinal image (grid estimator).

@@ -1,0 +1,1 @@
+//! Every kernel of the optical system against its slow twin, bit for bit.
