@@ -74,12 +74,14 @@ pub enum Kernel {
 
 /// The eye, the lenslets, the LCD and diffraction of one eye case: see the module comment.
 pub struct OpticalSystem<'a> {
-    display: &'a Display,
+    /// `None`: the eye alone ([`OpticalSystem::scene_only`]).
+    display: Option<&'a Display>,
     eye: Eye,
     /// The eye's rays: its own optics, or the thin lens's (`EyeOptics::thin_lens`).
     optics: Arc<EyeOptics>,
-    /// Eye -> LCD, with the pupil grid's constants (the grid's closed form).
-    transfer: FastTransfer<'a>,
+    /// Eye -> LCD, with the pupil grid's constants (the grid's closed form); `None`: the eye
+    /// alone, every LCD pixel [`MISS`].
+    transfer: Option<FastTransfer<'a>>,
     /// The pupil grid.
     pupil: Vec<DVec2>,
     /// The lenslet aperture when it diffracts.
@@ -101,16 +103,27 @@ impl<'a> OpticalSystem<'a> {
         Self::build(display, eye, false)
     }
 
+    /// The eye alone, in geometric optics: the scene rays of the ground truth, no display (every
+    /// LCD pixel [`MISS`]).
+    pub fn scene_only(eye: &Eye) -> Self {
+        Self::build_with(None, eye, false)
+    }
+
     fn build(display: &'a Display, eye: &Eye, diffraction: bool) -> Self {
+        Self::build_with(Some(display), eye, diffraction)
+    }
+
+    fn build_with(display: Option<&'a Display>, eye: &Eye, diffraction: bool) -> Self {
         let pupil = eye.pupil_samples();
-        let transfer = FastTransfer::new(display, eye, &pupil);
-        let thick = transfer.is_thick();
+        let transfer = display.map(|d| FastTransfer::new(d, eye, &pupil));
+        let thick = transfer.as_ref().is_some_and(|t| t.is_thick());
         let own = eye.optics.clone();
         let diffraction = diffraction && own.as_ref().is_some_and(|o| o.diffraction.is_on());
         let lenslet = own
             .as_ref()
             .filter(|o| diffraction && o.diffraction.lenslets())
-            .map(|_| ApertureShape::of_lattice(&display.lenslets));
+            .and(display)
+            .map(|d| ApertureShape::of_lattice(&d.lenslets));
         let kernel = match &own {
             None if thick => Kernel::ThinThick,
             None => Kernel::Paraxial,
@@ -128,8 +141,8 @@ impl<'a> OpticalSystem<'a> {
         &self.eye
     }
 
-    /// The display.
-    pub fn display(&self) -> &'a Display {
+    /// The display (`None`: the eye alone).
+    pub fn display(&self) -> Option<&'a Display> {
         self.display
     }
 
@@ -214,7 +227,7 @@ impl<'a> OpticalSystem<'a> {
         let lens = self.optics.thin_lens_ray()?;
         let core = DVec2::splat(self.pupil_core());
         let widened = (tangents.0.min(tangents.1) - core, tangents.0.max(tangents.1) + core);
-        Some(self.transfer.deviated_family_pixels(
+        Some(self.transfer.as_ref()?.deviated_family_pixels(
             (lens.v0, lens.d1),
             widened,
             pupil_radius,
@@ -232,7 +245,7 @@ impl<'a> OpticalSystem<'a> {
 
     /// The LCD's pixels per row.
     pub fn lcd_columns(&self) -> usize {
-        self.transfer.lcd_columns()
+        self.transfer.as_ref().map_or(0, |t| t.lcd_columns())
     }
 }
 

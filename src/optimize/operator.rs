@@ -269,10 +269,10 @@ impl Operator for EyeOperator<'_> {
         let mut lists: Vec<Entries> = (0..wave).map(|_| Entries::default()).collect();
         for first in (0..self.bands()).step_by(wave) {
             let count = wave.min(self.bands() - first);
-            lists[..count].par_iter_mut().enumerate().for_each_init(
-                GridBuffers::default,
-                |scratch, (b, list)| self.band_entries(first + b, list, scratch),
-            );
+            lists[..count]
+                .par_iter_mut()
+                .enumerate()
+                .for_each_init(GridBuffers::default, |scratch, (b, list)| self.band_entries(first + b, list, scratch));
             // Each part of the LCD walks every sample in order and keeps its own: every LCD
             // pixel receives its additions in the samples' global order.
             let lists = &lists[..count];

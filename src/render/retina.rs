@@ -9,20 +9,17 @@
 //!
 //! The paper's pinhole eye is the one-sample limit: the chief ray through the pupil centre.
 
-use glam::{DVec2, DVec3};
+use glam::DVec3;
 use rayon::prelude::*;
 
-use super::field::{bounds, AffineRays, RadianceField, Sample};
+use super::field::{bounds, RadianceField, Sample};
 use crate::error::{Error, Result};
-use crate::optics::system::{GridBuffers, OpticalSystem, Traced, MISS};
-use crate::optics::transfer::eye_scene_ray;
+use crate::optics::system::{GridBuffers, OpticalSystem, Traced, Traces, MISS};
 use crate::optics::{Display, Eye, Retina};
 use crate::progress::Progress;
 use crate::raster::RgbImage;
 
 pub use super::display_stack::DisplayStack;
-
-pub(crate) mod through_optics;
 
 /// Simulates what the eye sees of each display image in `displays` (all with the LCD's
 /// resolution). Convenience wrapper over [`simulate_stack`].
@@ -182,120 +179,123 @@ fn add_samples_each(dst: &mut [f64], indices: impl Iterator<Item = u32>, stack: 
     }
 }
 
-/// The family of eye rays [`eye_scene_ray`]`(eye, t, s)` for tangents `t` and pupil points `s`
-/// in the boxes `tangents` and `pupil` (each `(low corner, high corner)`, either way round):
-/// they start at `s` on the pupil plane with slope `t + s (1/v0 - d1)` (eq. (1a) with the eye
-/// lens's refraction), an [`AffineRays`] family with `q = s`.
-pub fn eye_rays(eye: &Eye, tangents: (DVec2, DVec2), pupil: (DVec2, DVec2)) -> AffineRays {
-    let (t_lo, t_hi) = (tangents.0.min(tangents.1), tangents.0.max(tangents.1));
-    AffineRays {
-        origin: eye.position,
-        dir: t_lo,
-        q_lo: pupil.0.min(pupil.1),
-        q_hi: pupil.0.max(pupil.1),
-        alpha: 1.0,
-        beta: 1.0 / eye.retina_distance - eye.power(),
-        e_lo: DVec2::ZERO,
-        e_hi: t_hi - t_lo,
-    }
-}
-
-/// The ground-truth retinal image: the eye looking straight at the scene.
+/// The ground-truth retinal image: the eye looking straight at the scene, every grid sample's
+/// scene rays traced through the eye alone ([`OpticalSystem::scene_only`]).
 pub fn ground_truth<R: RadianceField + ?Sized>(
     eye: &Eye,
     retina: &Retina,
     tracer: &R,
     progress: &Progress,
 ) -> RgbImage {
-    if let Some(optics) = &eye.optics {
-        return through_optics::ground_truth(eye, optics, retina, tracer, progress);
-    }
+    let system = OpticalSystem::scene_only(eye);
     let n = retina.resolution;
-    let pupil = eye.pupil_samples();
-    let subpixels = retina.subpixel_offsets();
-    let inv_count = 1.0 / (pupil.len() * subpixels.len()) as f64;
-    // Rays of a block of one retina row go to the field together, laid out [sub-pixel][pupil][column] so
-    // that consecutive rays are neighbouring pixels through the same pupil point (coherent runs
-    // for packets); every pixel sums in the order sub-pixel sample, then pupil sample.
-    let per_pixel = subpixels.len() * pupil.len();
+    let per_pixel = system.grid_samples_per_pixel(retina);
+    let inv = 1.0 / per_pixel as f64;
     let mut image = RgbImage::new(n, n);
+    let no_draws = |_: u64, _: u64| [0.0; 4];
     if !tracer.prefers_batches() {
-        // One ray at a time, straight to the field's radiance (no depth, no buffers); a pixel
-        // whose rays the field knows to bring back one colour adds that colour for each of them.
-        let pupil_box = bounds(pupil.iter().copied());
-        let frac_box = bounds(subpixels.iter().copied());
-        image.pixels.par_chunks_mut(n).enumerate().for_each(|(row, out)| {
+        // Pixel by pixel, one ray at a time straight to the field's radiance (no depth, no
+        // buffers); a pixel whose rays the field knows to bring back one colour adds that colour
+        // for each of them.
+        let pupil_box = bounds(system.pupil_grid().iter().copied());
+        let frac_box = bounds(retina.subpixel_offsets());
+        image.pixels.par_chunks_mut(n).enumerate().for_each_init(
+            || (Vec::new(), Traces::default()),
+            |(samples, traces), (row, out)| {
+                if progress.cancelled() {
+                    return;
+                }
+                // (colour, its sum over a pixel's samples): the same additions as adding it ray by ray.
+                let mut last_sum = (DVec3::NAN, DVec3::NAN);
+                for (col, px) in out.iter_mut().enumerate() {
+                    let tangents = (retina.tangent(row, col, frac_box.0), retina.tangent(row, col, frac_box.1));
+                    let family = if per_pixel >= 4 { system.ray_family(tangents, pupil_box) } else { None };
+                    let sum = if let Some((c, _)) = family.and_then(|f| tracer.uniform(&f)) {
+                        if last_sum.0.to_array().map(f64::to_bits) != c.to_array().map(f64::to_bits) {
+                            last_sum = (c, (0..per_pixel).fold(DVec3::ZERO, |sum, _| sum + c));
+                        }
+                        last_sum.1
+                    } else {
+                        system.grid_samples(retina, (row, col), &no_draws, samples);
+                        system.trace(samples, &[], traces);
+                        let radiance: Vec<DVec3> = traces.scene.iter().map(|r| tracer.radiance(r)).collect();
+                        sum_traced(&traces.samples, &radiance)
+                    };
+                    let v = sum * inv;
+                    *px = [v.x as f32, v.y as f32, v.z as f32];
+                }
+                progress.inc(1);
+            },
+        );
+        return image;
+    }
+    // Rays of a block of one retina row go to the field together, laid out (for the thin lens's
+    // closed form) [sub-pixel][pupil][column] so that consecutive rays are neighbouring pixels
+    // through the same pupil point (coherent runs for packets); every pixel sums in the order
+    // sub-pixel sample, then pupil sample.
+    const BLOCK: usize = 128;
+    image.pixels.par_chunks_mut(n).enumerate().for_each_init(
+        || (GridBuffers::default(), Vec::new(), vec![DVec3::ZERO; n], Vec::new()),
+        |(buf, hits, sums, owned), (row, out)| {
             if progress.cancelled() {
                 return;
             }
-            // (colour, its sum over a pixel's samples): the same additions as adding it ray by ray.
-            let mut last_sum = (DVec3::NAN, DVec3::NAN);
-            for (col, px) in out.iter_mut().enumerate() {
-                let mut sum = DVec3::ZERO;
-                let tangents = (retina.tangent(row, col, frac_box.0), retina.tangent(row, col, frac_box.1));
-                let uniform = if per_pixel >= 4 { tracer.uniform(&eye_rays(eye, tangents, pupil_box)) } else { None };
-                if let Some((c, _)) = uniform {
-                    if last_sum.0.to_array().map(f64::to_bits) != c.to_array().map(f64::to_bits) {
-                        last_sum = (c, (0..per_pixel).fold(DVec3::ZERO, |sum, _| sum + c));
-                    }
-                    sum = last_sum.1;
-                } else {
-                    for frac in &subpixels {
-                        let t = retina.tangent(row, col, *frac);
-                        for s in &pupil {
-                            sum += tracer.radiance(&eye_scene_ray(eye, t, *s));
-                        }
-                    }
+            sums.iter_mut().for_each(|s| *s = DVec3::ZERO);
+            system.trace_grid(retina, row..row + 1, BLOCK, true, &no_draws, buf, |pixels, traces| {
+                hits.clear();
+                hits.resize(traces.scene.len(), Sample::default());
+                tracer.sample_many(&traces.scene, hits);
+                owned.clear();
+                owned.extend(hits.iter().map(|h: &Sample| h.radiance));
+                for (&p, t) in pixels.iter().zip(&traces.samples) {
+                    let sum = &mut sums[p as usize - row * n];
+                    *sum = add_traced_radiance(*sum, t, owned);
                 }
-                let v = sum * inv_count;
+            });
+            for (px, sum) in out.iter_mut().zip(sums.iter()) {
+                let v = *sum * inv;
                 *px = [v.x as f32, v.y as f32, v.z as f32];
             }
             progress.inc(1);
-        });
-        return image;
-    }
-    let block = 128;
-    image.pixels.par_chunks_mut(n).enumerate().for_each(|(row, out)| {
-        if progress.cancelled() {
-            return;
-        }
-        let mut rays = Vec::with_capacity(per_pixel * block);
-        let mut samples = Vec::with_capacity(per_pixel * block);
-        for col0 in (0..n).step_by(block) {
-            let cols = block.min(n - col0);
-            rays.clear();
-            for frac in &subpixels {
-                for s in &pupil {
-                    for col in col0..col0 + cols {
-                        rays.push(eye_scene_ray(eye, retina.tangent(row, col, *frac), *s));
-                    }
-                }
-            }
-            samples.clear();
-            samples.resize(rays.len(), Sample::default());
-            tracer.sample_many(&rays, &mut samples);
-            for (c, px) in out[col0..col0 + cols].iter_mut().enumerate() {
-                let mut sum = DVec3::ZERO;
-                for k in 0..per_pixel {
-                    sum += samples[k * cols + c].radiance;
-                }
-                let v = sum * inv_count;
-                *px = [v.x as f32, v.y as f32, v.z as f32];
-            }
-        }
-        progress.inc(1);
-    });
+        },
+    );
     image
+}
+
+/// The sum over traced samples of their channels' radiance times their weight.
+fn sum_traced(samples: &[Traced], radiance: &[DVec3]) -> DVec3 {
+    samples.iter().fold(DVec3::ZERO, |sum, t| add_traced_radiance(sum, t, radiance))
+}
+
+/// `sum` plus a traced sample's channels' radiance times its weight (the weight skipped where it
+/// is 1, the same bits).
+#[inline(always)]
+fn add_traced_radiance(sum: DVec3, t: &Traced, radiance: &[DVec3]) -> DVec3 {
+    if t.single {
+        return match t.scene_ray(0) {
+            Some(j) if t.weight == 1.0 => sum + radiance[j],
+            Some(j) => sum + radiance[j] * t.weight,
+            None => sum,
+        };
+    }
+    let mut sum = sum;
+    for c in 0..3 {
+        if let Some(j) = t.scene_ray(c) {
+            sum[c] += radiance[j][c] * t.weight;
+        }
+    }
+    sum
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::optics::transfer::FastTransfer;
     use crate::fixtures::Lcg;
+    use crate::optics::transfer::{eye_scene_ray, FastTransfer};
     use crate::optics::Focus;
     use crate::raster::RgbView;
     use crate::render::display_stack::StackBuilder;
+    use glam::DVec2;
 
     /// Sample by sample, ray by ray: the slow twin of [`simulate_stack`].
     fn simulate_ray_by_ray(display: &Display, eye: &Eye, retina: &Retina, stack: &DisplayStack) -> Vec<RgbImage> {
@@ -381,7 +381,7 @@ mod tests {
                 let corner = DVec2::new(rng.range(-0.3, 0.3), rng.range(-0.3, 0.3));
                 let size = DVec2::new(rng.range(-0.01, 0.01), rng.range(-0.01, 0.01));
                 let (p0, p1) = (DVec2::new(rng.range(-2.5, 2.5), rng.range(-2.5, 2.5)), DVec2::new(0.0, 0.3));
-                let family = eye_rays(eye, (corner, corner + size), (p0, p0 + p1));
+                let family = OpticalSystem::scene_only(eye).ray_family((corner, corner + size), (p0, p0 + p1)).unwrap();
                 for _ in 0..10 {
                     let t = corner + size * DVec2::new(rng.next(), rng.next());
                     let s = p0 + p1 * DVec2::new(rng.next(), rng.next());

@@ -136,9 +136,12 @@ impl OpticalSystem<'_> {
         // The LCD pixel of each sample's channels (one for all when `!per_pixel`), each ray's
         // lenslet found once.
         let pixels = if per_pixel { 3 } else { 1 };
-        let t = &self.transfer;
         b.pixels.clear();
         b.pixels.resize(na * pixels, MISS);
+        let Some(t) = &self.transfer else {
+            self.push_diffracted(per_ray, pixels, out);
+            return;
+        };
         let ray_of = |j: usize| (j / pixels) * per_ray + (j % pixels).min(per_ray - 1);
         let (nm, lens_draw, active) = (&b.nm, &b.lens_draw, &b.active);
         match &self.lenslet {
@@ -154,7 +157,14 @@ impl OpticalSystem<'_> {
             ),
         }
 
-        let base = Traced { weight: 1.0, first: KNOWN, rays: 0b111, single: per_ray == 1, lcd: [KNOWN; 3], shared: true };
+        self.push_diffracted(per_ray, pixels, out);
+    }
+
+    /// The traces of [`OpticalSystem::trace_diffracted`] from its buffers.
+    fn push_diffracted(&self, per_ray: usize, pixels: usize, out: &mut Traces) {
+        let b = &out.bufs;
+        let base =
+            Traced { weight: 1.0, first: KNOWN, rays: 0b111, single: per_ray == 1, lcd: [KNOWN; 3], shared: true };
         for &a in &b.pos {
             if a == MISS {
                 // Both known: the pixel's ground truth and its LCD pixel's values.

@@ -97,7 +97,10 @@ impl OpticalSystem<'_> {
                     buf.tangents.extend(cols.clone().map(|col| retina.tangent(row, col, *frac)));
                     buf.lcd.resize(buf.tangents.len(), MISS);
                     for (k, &pupil) in self.pupil.iter().enumerate() {
-                        self.transfer.pixel_indices(&buf.tangents, k, &mut buf.scratch, &mut buf.lcd);
+                        match &self.transfer {
+                            Some(t) => t.pixel_indices(&buf.tangents, k, &mut buf.scratch, &mut buf.lcd),
+                            None => buf.lcd.fill(MISS),
+                        }
                         for ((col, &tangent), &lcd) in cols.clone().zip(&buf.tangents).zip(&buf.lcd) {
                             let first = t.scene.len() as u32;
                             if scene {

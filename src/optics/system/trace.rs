@@ -103,7 +103,6 @@ impl Traces {
     }
 }
 
-
 /// `r` (eye coordinates) in world coordinates at the eye's plane.
 #[inline(always)]
 pub(super) fn world(r: PlaneRay, eye: glam::DVec3) -> PlaneRay {
@@ -143,7 +142,8 @@ impl OpticalSystem<'_> {
                 }
                 Kernel::ThinThick => {
                     let r = world(eye_ray(&self.eye, s.tangent, s.pupil), self.eye.position);
-                    let lcd = std::array::from_fn(|c| index_u32(self.transfer.pixel_index_in(r, c, 0.5)));
+                    let t = self.transfer.as_ref();
+                    let lcd = std::array::from_fn(|c| index_u32(t.and_then(|t| t.pixel_index_in(r, c, 0.5))));
                     out.samples.push(Traced { first: out.scene.len() as u32, rays: 0b111, lcd, shared: false, ..DARK });
                     out.scene.push(eye_scene_ray(&self.eye, s.tangent, s.pupil));
                 }
@@ -156,7 +156,7 @@ impl OpticalSystem<'_> {
     }
 
     fn paraxial_pixel(&self, s: &EyeSample) -> u32 {
-        index_u32(self.transfer.pixel_index_through(s.tangent, s.pupil))
+        index_u32(self.transfer.as_ref().and_then(|t| t.pixel_index_through(s.tangent, s.pupil)))
     }
 
     /// The eye's rays of sample `s` (diffracted at the pupil when the system models it).
@@ -175,7 +175,12 @@ impl OpticalSystem<'_> {
         let b = &mut out.bufs;
         b.pixels.clear();
         b.pixels.resize(samples.len(), 0);
-        self.transfer.pixel_indices_through(|i| (samples[i].tangent, samples[i].pupil), &mut b.scratch, &mut b.pixels);
+        match &self.transfer {
+            Some(t) => {
+                t.pixel_indices_through(|i| (samples[i].tangent, samples[i].pupil), &mut b.scratch, &mut b.pixels)
+            }
+            None => b.pixels.fill(MISS),
+        }
         for (i, (s, &lcd)) in samples.iter().zip(&b.pixels).enumerate() {
             let first = self.thin_scene(s, hints.get(i), &mut out.scene);
             out.samples.push(Traced { first, rays: 0b111, lcd: [lcd; 3], ..DARK });
@@ -199,7 +204,7 @@ impl OpticalSystem<'_> {
         for (i, s) in samples.iter().enumerate() {
             let first = self.thin_scene(s, hints.get(i), &mut out.scene);
             let r = world(eye_ray(&self.eye, s.tangent, s.pupil), self.eye.position);
-            let lcd = self.transfer.pixel_indices_in(r, 0.5).map(index_u32);
+            let lcd = self.transfer.as_ref().map_or([MISS; 3], |t| t.pixel_indices_in(r, 0.5).map(index_u32));
             out.samples.push(Traced { first, rays: 0b111, lcd, shared: false, ..DARK });
         }
     }
@@ -226,7 +231,10 @@ impl OpticalSystem<'_> {
         b.pixels.clear();
         b.pixels.resize(b.lines.len(), 0);
         let lines = &b.lines;
-        self.transfer.pixel_indices_of(|i| lines[i], &mut b.scratch, &mut b.pixels);
+        match &self.transfer {
+            Some(t) => t.pixel_indices_of(|i| lines[i], &mut b.scratch, &mut b.pixels),
+            None => b.pixels.fill(MISS),
+        }
         let mut next = 0u32;
         for sr in &b.rays {
             let (rays, n) = carried(sr);
@@ -241,7 +249,14 @@ impl OpticalSystem<'_> {
             if sr.single {
                 lcd = [lcd[0]; 3];
             }
-            out.samples.push(Traced { weight: sr.weight, first: next, rays, single: sr.single, lcd, shared: sr.single });
+            out.samples.push(Traced {
+                weight: sr.weight,
+                first: next,
+                rays,
+                single: sr.single,
+                lcd,
+                shared: sr.single,
+            });
             next = j;
         }
     }
@@ -270,8 +285,8 @@ impl OpticalSystem<'_> {
     /// The trace of sample `s` with rays `sr`, each channel's LCD pixel found one at a time.
     fn push_general(&self, s: &EyeSample, sr: &SampleRays, out: &mut Traces) {
         let optics = &*self.optics;
-        let t = &self.transfer;
-        let thick = t.is_thick();
+        let transfer = self.transfer.as_ref();
+        let thick = transfer.is_some_and(|t| t.is_thick());
         let single = optics.is_single_wavelength();
         // Each channel finds its own LCD pixel through a real lenslet (refracted at its own
         // wavelength), and through a diffracting lenslet when the channels' wavelengths differ
@@ -290,6 +305,7 @@ impl OpticalSystem<'_> {
             out.scene.push(Ray { origin: r.position.extend(self.eye.position.z), dir: r.slope.extend(1.0) });
             // The LCD pixel of this ray in channel `ch`.
             let index = |ch: usize| {
+                let Some(t) = transfer else { return MISS };
                 let pixel = match (thick, draw) {
                     (false, None) => t.pixel_index_of(r),
                     (false, Some((shape, draw))) => {
