@@ -20,6 +20,7 @@ use rayon::prelude::*;
 use super::sampler::Sampler;
 
 mod display_source;
+mod pass;
 pub use display_source::DisplaySource;
 
 use crate::optics::transfer::FastTransfer;
@@ -120,50 +121,6 @@ impl<'a> EyeToLcd<'a> {
         self.transfer.pixel_indices_through(|i| (samples[i].tangent, samples[i].pupil), &mut scratch, out);
     }
 }
-
-/// Adds every sample's `K` images (`vals[i * K..][..K]`) into the sums of its owner pixel
-/// (`sums[o * 3K..][..3K]`), in sample order. A pixel's samples come in runs, so each run is
-/// summed in registers, starting from the pixel's stored sums (the same additions in the same
-/// order as adding into memory sample by sample, without a store-to-load round trip per sample).
-#[inline(always)]
-fn accumulate<const K: usize>(vals: &[[f64; 3]], owners: &[u32], sums: &mut [f64]) {
-    let mut i = 0;
-    while i < owners.len() {
-        let o = owners[i] as usize;
-        let dst: &mut [f64] = &mut sums[o * K * 3..(o + 1) * K * 3];
-        let mut acc: [[f64; 3]; K] = std::array::from_fn(|j| [dst[3 * j], dst[3 * j + 1], dst[3 * j + 2]]);
-        while i < owners.len() && owners[i] as usize == o {
-            let v = &vals[i * K..(i + 1) * K];
-            for j in 0..K {
-                acc[j][0] += v[j][0];
-                acc[j][1] += v[j][1];
-                acc[j][2] += v[j][2];
-            }
-            i += 1;
-        }
-        for j in 0..K {
-            dst[3 * j..3 * j + 3].copy_from_slice(&acc[j]);
-        }
-    }
-}
-
-/// Slow, obviously correct twin of [`accumulate`] for any number of images `k`: each sample
-/// added into its owner's sums in memory, one after the other.
-fn accumulate_each(vals: &[[f64; 3]], k: usize, owners: &[u32], sums: &mut [f64]) {
-    for (v, &o) in vals.chunks_exact(k).zip(owners) {
-        let dst = &mut sums[o as usize * k * 3..(o as usize + 1) * k * 3];
-        for (d, rgb) in dst.chunks_exact_mut(3).zip(v) {
-            d[0] += rgb[0];
-            d[1] += rgb[1];
-            d[2] += rgb[2];
-        }
-    }
-}
-
-/// Samples handed to a source at once (per worker).
-const BATCH: usize = 2048;
-/// Side of the square tiles of retina pixels traced together.
-const TILE: usize = 16;
 
 /// Per-replicate, per-pixel means of every image of a [`PairedSource`] on a square retina.
 #[derive(Clone, Debug, PartialEq)]
@@ -329,147 +286,18 @@ impl Replicates {
             return;
         }
         let n = self.resolution;
-        let (nr, k) = (self.replicates, self.images);
-        let fresh = (total - old) as usize;
-        let inv_total = 1.0 / f64::from(total);
-        let old_weight = f64::from(old);
-        let step = 2.0 * retina.half_tangent / n as f64;
-        let batch = BATCH.min(TILE * TILE * fresh);
+        let pass = pass::Pass::new(source, sampler, retina, (self.replicates, self.images), (old, total));
         // Every plane cut into bands of TILE rows; band b of every plane goes to one task.
-        let band_len = TILE * n;
-        let bands = n.div_ceil(TILE);
-        let mut per_band: Vec<Vec<&mut [f32]>> = (0..bands).map(|_| Vec::with_capacity(nr * k * 3)).collect();
+        let band_len = pass::TILE * n;
+        let bands = n.div_ceil(pass::TILE);
+        let mut per_band: Vec<Vec<&mut [f32]>> =
+            (0..bands).map(|_| Vec::with_capacity(self.replicates * self.images * 3)).collect();
         for plane in self.means.chunks_mut(n * n) {
             for (b, chunk) in plane.chunks_mut(band_len).enumerate() {
                 per_band[b].push(chunk);
             }
         }
-        // Bands of TILE rows in parallel; inside, TILE x TILE tiles with every replicate and
-        // sample: the rays of one tile meet the LCD in a few small patches (one per lenslet the
-        // pupil covers), which then stay in cache.
-        per_band.into_par_iter().enumerate().for_each(|(band, mut planes)| {
-            let row0 = band * TILE;
-            let rows = planes[0].len() / n;
-            let mut samples = vec![EyeSample::default(); batch];
-            let mut owners = vec![0u32; batch];
-            let mut values = vec![[0.0f64; 3]; batch * k];
-            let mut sums = vec![0.0f64; TILE * TILE * k * 3];
-            let radius = sampler.pupil_radius();
-            let spectral = source.spectral();
-            let diffraction = source.diffraction();
-            let mut pupils = vec![DVec2::ZERO; batch];
-            // Image 0 of each sample, when known for its whole pixel (`reference_over`).
-            let mut known = vec![None; batch];
-            let mut pixel_known = vec![None; TILE * TILE];
-            // The other images' handle, when known for the whole pixel too (`images_over`).
-            let mut images = vec![u32::MAX; batch];
-            let mut pixel_images = vec![u32::MAX; TILE * TILE];
-            let mut flush = |samples: &mut [EyeSample],
-                             pupils: &mut [DVec2],
-                             known: &[Option<[f64; 3]>],
-                             images: &[u32],
-                             owners: &[u32],
-                             sums: &mut [f64]| {
-                if radius != 0.0 {
-                    super::sampler::concentric_disk_batch(pupils, radius);
-                    for (s, p) in samples.iter_mut().zip(pupils.iter()) {
-                        s.pupil = *p;
-                    }
-                }
-                let vals = &mut values[..samples.len() * k];
-                source.eval_known_images(samples, known, images, vals);
-                match k {
-                    2 => accumulate::<2>(vals, owners, sums),
-                    3 => accumulate::<3>(vals, owners, sums),
-                    4 => accumulate::<4>(vals, owners, sums),
-                    _ => accumulate_each(vals, k, owners, sums),
-                }
-            };
-            for col0 in (0..n).step_by(TILE) {
-                if progress.cancelled() {
-                    return;
-                }
-                let cols = TILE.min(n - col0);
-                for dr in 0..rows {
-                    for dc in 0..cols {
-                        // The pixel's square of tangents.
-                        let (row, col) = (row0 + dr, col0 + dc);
-                        let square = (retina.tangent(row, col, DVec2::ZERO), retina.tangent(row, col, DVec2::ONE));
-                        let k = source.reference_over(square, radius);
-                        pixel_known[dr * TILE + dc] = k;
-                        pixel_images[dr * TILE + dc] =
-                            if k.is_some() { source.images_over(square, radius).unwrap_or(u32::MAX) } else { u32::MAX };
-                    }
-                }
-                for r in 0..nr {
-                    sums.iter_mut().for_each(|s| *s = 0.0);
-                    // (pixel, sample) pairs in pixel order, cut into batches anywhere.
-                    let mut filled = 0;
-                    for dr in 0..rows {
-                        let row = row0 + dr;
-                        for dc in 0..cols {
-                            let c = col0 + dc;
-                            let owner = (dr * TILE + dc) as u32;
-                            let mut points = sampler.points((row * n + c) as u64, r as u32, old);
-                            let later = diffraction.then(|| points.later_dims());
-                            for _ in old..total {
-                                let (frac, raw) = points.next_point_raw();
-                                // Retina::tangent, with the step hoisted.
-                                let tangent = DVec2::new(
-                                    -retina.half_tangent + (c as f64 + frac.x) * step,
-                                    retina.half_tangent - (row as f64 + frac.y) * step,
-                                );
-                                let (spectral, diffraction) = if let Some(later) = &later {
-                                    let (u, d) = points.spectral_and_diffraction_with(later);
-                                    (if spectral { u } else { 0.0 }, d)
-                                } else {
-                                    (if spectral { points.spectral_of_last() } else { 0.0 }, [0.0; 4])
-                                };
-                                samples[filled] = EyeSample { tangent, pupil: DVec2::ZERO, spectral, diffraction };
-                                pupils[filled] = raw.unwrap_or(DVec2::ZERO);
-                                owners[filled] = owner;
-                                known[filled] = pixel_known[owner as usize];
-                                images[filled] = pixel_images[owner as usize];
-                                filled += 1;
-                                if filled == batch {
-                                    flush(&mut samples, &mut pupils, &known, &images, &owners, &mut sums);
-                                    filled = 0;
-                                }
-                            }
-                        }
-                    }
-                    if filled > 0 {
-                        flush(
-                            &mut samples[..filled],
-                            &mut pupils[..filled],
-                            &known[..filled],
-                            &images[..filled],
-                            &owners[..filled],
-                            &mut sums,
-                        );
-                    }
-                    for (j, plane) in planes[r * k * 3..(r + 1) * k * 3].iter_mut().enumerate() {
-                        for dr in 0..rows {
-                            let dst = &mut plane[dr * n + col0..dr * n + col0 + cols];
-                            let src = sums[dr * TILE * k * 3 + j..].iter().step_by(k * 3);
-                            if old == 0 {
-                                // The first pass writes without reading: the storage may hold
-                                // anything (a recycled case), and a page written before it is
-                                // read is faulted in once, not twice. (0 * 0 + s) * w == s * w.
-                                for (d, &s) in dst.iter_mut().zip(src) {
-                                    *d = (s * inv_total) as f32;
-                                }
-                            } else {
-                                for (d, &s) in dst.iter_mut().zip(src) {
-                                    *d = ((f64::from(*d) * old_weight + s) * inv_total) as f32;
-                                }
-                            }
-                        }
-                    }
-                }
-            }
-            progress.inc(rows as u64);
-        });
+        per_band.into_par_iter().enumerate().for_each(|(band, mut planes)| pass.band(band, &mut planes, progress));
         self.samples = total;
     }
 }

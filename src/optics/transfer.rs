@@ -257,7 +257,7 @@ impl<'a> FastTransfer<'a> {
     }
 
     /// The LCD pixels every deviated thin-lens ray of a retina pixel can meet, for the
-    /// diffracted eye's shortcut (`measure/estimator/diffracted.rs`): the rays of
+    /// diffracted eye's shortcut (`optics/system/diffracted.rs`): the rays of
     /// `crate::optics::eye::ThinLensRay` `(v0, d1)` with retina tangents in the box `tangents`
     /// (already widened by the pupil's deviations), pupil points within `pupil_radius` mm of its
     /// centre in x and y, through any lenslet their lenslet-plane points can reach, bent after

@@ -1,4 +1,5 @@
 //! Tests of the parent module: its fast paths against their slow twins and exact answers.
+use super::pass::{accumulate, accumulate_each};
 use super::*;
 
 #[test]
