@@ -261,6 +261,40 @@ fn render_into<R: RadianceField + ?Sized>(
     dst: &mut [[f32; 3]],
     mut depth: Vec<f32>,
 ) -> Result<(Vec<f32>, bool)> {
+    check_render_settings(display, method, settings)?;
+    if let Some(lens) = display.thick_lenslet() {
+        return super::display_thick::render_into(display, lens, method, settings, tracer, progress, dst, depth);
+    }
+    let (nx, ny) = (display.lcd.columns(), display.lcd.rows());
+    let z_ref = settings.reference_plane_z;
+    let bundle = lenslet_bundle(display, method, z_ref);
+    let pixel_samples = stratified(settings.samples_per_pixel);
+    let inv_count = 1.0 / (pixel_samples.len() * bundle.shifts.len()) as f64;
+    let render = ParaxialRender { display, method, eye: settings.eye_position, z_ref, pixel_samples, bundle };
+    debug_assert!(dst.len() == nx * ny);
+    depth.resize(nx * ny, 0.0);
+    let depth_known = std::sync::atomic::AtomicBool::new(true);
+    let finish = |acc: BundleSum, px: &mut [f32; 3], z: &mut f32| {
+        if !acc.depth_known {
+            depth_known.store(false, std::sync::atomic::Ordering::Relaxed);
+        }
+        let v = acc.radiance * inv_count;
+        *px = [v.x as f32, v.y as f32, v.z as f32];
+        *z = if acc.hits > 0 { (acc.depth / acc.hits as f64) as f32 } else { f32::INFINITY };
+    };
+    if tracer.prefers_batches() {
+        render.batched(tracer, progress, dst, &mut depth, &finish);
+    } else {
+        render.ray_by_ray(tracer, progress, dst, &mut depth, &finish);
+    }
+    // A cancelled render skipped rows: its image is not returned.
+    progress.check()?;
+    Ok((depth, depth_known.into_inner()))
+}
+
+/// Refuses what no method can render: OPT (solved, not traced), an eye behind the display, PC
+/// with its pupil where eq. (1) has no solution, sample counts out of range.
+fn check_render_settings(display: &Display, method: Method, settings: &DisplayRenderSettings) -> Result<()> {
     if method == Method::Optimized {
         // OPT traces no camera rays: its image is solved for (`crate::methods` routes it).
         return Err(Error::Mismatch(
@@ -283,20 +317,18 @@ fn render_into<R: RadianceField + ?Sized>(
             ));
         }
     }
-    if let Some(lens) = display.thick_lenslet() {
-        return super::display_thick::render_into(display, lens, method, settings, tracer, progress, dst, depth);
-    }
-    let lcd = display.lcd;
-    let (nx, ny) = (lcd.columns(), lcd.rows());
-    let pixel_samples = stratified(settings.samples_per_pixel);
-    // LA's samples p = c + offset give camera rays that differ from the LC ray (p = c) by a
-    // constant start and slope shift per offset (eq. (1b) is affine in p):
-    // slope += offset (1/f - 1/v2), start += offset (1 - (1/f - 1/v2) L), L = v1 - z_ref.
-    // With a single offset of exactly zero (k = 1) the rays are LC's, bit for bit.
-    let z_ref = settings.reference_plane_z;
+    Ok(())
+}
+
+/// The lenslet points of a pixel's camera rays as shifts of the LC ray: LA's samples p = c +
+/// offset give camera rays that differ from the LC ray (p = c) by a constant start and slope
+/// shift per offset (eq. (1b) is affine in p): slope += offset (1/f - 1/v2), start += offset
+/// (1 - (1/f - 1/v2) L), L = v1 - z_ref. With a single offset of exactly zero (k = 1) the rays
+/// are LC's, bit for bit; every other method has that one.
+fn lenslet_bundle(display: &Display, method: Method, z_ref: f64) -> RayBundle {
     let gain = display.lenslet_power() - 1.0 / display.lenslets_to_lcd;
     let reach = display.lenslet_z() - z_ref;
-    let bundle = match method {
+    match method {
         Method::LensletAverage { grid } => {
             let offsets: Vec<DVec2> = stratified(grid)
                 .into_iter()
@@ -305,25 +337,36 @@ fn render_into<R: RadianceField + ?Sized>(
             RayBundle::lenslet_points(&offsets, gain, reach)
         }
         _ => RayBundle::new(vec![(DVec2::ZERO, DVec2::ZERO)]),
-    };
-    let eye = settings.eye_position;
-    let inv_count = 1.0 / (pixel_samples.len() * bundle.shifts.len()) as f64;
+    }
+}
 
-    let per_pixel = pixel_samples.len() * bundle.shifts.len();
-    debug_assert!(dst.len() == nx * ny);
-    depth.resize(nx * ny, 0.0);
-    let depth_known = std::sync::atomic::AtomicBool::new(true);
-    let base_ray = |row: usize, col: usize, frac: DVec2| base_ray(display, method, eye, z_ref, row, col, frac);
-    let finish = |acc: BundleSum, px: &mut [f32; 3], z: &mut f32| {
-        if !acc.depth_known {
-            depth_known.store(false, std::sync::atomic::Ordering::Relaxed);
-        }
-        let v = acc.radiance * inv_count;
-        *px = [v.x as f32, v.y as f32, v.z as f32];
-        *z = if acc.hits > 0 { (acc.depth / acc.hits as f64) as f32 } else { f32::INFINITY };
-    };
-    if tracer.prefers_batches() {
-        // Blocks of a row's pixels, ordered sample-major, so that packets see neighbouring rays.
+/// What a paraxial display image's rows share: the method's camera rays of every pixel sample
+/// and lenslet point.
+struct ParaxialRender<'a> {
+    display: &'a Display,
+    method: Method,
+    eye: DVec3,
+    z_ref: f64,
+    pixel_samples: Vec<DVec2>,
+    bundle: RayBundle,
+}
+
+impl ParaxialRender<'_> {
+    /// Blocks of a row's pixels, ordered sample-major, so that packets see neighbouring rays.
+    fn batched<R: RadianceField + ?Sized>(
+        &self,
+        tracer: &R,
+        progress: &Progress,
+        dst: &mut [[f32; 3]],
+        depth: &mut [f32],
+        finish: &(impl Fn(BundleSum, &mut [f32; 3], &mut f32) + Sync),
+    ) {
+        let nx = self.display.lcd.columns();
+        let (pixel_samples, bundle) = (&self.pixel_samples, &self.bundle);
+        let per_pixel = pixel_samples.len() * bundle.shifts.len();
+        let base_ray = |row: usize, col: usize, frac: DVec2| {
+            base_ray(self.display, self.method, self.eye, self.z_ref, row, col, frac)
+        };
         dst.par_chunks_mut(nx).zip(depth.par_chunks_mut(nx)).enumerate().for_each(|(row, (out, zout))| {
             if progress.cancelled() {
                 return;
@@ -361,10 +404,21 @@ fn render_into<R: RadianceField + ?Sized>(
             }
             progress.inc(1);
         });
-    } else {
-        // Ray by ray; each pixel sample's lenslet rays go to the field as one bundle, which fast
-        // fields cull as a whole. A row's base rays are found in passes over the row
-        // ([`RowRays::find`]); every pixel sums its samples in the same order as the batched path.
+    }
+
+    /// Ray by ray; each pixel sample's lenslet rays go to the field as one bundle, which fast
+    /// fields cull as a whole. A row's base rays are found in passes over the row
+    /// ([`RowRays::find`]); every pixel sums its samples in the same order as the batched path.
+    fn ray_by_ray<R: RadianceField + ?Sized>(
+        &self,
+        tracer: &R,
+        progress: &Progress,
+        dst: &mut [[f32; 3]],
+        depth: &mut [f32],
+        finish: &(impl Fn(BundleSum, &mut [f32; 3], &mut f32) + Sync),
+    ) {
+        let nx = self.display.lcd.columns();
+        let bundle = &self.bundle;
         let single = bundle.shifts.len() == 1;
         dst.par_chunks_mut(nx).zip(depth.par_chunks_mut(nx)).enumerate().for_each_init(
             RowRays::default,
@@ -374,15 +428,15 @@ fn render_into<R: RadianceField + ?Sized>(
                 }
                 s.sums.clear();
                 s.sums.resize(nx, BundleSum::default());
-                for frac in &pixel_samples {
-                    s.find(display, method, eye, z_ref, row, *frac);
+                for frac in &self.pixel_samples {
+                    s.find(self.display, self.method, self.eye, self.z_ref, row, *frac);
                     for (acc, base) in s.sums.iter_mut().zip(&s.rays) {
                         let part = if single {
                             let mut one = BundleSum::default();
                             one.add(tracer.sample(&bundle.ray(base, 0)));
                             one
                         } else {
-                            tracer.sample_sum(base, &bundle)
+                            tracer.sample_sum(base, bundle)
                         };
                         acc.merge(part);
                     }
@@ -394,9 +448,6 @@ fn render_into<R: RadianceField + ?Sized>(
             },
         );
     }
-    // A cancelled render skipped rows: its image is not returned.
-    progress.check()?;
-    Ok((depth, depth_known.into_inner()))
 }
 
 #[cfg(test)]
