@@ -3,7 +3,8 @@
 # every study in studies/ and sweeps/tiny.toml, run by each binary from this tree's files, then
 # compared: EXR files decoded (every channel's pixels bit for bit, every `inimtrace:*` attribute but
 # the build's own version and revision), CSV and JSON rows with their timing, host and build
-# columns left out, every other file byte for byte.
+# columns left out, report.html with its numbers masked (it is built from the files compared),
+# every other file byte for byte.
 #
 #   scripts/compare-runs.sh OLD_BIN NEW_BIN [NAME...]
 #
@@ -140,6 +141,12 @@ for run in runs:
             t = lambda p: [l for l in p.read_text().splitlines() if not re.search(r"\d\s*(s|ms|min)\b|seconds|time", l)]
             if t(a) != t(b):
                 problems.append(f"{where}: text differs")
+        elif rel.name == "report.html":
+            # The page is built from the files compared above, and prints the run's timings and
+            # the sizes and hashes of files that hold timings: its text with every number masked.
+            t = lambda p: re.sub(r"[0-9a-f]{8,}|\d+(\.\d+)?", "#", p.read_text())
+            if t(a) != t(b):
+                problems.append(f"{where}: text differs beyond its numbers")
         elif hashlib.sha256(a.read_bytes()).digest() != hashlib.sha256(b.read_bytes()).digest():
             problems.append(f"{where}: contents differ")
 for p in problems:
