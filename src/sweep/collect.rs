@@ -1,20 +1,23 @@
 //! Collecting a sweep: the records of its points (Table 1's scores, Sec. 4.2, per point) into
-//! `sweep.csv` (one row per point x eye case x method), `sweep.json` (the resolved base, the
+//! `sweep.csv` (one row per point x eye case x method, with the perceptual scores the
+//! experiment names and their intervals), `sweep.json` (the resolved base, the
 //! axes, every point with its id, values and whether it is complete) and plots of each score
 //! against each numeric axis. Collecting reads only complete records, so it can run at any
 //! time, also while points are still running; it names the points still missing.
 
+use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
 use serde_json::json;
 
 use super::plots::{write_plots, PlotRow};
-use super::store::{PointRecord, RecordState, Store};
+use super::store::{PointRecord, RecordState, ScoreRow, Store};
 use super::Sweep;
 use crate::error::{Error, Result};
 use crate::io::csv_table::CsvTable;
 use crate::io::output::write_atomic;
 use crate::overrides::value_text;
+use crate::perception::ScoreName;
 use crate::settings::Resolved;
 
 /// What a collection found and wrote.
@@ -65,25 +68,59 @@ pub fn collect(sweep: &Sweep, resolved: &[Resolved], store: &Store) -> Result<Co
         invalid,
         ..Default::default()
     };
+    let (csv, plot_rows) = sweep_csv(sweep, resolved, &records, &keys, &mut out);
+    write_text(&out.csv, &csv)?;
+    let text = sweep_json(sweep, resolved, &records, &out)?;
+    write_text(&out.json, &text)?;
 
+    let axes: Vec<usize> =
+        sweep.spec.axes.iter().enumerate().flat_map(|(a, axis)| axis.keys.iter().map(move |_| a)).collect();
+    out.plots = write_plots(&store.root().join("plots"), &keys, &axes, &plot_rows)?;
+    // The page, from the files just written.
+    crate::report::write(store.root())?;
+    Ok(out)
+}
+
+/// The extra scores (`[measurement] scores` beyond PSNR and SSIM) of any complete record, in
+/// report order: each gets `sweep.csv`'s columns value, `_ci95`, `_noise_bias` and
+/// `_bias_above_ci95`, as `results.csv` has them.
+fn extra_scores(records: &[Option<PointRecord>]) -> Vec<ScoreName> {
+    let names: BTreeSet<ScoreName> =
+        records.iter().flatten().flat_map(|r| r.scores.iter()).flat_map(|s| s.perceptual.keys().copied()).collect();
+    names.into_iter().collect()
+}
+
+/// `sweep.csv` and the plots' rows; counts the rows and the points complete, missing and
+/// missing their targets into `out`.
+fn sweep_csv(
+    sweep: &Sweep,
+    resolved: &[Resolved],
+    records: &[Option<PointRecord>],
+    keys: &[String],
+    out: &mut Collected,
+) -> (String, Vec<PlotRow>) {
     let mut csv = CsvTable::new();
+    let extra = extra_scores(records);
     // The precision of each row (empty under the grid estimator, which has no interval and no
     // target), then the point's time last.
-    let scores = [
-        "method",
-        "eye_case",
-        "psnr_db",
-        "psnr_ci95_db",
-        "ssim",
-        "ssim_ci95",
-        "samples_per_pixel",
-        "replicates",
-        "target_met",
-        "seconds",
-    ];
-    csv.row(["point", "id"].into_iter().chain(keys.iter().map(|k| k.as_str())).chain(scores));
+    let extra_header: Vec<String> = extra
+        .iter()
+        .flat_map(|n| {
+            [n.name().to_string(), format!("{n}_ci95"), format!("{n}_noise_bias"), format!("{n}_bias_above_ci95")]
+        })
+        .collect();
+    let scores = ["method", "eye_case", "psnr_db", "psnr_ci95_db", "ssim", "ssim_ci95"];
+    let precision = ["samples_per_pixel", "replicates", "target_met", "seconds"];
+    csv.row(
+        ["point", "id"]
+            .into_iter()
+            .chain(keys.iter().map(|k| k.as_str()))
+            .chain(scores)
+            .chain(extra_header.iter().map(String::as_str))
+            .chain(precision),
+    );
     let mut plot_rows = Vec::new();
-    for ((point, r), rec) in sweep.points.iter().zip(resolved).zip(&records) {
+    for ((point, r), rec) in sweep.points.iter().zip(resolved).zip(records) {
         let Some(rec) = rec else {
             out.missing.push(point.index);
             continue;
@@ -99,18 +136,24 @@ pub fn collect(sweep: &Sweep, resolved: &[Resolved], store: &Store) -> Result<Co
             .collect();
         let xs: Vec<Option<f64>> = point.values.iter().map(|(_, v)| number(v)).collect();
         for s in &rec.scores {
-            let row = [point.index.to_string(), r.id.to_string()].into_iter().chain(values.iter().cloned()).chain([
-                s.method.clone(),
-                s.eye_case.clone(),
-                number_text(s.psnr_db),
-                s.psnr_ci95_db.map(number_text).unwrap_or_default(),
-                number_text(s.ssim),
-                s.ssim_ci95.map(number_text).unwrap_or_default(),
-                s.samples_per_pixel.map(|n| n.to_string()).unwrap_or_default(),
-                s.replicates.map(|n| n.to_string()).unwrap_or_default(),
-                s.target_met.map(|m| m.to_string()).unwrap_or_default(),
-                rec.seconds.to_string(),
-            ]);
+            let row = [point.index.to_string(), r.id.to_string()]
+                .into_iter()
+                .chain(values.iter().cloned())
+                .chain([
+                    s.method.clone(),
+                    s.eye_case.clone(),
+                    number_text(s.psnr_db),
+                    s.psnr_ci95_db.map(number_text).unwrap_or_default(),
+                    number_text(s.ssim),
+                    s.ssim_ci95.map(number_text).unwrap_or_default(),
+                ])
+                .chain(extra_cells(s, &extra))
+                .chain([
+                    s.samples_per_pixel.map(|n| n.to_string()).unwrap_or_default(),
+                    s.replicates.map(|n| n.to_string()).unwrap_or_default(),
+                    s.target_met.map(|m| m.to_string()).unwrap_or_default(),
+                    rec.seconds.to_string(),
+                ]);
             csv.row(row);
             out.rows += 1;
             if s.missed() {
@@ -122,14 +165,41 @@ pub fn collect(sweep: &Sweep, resolved: &[Resolved], store: &Store) -> Result<Co
             plot_rows.push(PlotRow { xs: xs.clone(), score: s.clone() });
         }
     }
-    write_text(&out.csv, &csv.finish())?;
+    (csv.finish(), plot_rows)
+}
 
+/// The extra scores' cells of one row: value, half-width, removed noise bias and whether it
+/// exceeds the half-width, per score of `extra` (empty where not measured or not given).
+fn extra_cells(s: &ScoreRow, extra: &[ScoreName]) -> Vec<String> {
+    extra
+        .iter()
+        .flat_map(|n| {
+            let e = s.perceptual.get(n);
+            let opt = |v: Option<f64>| v.map(number_text).unwrap_or_default();
+            let flag = e.filter(|e| e.noise_bias.is_some()).map(|e| e.bias_above_ci95().to_string());
+            [
+                opt(e.map(|e| e.value)),
+                opt(e.and_then(|e| e.ci95)),
+                opt(e.and_then(|e| e.noise_bias)),
+                flag.unwrap_or_default(),
+            ]
+        })
+        .collect()
+}
+
+/// `sweep.json`: the sweep, its resolved base, its axes and every point with its scores.
+fn sweep_json(
+    sweep: &Sweep,
+    resolved: &[Resolved],
+    records: &[Option<PointRecord>],
+    out: &Collected,
+) -> Result<String> {
     let base = sweep.resolve_base()?;
     let points: Vec<serde_json::Value> = sweep
         .points
         .iter()
         .zip(resolved)
-        .zip(&records)
+        .zip(records)
         .map(|((p, r), rec)| {
             let values: serde_json::Map<String, serde_json::Value> = p
                 .values
@@ -189,15 +259,7 @@ pub fn collect(sweep: &Sweep, resolved: &[Resolved], store: &Store) -> Result<Co
         "points_missing_target": out.missed_points,
         "points": points,
     });
-    let text = serde_json::to_string_pretty(&doc).map_err(|e| Error::serialize("serialise sweep.json", e))?;
-    write_text(&out.json, &text)?;
-
-    let axes: Vec<usize> =
-        sweep.spec.axes.iter().enumerate().flat_map(|(a, axis)| axis.keys.iter().map(move |_| a)).collect();
-    out.plots = write_plots(&store.root().join("plots"), &keys, &axes, &plot_rows)?;
-    // The page, from the files just written.
-    crate::report::write(store.root())?;
-    Ok(out)
+    serde_json::to_string_pretty(&doc).map_err(|e| Error::serialize("serialise sweep.json", e))
 }
 
 fn write_text(path: &Path, text: &str) -> Result<()> {

@@ -1,4 +1,5 @@
-//! A sweep's plots (PNG and SVG): each Table 1 score (Sec. 4.2: PSNR, SSIM) against each
+//! A sweep's plots (PNG and SVG): each Table 1 score (Sec. 4.2: PSNR, SSIM) and each extra
+//! score the experiment names (luminance PSNR, ColorVideoVDP's JOD, HDR-FLIP) against each
 //! numeric axis, one series per method. Every point and eye case is a dot (with its 95%
 //! interval when the measurement gives one); the line joins the mean at each axis value over
 //! the other axes and the eye cases. For every pair of numeric axes (a 2-D sweep), the same
@@ -6,7 +7,7 @@
 //! method over both (`_x_`, each cell's value written in it). Axis labels carry the settings'
 //! units ([`super::units`]).
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 use plotters::prelude::*;
@@ -15,6 +16,7 @@ use crate::io::plot::legend;
 
 use super::store::ScoreRow;
 use crate::error::{Error, Result};
+use crate::perception::ScoreName;
 
 /// One row of `sweep.csv` as the plots see it: the value of every swept key (`None` where it
 /// is not a number) and the scores.
@@ -26,17 +28,26 @@ pub struct PlotRow {
     pub score: ScoreRow,
 }
 
+/// A score plotted: PSNR, SSIM or one of the extra scores `[measurement] scores` names.
 #[derive(Clone, Copy)]
 enum Metric {
     Psnr,
     Ssim,
+    Extra(ScoreName),
 }
 
 impl Metric {
+    /// PSNR, SSIM and every extra score of any row, in report order.
+    fn all(rows: &[PlotRow]) -> Vec<Metric> {
+        let extra: BTreeSet<ScoreName> = rows.iter().flat_map(|r| r.score.perceptual.keys().copied()).collect();
+        [Metric::Psnr, Metric::Ssim].into_iter().chain(extra.into_iter().map(Metric::Extra)).collect()
+    }
+
     fn name(self) -> &'static str {
         match self {
             Metric::Psnr => "psnr",
             Metric::Ssim => "ssim",
+            Metric::Extra(n) => n.name(),
         }
     }
 
@@ -44,7 +55,29 @@ impl Metric {
         match self {
             Metric::Psnr => "PSNR (dB)",
             Metric::Ssim => "SSIM",
+            Metric::Extra(ScoreName::Cvvdp) => "ColorVideoVDP (JOD)",
+            Metric::Extra(ScoreName::Flip) => "HDR-FLIP",
+            Metric::Extra(_) => "luminance PSNR (dB)",
         }
+    }
+
+    /// The least half-height of a plot's range.
+    fn least_pad(self) -> f64 {
+        match self {
+            Metric::Psnr | Metric::Extra(ScoreName::PsnrLuminance) => 0.2,
+            Metric::Extra(ScoreName::Cvvdp) => 0.02,
+            _ => 0.002,
+        }
+    }
+
+    /// A value as a tick (`cell` false) or a heatmap's cell (`cell` true) prints it.
+    fn text(self, v: f64, cell: bool) -> String {
+        let digits = match self {
+            Metric::Psnr | Metric::Extra(ScoreName::PsnrLuminance) => 1,
+            Metric::Extra(ScoreName::Cvvdp) => 2,
+            _ => 3,
+        };
+        format!("{v:.*}", digits + cell as usize)
     }
 
     /// The value and its 95% half-width; PSNR of identical images (inf) is left out.
@@ -52,6 +85,7 @@ impl Metric {
         let (v, ci) = match self {
             Metric::Psnr => (s.psnr_db, s.psnr_ci95_db),
             Metric::Ssim => (s.ssim, s.ssim_ci95),
+            Metric::Extra(n) => s.perceptual.get(&n).map(|e| (e.value, e.ci95))?,
         };
         v.is_finite().then_some((v, ci.filter(|c| c.is_finite())))
     }
@@ -118,8 +152,9 @@ pub fn write_plots(dir: &Path, keys: &[String], axes: &[usize], rows: &[PlotRow]
             methods.push(r.score.method.clone());
         }
     }
+    let metrics = Metric::all(rows);
     for &k in &numeric {
-        for metric in [Metric::Psnr, Metric::Ssim] {
+        for &metric in &metrics {
             let name = format!("{}_vs_{}", metric.name(), stem(&keys[k]));
             written.push(plot_file!(dir, &name, (900, 600), |area| draw(area, &keys[k], k, rows, metric)));
         }
@@ -127,7 +162,7 @@ pub fn write_plots(dir: &Path, keys: &[String], axes: &[usize], rows: &[PlotRow]
     for &k in &numeric {
         for &j in numeric.iter().filter(|&&j| j != k && axes.get(j) != axes.get(k)) {
             let by = values[j].as_deref().unwrap_or_default();
-            for metric in [Metric::Psnr, Metric::Ssim] {
+            for &metric in &metrics {
                 let name = format!("{}_vs_{}_by_{}", metric.name(), stem(&keys[k]), stem(&keys[j]));
                 written.push(plot_file!(dir, &name, (900, 600), |area| draw_by(
                     area,
@@ -142,7 +177,7 @@ pub fn write_plots(dir: &Path, keys: &[String], axes: &[usize], rows: &[PlotRow]
     for (a, &k) in numeric.iter().enumerate() {
         for &j in numeric[a + 1..].iter().filter(|&&j| axes.get(j) != axes.get(k)) {
             let (xs, ys) = (values[k].as_deref().unwrap_or_default(), values[j].as_deref().unwrap_or_default());
-            for metric in [Metric::Psnr, Metric::Ssim] {
+            for &metric in &metrics {
                 for method in &methods {
                     let name = format!("{}_{}_{}_x_{}", metric.name(), stem(method), stem(&keys[k]), stem(&keys[j]));
                     let size = (260 + 90 * xs.len() as u32, 160 + 50 * ys.len() as u32);
@@ -179,8 +214,8 @@ type LineChart<'a, DB> =
     ChartContext<'a, DB, Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>>;
 
 /// The axes every line plot of a sweep shares: `key` (with its unit) across, `metric` up, over
-/// the data's box `(x0, x1, y0, y1)` padded by 5% across and 8% up (at least 0.2 dB or 0.002
-/// SSIM), under `caption` at its font size.
+/// the data's box `(x0, x1, y0, y1)` padded by 5% across and 8% up (at least the metric's
+/// [`Metric::least_pad`]: 0.2 dB, 0.02 JOD, 0.002 SSIM or FLIP), under `caption` at its font size.
 fn metric_axes<'a, DB: DrawingBackend>(
     area: &'a DrawingArea<DB, plotters::coord::Shift>,
     metric: Metric,
@@ -190,10 +225,7 @@ fn metric_axes<'a, DB: DrawingBackend>(
     (x0, x1, y0, y1): (f64, f64, f64, f64),
 ) -> std::result::Result<LineChart<'a, DB>, DrawingAreaErrorKind<DB::ErrorType>> {
     let xpad = ((x1 - x0) * 0.05).max(1e-9);
-    let ypad = ((y1 - y0) * 0.08).max(match metric {
-        Metric::Psnr => 0.2,
-        Metric::Ssim => 0.002,
-    });
+    let ypad = ((y1 - y0) * 0.08).max(metric.least_pad());
     let mut chart = ChartBuilder::on(area)
         .caption(caption, ("sans-serif", caption_size))
         .margin(14)
@@ -205,10 +237,7 @@ fn metric_axes<'a, DB: DrawingBackend>(
         .max_light_lines(2)
         .x_desc(super::units::label(key))
         .y_desc(y_desc)
-        .y_label_formatter(&|v| match metric {
-            Metric::Psnr => format!("{v:.1}"),
-            Metric::Ssim => format!("{v:.3}"),
-        })
+        .y_label_formatter(&|v| metric.text(*v, false))
         .draw()?;
     Ok(chart)
 }
@@ -446,10 +475,7 @@ where
             };
             chart.draw_series([Rectangle::new([(x, y), (x + 1.0, y + 1.0)], fill.filled())]).map_err(e2s)?;
             if let Some(v) = cell {
-                let text = match metric {
-                    Metric::Psnr => format!("{v:.2}"),
-                    Metric::Ssim => format!("{v:.4}"),
-                };
+                let text = metric.text(*v, true);
                 // Dark text on the light end of the ramp, light text on the dark end.
                 let light = hi > lo && (v - lo) / (hi - lo) > 0.6;
                 let color = if light { BLACK } else { WHITE };

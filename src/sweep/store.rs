@@ -6,7 +6,7 @@
 //! when asked for, go to `points/<id>/`; their point counts as complete only once its record
 //! exists.
 
-use std::collections::HashSet;
+use std::collections::{BTreeMap, HashSet};
 use std::fs;
 use std::path::{Path, PathBuf};
 
@@ -15,6 +15,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Error, Result};
 use crate::experiment::Score;
 use crate::io::output::{read_regular, write_atomic, TEMP_PREFIX};
+use crate::perception::{PerceptualScores, ScalarEstimate, ScoreName};
 use crate::render::Method;
 use crate::settings::Resolved;
 
@@ -51,6 +52,10 @@ pub struct ScoreRow {
     /// grid estimator has no target).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub target_met: Option<bool>,
+    /// The scores `[measurement] scores` names beyond PSNR and SSIM (luminance PSNR,
+    /// ColorVideoVDP, FLIP), by name, as `results.json` gives them; absent when none is named.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub perceptual: BTreeMap<ScoreName, ExtraScore>,
 }
 
 impl ScoreRow {
@@ -58,6 +63,62 @@ impl ScoreRow {
     pub fn missed(&self) -> bool {
         self.target_met == Some(false)
     }
+
+    /// Why the row's extra scores are not those of a point that names `expected`, if they are not.
+    fn extra_problem(&self, expected: &[ScoreName]) -> Option<String> {
+        let have: Vec<ScoreName> = self.perceptual.keys().copied().collect();
+        if have != expected {
+            let names = |n: &[ScoreName]| n.iter().map(|n| n.name()).collect::<Vec<_>>().join(", ");
+            return Some(format!("extra scores [{}], not the point's [{}]", names(&have), names(expected)));
+        }
+        self.perceptual.iter().find_map(|(n, e)| e.problem(*n))
+    }
+}
+
+/// One extra score of a row: its value (in the score's unit) with its 95% half-width and the
+/// estimator's noise bias removed from it, when the converged estimator gives them (see
+/// `crate::perception::replicated`). Stored as [`ScoreRow`]'s numbers are: exact decimal text.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ExtraScore {
+    /// The score (JOD, FLIP, dB).
+    #[serde(with = "exact")]
+    pub value: f64,
+    /// Its 95% half-width.
+    #[serde(default, with = "exact_option", skip_serializing_if = "Option::is_none")]
+    pub ci95: Option<f64>,
+    /// The noise bias removed from it.
+    #[serde(default, with = "exact_option", skip_serializing_if = "Option::is_none")]
+    pub noise_bias: Option<f64>,
+}
+
+impl ExtraScore {
+    /// The score as the perception module gives it.
+    pub fn estimate(&self) -> ScalarEstimate {
+        ScalarEstimate { value: self.value, ci95: self.ci95, noise_bias: self.noise_bias }
+    }
+
+    /// Whether the removed noise bias exceeds the half-width ([`ScalarEstimate::bias_above_ci95`]).
+    pub fn bias_above_ci95(&self) -> bool {
+        self.estimate().bias_above_ci95()
+    }
+
+    /// Why the score cannot be one inimtrace measured, if it cannot: a value that is not a
+    /// number, a half-width or bias that is not finite, a negative half-width.
+    fn problem(&self, name: ScoreName) -> Option<String> {
+        let finite = |v: Option<f64>| v.is_none_or(f64::is_finite);
+        let value_ok = match name {
+            ScoreName::PsnrLuminance => !self.value.is_nan() && self.value != f64::NEG_INFINITY,
+            _ => self.value.is_finite(),
+        };
+        let ok = value_ok && finite(self.ci95) && finite(self.noise_bias) && self.ci95.is_none_or(|h| h >= 0.0);
+        (!ok).then(|| format!("its {name} {} is not valid", self.value))
+    }
+}
+
+/// The extra scores of a [`Score`] by name.
+fn extra_scores(p: &PerceptualScores) -> BTreeMap<ScoreName, ExtraScore> {
+    p.0.iter().map(|(n, e)| (*n, ExtraScore { value: e.value, ci95: e.ci95, noise_bias: e.noise_bias })).collect()
 }
 
 impl From<&Score> for ScoreRow {
@@ -72,6 +133,7 @@ impl From<&Score> for ScoreRow {
             samples_per_pixel: s.samples_per_pixel,
             replicates: s.replicates,
             target_met: s.target_met,
+            perceptual: extra_scores(&s.perceptual),
         }
     }
 }
@@ -140,6 +202,10 @@ impl PointRecord {
         if self.id != r.id {
             return Some(format!("it records the settings hash {}, not this point's {}", self.id, r.id));
         }
+        let extra = match &r.experiment.measurement {
+            Some(m) => m.extra_scores("the point's settings").map(|e| e.names().to_vec()).unwrap_or_default(),
+            None => Vec::new(),
+        };
         let mut expected = Vec::new();
         for m in &r.experiment.methods {
             let Ok(method) = m.parse::<Method>() else {
@@ -167,6 +233,9 @@ impl PointRecord {
                     "the score of {} under {} is not valid (PSNR {} dB, SSIM {})",
                     row.method, row.eye_case, row.psnr_db, row.ssim
                 ));
+            }
+            if let Some(why) = row.extra_problem(&extra) {
+                return Some(format!("the score of {} under {}: {why}", row.method, row.eye_case));
             }
         }
         let have =
@@ -362,6 +431,7 @@ mod tests {
                 samples_per_pixel: Some(64),
                 replicates: Some(8),
                 target_met: Some(false),
+                perceptual: BTreeMap::new(),
             }],
             seconds: 1.5,
             backend: "analytic".into(),
