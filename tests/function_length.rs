@@ -59,8 +59,6 @@ fn the_script_counts_from_fn_to_its_closing_brace_outside_test_modules() {
 }
 
 #[test]
-#[ignore = "enabled once measure/estimator.rs's extend, estimator/diffracted.rs's eval_diffracted_in, \
-            render/display_image.rs's render_into and sweep/collect.rs's collect are split (#49)"]
 fn no_function_outside_tests_is_over_120_lines() {
     let out = script(Path::new(env!("CARGO_MANIFEST_DIR")), "120");
     assert!(
