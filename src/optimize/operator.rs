@@ -6,10 +6,8 @@
 //! same rays: `(A^T r)_l = sum_{e : l_e = l} w_e r_{p_e}`.
 //!
 //! Matrix-free: the samples of a band of retina rows are traced afresh on every application
-//! (the same eye-to-LCD trace as `crate::render::simulate_stack`: [`FastTransfer`] for the thin
-//! lens, the eye's own rays ([`crate::optics::eye::EyeOptics::rays`]) otherwise, through real
-//! lenslets each channel's own exact trace) and dropped; only a bounded wave of bands is held at
-//! once. With diffraction (which only the converged estimator models) each sample carries a fixed
+//! through the eye state's [`crate::optics::system::OpticalSystem`] (its grid, the same trace as
+//! `crate::render::simulate_stack`) and dropped; only a bounded wave of bands is held at once. With diffraction (which only the converged estimator models) each sample carries a fixed
 //! pseudo-random draw of the pupil's and the lenslet aperture's deviations
 //! ([`diffraction_numbers`]), and its LCD pixels are those the estimator finds for that sample. The sample pattern is fixed, so the forward operator
 //! and the adjoint are the same matrix, transposed. Both are deterministic bit for bit at any

@@ -1,11 +1,11 @@
 //! Retinal images (paper Sec. 2.3 and 4.1).
 //!
 //! - Perceived image ([`simulate`]): for each retina sample and pupil sample, trace retina ->
-//!   pupil (thin lens) -> lenslet plane -> refraction at the nearest lenslet -> LCD (eq. (1),
-//!   [`FastTransfer`]), and read the display image there (box pixels). A ray that misses the
-//!   LCD carries black and still counts in the pixel's average, so no pixel is ever 0/0.
-//! - Ground truth ([`ground_truth`]): the same eye rays, leaving the eye lens, straight into the
-//!   scene ([`eye_scene_ray`]).
+//!   pupil -> lenslet plane -> refraction at the nearest lenslet -> LCD (eq. (1)) through the eye
+//!   case's [`OpticalSystem`], and read the display image there (box pixels). A ray that misses
+//!   the LCD carries black and still counts in the pixel's average, so no pixel is ever 0/0.
+//! - Ground truth ([`ground_truth`]): the same eye rays, leaving the eye, straight into the scene
+//!   ([`OpticalSystem::scene_only`]).
 //!
 //! The paper's pinhole eye is the one-sample limit: the chief ray through the pupil centre.
 
