@@ -75,26 +75,32 @@ impl<'a, F: RadianceField + ?Sized> DisplaySource<'a, F> {
         self.read(b, known, images, out);
     }
 
-    /// The field along every traced scene ray, then every sample's images.
+    /// The field along every traced scene ray, then every sample's images. A field that takes
+    /// batches gets every ray at once; otherwise each ray's radiance is asked where it is read.
     fn read(&self, b: &mut Buffers, known: &[Option<[f64; 3]>], images: &[u32], out: &mut [[f64; 3]]) {
         let scene = &b.traces.scene;
+        let batched = self.field.prefers_batches();
         b.radiance.clear();
-        if self.field.prefers_batches() {
+        if batched {
             b.hits.clear();
             b.hits.resize(scene.len(), Sample::default());
             self.field.sample_many(scene, &mut b.hits);
             b.radiance.extend(b.hits.iter().map(|h| h.radiance.to_array()));
-        } else {
-            b.radiance.extend(scene.iter().map(|r| self.field.radiance(r).to_array()));
         }
+        let radiance = |j: usize| if batched { b.radiance[j] } else { self.field.radiance(&scene[j]).to_array() };
         let k = 1 + self.stack.len();
         debug_assert_eq!(out.len(), b.traces.samples.len() * k);
         for (i, (o, t)) in out.chunks_exact_mut(k).zip(&b.traces.samples).enumerate() {
             let w = t.weight;
             o[0] = if t.first == KNOWN {
                 known[i].expect("a known ground truth").map(|v| v * w)
+            } else if t.single {
+                match t.scene_ray(0) {
+                    Some(j) => radiance(j).map(|v| v * w),
+                    None => [0.0; 3],
+                }
             } else {
-                std::array::from_fn(|c| t.scene_ray(c).map_or(0.0, |j| b.radiance[j][c] * w))
+                std::array::from_fn(|c| t.scene_ray(c).map_or(0.0, |j| radiance(j)[c] * w))
             };
             self.read_images(t, images.get(i).copied().unwrap_or(MISS), &mut o[1..]);
         }
