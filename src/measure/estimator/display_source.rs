@@ -119,6 +119,14 @@ impl<'a, F: RadianceField + ?Sized> DisplaySource<'a, F> {
         if t.shared {
             match pixel(t.lcd[0]) {
                 None => o.fill([0.0; 3]),
+                // The weight skipped where it is 1 (the same bits), for the common stack sizes
+                // with the image count known to the compiler.
+                Some(px) if w == 1.0 => match o.len() {
+                    1 => read_pixel::<1>(px, o),
+                    2 => read_pixel::<2>(px, o),
+                    3 => read_pixel::<3>(px, o),
+                    _ => read_pixel_each(px, o),
+                },
                 Some(px) => {
                     for (j, v) in o.iter_mut().enumerate() {
                         *v = std::array::from_fn(|c| f64::from(px[3 * j + c]) * w);
@@ -137,6 +145,22 @@ impl<'a, F: RadianceField + ?Sized> DisplaySource<'a, F> {
                 }
             }
         }
+    }
+}
+
+/// Every image's three channels of LCD pixel `px` into `o` (`M` images).
+#[inline(always)]
+fn read_pixel<const M: usize>(px: &[f32], o: &mut [[f64; 3]]) {
+    let (px, o) = (&px[..3 * M], &mut o[..M]);
+    for j in 0..M {
+        o[j] = [f64::from(px[3 * j]), f64::from(px[3 * j + 1]), f64::from(px[3 * j + 2])];
+    }
+}
+
+/// The slow twin of [`read_pixel`], for any number of images.
+fn read_pixel_each(px: &[f32], o: &mut [[f64; 3]]) {
+    for (j, v) in o.iter_mut().enumerate() {
+        *v = std::array::from_fn(|c| f64::from(px[3 * j + c]));
     }
 }
 
