@@ -200,8 +200,8 @@ pub fn ground_truth<R: RadianceField + ?Sized>(
         let pupil_box = bounds(system.pupil_grid().iter().copied());
         let frac_box = bounds(retina.subpixel_offsets());
         image.pixels.par_chunks_mut(n).enumerate().for_each_init(
-            || (Vec::new(), Traces::default()),
-            |(samples, traces), (row, out)| {
+            || (Vec::new(), Traces::default(), Vec::new()),
+            |(samples, traces, radiance), (row, out)| {
                 if progress.cancelled() {
                     return;
                 }
@@ -218,8 +218,9 @@ pub fn ground_truth<R: RadianceField + ?Sized>(
                     } else {
                         system.grid_samples(retina, (row, col), &no_draws, samples);
                         system.trace(samples, &[], traces);
-                        let radiance: Vec<DVec3> = traces.scene.iter().map(|r| tracer.radiance(r)).collect();
-                        sum_traced(&traces.samples, &radiance)
+                        radiance.clear();
+                        radiance.extend(traces.scene.iter().map(|r| tracer.radiance(r)));
+                        sum_traced(&traces.samples, radiance)
                     };
                     let v = sum * inv;
                     *px = [v.x as f32, v.y as f32, v.z as f32];
