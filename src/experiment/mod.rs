@@ -121,6 +121,7 @@ impl ExperimentSpec {
             position: None,
             pupil_diameter: None,
             weight: None,
+            gaze_deg: None,
         };
         vec![case("Pin", None), case("Near", Some(300.0)), case("Cen", Some(400.0)), case("Far", Some(600.0))]
     }
@@ -271,6 +272,8 @@ impl Experiment {
             retina,
             optics: e.optics_spec(pupil_diameter, source)?.with_diffraction(diffraction, e.spectrum.is_some()),
             primaries: display.primaries.clone().unwrap_or_default(),
+            gaze: e.gaze(source)?,
+            centre_of_rotation: e.centre_of_rotation(source)?,
         };
         let cases = resolve_cases(&spec, &base, &display, source)?;
         if methods.contains(&Method::PupilCenter) {
@@ -527,6 +530,10 @@ fn resolve_cases(spec: &ExperimentSpec, base: &BaseEye, display: &Display, sourc
             crate::optics::transfer::check_eye_in_front(display, p[2], source, &format!("{field}.position"))?;
         }
         let eye = c.resolve(base, source, &field)?;
+        if let Some(pose) = &eye.pose {
+            let gaze = if c.gaze_deg.is_some() { format!("{field}.gaze_deg") } else { "eye.gaze_deg".into() };
+            display.check_gaze(pose, source, &gaze)?;
+        }
         cases.push(EyeCase { name: c.name.clone(), eye });
     }
     Ok(cases)
