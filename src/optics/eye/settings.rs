@@ -528,20 +528,35 @@ impl EyeCaseSpec {
             }
             None => base.gaze,
         };
-        eye.pose = pose_of(&eye, gaze, base.centre_of_rotation);
+        eye.pose = pose_of(&base.optics.model, gaze, base.centre_of_rotation, position, source)?;
         Ok(eye)
     }
 }
 
-/// The pose of `eye` (its optics built) turned to `gaze` about `centre`: `None` straight ahead.
-pub fn pose_of(eye: &Eye, gaze: Gaze, centre: CentreOfRotation) -> Option<EyePose> {
+/// The pose of an eye of `model` whose pupil centre is at `position` straight ahead, turned to
+/// `gaze` about `centre` (`None` straight ahead). The centre lies `centre` behind the cornea of
+/// the model relaxed (its entrance pupil's depth at 0 D and its reference wavelength; the thin
+/// lens takes Navarro's, [`CentreOfRotation::pupil_depth`]), whatever a state's accommodation,
+/// so the states of one eye turn about one point. Errors name `source`.
+pub fn pose_of(
+    model: &EyeModel,
+    gaze: Gaze,
+    centre: CentreOfRotation,
+    position: DVec3,
+    source: &str,
+) -> Result<Option<EyePose>> {
     if gaze.is_ahead() {
-        return None;
+        return Ok(None);
     }
-    let schematic = eye.optics.as_ref().and_then(|o| o.schematic());
-    let paraxial = schematic.map(|s| s.paraxial(s.reference_wavelength()));
+    let paraxial = match model {
+        EyeModel::ThinLens => None,
+        m => {
+            let relaxed = super::SchematicEye::new(m, 0.0, source)?;
+            Some(relaxed.paraxial(relaxed.reference_wavelength()))
+        }
+    };
     let behind = centre.behind_pupil_mm(CentreOfRotation::pupil_depth(paraxial.as_ref()));
-    Some(EyePose::new(gaze, eye.position, behind))
+    Ok(Some(EyePose::new(gaze, position, behind)))
 }
 
 /// `err` with its field under `prefix`.
