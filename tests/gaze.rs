@@ -343,3 +343,28 @@ fn pupil_center_with_tracking_beats_it_without_and_without_tracking_falls_with_g
     }
     assert!(untracked.windows(2).all(|w| w[1] < w[0]), "PC without tracking falls with gaze: {untracked:?}");
 }
+
+#[test]
+fn the_gaze_and_eye_box_sweeps_build_every_point_on_two_axes() {
+    for (file, gaze) in [("sweeps/gaze.toml", true), ("sweeps/eyebox.toml", false)] {
+        let sweep = inimtrace::sweep::Sweep::load(&root().join(file), &[], None).unwrap();
+        let points = sweep.resolve().unwrap();
+        assert_eq!(points.len(), 25, "{file}");
+        let mut seen = Vec::new();
+        for p in &points {
+            let e = p.experiment().unwrap_or_else(|err| panic!("{file}: {err}"));
+            let eye = &e.cases[0].eye;
+            seen.push(if gaze {
+                eye.pose.map_or([0.0; 2], |p| <[f64; 2]>::from(p.gaze))
+            } else {
+                [eye.position.x, eye.position.y]
+            });
+            // PupilCenter renders for the eye's pupil: turned (ideal tracking) or moved.
+            let pupil = eye.pose.map_or(eye.position, |p| p.pupil_centre);
+            assert!((e.render.eye_position - pupil).length() < 1e-12, "{file}");
+        }
+        seen.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        seen.dedup();
+        assert_eq!(seen.len(), 25, "{file}: every point its own gaze or position");
+    }
+}
