@@ -109,6 +109,7 @@ impl EyeArgs {
             pupil_grid: self.pupil_grid,
             position: self.eye_position,
             optics: None,
+            pose: None,
         };
         eye.validate("command line")?;
         // The plausibility warning every command gives a pupil it uses, whatever the eye model.

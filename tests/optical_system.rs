@@ -1,6 +1,7 @@
 //! The optical system (`optics/system.rs`), decided once: every kernel it picks against its
 //! slow twin (one sample at a time), bit for bit, on random samples of every kind of eye and
-//! lenslet; the grid's order against the per-pixel trace; and the kernel each eye gets.
+//! lenslet, straight ahead and turned to a gaze; the grid's order against the per-pixel trace;
+//! and the kernel each eye gets.
 
 use std::path::Path;
 
@@ -8,7 +9,8 @@ use glam::DVec2;
 use inimtrace::fixtures::Lcg;
 use inimtrace::io::display_file::load_display;
 use inimtrace::optics::diffraction::Diffraction;
-use inimtrace::optics::eye::{EyeModel, EyeOptics, EyeOpticsSpec, FocusCriterion};
+use inimtrace::optics::eye::settings::pose_of;
+use inimtrace::optics::eye::{CentreOfRotation, EyeModel, EyeOptics, EyeOpticsSpec, FocusCriterion, Gaze};
 use inimtrace::optics::spectrum::Primaries;
 use inimtrace::optics::system::{EyeSample, GridBuffers, Kernel, OpticalSystem, Traces};
 use inimtrace::optics::{Display, Eye, Focus, Retina};
@@ -38,6 +40,12 @@ fn pmma() -> Display {
     load_display("displays/paper-pmma.toml", Path::new(env!("CARGO_MANIFEST_DIR"))).unwrap()
 }
 
+/// `eye` turned to a gaze of [9, -6] degrees about the default centre.
+fn turned(eye: Eye) -> Eye {
+    let (gaze, centre) = (Gaze::new(9.0, -6.0), CentreOfRotation::default());
+    Eye { pose: pose_of(&EyeModel::ThinLens, gaze, centre, eye.position, "t").unwrap(), ..eye }
+}
+
 /// Every kind of system: (name, display, eye, the kernel it must get).
 fn systems() -> Vec<(&'static str, Display, Eye, Kernel)> {
     let paper = Display::paper();
@@ -51,9 +59,13 @@ fn systems() -> Vec<(&'static str, Display, Eye, Kernel)> {
         ("navarro", paper.clone(), navarro(false), Kernel::EyeRays),
         ("navarro, stiles-crawford", paper.clone(), navarro(true), Kernel::EyeRays),
         ("thin lens, diffraction", paper.clone(), thin_diffracted(), Kernel::ThinDiffracted),
-        ("thin lens, stiles-crawford, diffraction", paper, thin_sc_diffracted(), Kernel::General),
+        ("thin lens, stiles-crawford, diffraction", paper.clone(), thin_sc_diffracted(), Kernel::General),
         ("navarro, thick lenslets", pmma(), navarro(false), Kernel::General),
         ("thin lens, diffraction, thick lenslets", pmma(), thin_diffracted(), Kernel::General),
+        ("thin lens, turned", paper.clone(), turned(thin()), Kernel::Rotated),
+        ("thin lens, thick lenslets, turned", pmma(), turned(thin()), Kernel::Rotated),
+        ("navarro, stiles-crawford, turned", paper.clone(), turned(navarro(true)), Kernel::Rotated),
+        ("thin lens, diffraction, turned", paper.clone(), turned(thin_diffracted()), Kernel::Rotated),
     ]
 }
 

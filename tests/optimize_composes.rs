@@ -218,6 +218,7 @@ fn an_optimize_state_is_an_eye_case_row_and_resolves_to_the_same_eye() {
         position: Some([0.5, 0.0, 0.0]),
         pupil_diameter: Some(3.0),
         weight: None,
+        gaze_deg: None,
     };
     let mut spec = ExperimentSpec::paper_converged();
     spec.methods = vec!["LA".into(), "OPT".into()];

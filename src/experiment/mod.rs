@@ -15,6 +15,7 @@ mod perceptual;
 mod report;
 pub mod simulated;
 mod stages;
+mod tracking;
 
 use crate::optics::eye::settings::prefix_field;
 pub use crate::optics::eye::settings::{BaseEye, EyeCaseSpec, EyeModelSettings, EyeSpec};
@@ -63,11 +64,25 @@ pub struct DisplayRenderSpec {
     /// Pupil centre PupilCenter aims at (default: the simulated eye's position).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub eye_position: Option<[f64; 3]>,
+    /// What PupilCenter knows of a turned eye's pupil: "ideal" (the default) or "none"
+    /// (`experiment/tracking.rs`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pupil_tracking: Option<String>,
+    /// The eye tracker's error, mm, with `pupil_tracking = "ideal"`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tracking_error_mm: Option<[f64; 3]>,
 }
 
 impl Default for DisplayRenderSpec {
     fn default() -> Self {
-        Self { la_grid: 5, samples_per_pixel: 1, reference_plane_z: 0.0, eye_position: None }
+        Self {
+            la_grid: 5,
+            samples_per_pixel: 1,
+            reference_plane_z: 0.0,
+            eye_position: None,
+            pupil_tracking: None,
+            tracking_error_mm: None,
+        }
     }
 }
 
@@ -121,6 +136,7 @@ impl ExperimentSpec {
             position: None,
             pupil_diameter: None,
             weight: None,
+            gaze_deg: None,
         };
         vec![case("Pin", None), case("Near", Some(300.0)), case("Cen", Some(400.0)), case("Far", Some(600.0))]
     }
@@ -239,7 +255,7 @@ impl Experiment {
         let methods = parse_methods(&spec, source)?;
         let dr = &spec.display_render;
         let e = &spec.eye;
-        let (position, render) = render_settings(&spec, &display, source)?;
+        let (position, mut render) = render_settings(&spec, &display, source)?;
         let retina = Retina {
             resolution: e.retina_resolution,
             half_tangent: e.retina_half_tangent,
@@ -271,8 +287,14 @@ impl Experiment {
             retina,
             optics: e.optics_spec(pupil_diameter, source)?.with_diffraction(diffraction, e.spectrum.is_some()),
             primaries: display.primaries.clone().unwrap_or_default(),
+            gaze: e.gaze(source)?,
+            centre_of_rotation: e.centre_of_rotation(source)?,
         };
         let cases = resolve_cases(&spec, &base, &display, source)?;
+        if let Some(pupil) = tracking::pc_pupil(dr, &base, source)? {
+            crate::optics::transfer::check_eye_in_front(&display, pupil.z, source, "display_render.pupil_tracking")?;
+            render.eye_position = pupil;
+        }
         if methods.contains(&Method::PupilCenter) {
             crate::optics::transfer::check_pupil_center(&display, render.eye_position).map_err(|e| {
                 let i = methods.iter().position(|m| *m == Method::PupilCenter).unwrap_or(0);
@@ -527,6 +549,10 @@ fn resolve_cases(spec: &ExperimentSpec, base: &BaseEye, display: &Display, sourc
             crate::optics::transfer::check_eye_in_front(display, p[2], source, &format!("{field}.position"))?;
         }
         let eye = c.resolve(base, source, &field)?;
+        if let Some(pose) = &eye.pose {
+            let gaze = if c.gaze_deg.is_some() { format!("{field}.gaze_deg") } else { "eye.gaze_deg".into() };
+            display.check_gaze(pose, source, &gaze)?;
+        }
         cases.push(EyeCase { name: c.name.clone(), eye });
     }
     Ok(cases)

@@ -230,6 +230,28 @@ impl Display {
         [(0.5 * self.lcd.size.x / distance).atan(), (0.5 * self.lcd.size.y / distance).atan()]
     }
 
+    /// Checks that an eye turned to `pose` looks at the display: its line of sight, from the
+    /// turned pupil's centre, meets the LCD plane inside the panel. Errors name `source` and
+    /// `field` (the gaze).
+    pub fn check_gaze(&self, pose: &super::eye::EyePose, source: &str, field: &str) -> crate::error::Result<()> {
+        let (p, l) = (pose.pupil_centre, pose.line_of_sight);
+        let at = p.truncate() + l.truncate() * ((self.lcd_z() - p.z) / l.z);
+        let half = 0.5 * self.lcd.size;
+        if l.z > 0.0 && at.x.abs() <= half.x && at.y.abs() <= half.y {
+            return Ok(());
+        }
+        let [h, v] = <[f64; 2]>::from(pose.gaze);
+        Err(crate::error::Error::invalid(
+            source,
+            field,
+            format!(
+                "the line of sight at [{h}, {v}] degrees meets the LCD plane at ({:.2}, {:.2}) mm, off the \
+                 {} x {} mm panel of display `{}`: the eye would look past the display",
+                at.x, at.y, self.lcd.size.x, self.lcd.size.y, self.name
+            ),
+        ))
+    }
+
     /// The area of the display's field of view, deg^2 (its angular width times its angular
     /// height): the adapting field of the light-adapted pupil ([`super::eye::pupil`]).
     pub fn field_area_deg2(&self) -> f64 {

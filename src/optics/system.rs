@@ -11,7 +11,8 @@
 //! [`OpticalSystem::new`] picks the kernel that traces the samples ([`Kernel`]): the paper's
 //! thin lens through paraxial lenslets in eq. (1)'s closed form, the thin lens through real
 //! lenslets, an eye's own rays batched, the thin lens with diffraction batched with its Airy-core
-//! shortcuts (`system/diffracted.rs`), and the general path sample by sample. Every kernel has a
+//! shortcuts (`system/diffracted.rs`), the general path sample by sample, and the eye turned to a
+//! gaze (`optics::eye::gaze`), whose rays at rest are moved by its pose into the scene's frame. Every kernel has a
 //! slow twin, [`OpticalSystem::trace_each`], which traces one sample at a time by the same
 //! arithmetic and gives the same bits (tested). The grid simulation, the converged estimator, the
 //! OPT operator and the resolution study all trace through this type; none of them branches on
@@ -70,6 +71,10 @@ pub enum Kernel {
     /// Everything else (a schematic eye through real lenslets, diffraction with a schematic eye
     /// or Stiles-Crawford, ...): sample by sample.
     General,
+    /// The eye turned to a gaze ([`crate::optics::eye::EyePose`]), any eye model: each sample's
+    /// rays of the eye at rest (the thin lens's through `EyeOptics::thin_lens`) moved by the
+    /// pose into the scene's frame, then as [`Kernel::General`], sample by sample.
+    Rotated,
 }
 
 /// The eye, the lenslets, the LCD and diffraction of one eye case: see the module comment.
@@ -125,6 +130,7 @@ impl<'a> OpticalSystem<'a> {
             .and(display)
             .map(|d| ApertureShape::of_lattice(&d.lenslets));
         let kernel = match &own {
+            _ if eye.pose.is_some() => Kernel::Rotated,
             None if thick => Kernel::ThinThick,
             None => Kernel::Paraxial,
             Some(_) if thick => Kernel::General,
@@ -193,7 +199,7 @@ impl<'a> OpticalSystem<'a> {
         let core = match self.kernel {
             Kernel::Paraxial | Kernel::ThinThick => 0.0,
             Kernel::ThinDiffracted => self.pupil_core(),
-            Kernel::EyeRays | Kernel::General => return None,
+            Kernel::EyeRays | Kernel::General | Kernel::Rotated => return None,
         };
         let core = DVec2::splat(core);
         let (t_lo, t_hi) = (tangents.0.min(tangents.1) - core, tangents.0.max(tangents.1) + core);

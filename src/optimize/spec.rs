@@ -315,7 +315,14 @@ impl Optimization {
                 if matches!(aperture, Aperture::Pinhole) { spec.pinhole_retina_samples } else { spec.retina_samples };
             TrainingState {
                 name: name.into(),
-                eye: Eye { retina_distance: 17.0, aperture, pupil_grid: 8, position: eye_position, optics: None },
+                eye: Eye {
+                    retina_distance: 17.0,
+                    aperture,
+                    pupil_grid: 8,
+                    position: eye_position,
+                    optics: None,
+                    pose: None,
+                },
                 retina: Retina { resolution: 512, half_tangent: 0.3, samples_per_pixel: k },
                 weight: 1.0,
             }

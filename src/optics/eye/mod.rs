@@ -128,12 +128,22 @@ pub struct Eye {
     /// A schematic eye, the display primaries' wavelengths or the Stiles-Crawford effect
     /// ([`rays`]); `None`: the paper's thin lens, traced by the fast paths.
     pub optics: Option<std::sync::Arc<EyeOptics>>,
+    /// The eye turned to a gaze about its centre of rotation ([`gaze`]): every ray of the eye at
+    /// rest moved by it. `None`: straight ahead, the eye at rest.
+    pub pose: Option<EyePose>,
 }
 
 impl Eye {
     /// The paper's pinhole eye: v0 = 17 mm, one chief ray through the pupil centre at the origin.
     pub fn pinhole() -> Self {
-        Self { retina_distance: 17.0, aperture: Aperture::Pinhole, pupil_grid: 1, position: DVec3::ZERO, optics: None }
+        Self {
+            retina_distance: 17.0,
+            aperture: Aperture::Pinhole,
+            pupil_grid: 1,
+            position: DVec3::ZERO,
+            optics: None,
+            pose: None,
+        }
     }
 
     /// A thin-lens eye (v0 = 17 mm, pupil centre at the origin): pupil diameter in mm, its focus,
@@ -145,6 +155,7 @@ impl Eye {
             pupil_grid,
             position: DVec3::ZERO,
             optics: None,
+            pose: None,
         }
     }
 

@@ -11,7 +11,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::optics::eye::pupil::{AutoPupil, Observer, PupilSetting};
-use crate::optics::eye::{EyeModel, EyeOptics, EyeOpticsSpec, FocusCriterion, UserEye};
+use crate::optics::eye::{
+    CentreOfRotation, EyeModel, EyeOptics, EyeOpticsSpec, EyePose, FocusCriterion, Gaze, UserEye,
+};
 use crate::optics::spectrum::Primaries;
 use crate::optics::{Aperture, Eye, Retina};
 
@@ -69,9 +71,35 @@ pub struct EyeSpec {
     /// Eyes adapted to the display for `pupil_diameter = "auto"`: 1 or 2 (default 2).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub adapted_eyes: Option<u8>,
+    /// The gaze, `[horizontal, vertical]` degrees in Fick's angles ([`Gaze`]; absent: [0, 0],
+    /// straight ahead): the whole eye turned about its centre of rotation.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gaze_deg: Option<[f64; 2]>,
+    /// The centre of rotation, mm behind the cornea on the optical axis (absent:
+    /// [`CentreOfRotation::DEFAULT_MM`], 13.3 mm).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub centre_of_rotation_mm: Option<f64>,
 }
 
 impl EyeSpec {
+    /// The gaze of `gaze_deg` (straight ahead when absent), checked; errors name `source` and
+    /// `eye.gaze_deg`.
+    pub fn gaze(&self, source: &str) -> Result<Gaze> {
+        let g = self.gaze_deg.map(Gaze::from).unwrap_or_default();
+        g.validate(source, "eye.gaze_deg")?;
+        Ok(g)
+    }
+
+    /// The centre of rotation of `centre_of_rotation_mm` (the default when absent), checked;
+    /// errors name `source` and `eye.centre_of_rotation_mm`.
+    pub fn centre_of_rotation(&self, source: &str) -> Result<CentreOfRotation> {
+        let c = self
+            .centre_of_rotation_mm
+            .map_or_else(CentreOfRotation::default, |mm| CentreOfRotation { behind_cornea_mm: mm });
+        c.validate(source, "eye.centre_of_rotation_mm")?;
+        Ok(c)
+    }
+
     /// The observer of `pupil_diameter = "auto"` (`None` for a stated diameter); errors name
     /// `source` and the field.
     pub fn observer(&self, source: &str) -> Result<Option<Observer>> {
@@ -394,6 +422,8 @@ impl Default for EyeSpec {
             stiles_crawford_peak: None,
             age: None,
             adapted_eyes: None,
+            gaze_deg: None,
+            centre_of_rotation_mm: None,
         }
     }
 }
@@ -424,6 +454,9 @@ pub struct EyeCaseSpec {
     /// OPT's weight w_s of this state (1); only in `[[optimize.states]]`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub weight: Option<f64>,
+    /// This state's gaze, `[horizontal, vertical]` degrees (default: `eye.gaze_deg`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gaze_deg: Option<[f64; 2]>,
 }
 
 /// The eye the `[eye]` table gives, before a state's own focus, pupil and position: what
@@ -444,6 +477,10 @@ pub struct BaseEye {
     pub optics: EyeOpticsSpec,
     /// The display's primaries (each channel's wavelengths).
     pub primaries: Primaries,
+    /// The gaze of `eye.gaze_deg`.
+    pub gaze: Gaze,
+    /// The centre of rotation.
+    pub centre_of_rotation: CentreOfRotation,
 }
 
 impl EyeCaseSpec {
@@ -469,6 +506,7 @@ impl EyeCaseSpec {
             pupil_grid: base.pupil_grid,
             position,
             optics: None,
+            pose: None,
         };
         eye.validate(source).map_err(|err| prefix_field(err, &format!("{field} / eye.")))?;
         let focus_field =
@@ -482,8 +520,43 @@ impl EyeCaseSpec {
             source,
             &focus_field,
         )?;
+        let gaze = match self.gaze_deg {
+            Some(g) => {
+                let g = Gaze::from(g);
+                g.validate(source, &format!("{field}.gaze_deg"))?;
+                g
+            }
+            None => base.gaze,
+        };
+        eye.pose = pose_of(&base.optics.model, gaze, base.centre_of_rotation, position, source)?;
         Ok(eye)
     }
+}
+
+/// The pose of an eye of `model` whose pupil centre is at `position` straight ahead, turned to
+/// `gaze` about `centre` (`None` straight ahead). The centre lies `centre` behind the cornea of
+/// the model relaxed (its entrance pupil's depth at 0 D and its reference wavelength; the thin
+/// lens takes Navarro's, [`CentreOfRotation::pupil_depth`]), whatever a state's accommodation,
+/// so the states of one eye turn about one point. Errors name `source`.
+pub fn pose_of(
+    model: &EyeModel,
+    gaze: Gaze,
+    centre: CentreOfRotation,
+    position: DVec3,
+    source: &str,
+) -> Result<Option<EyePose>> {
+    if gaze.is_ahead() {
+        return Ok(None);
+    }
+    let paraxial = match model {
+        EyeModel::ThinLens => None,
+        m => {
+            let relaxed = super::SchematicEye::new(m, 0.0, source)?;
+            Some(relaxed.paraxial(relaxed.reference_wavelength()))
+        }
+    };
+    let behind = centre.behind_pupil_mm(CentreOfRotation::pupil_depth(paraxial.as_ref()));
+    Ok(Some(EyePose::new(gaze, position, behind)))
 }
 
 /// `err` with its field under `prefix`.

@@ -14,6 +14,7 @@ use glam::DVec2;
 
 use super::{EyeSample, Kernel, OpticalSystem};
 use crate::optics::eye::rays::SampleRays;
+use crate::optics::eye::EyePose;
 use crate::optics::transfer::{eye_ray, eye_scene_ray};
 use crate::optics::PlaneRay;
 use crate::ray::Ray;
@@ -109,6 +110,21 @@ pub(super) fn world(r: PlaneRay, eye: glam::DVec3) -> PlaneRay {
     PlaneRay { position: r.position + eye.truncate(), slope: r.slope }
 }
 
+/// The world ray `r` of the eye at rest (crossing the plane `z` of its pupil centre) moved by
+/// `pose`: the scene ray (`x -> c + R (x - c)`, directions by R), and the same line where it
+/// crosses the plane `z` again, where the transfer to the LCD starts (`None`: it travels away
+/// from the display).
+#[inline]
+pub(super) fn posed(pose: &EyePose, r: PlaneRay, z: f64) -> (Ray, Option<PlaneRay>) {
+    let origin = pose.point(r.position.extend(z));
+    let dir = pose.direction(r.slope.extend(1.0));
+    let line = (dir.z > 0.0).then(|| {
+        let slope = dir.truncate() / dir.z;
+        PlaneRay { position: origin.truncate() + slope * (z - origin.z), slope }
+    });
+    (Ray { origin, dir }, line)
+}
+
 /// The trace of a sample that sees nothing (every ray blocked).
 const DARK: Traced = Traced { weight: 1.0, first: 0, rays: 0, single: true, lcd: [MISS; 3], shared: true };
 
@@ -124,7 +140,7 @@ impl OpticalSystem<'_> {
             Kernel::ThinThick => self.trace_thin_thick(samples, hints, out),
             Kernel::EyeRays => self.trace_eye_rays(samples, out),
             Kernel::ThinDiffracted => self.trace_diffracted(samples, hints, out),
-            Kernel::General => self.trace_general(samples, out),
+            Kernel::General | Kernel::Rotated => self.trace_general(samples, out),
         }
     }
 
@@ -302,10 +318,14 @@ impl OpticalSystem<'_> {
         for c in 0..n {
             let Some(r) = sr.rays[c].filter(|_| rays & (1 << c) != 0) else { continue };
             let r = world(r, self.eye.position);
-            out.scene.push(Ray { origin: r.position.extend(self.eye.position.z), dir: r.slope.extend(1.0) });
+            let (scene, r) = match &self.eye.pose {
+                None => (Ray { origin: r.position.extend(self.eye.position.z), dir: r.slope.extend(1.0) }, Some(r)),
+                Some(pose) => posed(pose, r, self.eye.position.z),
+            };
+            out.scene.push(scene);
             // The LCD pixel of this ray in channel `ch`.
             let index = |ch: usize| {
-                let Some(t) = transfer else { return MISS };
+                let (Some(t), Some(r)) = (transfer, r) else { return MISS };
                 let pixel = match (thick, draw) {
                     (false, None) => t.pixel_index_of(r),
                     (false, Some((shape, draw))) => {
