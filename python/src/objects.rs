@@ -183,6 +183,7 @@ impl PyEye {
             pupil_grid,
             position: DVec3::new(position.0, position.1, position.2),
             optics: None,
+            pose: None,
         };
         eye.validate("Eye()").py_err()?;
         // Likely unit mistakes, as the CLI warns of them.
