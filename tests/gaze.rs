@@ -368,3 +368,18 @@ fn the_gaze_and_eye_box_sweeps_build_every_point_on_two_axes() {
         assert_eq!(seen.len(), 25, "{file}: every point its own gaze or position");
     }
 }
+
+#[test]
+fn a_turned_eye_is_named_in_the_caption_and_the_image_attributes_and_straight_ahead_is_not() {
+    use inimtrace::experiment::{metadata, simulated::Simulated};
+    let turned = experiment(|s| s.eye.gaze_deg = Some([10.0, 5.0])).unwrap();
+    assert!(Simulated::of(&turned).eye.contains("gaze [10, 5] degrees"), "{}", Simulated::of(&turned).eye);
+    let case = &turned.cases[0];
+    let a = metadata::ground_truth(None, Some(&case.name), &case.eye, &turned.retina, "analytic");
+    assert!(a.get("inimtrace:gaze_horizontal_deg").is_some() && a.get("inimtrace:gaze_vertical_deg").is_some());
+    let ahead = experiment(|_| {}).unwrap();
+    assert!(!Simulated::of(&ahead).eye.contains("gaze"));
+    let case = &ahead.cases[0];
+    let a = metadata::ground_truth(None, Some(&case.name), &case.eye, &ahead.retina, "analytic");
+    assert!(a.get("inimtrace:gaze_horizontal_deg").is_none());
+}

@@ -142,6 +142,14 @@ pub fn eye(case: Option<&str>, eye: &Eye, retina: &Retina) -> Attributes {
     a.set("inimtrace:eye_x_mm", eye.position.x);
     a.set("inimtrace:eye_y_mm", eye.position.y);
     a.set("inimtrace:eye_z_mm", eye.position.z);
+    // A turned eye (absent: straight ahead, as before gaze existed).
+    if let Some(pose) = &eye.pose {
+        a.set("inimtrace:gaze_horizontal_deg", pose.gaze.horizontal_deg);
+        a.set("inimtrace:gaze_vertical_deg", pose.gaze.vertical_deg);
+        a.set("inimtrace:centre_of_rotation_x_mm", pose.centre.x);
+        a.set("inimtrace:centre_of_rotation_y_mm", pose.centre.y);
+        a.set("inimtrace:centre_of_rotation_z_mm", pose.centre.z);
+    }
     a.set("inimtrace:retina_resolution", AttrValue::count(retina.resolution));
     a.set("inimtrace:retina_half_tangent", retina.half_tangent);
     a.set("inimtrace:retina_samples_per_pixel", AttrValue::count(retina.samples_per_pixel.pow(2)));

@@ -50,8 +50,17 @@ impl Simulated {
             )
         };
         let diffraction = exp.spec.optics.as_ref().map(|o| o.diffraction).unwrap_or_default();
+        // A turned eye names its gazes (straight ahead names none, as before gaze existed).
+        let mut gazes: Vec<String> = Vec::new();
+        for g in exp.cases.iter().filter_map(|c| c.eye.pose.as_ref()).map(|p| p.gaze) {
+            let g = format!("[{}, {}] degrees", g.horizontal_deg, g.vertical_deg);
+            if !gazes.contains(&g) {
+                gazes.push(g);
+            }
+        }
+        let gaze = if gazes.is_empty() { String::new() } else { format!(", gaze {}", gazes.join(", ")) };
         Self {
-            eye: models.join(", "),
+            eye: models.join(", ") + &gaze,
             spectrum,
             diffraction: diffraction_words(diffraction).to_string(),
             lenslets: lenslet_words(&exp.display),
