@@ -1,5 +1,10 @@
 #!/usr/bin/env sh
 # Installs the Debian 12 packages inimtrace needs (run as root, or with sudo available).
+#   scripts/install-deps.sh            everything below
+#   scripts/install-deps.sh packages   the Debian packages only (enough to build)
+#   scripts/install-deps.sh extras     the rest: the Python venvs under target/ and Embree 4 (only
+#                                      tests and `--features embree4` need them; CI fetches them
+#                                      while the first build compiles)
 #   libembree-dev libclang-dev   Embree backend: bindgen over wrapper.h, libembree3 (+ TBB)
 #   glmark2-data                 the Stanford bunny mesh for scenes/bunny.toml
 #   assimp-testmodels            tests/assimp_corpus.rs: Assimp's test models (a real third-party
@@ -8,6 +13,8 @@
 #   pkg-config libfontconfig1-dev libfreetype-dev fontconfig fonts-dejavu-core
 #                                plotters' text rendering (figure labels, plots)
 #   build-essential              C toolchain for crates that build C
+#   mold                         a fast linker: CI links its two builds of the ~80 test binaries with
+#                                it (`mold -run` in .ci/run); plain builds use the default linker
 #   slurm-wlm munge              `inimtrace sweep --slurm` and its tests: scripts/slurm-local.sh runs
 #                                a single-node Slurm cluster on this machine
 #   qemu-user                    tests/cpu.rs and python/tests: the binary and the Python module
@@ -37,14 +44,22 @@
 #                                about 6 GB and two minutes); skipped with a warning when pip cannot
 #                                reach PyPI (the test then skips too, unless CI requires it)
 set -eu
+STAGE=${1:-all}
+case "$STAGE" in
+    all | packages | extras) ;;
+    *) echo "usage: scripts/install-deps.sh [packages | extras]" >&2; exit 2 ;;
+esac
 SUDO=""
 if [ "$(id -u)" != 0 ]; then SUDO=sudo; fi
 export DEBIAN_FRONTEND=noninteractive
-$SUDO apt-get update
-$SUDO apt-get install -y --no-install-recommends \
-    build-essential pkg-config libembree-dev libclang-dev glmark2-data assimp-testmodels \
-    libfontconfig1-dev libfreetype-dev fontconfig fonts-dejavu-core python3-venv slurm-wlm munge qemu-user \
-    time util-linux openexr chromium
+if [ "$STAGE" != extras ]; then
+    $SUDO apt-get update
+    $SUDO apt-get install -y --no-install-recommends \
+        build-essential pkg-config libembree-dev libclang-dev glmark2-data assimp-testmodels \
+        libfontconfig1-dev libfreetype-dev fontconfig fonts-dejavu-core python3-venv slurm-wlm munge qemu-user \
+        time util-linux openexr chromium mold
+fi
+if [ "$STAGE" = packages ]; then exit 0; fi
 cd "$(dirname "$0")/.."
 if [ ! -x target/venv-exr/bin/python ] || ! target/venv-exr/bin/python -c "import OpenEXR, numpy" 2>/dev/null; then
     mkdir -p target
