@@ -43,7 +43,7 @@ for input in "$DIR"/*.embree-input; do
         "$BIN/bare3" "$input" "$THREADS" "" "$MODE" | tee -a "$BIN/3"
         "$BIN/bare4" "$input" "$THREADS" "$CONFIG4" "$MODE" | tee -a "$BIN/4"
     done
-    for f in build_s nearest_rays_per_s occluded_rays_per_s; do
+    for f in build_s nearest_rays_per_s nearest_cold_rays_per_s occluded_rays_per_s occluded_cold_rays_per_s; do
         a=$(field "$f" <"$BIN/3" | median)
         b=$(field "$f" <"$BIN/4" | median)
         echo "$(basename "$input" .embree-input) $f median: Embree 3 $a, Embree 4 $b, Embree 4 / Embree 3 $(awk "BEGIN {printf \"%.3f\", $b / $a}")"
