@@ -304,6 +304,35 @@ fn an_experiments_bad_gaze_centre_or_tracking_is_refused_naming_the_field() {
     assert!(e.contains("look past the display"), "{e}");
 }
 
+/// OPT's training states are eye states like the cases: a state's gaze that looks past the
+/// display, or beyond 60 degrees, is refused naming `optimize.states[i].gaze_deg`; a state
+/// looking at the display loads, turned.
+#[test]
+fn an_opt_training_states_gaze_is_checked_against_the_display_naming_the_field() {
+    let path = root().join("experiments/paper-optimal.toml");
+    let load = |state: &str| {
+        let sets: Vec<inimtrace::overrides::Override> =
+            [format!("optimize.states=[{{ name = \"glance\", focus_mm = 350.0 }}, {state}]")]
+                .iter()
+                .map(|s| s.parse().unwrap())
+                .collect();
+        inimtrace::settings::load_experiment(Some(&path), None, &sets)
+    };
+    for gaze in ["[25.0, 0.0]", "[0.0, -30.0]", "[61.0, 0.0]"] {
+        let e = load(&format!("{{ name = \"turned\", focus_mm = 400.0, gaze_deg = {gaze} }}"))
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
+        assert!(e.contains("optimize.states[1].gaze_deg") && e.contains("paper-optimal.toml"), "{gaze}: {e}");
+    }
+    let e = load("{ name = \"turned\", focus_mm = 400.0, gaze_deg = [25.0, 0.0] }").err().unwrap().to_string();
+    assert!(e.contains("look past the display"), "{e}");
+    let ok = load("{ name = \"turned\", focus_mm = 400.0, gaze_deg = [10.0, 5.0] }").unwrap();
+    let opt = ok.optimize.expect("OPT's training");
+    let turned = opt.states.iter().find(|s| s.name == "turned").unwrap();
+    assert_eq!(turned.eye.pose.unwrap().gaze, Gaze::new(10.0, 5.0));
+}
+
 /// PSNR of PupilCenter rendered for `pc_pupil`, seen by `eye`, against its ground truth.
 fn pc_psnr(display: &Display, field: &dyn RadianceField, eye: &Eye, pc_pupil: DVec3, retina: &Retina) -> f64 {
     let hidden = Progress::hidden();

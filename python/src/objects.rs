@@ -1,5 +1,6 @@
 //! The inputs of the paper's pipeline as Python objects (Sec. 2-4): `Display` (the lenslet array
-//! and LCD), `Eye` (the thin-lens eye with its retina, as the CLI's eye flags), `Scene` and
+//! and LCD), `Eye` (the thin-lens or schematic eye with its retina and gaze, as the CLI's eye
+//! flags and `[eye]` keys), `Scene` and
 //! `Experiment`, each loaded by the library's own loaders, with `set=` as `--set`.
 
 use std::path::{Path, PathBuf};
@@ -9,6 +10,8 @@ use pyo3::prelude::*;
 
 use inimtrace::experiment::{Experiment, ExperimentSpec};
 use inimtrace::info::DisplayParameters;
+use inimtrace::optics::eye::settings::pose_of;
+use inimtrace::optics::eye::{CentreOfRotation, EyeModel, Gaze};
 use inimtrace::optics::{Aperture, Display, Eye, Retina};
 use inimtrace::scene::Scene;
 use inimtrace::settings::{load_display_part, load_experiment, load_scene_part};
@@ -126,6 +129,8 @@ impl PyDisplay {
 pub struct PyEye {
     pub eye: Eye,
     pub retina: Retina,
+    /// The centre of rotation the eye turns about (`[eye] centre_of_rotation_mm`).
+    pub centre: CentreOfRotation,
     /// How a schematic eye's optics are rebuilt for a display's own primaries (None: the eye of
     /// an experiment's case, built with its display's primaries already).
     pub rebuild: Option<(inimtrace::experiment::EyeModelSettings, &'static str)>,
@@ -134,7 +139,11 @@ pub struct PyEye {
 impl PyEye {
     /// The eye seen with `display`: a polychromatic schematic eye's channels take the display's
     /// `[primaries]` (the eye was built with the default primaries, not knowing the display).
+    /// A turned eye's line of sight must meet the display's LCD, as the CLI checks `eye.gaze_deg`.
     pub fn for_display(&self, display: Option<&inimtrace::optics::Display>) -> PyResult<Eye> {
+        if let (Some(d), Some(pose)) = (display, &self.eye.pose) {
+            d.check_gaze(pose, "Eye()", "gaze").py_err()?;
+        }
         let mut eye = self.eye.clone();
         let primaries = display.and_then(|d| d.primaries.as_ref());
         let polychromatic = eye.optics.as_ref().is_some_and(|o| !o.is_single_wavelength());
@@ -154,10 +163,12 @@ impl PyEye {
     #[new]
     /// `model` (`[eye] model`: "thin-lens", "navarro", "navarro-1999", "arizona", "le-grand"),
     /// `spectrum` ("primaries" or "single") and `stiles_crawford_rho` choose the eye as an
-    /// experiment's `[eye]` does (docs/EYE.md).
+    /// experiment's `[eye]` does (docs/EYE.md). `gaze` (`[eye] gaze_deg`: horizontal, vertical
+    /// degrees) turns the whole eye about its centre of rotation, `centre_of_rotation` mm behind
+    /// the cornea (`[eye] centre_of_rotation_mm`, 13.3 by default).
     #[pyo3(signature = (*, pinhole=false, focus_mm=None, focus_diopters=None, pupil=5.0, pupil_grid=8, retina=512,
         half_tangent=0.3, retina_samples=1, retina_distance=17.0, position=(0.0, 0.0, 0.0), model=None,
-        spectrum=None, stiles_crawford_rho=None))]
+        spectrum=None, stiles_crawford_rho=None, gaze=(0.0, 0.0), centre_of_rotation=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -174,6 +185,8 @@ impl PyEye {
         model: Option<String>,
         spectrum: Option<String>,
         stiles_crawford_rho: Option<f64>,
+        gaze: (f64, f64),
+        centre_of_rotation: Option<f64>,
     ) -> PyResult<Self> {
         let aperture = Aperture::stated(pinhole, focus_mm, focus_diopters, pupil)
             .ok_or_else(|| value_error("Eye: give exactly one of pinhole=True, focus_mm or focus_diopters"))?;
@@ -202,7 +215,14 @@ impl PyEye {
         eye.optics = settings.optics_for(&eye, half_tangent, &primaries, "Eye()", focus).py_err()?;
         let retina = Retina { resolution: retina, half_tangent, samples_per_pixel: retina_samples };
         retina.validate("Eye()").py_err()?;
-        Ok(Self { eye, retina, rebuild: Some((settings, focus)) })
+        let gaze = Gaze::new(gaze.0, gaze.1);
+        gaze.validate("Eye()", "gaze").py_err()?;
+        let centre =
+            centre_of_rotation.map_or_else(CentreOfRotation::default, |mm| CentreOfRotation { behind_cornea_mm: mm });
+        centre.validate("Eye()", "centre_of_rotation").py_err()?;
+        let model = eye.optics.as_ref().map_or(EyeModel::ThinLens, |o| o.model.clone());
+        eye.pose = pose_of(&model, gaze, centre, eye.position, "Eye()").py_err()?;
+        Ok(Self { eye, retina, centre, rebuild: Some((settings, focus)) })
     }
 
     #[getter]
@@ -260,6 +280,22 @@ impl PyEye {
     #[getter]
     fn position(&self) -> (f64, f64, f64) {
         self.eye.position.into()
+    }
+    /// The gaze, (horizontal, vertical) degrees ((0, 0): straight ahead).
+    #[getter]
+    fn gaze(&self) -> (f64, f64) {
+        self.eye.pose.map_or((0.0, 0.0), |p| (p.gaze.horizontal_deg, p.gaze.vertical_deg))
+    }
+    /// The centre of rotation, mm behind the cornea.
+    #[getter]
+    fn centre_of_rotation(&self) -> f64 {
+        self.centre.behind_cornea_mm
+    }
+    /// The pupil centre at the gaze, mm (`position` straight ahead): where PupilCenter renders
+    /// for with ideal tracking (`render_display(..., eye_position=eye.pupil_centre)`).
+    #[getter]
+    fn pupil_centre(&self) -> (f64, f64, f64) {
+        self.eye.pose.map_or(self.eye.position, |p| p.pupil_centre).into()
     }
     /// The eye model's canonical name (`[eye] model`): "thin-lens", "navarro-1985",
     /// "navarro-1999", "arizona", "le-grand" or "user".
@@ -396,10 +432,16 @@ impl PyExperiment {
     /// The eye cases as (name, Eye) pairs.
     #[getter]
     fn eye_cases(&self) -> Vec<(String, PyEye)> {
+        let centre = self
+            .inner
+            .spec
+            .eye
+            .centre_of_rotation_mm
+            .map_or_else(CentreOfRotation::default, |mm| CentreOfRotation { behind_cornea_mm: mm });
         self.inner
             .cases
             .iter()
-            .map(|c| (c.name.clone(), PyEye { eye: c.eye.clone(), retina: self.inner.retina, rebuild: None }))
+            .map(|c| (c.name.clone(), PyEye { eye: c.eye.clone(), retina: self.inner.retina, centre, rebuild: None }))
             .collect()
     }
     /// "converged" or "grid".

@@ -315,7 +315,9 @@ impl Experiment {
                 let named: Vec<(String, Eye)> = cases.iter().map(|c| (c.name.clone(), c.eye.clone())).collect();
                 // The explicit [[optimize.states]] are eye states of the experiment's eye, as its
                 // cases are (a schematic eye, the primaries' wavelengths, diffraction).
-                let opt = o.clone().unwrap_or_default().resolve(&named, &base, dr.la_grid, source)?;
+                let spec = o.clone().unwrap_or_default();
+                let opt = spec.resolve(&named, &base, dr.la_grid, source)?;
+                check_state_gazes(&spec, &opt, &display, source)?;
                 Some(opt)
             }
         };
@@ -556,6 +558,26 @@ fn resolve_cases(spec: &ExperimentSpec, base: &BaseEye, display: &Display, sourc
         cases.push(EyeCase { name: c.name.clone(), eye });
     }
     Ok(cases)
+}
+
+/// OPT's explicit training states look at the display, as the eye cases do: a turned state's
+/// line of sight meets the LCD. Errors name `optimize.states[i].gaze_deg` (or `eye.gaze_deg`,
+/// which the state inherits).
+fn check_state_gazes(
+    spec: &crate::optimize::OptimizeSpec,
+    opt: &crate::optimize::Optimization,
+    display: &Display,
+    source: &str,
+) -> Result<()> {
+    for (i, s) in spec.states.iter().enumerate() {
+        let pose = opt.states.iter().find(|t| t.name == s.name).and_then(|t| t.eye.pose.as_ref());
+        if let Some(pose) = pose {
+            let field =
+                if s.gaze_deg.is_some() { format!("optimize.states[{i}].gaze_deg") } else { "eye.gaze_deg".into() };
+            display.check_gaze(pose, source, &field)?;
+        }
+    }
+    Ok(())
 }
 
 /// The measurement's consistency with the optics and the eye: diffraction needs the converged

@@ -1,6 +1,7 @@
 //! Optics: the display, the eye and the paraxial ray transfer between them (paper Sec. 2.3).
 
 pub mod clearance;
+pub mod crosstalk;
 pub mod diffraction;
 pub mod display;
 pub mod eye;

@@ -228,8 +228,8 @@ fn state_field(i: usize, cases: usize) -> String {
 }
 
 /// Whether two training states are the same eye state (so that training on both would only
-/// double its weight): the same aperture (focus compared as vergence), pupil centre, retina
-/// distance, optics and training retina.
+/// double its weight): the same aperture (focus compared as vergence), pupil centre, gaze,
+/// retina distance, optics and training retina.
 fn same_state(a: &TrainingState, b: &TrainingState) -> bool {
     let aperture = |s: &TrainingState| match s.eye.aperture {
         Aperture::Pinhole => None,
@@ -237,6 +237,7 @@ fn same_state(a: &TrainingState, b: &TrainingState) -> bool {
     };
     aperture(a) == aperture(b)
         && a.eye.position == b.eye.position
+        && a.eye.pose == b.eye.pose
         && a.eye.retina_distance == b.eye.retina_distance
         && a.eye.optics == b.eye.optics
         && a.retina == b.retina
