@@ -27,6 +27,7 @@ pub use stages::{
     ground_truth_image, pack_display_images, perceived_images, render_display_images, render_display_stack,
     render_optimized, table1, table1_each, table1_scores, CaseResult, DisplayImages, Table1,
 };
+pub use tracking::tracked_pupil;
 
 use std::path::Path;
 

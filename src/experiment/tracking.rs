@@ -15,6 +15,7 @@ use glam::DVec3;
 
 use crate::error::{Error, Result};
 use crate::optics::eye::settings::{pose_of, BaseEye};
+use crate::optics::eye::EyePose;
 
 use super::DisplayRenderSpec;
 
@@ -22,30 +23,7 @@ use super::DisplayRenderSpec;
 /// (`display_render.eye_position`, or `eye.position`); `None`: `stated`. Errors name `source`
 /// and the field.
 pub(super) fn pc_pupil(dr: &DisplayRenderSpec, base: &BaseEye, source: &str) -> Result<Option<DVec3>> {
-    let ideal = match dr.pupil_tracking.as_deref() {
-        None | Some("ideal") => true,
-        Some("none") => false,
-        Some(other) => {
-            return Err(Error::invalid(
-                source,
-                "display_render.pupil_tracking",
-                format!("`{other}` is not one of \"ideal\" or \"none\""),
-            ))
-        }
-    };
-    let error = match dr.tracking_error_mm.map(DVec3::from_array) {
-        Some(_) if !ideal => {
-            return Err(Error::invalid(
-                source,
-                "display_render.tracking_error_mm",
-                "is only read with pupil_tracking = \"ideal\" (a tracker's error)",
-            ))
-        }
-        Some(e) if !e.is_finite() => {
-            return Err(Error::invalid(source, "display_render.tracking_error_mm", "must be finite mm"))
-        }
-        e => e.unwrap_or(DVec3::ZERO),
-    };
+    let offset = tracking_offset(dr.pupil_tracking.as_deref(), dr.tracking_error_mm, source)?;
     if dr.eye_position.is_some() {
         for (given, field) in
             [(dr.pupil_tracking.is_some(), "pupil_tracking"), (dr.tracking_error_mm.is_some(), "tracking_error_mm")]
@@ -60,10 +38,55 @@ pub(super) fn pc_pupil(dr: &DisplayRenderSpec, base: &BaseEye, source: &str) -> 
         }
         return Ok(None);
     }
-    if !ideal {
+    if offset.is_none() {
         return Ok(None);
     }
     let pose = pose_of(&base.optics.model, base.gaze, base.centre_of_rotation, base.position, source)?;
-    let pupil = pose.map_or(base.position, |p| p.pupil_centre);
-    Ok((pose.is_some() || dr.tracking_error_mm.is_some()).then_some(pupil + error))
+    tracked_pupil(dr.pupil_tracking.as_deref(), dr.tracking_error_mm, pose.as_ref(), base.position, source)
+}
+
+/// The tracker's offset of `tracking` (`"ideal"`, the default, or `"none"`) and `error` (mm,
+/// only with `"ideal"`): `Some` (zero without an error) when PupilCenter follows the pupil,
+/// `None` without tracking. Errors name `source` and the field.
+fn tracking_offset(tracking: Option<&str>, error: Option<[f64; 3]>, source: &str) -> Result<Option<DVec3>> {
+    let ideal = match tracking {
+        None | Some("ideal") => true,
+        Some("none") => false,
+        Some(other) => {
+            return Err(Error::invalid(
+                source,
+                "display_render.pupil_tracking",
+                format!("`{other}` is not one of \"ideal\" or \"none\""),
+            ))
+        }
+    };
+    match error.map(DVec3::from_array) {
+        Some(_) if !ideal => Err(Error::invalid(
+            source,
+            "display_render.tracking_error_mm",
+            "is only read with pupil_tracking = \"ideal\" (a tracker's error)",
+        )),
+        Some(e) if !e.is_finite() => {
+            Err(Error::invalid(source, "display_render.tracking_error_mm", "must be finite mm"))
+        }
+        e => Ok(ideal.then(|| e.unwrap_or(DVec3::ZERO))),
+    }
+}
+
+/// The pupil centre PupilCenter renders for under `tracking` (`"ideal"`, the default, or
+/// `"none"`) with a tracker's `error` (mm, only with `"ideal"`), for an eye whose pupil centre is
+/// at `position` straight ahead and which is turned to `pose` (`None`: straight ahead). `None`
+/// when that is `position` itself (no turn and no tracking error, or no tracking). Errors name
+/// `source` and `display_render.pupil_tracking` or `display_render.tracking_error_mm`; an
+/// experiment and a resolution study both read it.
+pub fn tracked_pupil(
+    tracking: Option<&str>,
+    error: Option<[f64; 3]>,
+    pose: Option<&EyePose>,
+    position: DVec3,
+    source: &str,
+) -> Result<Option<DVec3>> {
+    let Some(offset) = tracking_offset(tracking, error, source)? else { return Ok(None) };
+    let pupil = pose.map_or(position, |p| p.pupil_centre);
+    Ok((pose.is_some() || error.is_some()).then_some(pupil + offset))
 }

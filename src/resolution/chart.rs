@@ -29,6 +29,14 @@
 //! in the direction from the pupil centre. Retina pixels of its windows are cut in the chart's
 //! own frame and carried to the eye's tangents the same way.
 //!
+//! **The eye's frame.** Everything above is the eye's own frame: its pupil centre at the origin,
+//! its line of sight along +z. A study whose eye is turned (`[eye] gaze_deg`, about its centre
+//! of rotation, [`crate::optics::eye::EyePose`]) or moved (`[eye] position`) carries the chart
+//! with it ([`Chart::seen_by`]): the chart, its plane and its windows stay on the eye's line of
+//! sight at the content distance, while the display stays where it is. A turned eye therefore
+//! measures a chart on its line of sight exactly as the eye at rest measures it on the axis; only
+//! what the display shows it differs.
+//!
 //! [`ChartField`] is the chart as a [`RadianceField`] (the plane's radiance along any ray), the
 //! one field that renders the display images and the ground truth alike.
 
@@ -104,6 +112,47 @@ pub struct Chart {
     pub field: Gaze,
     /// The rotation from the chart's own frame to the eye's; `None` on the axis.
     facing: Option<DMat3>,
+    /// The eye's frame in the display's, when the eye is turned or moved; `None`: the eye at rest
+    /// at the origin.
+    pub eye: Option<EyeFrame>,
+}
+
+/// Where the eye is: its frame (pupil centre at the origin, line of sight along +z) in the
+/// display's, `x_display = R x_eye + pupil`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EyeFrame {
+    /// The eye's rotation `R` (its gaze); `None`: looking straight ahead.
+    pub rotation: Option<DMat3>,
+    /// The pupil centre, mm (for a turned eye, where its turn has moved it).
+    pub pupil: DVec3,
+}
+
+impl EyeFrame {
+    /// The frame of an eye whose pupil centre is at `position` when it looks straight ahead,
+    /// turned by `pose` (`None`: straight ahead); `None` for the eye at rest at the origin.
+    pub fn of(position: DVec3, pose: Option<&crate::optics::eye::EyePose>) -> Option<Self> {
+        match pose {
+            Some(p) => Some(Self { rotation: Some(DMat3::from_quat(p.rotation)), pupil: p.pupil_centre }),
+            None if position == DVec3::ZERO => None,
+            None => Some(Self { rotation: None, pupil: position }),
+        }
+    }
+
+    /// A ray of the display's frame in the eye's.
+    #[inline]
+    pub fn to_eye(&self, ray: &Ray) -> Ray {
+        let o = ray.origin - self.pupil;
+        match self.rotation {
+            None => Ray { origin: o, dir: ray.dir },
+            Some(m) => Ray { origin: m.transpose() * o, dir: m.transpose() * ray.dir },
+        }
+    }
+
+    /// A direction of the eye's frame in the display's.
+    #[inline]
+    pub fn direction(&self, d: DVec3) -> DVec3 {
+        self.rotation.map_or(d, |m| m * d)
+    }
 }
 
 impl Chart {
@@ -119,7 +168,9 @@ impl Chart {
             .map(|&f| (Pattern::Grating { frequency_cpd: f }, DVec2::from(r.window_deg)))
             .collect();
         items.push((Pattern::Edge { angle_deg: r.edge_angle_deg }, DVec2::from(r.edge_window_deg)));
-        Self::layout(&items, g, ppd, study.target.mean, study.target.contrast).at_field(study.field_deg)
+        Self::layout(&items, g, ppd, study.target.mean, study.target.contrast)
+            .at_field(study.field_deg)
+            .seen_by(study.eye_place.frame())
     }
 
     /// Lays `items` (pattern, window size in degrees) out in columns, choosing the column
@@ -180,7 +231,14 @@ impl Chart {
             turn: None,
             field: Gaze::AHEAD,
             facing: None,
+            eye: None,
         }
+    }
+
+    /// This chart carried with the eye of `frame` (module documentation); `None` leaves it as it
+    /// is.
+    pub fn seen_by(self, frame: Option<EyeFrame>) -> Chart {
+        Chart { eye: frame, ..self }
     }
 
     /// This chart facing `field` (module documentation); straight ahead leaves it on the axis.
@@ -328,8 +386,9 @@ pub fn unit_at(deg: f64) -> DVec2 {
     }
 }
 
-/// The chart on the plane `z = depth` (mm from the pupil), as a radiance field: rays that meet
-/// the plane in front of them see the chart at `(x, y) / depth`; others see the grey mean.
+/// The chart on the plane `z = depth` (mm from the pupil) of the eye's frame, as a radiance
+/// field: rays that meet the plane in front of them see the chart at `(x, y) / depth`; others see
+/// the grey mean.
 pub struct ChartField<'a> {
     /// The chart.
     pub chart: &'a Chart,
@@ -340,6 +399,14 @@ pub struct ChartField<'a> {
 impl RadianceField for ChartField<'_> {
     #[inline]
     fn radiance(&self, ray: &Ray) -> DVec3 {
+        let seen;
+        let ray = match &self.chart.eye {
+            None => ray,
+            Some(frame) => {
+                seen = frame.to_eye(ray);
+                &seen
+            }
+        };
         let l = if ray.dir.z > 0.0 {
             let t = (self.depth - ray.origin.z) / ray.dir.z;
             if t > 0.0 {

@@ -10,10 +10,10 @@
 
 use std::time::Instant;
 
-use glam::DVec2;
+use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 
-use super::chart::{Chart, ChartField, Pattern};
+use super::chart::{Chart, ChartField, EyeFrame, Pattern};
 use super::study::Study;
 use super::window::{measure_windows_as, progress_steps, Grey, WindowSamples};
 use super::{edge, grating};
@@ -35,12 +35,43 @@ use crate::render::{DisplayRenderSettings, Method};
 /// the eye at the origin. The bound (triangle inequality through eq. (1), with the farthest a
 /// lenslet centre can be from a point it is nearest to) errs on the side of a larger crop.
 pub fn crop_display(display: &Display, half_tangent: DVec2, pupil_radius: f64, max_vergence: f64) -> Display {
-    let (v1, v2) = (display.eye_to_lenslets, display.lenslets_to_lcd);
+    let slope = half_tangent + DVec2::splat(pupil_radius * max_vergence.abs());
+    let x2 = DVec2::splat(pupil_radius) + slope * display.eye_to_lenslets;
+    crop_reaching(display, x2, slope)
+}
+
+/// [`crop_display`] for an eye turned or moved to `frame` (its tangents, pupil and vergences in
+/// its own frame): the eye's ray slopes in the display's frame are bounded by the images of the
+/// corners of its tangent rectangle (the gnomonic map keeps straight lines straight), its pupil
+/// points lie within `pupil_radius` of the pupil centre (a turned pupil also up to that much
+/// nearer the lenslets).
+pub fn crop_display_seen(
+    display: &Display,
+    half_tangent: DVec2,
+    pupil_radius: f64,
+    max_vergence: f64,
+    frame: &EyeFrame,
+) -> Display {
+    let h = half_tangent + DVec2::splat(pupil_radius * max_vergence.abs());
+    let mut slope = DVec2::ZERO;
+    for c in [h, -h, DVec2::new(h.x, -h.y), DVec2::new(-h.x, h.y)] {
+        let d = frame.direction(DVec3::new(c.x, c.y, 1.0));
+        // A direction at or beyond 90 degrees from the axis never reaches the display: the whole
+        // panel.
+        slope = slope.max(if d.z > 0.0 { (d.truncate() / d.z).abs() } else { DVec2::splat(f64::INFINITY) });
+    }
+    let depth = display.eye_to_lenslets - frame.pupil.z + pupil_radius;
+    let x2 = frame.pupil.truncate().abs() + DVec2::splat(pupil_radius) + slope * depth;
+    crop_reaching(display, x2, slope)
+}
+
+/// The centred crop of `display` holding every LCD point of rays that meet the lenslet plane
+/// within `x2` (per axis, mm) with slopes within `slope`.
+fn crop_reaching(display: &Display, x2: DVec2, slope: DVec2) -> Display {
+    let v2 = display.lenslets_to_lcd;
     let m = display.lenslets.reduced_matrix();
     // A point is at most half the two basis vectors' lengths from its nearest centre.
     let cell = 0.5 * (m.x_axis.abs() + m.y_axis.abs());
-    let slope = half_tangent + DVec2::splat(pupil_radius * max_vergence.abs());
-    let x2 = DVec2::splat(pupil_radius) + slope * v1;
     let mut lcd = x2 + (slope + cell / display.focal_length) * v2;
     if let Some(t) = display.thick_lenslet() {
         // A real lenslet: the LCD is a thickness farther, and its shortest focal length over the
@@ -52,6 +83,9 @@ pub fn crop_display(display: &Display, half_tangent: DVec2, pupil_radius: f64, m
     let res = display.lcd.resolution;
     let pixels = |i: usize, half: f64| -> usize {
         let full = res[i];
+        if !half.is_finite() {
+            return full;
+        }
         // Pixels either side of the centre, plus two; the parity of the full panel keeps the grid.
         let mut n = 2 * ((half / pitch[i]).ceil() as usize + 2);
         if full % 2 == 1 {
@@ -266,6 +300,8 @@ impl StudySetup {
             .map(|(i, &focus)| {
                 let mut eye = Eye::thin_lens(study.pupil_diameter_mm, Focus::Diopters(focus), 8);
                 eye.retina_distance = study.retina_distance_mm;
+                eye.position = study.eye_place.position;
+                eye.pose = study.eye_place.pose;
                 eye.optics = EyeOptics::build(
                     &study.eye_optics,
                     &eye.aperture,
@@ -292,11 +328,16 @@ impl StudySetup {
             DVec2::ZERO
         };
         let schematic = eyes.iter().any(|e| e.optics.as_ref().is_some_and(|o| o.schematic().is_some()));
+        let frame = study.eye_place.frame();
         let crop = |half: DVec2| {
-            if schematic {
-                crop_display(&study.display, half * 1.25 + 0.02 + diffraction, radius * 1.3, max_vergence + 0.003)
+            let (half, radius, vergence) = if schematic {
+                (half * 1.25 + 0.02 + diffraction, radius * 1.3, max_vergence + 0.003)
             } else {
-                crop_display(&study.display, half + diffraction, radius, max_vergence)
+                (half + diffraction, radius, max_vergence)
+            };
+            match &frame {
+                None => crop_display(&study.display, half, radius, vergence),
+                Some(f) => crop_display_seen(&study.display, half, radius, vergence, f),
             }
         };
         let display = crop(half);
@@ -350,7 +391,8 @@ pub fn run_study(study: &Study, quiet: bool) -> Result<StudyResults> {
     let turned_focuses = if study.orientations_through_focus { nf } else { 1 };
     let mut timings = vec![Timing { stage: "chart and LCD crop".into(), seconds: t.elapsed().as_secs_f64() }];
 
-    let settings = DisplayRenderSettings::default();
+    // PupilCenter renders for the pupil the study's tracking says (the origin by default).
+    let settings = DisplayRenderSettings { eye_position: study.eye_place.pupil_center, ..Default::default() };
     // A study states no [optimize]: OPT trains on the paper's eye states.
     let training =
         study.methods.contains(&Method::Optimized).then(|| Optimization::paper_default(settings.eye_position));

@@ -163,6 +163,10 @@ pub struct StudySpec {
     /// only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub optics: Option<crate::optics::diffraction::OpticsSpec>,
+    /// `[display_render]`: the pupil PupilCenter renders for when the eye turns (absent: the
+    /// turned pupil, ideal tracking).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub display_render: Option<super::field::StudyRenderSpec>,
 }
 
 fn no_values() -> Values {
@@ -237,6 +241,13 @@ pub struct Study {
     /// The eye beyond the thin lens they ask for.
     #[serde(skip)]
     pub eye_optics: crate::optics::eye::EyeOpticsSpec,
+    /// Where the eye is (`[eye] gaze_deg`, `centre_of_rotation_mm`, `position`) and the pupil
+    /// PupilCenter renders for; the chart goes with the eye.
+    #[serde(skip)]
+    pub eye_place: super::field::EyePlacement,
+    /// `[display_render]` as the file gave it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub display_render: Option<super::field::StudyRenderSpec>,
     /// What predicts the eye's focus.
     pub accommodation: AccommodationSpec,
     /// The display-limit settings.
@@ -306,6 +317,17 @@ impl Study {
         let (pupil, auto_pupil) = eye.study_pupil(spec.pupil_diameter_mm, spec.target.mean, &display, source)?;
         check_listed_frequencies(spec, source, &frequencies)?;
         let orientations = study_orientations(spec, source)?;
+        let eye_optics = eye.optics_spec(pupil, source, "eye.")?.with_diffraction(
+            spec.optics.as_ref().map(|o| o.diffraction).unwrap_or_default(),
+            spec.eye.as_ref().is_some_and(|e| e.spectrum.is_some()),
+        );
+        let eye_place = super::field::EyePlacement::resolve(
+            &eye,
+            spec.display_render.as_ref(),
+            &eye_optics.model,
+            (&display, &methods),
+            source,
+        )?;
         let study = Study {
             name: spec.name.clone(),
             description: spec.description.clone(),
@@ -329,10 +351,9 @@ impl Study {
             retina_nyquist_cpd: nyquist,
             measurement: spec.measurement,
             eye: spec.eye.clone(),
-            eye_optics: spec.eye.clone().unwrap_or_default().optics_spec(pupil, source, "eye.")?.with_diffraction(
-                spec.optics.as_ref().map(|o| o.diffraction).unwrap_or_default(),
-                spec.eye.as_ref().is_some_and(|e| e.spectrum.is_some()),
-            ),
+            eye_optics,
+            eye_place,
+            display_render: spec.display_render.clone(),
             accommodation: spec.accommodation,
             limits: spec.limits.clone(),
         };

@@ -120,6 +120,9 @@ impl EyeSpec {
             stiles_crawford_peak: self.stiles_crawford_peak,
             age: None,
             adapted_eyes: None,
+            gaze_deg: None,
+            centre_of_rotation_mm: None,
+            position: None,
         };
         m.optics_spec(pupil_diameter, source, "eye.")
     }
@@ -190,6 +193,16 @@ pub struct EyeModelSettings {
     /// See [`EyeSpec::adapted_eyes`].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub adapted_eyes: Option<u8>,
+    /// A study's gaze, see [`EyeSpec::gaze_deg`] (the chart goes with the eye,
+    /// `resolution::chart`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gaze_deg: Option<[f64; 2]>,
+    /// A study's centre of rotation, see [`EyeSpec::centre_of_rotation_mm`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub centre_of_rotation_mm: Option<f64>,
+    /// A study's pupil centre straight ahead, mm, see [`EyeSpec::position`] (absent: the origin).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub position: Option<[f64; 3]>,
 }
 
 impl EyeModelSettings {
