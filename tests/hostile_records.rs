@@ -104,7 +104,7 @@ fn records_are_checked_against_their_points_settings() {
     let store = Store::open(&out).unwrap();
     let RecordState::Complete(good) = store.state(&resolved[0]) else { panic!("point 0 is not complete") };
     assert_eq!(store.state(&resolved[1]), RecordState::Missing);
-    let path = out.join("points").join(format!("{}.json", resolved[0].id));
+    let path = out.join("points").join(format!("{}.json", resolved[0].id()));
     let cases: Vec<(&str, Box<Edit>)> = vec![
         ("SSIM", Box::new(|v| v["scores"][0]["ssim"] = "1.5".into())),
         ("PSNR", Box::new(|v| v["scores"][0]["psnr_db"] = "-inf".into())),

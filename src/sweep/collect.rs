@@ -12,13 +12,13 @@ use serde_json::json;
 
 use super::plots::{write_plots, PlotRow};
 use super::store::{PointRecord, RecordState, ScoreRow, Store};
+use super::PointSpec;
 use super::Sweep;
 use crate::error::{Error, Result};
 use crate::io::csv_table::CsvTable;
 use crate::io::output::write_atomic;
 use crate::overrides::value_text;
 use crate::perception::ScoreName;
-use crate::settings::Resolved;
 
 /// What a collection found and wrote.
 #[derive(Clone, Debug, Default)]
@@ -46,7 +46,7 @@ pub struct Collected {
 
 /// Writes `sweep.csv`, `sweep.json` and the plots into the sweep's folder from the records
 /// there. `resolved` are the sweep's points, resolved (see [`Sweep::resolve`]).
-pub fn collect(sweep: &Sweep, resolved: &[Resolved], store: &Store) -> Result<Collected> {
+pub fn collect(sweep: &Sweep, resolved: &[PointSpec], store: &Store) -> Result<Collected> {
     let states: Vec<RecordState> = resolved.iter().map(|r| store.state(r)).collect();
     let mut invalid = Vec::new();
     for (p, st) in sweep.points.iter().zip(&states) {
@@ -68,7 +68,11 @@ pub fn collect(sweep: &Sweep, resolved: &[Resolved], store: &Store) -> Result<Co
         invalid,
         ..Default::default()
     };
-    let (csv, plot_rows) = sweep_csv(sweep, resolved, &records, &keys, &mut out);
+    let (csv, plot_rows) = if sweep.study().is_some() {
+        study_csv(sweep, resolved, &records, &keys, &mut out)
+    } else {
+        sweep_csv(sweep, resolved, &records, &keys, &mut out)
+    };
     write_text(&out.csv, &csv)?;
     let text = sweep_json(sweep, resolved, &records, &out)?;
     write_text(&out.json, &text)?;
@@ -94,7 +98,7 @@ fn extra_scores(records: &[Option<PointRecord>]) -> Vec<ScoreName> {
 /// missing their targets into `out`.
 fn sweep_csv(
     sweep: &Sweep,
-    resolved: &[Resolved],
+    resolved: &[PointSpec],
     records: &[Option<PointRecord>],
     keys: &[String],
     out: &mut Collected,
@@ -136,7 +140,7 @@ fn sweep_csv(
             .collect();
         let xs: Vec<Option<f64>> = point.values.iter().map(|(_, v)| number(v)).collect();
         for s in &rec.scores {
-            let row = [point.index.to_string(), r.id.to_string()]
+            let row = [point.index.to_string(), r.id().to_string()]
                 .into_iter()
                 .chain(values.iter().cloned())
                 .chain([
@@ -162,7 +166,56 @@ fn sweep_csv(
                     out.missed_points.push(point.index);
                 }
             }
-            plot_rows.push(PlotRow { xs: xs.clone(), score: s.clone() });
+            plot_rows.push(PlotRow::of_score(xs.clone(), s));
+        }
+    }
+    (csv.finish(), plot_rows)
+}
+
+/// `sweep.csv` of a study's sweep and the plots' rows: one row per point, source and content
+/// depth, the MTF50 with the eye on the content and its 95% half-width as the study's
+/// `mtf50.csv` writes them (empty where the MTF stays above 0.5 up to the retina's Nyquist
+/// frequency); counts the points complete and missing into `out`.
+fn study_csv(
+    sweep: &Sweep,
+    resolved: &[PointSpec],
+    records: &[Option<PointRecord>],
+    keys: &[String],
+    out: &mut Collected,
+) -> (String, Vec<PlotRow>) {
+    let mut csv = CsvTable::new();
+    let columns =
+        ["source", "content_diopters", "mtf50_cpd", "mtf50_ci95", "samples_per_pixel", "replicates", "seconds"];
+    csv.row(["point", "id"].into_iter().chain(keys.iter().map(|k| k.as_str())).chain(columns));
+    let mut plot_rows = Vec::new();
+    let n = super::study::number;
+    for ((point, r), rec) in sweep.points.iter().zip(resolved).zip(records) {
+        let Some(rec) = rec else {
+            out.missing.push(point.index);
+            continue;
+        };
+        out.complete += 1;
+        let values: Vec<String> = point
+            .values
+            .iter()
+            .map(|(_, v)| match v {
+                toml::Value::String(s) => s.clone(),
+                other => value_text(other),
+            })
+            .collect();
+        let xs: Vec<Option<f64>> = point.values.iter().map(|(_, v)| number(v)).collect();
+        for m in &rec.mtf50 {
+            csv.row([point.index.to_string(), r.id().to_string()].into_iter().chain(values.iter().cloned()).chain([
+                m.source.clone(),
+                n(m.content_diopters),
+                n(m.mtf50_cpd),
+                n(m.mtf50_ci95),
+                m.samples_per_pixel.to_string(),
+                m.replicates.to_string(),
+                rec.seconds.to_string(),
+            ]));
+            out.rows += 1;
+            plot_rows.push(PlotRow::of_mtf50(xs.clone(), m));
         }
     }
     (csv.finish(), plot_rows)
@@ -190,11 +243,16 @@ fn extra_cells(s: &ScoreRow, extra: &[ScoreName]) -> Vec<String> {
 /// `sweep.json`: the sweep, its resolved base, its axes and every point with its scores.
 fn sweep_json(
     sweep: &Sweep,
-    resolved: &[Resolved],
+    resolved: &[PointSpec],
     records: &[Option<PointRecord>],
     out: &Collected,
 ) -> Result<String> {
     let base = sweep.resolve_base()?;
+    let (base_document, base_id) = match &base {
+        PointSpec::Experiment(r) => (serde_json::to_value(&r.document).unwrap_or_default(), r.id.clone()),
+        PointSpec::Study(s) => (serde_json::to_value(&s.study).unwrap_or_default(), s.id.clone()),
+    };
+    let args = if sweep.study().is_some() { "resolution_args" } else { "assess_args" };
     let points: Vec<serde_json::Value> = sweep
         .points
         .iter()
@@ -208,17 +266,19 @@ fn sweep_json(
                 .collect();
             let mut point = json!({
                 "index": p.index,
-                "id": r.id,
+                "id": r.id(),
                 "values": values,
                 "complete": rec.is_some(),
-                "assess_args": sweep.assess_args(p),
             });
+            point[args] = json!(sweep.assess_args(p));
             // Only for a record that cannot count, so sweeps without one are written as before.
             if let Some((_, why)) = out.invalid.iter().find(|(i, _)| *i == p.index) {
                 point["invalid_record"] = json!(why);
             }
             // Every score row of the point with its precision, as in its record and sweep.csv.
-            if let Some(rec) = rec {
+            if let Some(rec) = rec.as_ref().filter(|_| sweep.study().is_some()) {
+                point["mtf50"] = serde_json::to_value(&rec.mtf50).unwrap_or_default();
+            } else if let Some(rec) = rec {
                 point["scores"] = serde_json::to_value(&rec.scores).unwrap_or_default();
                 point["targets_missed"] = json!(rec.scores.iter().filter(|s| s.missed()).count());
             }
@@ -249,8 +309,8 @@ fn sweep_json(
             sweep.spec.base().join(&sweep.spec.experiment).display().to_string()
         },
         "set": sweep.spec.set.iter().chain(&sweep.overrides).map(|o| o.to_arg()).collect::<Vec<_>>(),
-        "base": serde_json::to_value(&base.document).unwrap_or_default(),
-        "base_id": base.id,
+        "base": base_document,
+        "base_id": base_id,
         "axes": axes,
         "point_count": sweep.points.len(),
         "complete": out.complete,
@@ -259,6 +319,13 @@ fn sweep_json(
         "points_missing_target": out.missed_points,
         "points": points,
     });
+    let mut doc = doc;
+    if let Some((study, file)) = sweep.study() {
+        doc["experiment"] = serde_json::Value::Null;
+        doc["experiment_file"] = serde_json::Value::Null;
+        doc["study"] = json!(study);
+        doc["study_file"] = json!(file);
+    }
     serde_json::to_string_pretty(&doc).map_err(|e| Error::serialize("serialise sweep.json", e))
 }
 

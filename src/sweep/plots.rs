@@ -1,6 +1,7 @@
 //! A sweep's plots (PNG and SVG): each Table 1 score (Sec. 4.2: PSNR, SSIM) and each extra
-//! score the experiment names (luminance PSNR, ColorVideoVDP's JOD, HDR-FLIP) against each
-//! numeric axis, one series per method. Every point and eye case is a dot (with its 95%
+//! score the experiment names (luminance PSNR, ColorVideoVDP's JOD, HDR-FLIP), or a study's
+//! MTF50 ([`super::study`]), against each numeric axis, one series per method (a study's: per
+//! source and content depth). Every point and eye case is a dot (with its 95%
 //! interval when the measurement gives one); the line joins the mean at each axis value over
 //! the other axes and the eye cases. For every pair of numeric axes (a 2-D sweep), the same
 //! score against one axis with one line per value of the other (`_by_`), and a heatmap per
@@ -19,28 +20,68 @@ use crate::error::{Error, Result};
 use crate::perception::ScoreName;
 
 /// One row of `sweep.csv` as the plots see it: the value of every swept key (`None` where it
-/// is not a number) and the scores.
+/// is not a number), the series it belongs to (a method; a study's source at a content depth)
+/// and its values with their 95% half-widths.
 #[derive(Clone, Debug)]
 pub struct PlotRow {
     /// The value of every swept key, in the keys' order (`None`: not a number).
     pub xs: Vec<Option<f64>>,
-    /// The point's score of one method and eye case.
-    pub score: ScoreRow,
+    /// The series: the method (`LC`), or a study's source at a content depth (`LC 2.5D`).
+    pub method: String,
+    /// Each score of the row: its value (finite) and 95% half-width (finite), if measured.
+    values: Vec<(Metric, Option<(f64, Option<f64>)>)>,
 }
 
-/// A score plotted: PSNR, SSIM or one of the extra scores `[measurement] scores` names.
-#[derive(Clone, Copy)]
+impl PlotRow {
+    /// The row of an experiment's point: one method under one eye case.
+    pub fn of_score(xs: Vec<Option<f64>>, s: &ScoreRow) -> Self {
+        let mut values =
+            vec![(Metric::Psnr, finite(s.psnr_db, s.psnr_ci95_db)), (Metric::Ssim, finite(s.ssim, s.ssim_ci95))];
+        values.extend(s.perceptual.iter().map(|(n, e)| (Metric::Extra(*n), finite(e.value, e.ci95))));
+        Self { xs, method: s.method.clone(), values }
+    }
+
+    /// The row of a study's point: one source's MTF50 at one content depth.
+    pub fn of_mtf50(xs: Vec<Option<f64>>, r: &super::study::Mtf50Row) -> Self {
+        let values = vec![(Metric::Mtf50, finite(r.mtf50_cpd, Some(r.mtf50_ci95)))];
+        Self { xs, method: format!("{} {}D", r.source, r.content_diopters), values }
+    }
+}
+
+/// A value and its half-width as a plot takes them: PSNR of identical images (inf), an MTF50
+/// beyond the retina's Nyquist frequency (NaN) are left out.
+fn finite(v: f64, ci: Option<f64>) -> Option<(f64, Option<f64>)> {
+    v.is_finite().then_some((v, ci.filter(|c| c.is_finite())))
+}
+
+/// A score plotted: PSNR, SSIM, one of the extra scores `[measurement] scores` names, or a
+/// study's MTF50.
+#[derive(Clone, Copy, Debug, PartialEq)]
 enum Metric {
     Psnr,
     Ssim,
     Extra(ScoreName),
+    Mtf50,
 }
 
 impl Metric {
-    /// PSNR, SSIM and every extra score of any row, in report order.
+    /// Every score of any row, in report order (PSNR, SSIM, the extra scores; MTF50).
     fn all(rows: &[PlotRow]) -> Vec<Metric> {
-        let extra: BTreeSet<ScoreName> = rows.iter().flat_map(|r| r.score.perceptual.keys().copied()).collect();
-        [Metric::Psnr, Metric::Ssim].into_iter().chain(extra.into_iter().map(Metric::Extra)).collect()
+        let extra: BTreeSet<ScoreName> = rows
+            .iter()
+            .flat_map(|r| r.values.iter())
+            .filter_map(|(m, _)| match m {
+                Metric::Extra(n) => Some(*n),
+                _ => None,
+            })
+            .collect();
+        let has = |m: Metric| rows.iter().any(|r| r.values.iter().any(|(n, _)| *n == m));
+        [Metric::Psnr, Metric::Ssim]
+            .into_iter()
+            .filter(|m| has(*m))
+            .chain(extra.into_iter().map(Metric::Extra))
+            .chain([Metric::Mtf50].into_iter().filter(|m| has(*m)))
+            .collect()
     }
 
     fn name(self) -> &'static str {
@@ -48,6 +89,7 @@ impl Metric {
             Metric::Psnr => "psnr",
             Metric::Ssim => "ssim",
             Metric::Extra(n) => n.name(),
+            Metric::Mtf50 => "mtf50",
         }
     }
 
@@ -58,6 +100,7 @@ impl Metric {
             Metric::Extra(ScoreName::Cvvdp) => "ColorVideoVDP (JOD)",
             Metric::Extra(ScoreName::Flip) => "HDR-FLIP",
             Metric::Extra(_) => "luminance PSNR (dB)",
+            Metric::Mtf50 => "MTF50 (cpd)",
         }
     }
 
@@ -65,7 +108,7 @@ impl Metric {
     fn least_pad(self) -> f64 {
         match self {
             Metric::Psnr | Metric::Extra(ScoreName::PsnrLuminance) => 0.2,
-            Metric::Extra(ScoreName::Cvvdp) => 0.02,
+            Metric::Extra(ScoreName::Cvvdp) | Metric::Mtf50 => 0.02,
             _ => 0.002,
         }
     }
@@ -74,20 +117,15 @@ impl Metric {
     fn text(self, v: f64, cell: bool) -> String {
         let digits = match self {
             Metric::Psnr | Metric::Extra(ScoreName::PsnrLuminance) => 1,
-            Metric::Extra(ScoreName::Cvvdp) => 2,
+            Metric::Extra(ScoreName::Cvvdp) | Metric::Mtf50 => 2,
             _ => 3,
         };
         format!("{v:.*}", digits + cell as usize)
     }
 
-    /// The value and its 95% half-width; PSNR of identical images (inf) is left out.
-    fn of(self, s: &ScoreRow) -> Option<(f64, Option<f64>)> {
-        let (v, ci) = match self {
-            Metric::Psnr => (s.psnr_db, s.psnr_ci95_db),
-            Metric::Ssim => (s.ssim, s.ssim_ci95),
-            Metric::Extra(n) => s.perceptual.get(&n).map(|e| (e.value, e.ci95))?,
-        };
-        v.is_finite().then_some((v, ci.filter(|c| c.is_finite())))
+    /// The value and its 95% half-width in `row`, if it has this score.
+    fn of(self, row: &PlotRow) -> Option<(f64, Option<f64>)> {
+        row.values.iter().find(|(m, _)| *m == self).and_then(|(_, v)| *v)
     }
 }
 
@@ -148,8 +186,8 @@ pub fn write_plots(dir: &Path, keys: &[String], axes: &[usize], rows: &[PlotRow]
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     let mut methods: Vec<String> = Vec::new();
     for r in rows {
-        if !methods.contains(&r.score.method) {
-            methods.push(r.score.method.clone());
+        if !methods.contains(&r.method) {
+            methods.push(r.method.clone());
         }
     }
     let metrics = Metric::all(rows);
@@ -257,10 +295,10 @@ where
     // (x, value, half-width) per method, methods in order of appearance.
     let mut methods: Vec<(String, Vec<Dot>)> = Vec::new();
     for r in rows {
-        let (Some(x), Some((v, ci))) = (r.xs[k], metric.of(&r.score)) else { continue };
-        match methods.iter_mut().find(|(m, _)| *m == r.score.method) {
+        let (Some(x), Some((v, ci))) = (r.xs[k], metric.of(r)) else { continue };
+        match methods.iter_mut().find(|(m, _)| *m == r.method) {
             Some((_, pts)) => pts.push((x, v, ci)),
-            None => methods.push((r.score.method.clone(), vec![(x, v, ci)])),
+            None => methods.push((r.method.clone(), vec![(x, v, ci)])),
         }
     }
     let all = methods.iter().flat_map(|(_, p)| p.iter());
@@ -317,10 +355,10 @@ fn mean_at(
     let (mut sum, mut n) = (0.0, 0usize);
     for r in rows {
         let at = |key: usize, v: f64| r.xs.get(key).copied().flatten() == Some(v);
-        if r.score.method != method || !at(k, x) || by.is_some_and(|(j, y)| !at(j, y)) {
+        if r.method != method || !at(k, x) || by.is_some_and(|(j, y)| !at(j, y)) {
             continue;
         }
-        if let Some((v, _)) = metric.of(&r.score) {
+        if let Some((v, _)) = metric.of(r) {
             sum += v;
             n += 1;
         }
@@ -352,8 +390,8 @@ where
     xs.dedup();
     let mut methods: Vec<String> = Vec::new();
     for r in rows {
-        if !methods.contains(&r.score.method) {
-            methods.push(r.score.method.clone());
+        if !methods.contains(&r.method) {
+            methods.push(r.method.clone());
         }
     }
     // (method index, index of the value of j, line)

@@ -18,7 +18,9 @@ use crate::raster::RgbImage;
 use crate::render::retina::DisplayStack;
 use crate::render::{with_scene_fields, BackendChoice, FieldUser, Method, RadianceField};
 use crate::scene::Scene;
-use crate::settings::{hash_json, Resolved};
+use crate::settings::hash_json;
+
+use super::PointSpec;
 
 /// How points run.
 #[derive(Clone, Copy, Debug, Default)]
@@ -79,7 +81,7 @@ type SceneJobs = (String, Scene, Vec<Job>);
 /// Builds (and so validates) the experiments of the points `todo`, each scene once; each
 /// point's provenance is `inputs` with the files its scene read and its own values.
 fn build(
-    resolved: &[Resolved],
+    resolved: &[PointSpec],
     values: &[Vec<String>],
     todo: &[usize],
     inputs: &SweepInputs,
@@ -89,7 +91,7 @@ fn build(
     let mut warnings = Vec::new();
     let mut unit_mistakes: Vec<(String, String, Vec<usize>)> = Vec::new();
     for &i in todo {
-        let r = &resolved[i];
+        let Some(r) = resolved[i].resolved() else { continue };
         let slot = match scenes.iter().position(|(key, _, _)| *key == r.scene_key) {
             Some(s) => s,
             None => {
@@ -137,17 +139,22 @@ fn build(
 
 /// Builds every point's experiment, as a run would, and reports the first invalid one (before
 /// a sweep is submitted anywhere).
-pub fn validate(resolved: &[Resolved]) -> Result<()> {
+pub fn validate(resolved: &[PointSpec]) -> Result<()> {
     point_costs(resolved).map(|_| ())
 }
 
 /// `sweep --check`: builds (and so validates) every point's experiment and checks its memory
 /// estimate ([`experiment::check`]); returns the rays of all points and what building them
 /// noticed (a scene's warnings). Nothing runs.
-pub fn check_points(resolved: &[Resolved]) -> Result<(u64, Vec<String>)> {
+pub fn check_points(resolved: &[PointSpec]) -> Result<(u64, Vec<String>)> {
+    let mut rays = 0u64;
+    for p in resolved {
+        if let PointSpec::Study(s) = p {
+            rays = rays.saturating_add(super::study::check_point(s)?);
+        }
+    }
     let all: Vec<usize> = (0..resolved.len()).collect();
     let (scenes, warnings) = build(resolved, &[], &all, &SweepInputs::default())?;
-    let mut rays = 0u64;
     for job in scenes.iter().flat_map(|(_, _, jobs)| jobs) {
         rays = rays.saturating_add(experiment::check(&job.exp)?.rays);
     }
@@ -156,10 +163,15 @@ pub fn check_points(resolved: &[Resolved]) -> Result<(u64, Vec<String>)> {
 
 /// Builds (and so validates) every point's experiment and returns its estimated cost: the rays
 /// its display images and its retinal images trace ([`experiment::estimate`]), by index.
-pub fn point_costs(resolved: &[Resolved]) -> Result<Vec<u64>> {
+pub fn point_costs(resolved: &[PointSpec]) -> Result<Vec<u64>> {
     let all: Vec<usize> = (0..resolved.len()).collect();
     let (scenes, _) = build(resolved, &[], &all, &SweepInputs::default())?;
     let mut costs = vec![0; resolved.len()];
+    for (i, p) in resolved.iter().enumerate() {
+        if let PointSpec::Study(s) = p {
+            costs[i] = super::study::point_rays(s)?;
+        }
+    }
     for job in scenes.iter().flat_map(|(_, _, jobs)| jobs) {
         costs[job.index] = experiment::estimate(&job.exp).rays;
     }
@@ -171,7 +183,7 @@ pub fn point_costs(resolved: &[Resolved]) -> Result<Vec<u64>> {
 /// first one runs; what building them noticed (a scene's warnings, a likely unit mistake) goes to
 /// `log` before any point runs.
 pub fn run_points(
-    resolved: &[Resolved],
+    resolved: &[PointSpec],
     values: &[Vec<String>],
     selection: &[usize],
     store: &Store,
@@ -188,7 +200,7 @@ pub fn run_points(
     let todo: Vec<usize> = selection
         .iter()
         .copied()
-        .filter(|&i| seen.insert(resolved[i].id.clone()))
+        .filter(|&i| seen.insert(resolved[i].id().to_string()))
         .filter(|&i| match store.state(&resolved[i]) {
             super::store::RecordState::Complete(_) => false,
             super::store::RecordState::Missing => true,
@@ -200,6 +212,12 @@ pub fn run_points(
         .collect();
     summary.redone = redone;
     summary.already_complete = selection.len() - todo.len();
+    if resolved.iter().any(|p| matches!(p, PointSpec::Study(_))) {
+        run_study_points(resolved, values, &todo, store, opts.quiet)?;
+        summary.ran = todo.len();
+        summary.seconds = start.elapsed().as_secs_f64();
+        return Ok(summary);
+    }
     let (scenes, warnings) = build(resolved, values, &todo, inputs)?;
     for w in &warnings {
         log(format!("warning: {w}"));
@@ -226,6 +244,37 @@ pub fn run_points(
     summary.ran = todo.len();
     summary.seconds = start.elapsed().as_secs_f64();
     Ok(summary)
+}
+
+/// The points `todo` of a study's sweep, one after another (each study runs on all threads),
+/// each recorded as soon as it is done. Every point's setup is checked before the first runs.
+fn run_study_points(
+    resolved: &[PointSpec],
+    values: &[Vec<String>],
+    todo: &[usize],
+    store: &Store,
+    quiet: bool,
+) -> Result<()> {
+    let points: Vec<(usize, &super::study::StudyPoint)> = todo
+        .iter()
+        .filter_map(|&i| match &resolved[i] {
+            PointSpec::Study(s) => Some((i, &**s)),
+            PointSpec::Experiment(_) => None,
+        })
+        .collect();
+    let mut rays = 0u64;
+    for (_, p) in &points {
+        rays = rays.saturating_add(super::study::check_point(p)?);
+    }
+    crate::long_run::announce(rays);
+    let progress = Progress::new(points.len() as u64, "sweep points", quiet);
+    for (i, p) in points {
+        let record = super::study::run_point(p, i, values.get(i).map(Vec::as_slice).unwrap_or_default())?;
+        store.write(&record)?;
+        progress.inc(1);
+    }
+    progress.finish();
+    Ok(())
 }
 
 /// A full `assess` of one point into `points/<id>/`, then its record.
@@ -256,6 +305,7 @@ fn record(job: &Job, scores: &[Score], elapsed: Duration, backend: &str) -> Poin
         finished_unix: unix_now(),
         version: env!("CARGO_PKG_VERSION").to_string(),
         provenance: Some(Box::new(job.exp.provenance.clone())),
+        mtf50: Vec::new(),
     }
 }
 

@@ -12,11 +12,11 @@ use std::time::Duration;
 
 use super::spec::format_selection;
 use super::store::Store;
+use super::PointSpec;
 use super::Sweep;
 use crate::error::{Error, Result};
 use crate::progress::Progress;
 use crate::render::BackendChoice;
-use crate::settings::Resolved;
 
 /// How to submit.
 #[derive(Clone, Debug)]
@@ -86,7 +86,7 @@ pub struct Submission {
 /// writes nothing.
 pub fn submit(
     sweep: &Sweep,
-    resolved: &[Resolved],
+    resolved: &[PointSpec],
     costs: &[u64],
     store: &Store,
     opts: &SlurmOptions,
@@ -100,7 +100,7 @@ pub fn submit(
         .points
         .iter()
         .map(|p| p.index)
-        .filter(|&i| seen.insert(resolved[i].id.clone()) && store.record_of(&resolved[i]).is_none())
+        .filter(|&i| seen.insert(resolved[i].id().to_string()) && store.record_of(&resolved[i]).is_none())
         .collect();
     let (chunks, task_costs) = balance(&missing, costs, opts.array_max);
     let mut sub =
@@ -231,7 +231,7 @@ const HOPELESS_POLLS: usize = 3;
 /// Waits until job `job` has no task pending or running, showing the points recorded so far.
 /// A task pending for a reason that cannot clear (`reason_never_clears`) stops the wait with
 /// an error naming the reason (the job stays queued; `scancel` removes it).
-pub fn wait_for(job: &str, resolved: &[Resolved], points: &[usize], store: &Store, quiet: bool) -> Result<()> {
+pub fn wait_for(job: &str, resolved: &[PointSpec], points: &[usize], store: &Store, quiet: bool) -> Result<()> {
     let progress = Progress::new(points.len() as u64, &format!("slurm job {job}"), quiet);
     let mut shown = 0;
     let mut failures = 0;

@@ -39,7 +39,10 @@ struct SweepFile {
     name: Option<String>,
     #[serde(default)]
     description: Option<String>,
-    experiment: String,
+    #[serde(default)]
+    experiment: Option<String>,
+    #[serde(default)]
+    study: Option<String>,
     #[serde(default)]
     images: bool,
     #[serde(default)]
@@ -94,8 +97,12 @@ pub struct SweepSpec {
     pub name: String,
     /// One line for reports.
     pub description: Option<String>,
-    /// The base experiment as written (a path relative to the sweep file, or `builtin:paper`).
+    /// The base experiment as written (a path relative to the sweep file, or `builtin:paper`);
+    /// empty when the sweep names a study.
     pub experiment: String,
+    /// The base resolution study as written (a path relative to the sweep file, or
+    /// `builtin:paper`), in place of an experiment: each point runs `inimtrace resolution`.
+    pub study: Option<String>,
     /// Write every point's images too.
     pub images: bool,
     /// `[set]`, in order, paths relative to the sweep file.
@@ -204,11 +211,33 @@ impl SweepSpec {
             }
             axes.push(Axis { keys });
         }
+        let (experiment, study) = match (file.experiment, file.study) {
+            (Some(e), None) => (e, None),
+            (None, Some(s)) => (String::new(), Some(s)),
+            (Some(_), Some(_)) => {
+                return Err(Error::invalid(&src, "study", "give `experiment` or `study`, not both"));
+            }
+            (None, None) => {
+                return Err(Error::invalid(
+                    &src,
+                    "experiment",
+                    "missing: name the base `experiment` (or a resolution `study`) the points change",
+                ));
+            }
+        };
+        if file.images && study.is_some() {
+            return Err(Error::invalid(
+                &src,
+                "images",
+                "a study sweep writes tables only (run `inimtrace resolution` on a point for its files)",
+            ));
+        }
         let spec = Self {
             path: path.to_path_buf(),
             name,
             description: file.description,
-            experiment: file.experiment,
+            experiment,
+            study,
             images: file.images,
             set,
             axes,
@@ -443,6 +472,8 @@ mod tests {
             ("experiment = \"x\"\nname = \"../up\"\n", vec!["name"]),
             ("experiment = \"x\"\naxis = []\n", vec!["unknown field `axis`"]),
             ("[[axes]]\na = [1]\n", vec!["experiment"]),
+            ("experiment = \"x\"\nstudy = \"y\"\n", vec!["study", "not both"]),
+            ("study = \"y\"\nimages = true\n", vec!["images"]),
         ] {
             let e = spec(text).unwrap_err().to_string();
             for w in words {

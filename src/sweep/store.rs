@@ -12,12 +12,12 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
+use super::PointSpec;
 use crate::error::{Error, Result};
 use crate::experiment::Score;
 use crate::io::output::{read_regular, write_atomic, TEMP_PREFIX};
 use crate::perception::{PerceptualScores, ScalarEstimate, ScoreName};
 use crate::render::Method;
-use crate::settings::Resolved;
 
 /// One score row of a point: a method under an eye case. PSNR in dB (`inf` for identical
 /// images); the 95% half-widths are present when the experiment's measurement gives them.
@@ -162,8 +162,12 @@ pub struct PointRecord {
     pub index: usize,
     /// The swept values, as `KEY=VALUE` in TOML syntax.
     pub values: Vec<String>,
-    /// Table 1 of the point: every method under every eye case.
+    /// Table 1 of the point: every method under every eye case (a point of an experiment).
     pub scores: Vec<ScoreRow>,
+    /// Every source's MTF50 per content depth, the eye on the content (a point of a resolution
+    /// study, [`super::study`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub mtf50: Vec<super::study::Mtf50Row>,
     /// Wall time of the point: its own stages plus its share of the display images it shared.
     pub seconds: f64,
     /// The intersection backend that ran.
@@ -188,7 +192,7 @@ impl PointRecord {
     /// Why this record cannot be the complete record of the point `r`, if it cannot: another
     /// format, another point's settings hash, a method or eye case the point does not have (or
     /// one of its rows missing), a score that is not a number or out of its range.
-    pub fn problem(&self, r: &Resolved) -> Option<String> {
+    pub fn problem(&self, p: &PointSpec) -> Option<String> {
         if self.format != RECORD_FORMAT {
             return Some(format!("record format {} (this inimtrace reads format {RECORD_FORMAT})", self.format));
         }
@@ -199,8 +203,18 @@ impl PointRecord {
                 env!("CARGO_PKG_VERSION")
             ));
         }
-        if self.id != r.id {
-            return Some(format!("it records the settings hash {}, not this point's {}", self.id, r.id));
+        if self.id != p.id() {
+            return Some(format!("it records the settings hash {}, not this point's {}", self.id, p.id()));
+        }
+        if !(self.seconds.is_finite() && self.seconds >= 0.0) {
+            return Some(format!("its time {} s is not valid", self.seconds));
+        }
+        let r = match p {
+            PointSpec::Study(s) => return super::study::record_problem(self, s),
+            PointSpec::Experiment(r) => r,
+        };
+        if !self.mtf50.is_empty() {
+            return Some("it holds a study's MTF50 rows, not an experiment's scores".into());
         }
         let extra = match &r.experiment.measurement {
             Some(m) => m.extra_scores("the point's settings").map(|e| e.names().to_vec()).unwrap_or_default(),
@@ -245,9 +259,6 @@ impl PointRecord {
                 "{} of {m} under {c}, not one",
                 crate::count::count(have(&(m.clone(), c.clone())), "score")
             ));
-        }
-        if !(self.seconds.is_finite() && self.seconds >= 0.0) {
-            return Some(format!("its time {} s is not valid", self.seconds));
         }
         None
     }
@@ -314,8 +325,8 @@ impl Store {
     }
 
     /// What the store holds for the point `r`: its record checked against the point's settings.
-    pub fn state(&self, r: &Resolved) -> RecordState {
-        let path = self.record_path(&r.id);
+    pub fn state(&self, r: &PointSpec) -> RecordState {
+        let path = self.record_path(r.id());
         let bytes = match read_regular(&path) {
             Ok(Some(b)) => b,
             Ok(None) => return RecordState::Missing,
@@ -331,7 +342,7 @@ impl Store {
     }
 
     /// The complete, checked record of the point `r` (see [`Store::state`]).
-    pub fn record_of(&self, r: &Resolved) -> Option<PointRecord> {
+    pub fn record_of(&self, r: &PointSpec) -> Option<PointRecord> {
         match self.state(r) {
             RecordState::Complete(rec) => Some(rec),
             _ => None,
@@ -369,7 +380,7 @@ pub fn unix_now() -> u64 {
 
 /// An `f64` as JSON text: Rust's shortest round-trip decimal form (`24.928587269627645`,
 /// `inf`), read back with a correctly rounded parse, so a score survives a record bit for bit.
-mod exact {
+pub(super) mod exact {
     use serde::{de::Error, Deserialize, Deserializer, Serializer};
 
     pub fn serialize<S: Serializer>(v: &f64, s: S) -> Result<S::Ok, S::Error> {
@@ -440,6 +451,7 @@ mod tests {
             finished_unix: unix_now(),
             version: env!("CARGO_PKG_VERSION").into(),
             provenance: None,
+            mtf50: Vec::new(),
         }
     }
 
