@@ -29,8 +29,11 @@ pub struct PlotRow {
     /// The series: the method (`LC`), or a study's source at a content depth (`LC 2.5D`).
     pub method: String,
     /// Each score of the row: its value (finite) and 95% half-width (finite), if measured.
-    values: Vec<(Metric, Option<(f64, Option<f64>)>)>,
+    values: Vec<(Metric, Option<Measured>)>,
 }
+
+/// A value with its 95% half-width, if the measurement gives one.
+type Measured = (f64, Option<f64>);
 
 impl PlotRow {
     /// The row of an experiment's point: one method under one eye case.
@@ -50,7 +53,7 @@ impl PlotRow {
 
 /// A value and its half-width as a plot takes them: PSNR of identical images (inf), an MTF50
 /// beyond the retina's Nyquist frequency (NaN) are left out.
-fn finite(v: f64, ci: Option<f64>) -> Option<(f64, Option<f64>)> {
+fn finite(v: f64, ci: Option<f64>) -> Option<Measured> {
     v.is_finite().then_some((v, ci.filter(|c| c.is_finite())))
 }
 
@@ -124,7 +127,7 @@ impl Metric {
     }
 
     /// The value and its 95% half-width in `row`, if it has this score.
-    fn of(self, row: &PlotRow) -> Option<(f64, Option<f64>)> {
+    fn of(self, row: &PlotRow) -> Option<Measured> {
         row.values.iter().find(|(m, _)| *m == self).and_then(|(_, v)| *v)
     }
 }
