@@ -201,13 +201,17 @@ pub fn execute(cmd: &SweepCommand, log: &mut dyn FnMut(String)) -> Result<SweepO
             if run.redone.len() == 1 { "its record" } else { "their records" }
         ));
     }
+    // A study's points render their own display images (each study its charts').
+    let shared = match sweep.study() {
+        Some(_) => String::new(),
+        None => format!(" ({} rendered, shared)", count(run.display_images, "display image")),
+    };
     log(format!(
-        "{name}: {} asked for, {} already complete, {} run in {:.2} s ({} rendered, shared); {}",
+        "{name}: {} asked for, {} already complete, {} run in {:.2} s{shared}; {}",
         count(run.selected, "point"),
         run.already_complete,
         run.ran,
         run.seconds,
-        count(run.display_images, "display image"),
         count(rayon::current_num_threads(), "thread")
     ));
     if cmd.points.is_some() {

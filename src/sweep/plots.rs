@@ -26,7 +26,8 @@ use crate::perception::ScoreName;
 pub struct PlotRow {
     /// The value of every swept key, in the keys' order (`None`: not a number).
     pub xs: Vec<Option<f64>>,
-    /// The series: the method (`LC`), or a study's source at a content depth (`LC 2.5D`).
+    /// The series: the method (`LC`), or a study's source at a content depth (`LC 2.5D`,
+    /// `LC 1.667D`).
     pub method: String,
     /// Each score of the row: its value (finite) and 95% half-width (finite), if measured.
     values: Vec<(Metric, Option<Measured>)>,
@@ -47,7 +48,9 @@ impl PlotRow {
     /// The row of a study's point: one source's MTF50 at one content depth.
     pub fn of_mtf50(xs: Vec<Option<f64>>, r: &super::study::Mtf50Row) -> Self {
         let values = vec![(Metric::Mtf50, finite(r.mtf50_cpd, Some(r.mtf50_ci95)))];
-        Self { xs, method: format!("{} {}D", r.source, r.content_diopters), values }
+        // The depth to a thousandth of a dioptre (600 mm is `1.667D`).
+        let d = format!("{:.3}", r.content_diopters);
+        Self { xs, method: format!("{} {}D", r.source, d.trim_end_matches('0').trim_end_matches('.')), values }
     }
 }
 

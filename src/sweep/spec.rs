@@ -111,6 +111,26 @@ pub struct SweepSpec {
     pub axes: Vec<Axis>,
 }
 
+/// The base a sweep file names: its experiment (empty for a study) and its study, exactly one
+/// of them; `images` only with an experiment. Errors name `src` and the field.
+fn base_of(file: &SweepFile, src: &str) -> Result<(String, Option<String>)> {
+    match (&file.experiment, &file.study) {
+        (Some(e), None) => Ok((e.clone(), None)),
+        (None, Some(_)) if file.images => Err(Error::invalid(
+            src,
+            "images",
+            "a study sweep writes tables only (run `inimtrace resolution` on a point for its files)",
+        )),
+        (None, Some(s)) => Ok((String::new(), Some(s.clone()))),
+        (Some(_), Some(_)) => Err(Error::invalid(src, "study", "give `experiment` or `study`, not both")),
+        (None, None) => Err(Error::invalid(
+            src,
+            "experiment",
+            "missing: name the base `experiment` (or a resolution `study`) the points change",
+        )),
+    }
+}
+
 /// The line of key `key` of axis `i` in a sweep file's text (`None` when it cannot be told).
 fn axis_key_line(text: &str, i: usize, key: &str) -> Option<usize> {
     #[derive(Deserialize)]
@@ -129,6 +149,7 @@ impl SweepSpec {
         let text = read_text(path)?;
         let file: SweepFile = toml::from_str(&text).map_err(|e| toml_error(path, &text, &e))?;
         let src = path.display().to_string();
+        let (experiment, study) = base_of(&file, &src)?;
         let base = base_dir(path);
         let name = match file.name {
             Some(n) => n,
@@ -210,27 +231,6 @@ impl SweepSpec {
                 ));
             }
             axes.push(Axis { keys });
-        }
-        let (experiment, study) = match (file.experiment, file.study) {
-            (Some(e), None) => (e, None),
-            (None, Some(s)) => (String::new(), Some(s)),
-            (Some(_), Some(_)) => {
-                return Err(Error::invalid(&src, "study", "give `experiment` or `study`, not both"));
-            }
-            (None, None) => {
-                return Err(Error::invalid(
-                    &src,
-                    "experiment",
-                    "missing: name the base `experiment` (or a resolution `study`) the points change",
-                ));
-            }
-        };
-        if file.images && study.is_some() {
-            return Err(Error::invalid(
-                &src,
-                "images",
-                "a study sweep writes tables only (run `inimtrace resolution` on a point for its files)",
-            ));
         }
         let spec = Self {
             path: path.to_path_buf(),
