@@ -114,3 +114,46 @@ fn a_study_sweep_gives_each_sources_mtf50_as_the_study_gives_it() {
     assert!(ok, "{err}");
     assert!(err.contains("1 already complete, 1 run") && err.contains("MTF50"), "{err}");
 }
+
+/// `sweep.csv` without its `seconds` column.
+fn table_without_seconds(dir: &Path) -> Vec<BTreeMap<String, String>> {
+    let mut t = rows(&dir.join("sweep.csv"));
+    for r in &mut t {
+        r.remove("seconds");
+    }
+    t
+}
+
+#[test]
+fn a_study_sweep_runs_point_by_point_as_slurm_tasks_do() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("tiny-pupil.toml");
+    let study = root().join("studies/tiny.toml");
+    std::fs::write(&file, format!("study = \"{}\"\n[[axes]]\n\"pupil_diameter_mm\" = [3, 5]\n", study.display()))
+        .unwrap();
+    let f = file.to_str().unwrap();
+    let (whole, tasks) = (dir.path().join("whole"), dir.path().join("tasks"));
+    let (ok, _, err) = inimtrace(&["sweep", f, "--out", whole.to_str().unwrap()]);
+    assert!(ok, "{err}");
+    // A job array's tasks: each its points, then a collection.
+    for p in ["1", "0"] {
+        let (ok, _, err) = inimtrace(&["sweep", f, "--out", tasks.to_str().unwrap(), "--points", p]);
+        assert!(ok, "{err}");
+    }
+    let (ok, stdout, err) = inimtrace(&["sweep", f, "--out", tasks.to_str().unwrap(), "--collect"]);
+    assert!(ok && stdout.contains("2 of 2 points complete"), "{stdout} {err}");
+    assert_eq!(table_without_seconds(&tasks), table_without_seconds(&whole));
+    // The script a submission would send: one task per point (they cost the same), and a
+    // dry run writes nothing.
+    let remote = dir.path().join("remote");
+    let (ok, script, err) =
+        inimtrace(&["sweep", f, "--out", remote.to_str().unwrap(), "--slurm", "--array-max", "2", "--dry-run"]);
+    assert!(ok, "{err}");
+    assert!(script.contains("#SBATCH --array=0-1\n"), "{script}");
+    assert!(!remote.exists());
+    // The study's own refusals name the sweep's point.
+    std::fs::write(&file, format!("study = \"{}\"\n[[axes]]\n\"eye.gaze_deg\" = [[0, 0], [30, 0]]\n", study.display()))
+        .unwrap();
+    let (ok, _, err) = inimtrace(&["sweep", f, "--out", remote.to_str().unwrap()]);
+    assert!(!ok && err.contains("point 1") && err.contains("eye.gaze_deg"), "{err}");
+}
