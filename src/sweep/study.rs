@@ -2,7 +2,7 @@
 //! different focused depths", over ranges of its settings): a sweep file naming `study` instead
 //! of `experiment`. Each point is the study with the point's settings (`--set` keys of the study
 //! file), run as `inimtrace resolution` runs it ([`run_study`]), identified by the content hash
-//! of its resolved settings and recorded as every sweep point is ([`super::store`]): its rows are
+//! of its resolved settings and recorded as every sweep point is (`points/<id>.json`): its rows are
 //! each source's slanted-edge MTF50 (cycles per degree, with its 95% half-width) with the eye on
 //! the content, per content depth, exactly the rows of the study's `mtf50.csv` with
 //! `target_diopters = focus_diopters`.
