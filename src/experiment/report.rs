@@ -367,20 +367,8 @@ fn results_csv(report: &AssessReport, exp: &Experiment) -> String {
 /// The extra scores' cells of one score row: value, half-width, removed noise bias and whether
 /// it exceeds the half-width, per score `extra` names (empty where not measured).
 fn perceptual_values(s: &Score, extra: &[crate::perception::ScoreName]) -> Vec<String> {
-    extra
-        .iter()
-        .flat_map(|n| {
-            let e = s.perceptual.get(*n);
-            let opt = |v: Option<f64>| v.map(csv_db).unwrap_or_default();
-            let flag = e.filter(|e| e.noise_bias.is_some()).map(|e| e.bias_above_ci95().to_string());
-            [
-                opt(e.map(|e| e.value)),
-                opt(e.and_then(|e| e.ci95)),
-                opt(e.and_then(|e| e.noise_bias)),
-                flag.unwrap_or_default(),
-            ]
-        })
-        .collect()
+    use crate::perception::replicated::ScalarEstimate;
+    extra.iter().flat_map(|n| ScalarEstimate::csv_cells(s.perceptual.get(*n), csv_db)).collect()
 }
 
 pub(super) fn write_reports(report: &AssessReport, exp: &Experiment, dir: &OutputDir) -> Result<()> {

@@ -62,6 +62,20 @@ impl ScalarEstimate {
     pub fn bias_above_ci95(&self) -> bool {
         matches!((self.noise_bias, self.ci95), (Some(b), Some(h)) if b.abs() > h)
     }
+
+    /// The four CSV cells of a score, as results.csv and sweep.csv write them: the value, the
+    /// half-width, the removed noise bias and whether it exceeds the half-width, numbers as
+    /// `number` writes them; empty where the score (or that part of it) is absent.
+    pub fn csv_cells(score: Option<&ScalarEstimate>, number: impl Fn(f64) -> String) -> [String; 4] {
+        let opt = |v: Option<f64>| v.map(&number).unwrap_or_default();
+        let flag = score.filter(|e| e.noise_bias.is_some()).map(|e| e.bias_above_ci95().to_string());
+        [
+            opt(score.map(|e| e.value)),
+            opt(score.and_then(|e| e.ci95)),
+            opt(score.and_then(|e| e.noise_bias)),
+            flag.unwrap_or_default(),
+        ]
+    }
 }
 
 impl Serialize for ScalarEstimate {

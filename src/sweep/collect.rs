@@ -11,6 +11,7 @@ use std::path::{Path, PathBuf};
 use serde_json::json;
 
 use super::plots::{write_plots, PlotRow};
+use super::spec::Point;
 use super::store::{PointRecord, RecordState, ScoreRow, Store};
 use super::PointSpec;
 use super::Sweep;
@@ -18,6 +19,7 @@ use crate::error::{Error, Result};
 use crate::io::csv_table::CsvTable;
 use crate::io::output::write_atomic;
 use crate::overrides::value_text;
+use crate::perception::replicated::ScalarEstimate;
 use crate::perception::ScoreName;
 
 /// What a collection found and wrote.
@@ -130,15 +132,7 @@ fn sweep_csv(
             continue;
         };
         out.complete += 1;
-        let values: Vec<String> = point
-            .values
-            .iter()
-            .map(|(_, v)| match v {
-                toml::Value::String(s) => s.clone(),
-                other => value_text(other),
-            })
-            .collect();
-        let xs: Vec<Option<f64>> = point.values.iter().map(|(_, v)| number(v)).collect();
+        let (values, xs) = point_values(point);
         for s in &rec.scores {
             let row = [point.index.to_string(), r.id().to_string()]
                 .into_iter()
@@ -195,15 +189,7 @@ fn study_csv(
             continue;
         };
         out.complete += 1;
-        let values: Vec<String> = point
-            .values
-            .iter()
-            .map(|(_, v)| match v {
-                toml::Value::String(s) => s.clone(),
-                other => value_text(other),
-            })
-            .collect();
-        let xs: Vec<Option<f64>> = point.values.iter().map(|(_, v)| number(v)).collect();
+        let (values, xs) = point_values(point);
         for m in &rec.mtf50 {
             csv.row([point.index.to_string(), r.id().to_string()].into_iter().chain(values.iter().cloned()).chain([
                 m.source.clone(),
@@ -221,23 +207,26 @@ fn study_csv(
     (csv.finish(), plot_rows)
 }
 
+/// A point's swept values as `sweep.csv`'s cells (strings as they are) and as the plots' numbers
+/// (none where a value is not a number).
+fn point_values(point: &Point) -> (Vec<String>, Vec<Option<f64>>) {
+    let cells = point
+        .values
+        .iter()
+        .map(|(_, v)| match v {
+            toml::Value::String(s) => s.clone(),
+            other => value_text(other),
+        })
+        .collect();
+    (cells, point.values.iter().map(|(_, v)| number(v)).collect())
+}
+
 /// The extra scores' cells of one row: value, half-width, removed noise bias and whether it
 /// exceeds the half-width, per score of `extra` (empty where not measured or not given).
 fn extra_cells(s: &ScoreRow, extra: &[ScoreName]) -> Vec<String> {
-    extra
-        .iter()
-        .flat_map(|n| {
-            let e = s.perceptual.get(n);
-            let opt = |v: Option<f64>| v.map(number_text).unwrap_or_default();
-            let flag = e.filter(|e| e.noise_bias.is_some()).map(|e| e.bias_above_ci95().to_string());
-            [
-                opt(e.map(|e| e.value)),
-                opt(e.and_then(|e| e.ci95)),
-                opt(e.and_then(|e| e.noise_bias)),
-                flag.unwrap_or_default(),
-            ]
-        })
-        .collect()
+    let cells =
+        |n: &ScoreName| ScalarEstimate::csv_cells(s.perceptual.get(n).map(|e| e.estimate()).as_ref(), number_text);
+    extra.iter().flat_map(cells).collect()
 }
 
 /// `sweep.json`: the sweep, its resolved base, its axes and every point with its scores.
