@@ -167,3 +167,25 @@ fn bad_placements_are_refused_naming_the_field() {
         assert!(e.contains(field) && e.contains("gaze.toml"), "{eye} {extra}: {e}");
     }
 }
+
+/// display.md says where the study's eye was: its gaze about the centre of rotation and its
+/// pupil's position when moved, nothing at rest (the line as before the eye could move).
+#[test]
+fn display_md_names_a_turned_or_moved_eye_and_not_an_eye_at_rest() {
+    use inimtrace::resolution::limits::display_limits;
+    use inimtrace::resolution::report::display_md;
+    let md = |eye: &str| {
+        let study = load(r#"["LC"]"#, eye, "").unwrap();
+        display_md(&display_limits(&study.display, study.pupil_diameter_mm), &study)
+    };
+    let rest = md("");
+    assert!(rest.contains("Study `gaze`, pupil 5 mm.\n"), "{rest}");
+    let turned = md("gaze_deg = [6, -3]\ncentre_of_rotation_mm = 12");
+    // 12 mm behind the cornea, which lies 3.04 mm in front of the thin-lens eye's pupil
+    // (Navarro's depth, docs/EYE.md): z = 3.04 - 12 = -8.96 mm.
+    assert!(turned.contains("gaze [6, -3] degrees about the centre of rotation (0, 0, -8.96) mm.\n"), "{turned}");
+    assert!(!turned.contains("pupil at"), "{turned}");
+    let moved = md("position = [1.5, -0.5, 0]");
+    assert!(moved.contains("Study `gaze`, pupil 5 mm, pupil at (1.5, -0.5, 0) mm.\n"), "{moved}");
+    assert!(!moved.contains("gaze ["), "{moved}");
+}

@@ -305,6 +305,26 @@ pub fn display_json(l: &DisplayLimits) -> String {
     serde_json::to_string_pretty(l).unwrap_or_default() + "\n"
 }
 
+/// Where the study's eye is, when it is not at rest at the origin: its gaze (and centre of
+/// rotation) and its pupil's position; empty at rest, as before the eye could move.
+fn eye_place_text(study: &Study) -> String {
+    let place = &study.eye_place;
+    let mut t = String::new();
+    if let Some(pose) = &place.pose {
+        let c = pose.centre;
+        let _ = write!(
+            t,
+            ", gaze [{}, {}] degrees about the centre of rotation ({}, {}, {}) mm",
+            place.gaze.horizontal_deg, place.gaze.vertical_deg, c.x, c.y, c.z
+        );
+    }
+    if place.position != glam::DVec3::ZERO {
+        let p = place.position;
+        let _ = write!(t, ", pupil at ({}, {}, {}) mm", p.x, p.y, p.z);
+    }
+    t
+}
+
 /// `display.md`: the limits as a short report.
 pub fn display_md(l: &DisplayLimits, study: &Study) -> String {
     let opt2 = |v: Option<[f64; 2]>, d: usize| match v {
@@ -313,7 +333,7 @@ pub fn display_md(l: &DisplayLimits, study: &Study) -> String {
     };
     let mut s = String::new();
     let _ = writeln!(s, "# Display limits: {}\n", l.display.name);
-    let _ = writeln!(s, "Study `{}`, pupil {} mm.\n", study.name, l.pupil_diameter_mm);
+    let _ = writeln!(s, "Study `{}`, pupil {} mm{}.\n", study.name, l.pupil_diameter_mm, eye_place_text(study));
     let _ = writeln!(s, "| quantity | value |\n|---|---|");
     let _ = writeln!(
         s,
